@@ -1,0 +1,196 @@
+/* A PROFIBUS-DP (DP-V0) slave: FDL station, DP state machine, watchdog and baud search.
+ *
+ * The caller owns the dp_slave_t (no heap, no globals), feeds it every received character with
+ * dp_slave_rx_char() and calls dp_slave_poll() at or after the deadline it returned. Replies go
+ * out through the HAL UART's transmit(), timed at end-of-request + min TSDR. What the device
+ * does with the data (which configurations and parameters it accepts, what the outputs mean,
+ * what the inputs are) is supplied through dp_slave_hooks_t; the DFP21B personality in
+ * firmware/dfp21b is one such device. */
+#ifndef DP_SLAVE_DP_SLAVE_H
+#define DP_SLAVE_DP_SLAVE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "dp_slave/dp_config.h"
+#include "dp_slave/fdl_rx.h"
+#include "hal/hal_time.h"
+#include "hal/hal_uart.h"
+
+typedef enum dp_state {
+    DP_STATE_WAIT_PRM = 0,
+    DP_STATE_WAIT_CFG,
+    DP_STATE_DATA_EXCH,
+} dp_state_t;
+
+typedef enum dp_baud_state {
+    DP_BAUD_SEARCH = 0, /* trying rates from 12 Mbit/s down until a good telegram arrives */
+    DP_BAUD_CONTROL,    /* rate found; lost again if nothing reaches this station for a while */
+    DP_BAUD_FIXED,      /* configured rate, no search */
+} dp_baud_state_t;
+
+typedef enum dp_event_type {
+    DP_EV_STATE = 0,       /* old_state -> new_state */
+    DP_EV_BAUD_SET,        /* value = rate now selected (search step) */
+    DP_EV_BAUD_FOUND,      /* value = rate */
+    DP_EV_BAUD_LOST,       /* baud control expired: searching again */
+    DP_EV_WD_EXPIRED,      /* DP watchdog ran out: outputs cleared, back to Wait_Prm */
+    DP_EV_PRM_OK,          /* value = watchdog time in ms (0 = off) */
+    DP_EV_PRM_FAULT,       /* value = dp_prm_fault_t */
+    DP_EV_CFG_OK,          /* value = output length << 8 | input length */
+    DP_EV_CFG_FAULT,
+    DP_EV_GLOBAL_CONTROL,  /* value = Control_Command */
+    DP_EV_LOCKED_OUT,      /* a request of another master was refused; master = its address */
+    DP_EV_RX_ERROR,        /* value = fdl_rx_error_t */
+    DP_EV_FCB_REPEAT,      /* a retry was answered from the reply cache */
+    DP_EV_ADDRESSED,       /* a valid telegram for this station arrived (any service) */
+} dp_event_type_t;
+
+typedef enum dp_prm_fault {
+    DP_PRM_FAULT_LENGTH = 1,
+    DP_PRM_FAULT_IDENT,
+    DP_PRM_FAULT_WATCHDOG,
+    DP_PRM_FAULT_RESERVED_BITS,
+    DP_PRM_FAULT_USER, /* rejected by the device's prm_check */
+    DP_PRM_FAULT_UNSUPPORTED, /* Sync/Freeze requested but not supported */
+} dp_prm_fault_t;
+
+typedef struct dp_event {
+    dp_event_type_t type;
+    hal_time_us_t t;
+    dp_state_t old_state;
+    dp_state_t new_state;
+    uint8_t master;
+    uint32_t value;
+} dp_event_t;
+
+typedef enum dp_outputs_reason {
+    DP_OUTPUTS_DATA = 0,    /* new outputs from Data_Exchange (or released by Sync/Unsync) */
+    DP_OUTPUTS_CLEAR,       /* Global_Control Clear_Data or an empty (fail-safe) telegram */
+    DP_OUTPUTS_SAFE_STATE,  /* left Data_Exch (watchdog, new parameterisation, unlock) */
+} dp_outputs_reason_t;
+
+typedef struct dp_slave_hooks {
+    void *ctx;
+    /* Set_Prm octets from index 7 on (DP-V1 status and user parameters), len may be 0. */
+    bool (*prm_check)(void *ctx, const uint8_t *prm, size_t len);
+    /* Chk_Cfg identifiers; on success the output and input lengths in octets. */
+    bool (*cfg_check)(void *ctx, const uint8_t *cfg, size_t len, uint8_t *out_len,
+                      uint8_t *in_len);
+    /* Outputs for the application. Called on the receive path: copy, do not work. */
+    void (*outputs)(void *ctx, const uint8_t *out, size_t len, dp_outputs_reason_t reason);
+    /* Everything that happens, for LEDs, logs and monitoring. Optional. */
+    void (*event)(void *ctx, const dp_event_t *ev);
+} dp_slave_hooks_t;
+
+typedef struct dp_slave_cfg {
+    uint8_t address; /* 0..125 */
+    uint16_t ident;
+    uint32_t fixed_baud; /* 0 = automatic baud detection */
+    bool strict_timing;  /* see fdl_rx.h */
+    uint32_t baud_control_ms; /* 0 = DP_BAUD_CONTROL_MS_DEFAULT */
+    bool sync_supported;
+    bool freeze_supported;
+    /* Get_Cfg answer before any Chk_Cfg was accepted. */
+    const uint8_t *default_cfg;
+    uint8_t default_cfg_len;
+    hal_uart_t uart;
+    dp_slave_hooks_t hooks;
+} dp_slave_cfg_t;
+
+#define DP_BAUD_CONTROL_MS_DEFAULT 1000u
+
+typedef struct fdl_fcb_slot {
+    bool used;
+    bool fcb_valid;
+    uint8_t master;
+    uint8_t fcb;
+    uint8_t age;
+    uint16_t reply_len; /* 0: no reply cached */
+    uint8_t reply[FDL_FRAME_MAX];
+} fdl_fcb_slot_t;
+
+typedef struct dp_slave {
+    dp_slave_cfg_t cfg;
+    fdl_rx_t rx;
+
+    /* baud */
+    dp_baud_state_t baud_state;
+    uint8_t baud_index;
+    uint32_t baud;
+    hal_time_us_t baud_deadline;
+
+    /* FDL */
+    uint8_t min_tsdr_bits;
+    fdl_fcb_slot_t fcb[FDL_FCB_SLOTS];
+    uint8_t reply[FDL_FRAME_MAX];
+    uint16_t reply_len;
+
+    /* DP */
+    dp_state_t state;
+    uint8_t master_add;
+    uint8_t group_ident;
+    uint8_t station_status; /* Set_Prm octet 0 as accepted */
+    uint8_t dpv1_status[3];
+    bool wd_on;
+    uint32_t wd_time_ms;
+    hal_time_us_t wd_deadline;
+    bool prm_fault;
+    bool cfg_fault;
+    bool not_supported;
+    bool stat_diag;
+    bool diag_pending; /* new diagnosis not yet read: Data_Exchange answers DH */
+    bool sync_mode;
+    bool freeze_mode;
+    bool sync_latched;
+
+    uint8_t cfg_data[DP_MAX_CFG_LEN];
+    uint8_t cfg_len;
+    uint8_t out_len;
+    uint8_t in_len;
+    uint8_t outputs[DP_MAX_IO_LEN];
+    uint8_t latched_outputs[DP_MAX_IO_LEN];
+    uint8_t inputs[DP_MAX_IO_LEN];
+    uint8_t frozen_inputs[DP_MAX_IO_LEN];
+
+    uint8_t ext_diag[DP_MAX_EXT_DIAG_LEN];
+    uint8_t ext_diag_len;
+    bool ext_diag_overflow;
+
+    uint32_t telegrams_for_me;
+} dp_slave_t;
+
+/* Power-on: Wait_Prm, Master_Add none, baud search started (or fixed rate selected). */
+void dp_slave_init(dp_slave_t *s, const dp_slave_cfg_t *cfg, hal_time_us_t now);
+/* One received character; t = end of its stop bit. May transmit a reply. */
+void dp_slave_rx_char(dp_slave_t *s, uint8_t byte, uint8_t flags, hal_time_us_t t);
+/* Runs timers (watchdog, baud search/control). Returns the next deadline (absolute). */
+hal_time_us_t dp_slave_poll(dp_slave_t *s, hal_time_us_t now);
+
+/* The application's input image; copied, used from the next Data_Exchange on. */
+void dp_slave_set_inputs(dp_slave_t *s, const uint8_t *in, size_t len);
+/* Device-related diagnosis after the six standard octets (len 0 clears Ext_Diag). Any change
+ * makes the next Data_Exchange reply DH so the master reads it. */
+void dp_slave_set_ext_diag(dp_slave_t *s, const uint8_t *diag, size_t len);
+void dp_slave_set_stat_diag(dp_slave_t *s, bool on);
+
+/* Builds the Slave_Diag DU as the master would read it now. Returns its length. */
+size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max);
+
+static inline dp_state_t dp_slave_state(const dp_slave_t *s) { return s->state; }
+static inline uint32_t dp_slave_baud(const dp_slave_t *s) { return s->baud; }
+static inline dp_baud_state_t dp_slave_baud_state(const dp_slave_t *s) { return s->baud_state; }
+static inline uint8_t dp_slave_master(const dp_slave_t *s) { return s->master_add; }
+static inline uint32_t dp_slave_wd_time_ms(const dp_slave_t *s)
+{
+    return s->wd_on ? s->wd_time_ms : 0u;
+}
+
+const char *dp_state_name(dp_state_t st);
+const char *dp_baud_state_name(dp_baud_state_t st);
+
+/* Dwell time on one rate during the baud search: long enough for two longest telegrams. */
+uint32_t dp_baud_search_dwell_us(uint32_t baud);
+
+#endif

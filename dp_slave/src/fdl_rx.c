@@ -1,0 +1,175 @@
+#include "dp_slave/fdl_rx.h"
+
+#include "dp_slave/fdl_frame.h"
+#include "hal/hal_uart.h"
+
+void fdl_rx_init(fdl_rx_t *rx, uint32_t baud, bool strict)
+{
+    *rx = (fdl_rx_t){0};
+    rx->strict = strict;
+    rx->synced = true;
+    rx->relaxed_gap_us = FDL_RX_RELAXED_GAP_US_DEFAULT;
+    rx->relaxed_resync_us = FDL_RX_RELAXED_RESYNC_US_DEFAULT;
+    rx->idle_before_ns = UINT32_MAX;
+    fdl_rx_set_baud(rx, baud);
+}
+
+void fdl_rx_set_baud(fdl_rx_t *rx, uint32_t baud)
+{
+    rx->char_ns = hal_uart_char_ns(baud != 0u ? baud : 12000000u);
+    fdl_rx_reset(rx);
+}
+
+void fdl_rx_reset(fdl_rx_t *rx)
+{
+    rx->collecting = false;
+    rx->len = 0;
+    rx->expected = 0;
+    rx->synced = true;
+}
+
+const char *fdl_rx_error_name(fdl_rx_error_t e)
+{
+    static const char *const names[FDL_RX_ERR_COUNT] = {
+        "ok", "character error", "bad start delimiter", "LE/LEr", "SD2 repeat", "FCS", "ED",
+        "gap inside telegram", "no TSYN idle before request",
+    };
+    return (unsigned)e < FDL_RX_ERR_COUNT ? names[e] : "?";
+}
+
+static fdl_rx_result_t fail(fdl_rx_t *rx, fdl_rx_error_t e)
+{
+    rx->collecting = false;
+    rx->len = 0;
+    rx->expected = 0;
+    rx->synced = false; /* wait for a pause before trusting a start delimiter again */
+    rx->last_error = e;
+    rx->error_count[e]++;
+    return FDL_RX_ERROR;
+}
+
+static fdl_rx_result_t complete(fdl_rx_t *rx, hal_time_us_t t)
+{
+    const uint8_t *b = rx->buf;
+    uint16_t n = rx->len;
+    switch (b[0]) {
+    case FDL_SD1:
+        if (fdl_fcs(&b[1], 3u) != b[4]) {
+            return fail(rx, FDL_RX_ERR_FCS);
+        }
+        break;
+    case FDL_SD3:
+        if (fdl_fcs(&b[1], 3u + FDL_SD3_DU_LEN) != b[12]) {
+            return fail(rx, FDL_RX_ERR_FCS);
+        }
+        break;
+    case FDL_SD2:
+        if (fdl_fcs(&b[4], b[1]) != b[n - 2u]) {
+            return fail(rx, FDL_RX_ERR_FCS);
+        }
+        break;
+    default: /* SD4 and SC carry no check octets */
+        break;
+    }
+    if ((b[0] == FDL_SD1 || b[0] == FDL_SD2 || b[0] == FDL_SD3) && b[n - 1u] != FDL_ED) {
+        return fail(rx, FDL_RX_ERR_ED);
+    }
+    rx->frame_len = n;
+    rx->frame_end_t = t;
+    rx->idle_before_ns = rx->idle_before_pending_ns;
+    rx->collecting = false;
+    rx->len = 0;
+    rx->expected = 0;
+    rx->synced = true;
+    rx->last_error = FDL_RX_OK;
+    return FDL_RX_FRAME;
+}
+
+static uint16_t length_for_sd(uint8_t sd)
+{
+    switch (sd) {
+    case FDL_SD1: return FDL_SD1_LEN;
+    case FDL_SD3: return FDL_SD3_LEN;
+    case FDL_SD4: return FDL_SD4_LEN;
+    case FDL_SC: return 1u;
+    case FDL_SD2: return 0u; /* known after LE */
+    default: return UINT16_MAX;
+    }
+}
+
+fdl_rx_result_t fdl_rx_char(fdl_rx_t *rx, uint8_t byte, uint8_t flags, hal_time_us_t t)
+{
+    /* How long the line was idle between the previous character and this one. */
+    uint32_t idle_ns = UINT32_MAX;
+    bool paused = true;
+    if (rx->have_last) {
+        int32_t dt_us = hal_time_diff(t, rx->last_char_t);
+        if (dt_us < 0) {
+            dt_us = 0;
+        }
+        uint64_t dt_ns = (uint64_t)(uint32_t)dt_us * 1000u;
+        idle_ns = dt_ns > rx->char_ns ? (uint32_t)((dt_ns - rx->char_ns) > UINT32_MAX - 1u
+                                                       ? UINT32_MAX - 1u
+                                                       : (dt_ns - rx->char_ns))
+                                      : 0u;
+        if (rx->strict) {
+            paused = idle_ns > FDL_RX_GAP_TOLERANCE_NS;
+        } else {
+            paused = (uint32_t)dt_us > rx->relaxed_gap_us;
+        }
+    }
+    bool resync_pause = rx->strict ? paused
+                                   : (!rx->have_last ||
+                                      (uint32_t)hal_time_diff(t, rx->last_char_t) >=
+                                          rx->relaxed_resync_us);
+    rx->have_last = true;
+    rx->last_char_t = t;
+
+    if (rx->collecting && paused) {
+        (void)fail(rx, FDL_RX_ERR_GAP);
+        /* the character after the pause may begin the next telegram: fall through */
+    }
+    if ((flags & (HAL_UART_RX_PARITY_ERR | HAL_UART_RX_FRAMING_ERR | HAL_UART_RX_OVERRUN_ERR)) !=
+        0u) {
+        return fail(rx, FDL_RX_ERR_CHAR);
+    }
+
+    if (!rx->collecting) {
+        if (!rx->synced && !resync_pause) {
+            return FDL_RX_NOTHING; /* still inside garbage: ignore until the line pauses */
+        }
+        uint16_t need = length_for_sd(byte);
+        if (need == UINT16_MAX) {
+            return fail(rx, FDL_RX_ERR_SD);
+        }
+        rx->collecting = true;
+        rx->idle_before_pending_ns = idle_ns;
+        rx->buf[0] = byte;
+        rx->len = 1;
+        rx->expected = need;
+        if (need == 1u) {
+            return complete(rx, t);
+        }
+        return FDL_RX_NOTHING;
+    }
+
+    rx->buf[rx->len++] = byte;
+    if (rx->buf[0] == FDL_SD2 && rx->expected == 0u) {
+        if (rx->len == 3u) {
+            uint8_t le = rx->buf[1];
+            if (le != rx->buf[2] || le < FDL_LE_MIN || le > FDL_LE_MAX) {
+                return fail(rx, FDL_RX_ERR_LE);
+            }
+        } else if (rx->len == 4u) {
+            if (byte != FDL_SD2) {
+                return fail(rx, FDL_RX_ERR_SD_REPEAT);
+            }
+            rx->expected = (uint16_t)(rx->buf[1] + FDL_SD2_OVERHEAD);
+        }
+        return FDL_RX_NOTHING;
+    }
+    if (rx->len >= rx->expected) {
+        return complete(rx, t);
+    }
+    return FDL_RX_NOTHING;
+}

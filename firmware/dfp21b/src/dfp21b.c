@@ -1,0 +1,350 @@
+#include "dfp21b/dfp21b.h"
+
+#include <string.h>
+
+#include "dp_slave/dp_wire.h"
+
+const uint8_t dfp21b_default_cfg[2] = {0xF3u, 0xF2u};
+
+/* ---- configuration (manual §4.1, §8.1; dfp21b.md §3) -------------------------------------- */
+
+typedef struct ident_info {
+    uint8_t dir;   /* DP_CFG_DIR_* */
+    uint8_t bytes; /* length in octets */
+    bool words;
+    bool consistent;
+} ident_info_t;
+
+static bool decode_general(uint8_t b, ident_info_t *info)
+{
+    info->dir = (uint8_t)(b & DP_CFG_DIR_MASK);
+    if (info->dir == DP_CFG_DIR_SPECIAL) {
+        return false;
+    }
+    info->words = (b & DP_CFG_WORDS) != 0u;
+    info->consistent = (b & DP_CFG_CONSISTENT) != 0u;
+    uint8_t units = (uint8_t)((b & DP_CFG_LEN_MASK) + 1u);
+    info->bytes = (uint8_t)(info->words ? units * 2u : units);
+    return true;
+}
+
+static bool is_param_channel(uint8_t b)
+{
+    /* 4 I/O words or 8 I/O octets, consistent over the whole length. */
+    return b == 0xF3u || b == 0xB7u;
+}
+
+/* Process-data module: one I/O identifier, or an output and an input identifier. Lengths in
+ * octets; *equal reports whether input and output lengths match. */
+static bool decode_pd(const uint8_t *cfg, size_t len, uint8_t *out_bytes, uint8_t *in_bytes)
+{
+    *out_bytes = 0;
+    *in_bytes = 0;
+    if (len < 1u || len > 2u) {
+        return false;
+    }
+    for (size_t i = 0; i < len; i++) {
+        ident_info_t id;
+        if (!decode_general(cfg[i], &id) || !id.consistent) {
+            return false;
+        }
+        if (id.dir == DP_CFG_DIR_INOUT) {
+            if (len != 1u) {
+                return false;
+            }
+            *out_bytes = id.bytes;
+            *in_bytes = id.bytes;
+        } else if (id.dir == DP_CFG_DIR_OUT && *out_bytes == 0u) {
+            *out_bytes = id.bytes;
+        } else if (id.dir == DP_CFG_DIR_IN && *in_bytes == 0u) {
+            *in_bytes = id.bytes;
+        } else {
+            return false;
+        }
+    }
+    return true;
+}
+
+bool dfp21b_check_cfg(const uint8_t *cfg, size_t len, dfp21b_pd_cfg_t *pd)
+{
+    *pd = (dfp21b_pd_cfg_t){0};
+    if (cfg == NULL || len == 0u || len > 3u) {
+        return false;
+    }
+    size_t first = 0;
+    bool param = false;
+    if (len >= 2u && (cfg[0] == 0x00u || is_param_channel(cfg[0]))) {
+        /* module 0: an empty slot or the parameter channel */
+        param = cfg[0] != 0x00u;
+        first = 1;
+    }
+    uint8_t out_bytes;
+    uint8_t in_bytes;
+    if (!decode_pd(&cfg[first], len - first, &out_bytes, &in_bytes)) {
+        return false;
+    }
+    /* Unequal lengths are a configuration fault the manual names: P090 shows 0PD. */
+    if (out_bytes != in_bytes || out_bytes < 2u || out_bytes > 2u * DFP21B_MAX_PD ||
+        (out_bytes % 2u) != 0u) {
+        return false;
+    }
+    pd->valid = true;
+    pd->param_channel = param;
+    pd->pd_words = (uint8_t)(out_bytes / 2u);
+    return true;
+}
+
+/* ---- user parameters (manual §4.2; dfp21b.md §4) ------------------------------------------- */
+
+bool dfp21b_check_user_prm(const uint8_t *prm, size_t len, bool *diag_alarm)
+{
+    static const uint8_t block[5] = {0x06u, 0x81u, 0x00u, 0x00u, 0x01u};
+    if (len != DFP21B_USER_PRM_LEN) {
+        return false;
+    }
+    /* Octets 0..2 are DPV1_Status_1..3. The card supports DP-V1 read/write but no alarms,
+     * no fail-safe, no publisher and no isochronous mode. */
+    if ((prm[0] & (uint8_t)~(DP_DPV1_1_ENABLE | DP_DPV1_1_WD_BASE_1MS |
+                             DP_DPV1_1_DIS_STOP_CONTROL | DP_DPV1_1_DIS_START_CONTROL)) != 0u) {
+        return false;
+    }
+    if (prm[1] != 0u) {
+        return false;
+    }
+    if ((prm[2] & (uint8_t)~0x0Fu) != 0u) { /* Prm_Structure and Alarm_Mode only */
+        return false;
+    }
+    if (memcmp(&prm[3], block, sizeof block) != 0 || prm[8] > 1u) {
+        return false;
+    }
+    *diag_alarm = prm[8] == 0u;
+    return true;
+}
+
+size_t dfp21b_p090_text(const dfp21b_pd_cfg_t *pd, char *out, size_t max)
+{
+    char buf[16];
+    size_t n = 0;
+    if (!pd->valid) {
+        buf[n++] = '0';
+    } else {
+        if (pd->pd_words >= 10u) {
+            buf[n++] = '1';
+            buf[n++] = '0';
+        } else {
+            buf[n++] = (char)('0' + pd->pd_words);
+        }
+    }
+    buf[n++] = 'P';
+    buf[n++] = 'D';
+    if (pd->valid && pd->param_channel) {
+        static const char suffix[] = " + PARAM";
+        memcpy(&buf[n], suffix, sizeof suffix - 1u);
+        n += sizeof suffix - 1u;
+    }
+    if (max == 0u) {
+        return 0;
+    }
+    if (n > max - 1u) {
+        n = max - 1u;
+    }
+    memcpy(out, buf, n);
+    out[n] = '\0';
+    return n;
+}
+
+/* ---- LEDs (manual §3.7; dfp21b.md §2) ------------------------------------------------------ */
+
+static void led_set(dfp21b_t *c, hal_led_id_t id, hal_led_mode_t mode)
+{
+    if (c->leds_known && c->led[id] == mode) {
+        return;
+    }
+    c->led[id] = mode;
+    if (c->cfg.led.ops != NULL && c->cfg.led.ops->set != NULL) {
+        c->cfg.led.ops->set(c->cfg.led.ctx, id, mode);
+    }
+}
+
+static void update_leds(dfp21b_t *c)
+{
+    hal_led_mode_t run = c->on_bus ? HAL_LED_ON : HAL_LED_BLINK;
+    hal_led_mode_t bus;
+    if (!c->on_bus || dp_slave_baud_state(&c->dp) == DP_BAUD_SEARCH || c->master_lost) {
+        bus = HAL_LED_ON; /* no baud rate, bus interrupted, or master gone (watchdog) */
+    } else if (dp_slave_state(&c->dp) == DP_STATE_DATA_EXCH) {
+        bus = HAL_LED_OFF;
+    } else {
+        bus = HAL_LED_BLINK; /* baud found, but not (or wrongly) configured */
+    }
+    led_set(c, HAL_LED_RUN, run);
+    led_set(c, HAL_LED_BUS_FAULT, bus);
+    c->leds_known = true;
+}
+
+/* ---- hooks from the DP slave (receive path: copy only) ------------------------------------ */
+
+static bool hook_prm_check(void *ctx, const uint8_t *prm, size_t len)
+{
+    dfp21b_t *c = ctx;
+    bool alarm = false;
+    if (!dfp21b_check_user_prm(prm, len, &alarm)) {
+        return false;
+    }
+    c->diag_alarm = alarm;
+    return true;
+}
+
+static bool hook_cfg_check(void *ctx, const uint8_t *cfg, size_t len, uint8_t *out_len,
+                           uint8_t *in_len)
+{
+    dfp21b_t *c = ctx;
+    if (!dfp21b_check_cfg(cfg, len, &c->pd_candidate)) {
+        return false;
+    }
+    uint8_t n = (uint8_t)((c->pd_candidate.param_channel ? DFP21B_PARAM_LEN : 0u) +
+                          2u * c->pd_candidate.pd_words);
+    *out_len = n;
+    *in_len = n;
+    return true;
+}
+
+static void hook_outputs(void *ctx, const uint8_t *out, size_t len, dp_outputs_reason_t why)
+{
+    dfp21b_t *c = ctx;
+    if (len > sizeof c->out_image) {
+        len = sizeof c->out_image;
+    }
+    memset(c->out_image, 0, sizeof c->out_image);
+    memcpy(c->out_image, out, len);
+    c->outputs_new = true;
+    c->outputs_reason = why;
+}
+
+static void hook_event(void *ctx, const dp_event_t *ev)
+{
+    dfp21b_t *c = ctx;
+    switch (ev->type) {
+    case DP_EV_WD_EXPIRED:
+        c->master_lost = true;
+        if (c->cfg.app.fieldbus_timeout != NULL) {
+            c->cfg.app.fieldbus_timeout(c->cfg.app.ctx);
+        }
+        break;
+    case DP_EV_ADDRESSED:
+        c->master_lost = false;
+        break;
+    case DP_EV_PRM_OK:
+        c->p819_ms = ev->value;
+        break;
+    case DP_EV_CFG_OK:
+        c->pd = c->pd_candidate;
+        break;
+    case DP_EV_CFG_FAULT:
+        c->pd = (dfp21b_pd_cfg_t){0};
+        break;
+    default:
+        break;
+    }
+    update_leds(c);
+    if (c->cfg.event != NULL) {
+        c->cfg.event(c->cfg.event_ctx, ev);
+    }
+}
+
+/* ---- life cycle ---------------------------------------------------------------------------- */
+
+void dfp21b_init(dfp21b_t *c, const dfp21b_cfg_t *cfg, hal_time_us_t now)
+{
+    memset(c, 0, sizeof *c);
+    c->cfg = *cfg;
+    uint8_t dip = 0;
+    if (cfg->dip.ops != NULL && cfg->dip.ops->read != NULL) {
+        dip = cfg->dip.ops->read(cfg->dip.ctx);
+    }
+    c->address = (uint8_t)(dip & 0x7Fu);
+    c->on_bus = c->address <= DFP21B_MAX_ADDRESS;
+    dp_slave_cfg_t dcfg = {
+        .address = c->address,
+        .ident = DFP21B_IDENT,
+        .fixed_baud = cfg->fixed_baud,
+        .strict_timing = cfg->strict_timing,
+        .baud_control_ms = cfg->baud_control_ms,
+        .sync_supported = true,
+        .freeze_supported = true,
+        .default_cfg = dfp21b_default_cfg,
+        .default_cfg_len = (uint8_t)sizeof dfp21b_default_cfg,
+        .uart = c->on_bus ? cfg->uart : (hal_uart_t){0},
+        .hooks = {.ctx = c, .prm_check = hook_prm_check, .cfg_check = hook_cfg_check,
+                  .outputs = hook_outputs, .event = hook_event},
+    };
+    dp_slave_init(&c->dp, &dcfg, now);
+    update_leds(c);
+}
+
+void dfp21b_rx_char(dfp21b_t *c, uint8_t byte, uint8_t flags, hal_time_us_t t)
+{
+    if (c->on_bus) {
+        dp_slave_rx_char(&c->dp, byte, flags, t);
+    }
+}
+
+static void put_be16(uint8_t *p, uint16_t v)
+{
+    p[0] = (uint8_t)(v >> 8);
+    p[1] = (uint8_t)(v & 0xFFu);
+}
+
+static void exchange_process_data(dfp21b_t *c)
+{
+    size_t off = c->pd.param_channel ? DFP21B_PARAM_LEN : 0u;
+    uint8_t n = c->pd.valid ? c->pd.pd_words : 0u;
+    if (c->pd.param_channel) {
+        memcpy(c->param_req, c->out_image, DFP21B_PARAM_LEN);
+    }
+    for (uint8_t i = 0; i < DFP21B_MAX_PD; i++) {
+        c->po[i] = i < n ? (uint16_t)((c->out_image[off + 2u * i] << 8) |
+                                      c->out_image[off + 2u * i + 1u])
+                         : 0u;
+    }
+    if (c->cfg.app.process_data != NULL) {
+        c->cfg.app.process_data(c->cfg.app.ctx, c->po, c->pi, n, c->outputs_reason);
+    } else {
+        memcpy(c->pi, c->po, sizeof c->pi); /* loopback: a defined answer without an inverter */
+    }
+    if (c->pd.param_channel) {
+        if (c->cfg.app.param_channel != NULL) {
+            c->cfg.app.param_channel(c->cfg.app.ctx, c->param_req, c->param_rsp);
+        }
+        memcpy(c->in_image, c->param_rsp, DFP21B_PARAM_LEN);
+    }
+    for (uint8_t i = 0; i < n; i++) {
+        put_be16(&c->in_image[off + 2u * i], c->pi[i]);
+    }
+    dp_slave_set_inputs(&c->dp, c->in_image, off + 2u * n);
+}
+
+hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now)
+{
+    if (!c->on_bus) {
+        return now + HAL_TIME_NO_DEADLINE_US;
+    }
+    hal_time_us_t next = dp_slave_poll(&c->dp, now);
+    if (c->outputs_new) {
+        c->outputs_new = false;
+        exchange_process_data(c);
+    }
+    update_leds(c);
+    return next;
+}
+
+void dfp21b_set_inverter_fault(dfp21b_t *c, uint8_t fault)
+{
+    c->inverter_fault = fault;
+    if (!c->diag_alarm || fault == 0u) {
+        dp_slave_set_ext_diag(&c->dp, NULL, 0);
+        return;
+    }
+    const uint8_t block[2] = {0x02u, fault}; /* device-related block, 2 octets incl. header */
+    dp_slave_set_ext_diag(&c->dp, block, sizeof block);
+}
