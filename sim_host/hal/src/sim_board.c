@@ -1,5 +1,7 @@
 #include "sim_hal/sim_board.h"
 
+#include <stddef.h>
+
 static void leds_set(void *ctx, hal_led_id_t led, hal_led_mode_t mode)
 {
     sim_leds_t *l = ctx;
