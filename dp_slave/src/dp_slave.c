@@ -31,9 +31,10 @@ const char *dp_baud_state_name(dp_baud_state_t st)
 
 uint32_t dp_baud_search_dwell_us(uint32_t baud)
 {
-    /* Two telegrams of the maximum 255 characters, but never below 10 ms. */
+    /* Two telegrams of the maximum 255 characters, but never below 20 ms, so a master that
+     * repeats its requests every few milliseconds is heard on every rate it might use. */
     uint64_t us = (2ull * FDL_FRAME_MAX * FDL_CHAR_BITS * 1000000ull) / baud;
-    return us < 10000u ? 10000u : (uint32_t)us;
+    return us < 20000u ? 20000u : (uint32_t)us;
 }
 
 static void emit(dp_slave_t *s, dp_event_type_t type, hal_time_us_t t, uint32_t value,

@@ -56,6 +56,8 @@ struct membus {
 void membus_init(membus_t *bus);
 /* Returns the port (NULL when full). Give port's uart to the station before running. */
 membus_port_t *membus_attach(membus_t *bus, const sim_station_t *station, hal_uart_t *uart_out);
+/* The station's state changed outside its callbacks (a command from the user): poll it now. */
+static inline void membus_wake(membus_port_t *port) { port->deadline_ns = port->bus->now_ns; }
 void membus_set_tap(membus_t *bus, sim_frame_tap_t tap, void *ctx);
 /* Runs every station until simulated time t_ns (absolute, from bus start). */
 void membus_run_until_ns(membus_t *bus, uint64_t t_ns);

@@ -1,0 +1,50 @@
+#include "dp_slave/dp_cfg.h"
+
+#include "dp_slave/dp_wire.h"
+
+static uint16_t units_to_bytes(uint8_t len_octet_or_id, bool special_length_octet)
+{
+    uint8_t units = special_length_octet ? (uint8_t)((len_octet_or_id & 0x3Fu) + 1u)
+                                         : (uint8_t)((len_octet_or_id & DP_CFG_LEN_MASK) + 1u);
+    bool words = (len_octet_or_id & DP_CFG_WORDS) != 0u;
+    return (uint16_t)(words ? units * 2u : units);
+}
+
+bool dp_cfg_io_lengths(const uint8_t *cfg, size_t len, uint16_t *out_len, uint16_t *in_len)
+{
+    uint16_t out = 0;
+    uint16_t in = 0;
+    size_t i = 0;
+    while (i < len) {
+        uint8_t id = cfg[i++];
+        uint8_t dir = (uint8_t)(id & DP_CFG_DIR_MASK);
+        if (dir != DP_CFG_DIR_SPECIAL) {
+            uint16_t n = units_to_bytes(id, false);
+            if ((dir & DP_CFG_DIR_OUT) != 0u) out = (uint16_t)(out + n);
+            if ((dir & DP_CFG_DIR_IN) != 0u) in = (uint16_t)(in + n);
+            continue;
+        }
+        /* Special format: bits 7..6 say which length octets follow, bits 3..0 how many
+         * manufacturer octets (15 = none). */
+        uint8_t kind = (uint8_t)(id >> 6);
+        uint8_t vendor = (uint8_t)(id & 0x0Fu);
+        if (kind == 2u || kind == 3u) {
+            if (i >= len) return false;
+            out = (uint16_t)(out + units_to_bytes(cfg[i++], true));
+        }
+        if (kind == 1u || kind == 3u) {
+            if (i >= len) return false;
+            in = (uint16_t)(in + units_to_bytes(cfg[i++], true));
+        }
+        if (vendor != 15u) {
+            if (len - i < vendor) return false;
+            i += vendor;
+        }
+    }
+    if (out > 244u || in > 244u) {
+        return false;
+    }
+    *out_len = out;
+    *in_len = in;
+    return true;
+}

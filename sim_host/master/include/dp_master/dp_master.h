@@ -1,0 +1,143 @@
+/* A class-1 DP master for the host: brings DP-V0 slaves up (FDL status, Slave_Diag, Set_Prm,
+ * Chk_Cfg, Slave_Diag) and keeps them in cyclic Data_Exchange; Global_Control on demand.
+ * It runs as a station on any medium (in-memory bus, tty, PTY) like the card does, and keeps
+ * only one request outstanding, as a single master on a segment does.
+ *
+ * Fault handling: a missing reply is retried with the same FCB (max_retry times); then the
+ * slave counts as lost and its start-up is repeated: a silent address is asked again every
+ * lost_poll_us (like a GAP update), a slave that answers but refuses after a back-off that
+ * doubles from backoff_min_us to backoff_max_us, so a broken slave is not hammered. RS to
+ * Data_Exchange, Prm_Fault, Cfg_Fault and Not_Supported in the diagnosis do the same. DH makes
+ * the master read the diagnosis before the next Data_Exchange. */
+#ifndef DP_MASTER_DP_MASTER_H
+#define DP_MASTER_DP_MASTER_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "dp_slave/fdl_rx.h"
+#include "hal/hal_time.h"
+#include "hal/hal_uart.h"
+
+#ifndef DPM_MAX_SLAVES
+#define DPM_MAX_SLAVES 32u
+#endif
+#define DPM_MAX_PRM 244u
+#define DPM_MAX_CFG 244u
+#define DPM_MAX_IO 244u
+
+typedef enum dpm_phase {
+    DPM_PHASE_BACKOFF = 0, /* waiting before the next start-up attempt */
+    DPM_PHASE_FDL_STATUS,
+    DPM_PHASE_DIAG_1,
+    DPM_PHASE_SET_PRM,
+    DPM_PHASE_CHK_CFG,
+    DPM_PHASE_DIAG_2,
+    DPM_PHASE_DATA_EXCH,
+    DPM_PHASE_DIAG_DX, /* reading a diagnosis announced by DH */
+} dpm_phase_t;
+
+typedef enum dpm_event_type {
+    DPM_EV_PHASE = 0, /* a slave moved from old_phase to new_phase */
+    DPM_EV_DIAG,      /* a Slave_Diag answer: data/len */
+    DPM_EV_FAULT,     /* text says why the slave is restarted */
+    DPM_EV_RETRY,
+    DPM_EV_INPUTS,    /* Data_Exchange answer: data/len */
+    DPM_EV_GLOBAL_CONTROL_SENT,
+} dpm_event_type_t;
+
+typedef struct dpm_event {
+    dpm_event_type_t type;
+    hal_time_us_t t;
+    uint8_t slave;
+    dpm_phase_t old_phase;
+    dpm_phase_t new_phase;
+    const uint8_t *data;
+    size_t len;
+    const char *text;
+} dpm_event_t;
+
+typedef struct dpm_slave_cfg {
+    uint8_t address;
+    uint8_t prm[DPM_MAX_PRM]; /* complete Set_Prm DU */
+    uint8_t prm_len;
+    uint8_t cfg[DPM_MAX_CFG];
+    uint8_t cfg_len;
+} dpm_slave_cfg_t;
+
+typedef struct dp_master_cfg {
+    uint8_t address;
+    uint32_t baud;
+    bool strict_timing;
+    uint32_t slot_time_us;   /* 0: TSL default for the rate (100..1000 bit times) */
+    uint32_t cycle_us;       /* minimum time between two Data_Exchange of one slave */
+    uint8_t max_retry;       /* 0: 1 retry */
+    uint32_t backoff_min_us; /* 0: 10 ms */
+    uint32_t backoff_max_us; /* 0: 1 s */
+    uint32_t lost_poll_us;   /* 0: 5 ms between FDL status requests to a silent address */
+    hal_uart_t uart;
+    void (*event)(void *ctx, const dpm_event_t *ev);
+    void *event_ctx;
+} dp_master_cfg_t;
+
+typedef struct dpm_slave {
+    dpm_slave_cfg_t cfg;
+    uint16_t out_len;
+    uint16_t in_len;
+    dpm_phase_t phase;
+    bool fcb_first; /* next request carries FCV=0, FCB=1 */
+    bool fcb;
+    hal_time_us_t due; /* earliest time of the next request */
+    uint32_t backoff_us;
+    uint8_t stat_diag_repeats;
+    uint8_t outputs[DPM_MAX_IO];
+    uint8_t inputs[DPM_MAX_IO];
+    uint16_t inputs_len;
+    uint8_t last_diag[DPM_MAX_IO];
+    uint8_t last_diag_len;
+    uint32_t cycles;
+    uint32_t restarts;
+} dpm_slave_t;
+
+typedef struct dp_master {
+    dp_master_cfg_t cfg;
+    fdl_rx_t rx;
+    dpm_slave_t slaves[DPM_MAX_SLAVES];
+    uint8_t num_slaves;
+    uint8_t next_slave; /* round robin */
+    bool running;
+    bool waiting;       /* a request is outstanding */
+    uint8_t waiting_for; /* slave index */
+    uint8_t retries;
+    hal_time_us_t reply_deadline;
+    hal_time_us_t next_send;
+    uint8_t request[FDL_FRAME_MAX];
+    uint16_t request_len;
+    bool gc_pending;
+    uint8_t gc_command;
+    uint8_t gc_group;
+    uint32_t timeouts;
+    uint32_t total_retries;
+} dp_master_t;
+
+void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t now);
+/* Returns the slave index or -1 (table full, malformed configuration). */
+int dp_master_add_slave(dp_master_t *m, const dpm_slave_cfg_t *slave);
+void dp_master_set_outputs(dp_master_t *m, unsigned slave, const uint8_t *out, size_t len);
+/* Sent as SDN to address 127 at the next free moment. */
+void dp_master_global_control(dp_master_t *m, uint8_t command, uint8_t group_select);
+/* A stopped master sends nothing (to show what the slave's watchdog does). start() brings every
+ * slave up again from the beginning. */
+void dp_master_stop(dp_master_t *m);
+void dp_master_start(dp_master_t *m, hal_time_us_t now);
+
+void dp_master_rx_char(dp_master_t *m, uint8_t byte, uint8_t flags, hal_time_us_t t);
+hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now);
+
+const char *dpm_phase_name(dpm_phase_t p);
+/* Standard DP-V0 Set_Prm: Lock_Req, WD_On with the given time (10 ms base), min TSDR 11. */
+size_t dpm_build_prm(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
+                     size_t user_len);
+
+#endif

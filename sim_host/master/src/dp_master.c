@@ -1,0 +1,457 @@
+#include "dp_master/dp_master.h"
+
+#include <string.h>
+
+#include "dp_slave/dp_cfg.h"
+#include "dp_slave/dp_wire.h"
+#include "dp_slave/fdl_frame.h"
+#include "dp_slave/fdl_wire.h"
+
+const char *dpm_phase_name(dpm_phase_t p)
+{
+    switch (p) {
+    case DPM_PHASE_BACKOFF: return "back-off";
+    case DPM_PHASE_FDL_STATUS: return "FDL status";
+    case DPM_PHASE_DIAG_1: return "Slave_Diag";
+    case DPM_PHASE_SET_PRM: return "Set_Prm";
+    case DPM_PHASE_CHK_CFG: return "Chk_Cfg";
+    case DPM_PHASE_DIAG_2: return "Slave_Diag (check)";
+    case DPM_PHASE_DATA_EXCH: return "Data_Exchange";
+    case DPM_PHASE_DIAG_DX: return "Slave_Diag (DH)";
+    }
+    return "?";
+}
+
+size_t dpm_build_prm(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
+                     size_t user_len)
+{
+    uint32_t units = (wd_ms + 9u) / 10u; /* 10 ms base */
+    uint8_t f1 = 1;
+    uint8_t f2 = 1;
+    bool wd = wd_ms > 0u;
+    if (wd) {
+        if (units < 2u) units = 2u; /* 1 x 1 is not allowed */
+        if (units > 255u * 255u) units = 255u * 255u;
+        f1 = (uint8_t)((units + 254u) / 255u);
+        if (f1 < 1u) f1 = 1u;
+        f2 = (uint8_t)((units + f1 - 1u) / f1);
+        if (f1 == 1u && f2 == 1u) f2 = 2u;
+    }
+    out[DP_PRM_STATION_STATUS] = (uint8_t)(DP_PRM_LOCK_REQ | (wd ? DP_PRM_WD_ON : 0u));
+    out[DP_PRM_WD_FACT_1] = f1;
+    out[DP_PRM_WD_FACT_2] = f2;
+    out[DP_PRM_MIN_TSDR] = FDL_MIN_TSDR_DEFAULT_BITS;
+    out[DP_PRM_IDENT_HIGH] = (uint8_t)(ident >> 8);
+    out[DP_PRM_IDENT_LOW] = (uint8_t)(ident & 0xFFu);
+    out[DP_PRM_GROUP_IDENT] = 0;
+    if (user_len > DPM_MAX_PRM - DP_PRM_LEN_STANDARD) {
+        user_len = DPM_MAX_PRM - DP_PRM_LEN_STANDARD;
+    }
+    memcpy(&out[DP_PRM_LEN_STANDARD], user, user_len);
+    return DP_PRM_LEN_STANDARD + user_len;
+}
+
+static void emit(dp_master_t *m, const dpm_event_t *ev)
+{
+    if (m->cfg.event != NULL) {
+        m->cfg.event(m->cfg.event_ctx, ev);
+    }
+}
+
+static void set_phase(dp_master_t *m, unsigned idx, dpm_phase_t next, hal_time_us_t t)
+{
+    dpm_slave_t *s = &m->slaves[idx];
+    if (s->phase == next) {
+        return;
+    }
+    dpm_event_t ev = {.type = DPM_EV_PHASE, .t = t, .slave = s->cfg.address,
+                      .old_phase = s->phase, .new_phase = next};
+    s->phase = next;
+    emit(m, &ev);
+}
+
+static void restart_slave(dp_master_t *m, unsigned idx, hal_time_us_t t, const char *why)
+{
+    dpm_slave_t *s = &m->slaves[idx];
+    bool lost = s->phase == DPM_PHASE_FDL_STATUS;
+    dpm_event_t ev = {.type = DPM_EV_FAULT, .t = t, .slave = s->cfg.address, .text = why,
+                      .old_phase = s->phase, .new_phase = DPM_PHASE_BACKOFF};
+    emit(m, &ev);
+    s->restarts++;
+    s->fcb_first = true;
+    if (lost) {
+        /* Nobody answers at this address (yet): ask again at a steady, modest rate, as a
+         * master's GAP update does, so a slave still searching for the baud rate hears us. */
+        s->due = t + m->cfg.lost_poll_us;
+    } else {
+        /* The slave answers but refuses: back off so a broken slave is not hammered. */
+        s->due = t + s->backoff_us;
+        s->backoff_us = s->backoff_us * 2u > m->cfg.backoff_max_us ? m->cfg.backoff_max_us
+                                                                   : s->backoff_us * 2u;
+    }
+    set_phase(m, idx, DPM_PHASE_BACKOFF, t);
+}
+
+void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t now)
+{
+    memset(m, 0, sizeof *m);
+    m->cfg = *cfg;
+    if (m->cfg.slot_time_us == 0u) {
+        uint32_t b = cfg->baud;
+        uint32_t bits = b <= 187500u ? 100u : b <= 500000u ? 200u : b <= 1500000u ? 300u
+                        : b <= 3000000u ? 400u : b <= 6000000u ? 600u : 1000u;
+        m->cfg.slot_time_us = hal_uart_bits_us(b, bits);
+    }
+    if (m->cfg.max_retry == 0u) m->cfg.max_retry = 1u;
+    if (m->cfg.backoff_min_us == 0u) m->cfg.backoff_min_us = 10000u;
+    if (m->cfg.backoff_max_us == 0u) m->cfg.backoff_max_us = 1000000u;
+    if (m->cfg.lost_poll_us == 0u) m->cfg.lost_poll_us = 5000u;
+    fdl_rx_init(&m->rx, cfg->baud, cfg->strict_timing);
+    if (cfg->uart.ops != NULL && cfg->uart.ops->set_baud != NULL) {
+        (void)cfg->uart.ops->set_baud(cfg->uart.ctx, cfg->baud);
+    }
+    m->running = true;
+    m->next_send = now;
+}
+
+int dp_master_add_slave(dp_master_t *m, const dpm_slave_cfg_t *sc)
+{
+    if (m->num_slaves >= DPM_MAX_SLAVES || sc->prm_len < DP_PRM_LEN_STANDARD) {
+        return -1;
+    }
+    uint16_t out_len;
+    uint16_t in_len;
+    if (!dp_cfg_io_lengths(sc->cfg, sc->cfg_len, &out_len, &in_len)) {
+        return -1;
+    }
+    dpm_slave_t *s = &m->slaves[m->num_slaves];
+    memset(s, 0, sizeof *s);
+    s->cfg = *sc;
+    s->out_len = out_len;
+    s->in_len = in_len;
+    s->fcb_first = true;
+    s->phase = DPM_PHASE_FDL_STATUS;
+    s->backoff_us = m->cfg.backoff_min_us;
+    return m->num_slaves++;
+}
+
+void dp_master_set_outputs(dp_master_t *m, unsigned idx, const uint8_t *out, size_t len)
+{
+    if (idx >= m->num_slaves) {
+        return;
+    }
+    dpm_slave_t *s = &m->slaves[idx];
+    memcpy(s->outputs, out, len < s->out_len ? len : s->out_len);
+}
+
+void dp_master_global_control(dp_master_t *m, uint8_t command, uint8_t group_select)
+{
+    m->gc_pending = true;
+    m->gc_command = command;
+    m->gc_group = group_select;
+}
+
+void dp_master_stop(dp_master_t *m)
+{
+    m->running = false;
+    m->waiting = false;
+}
+
+void dp_master_start(dp_master_t *m, hal_time_us_t now)
+{
+    m->running = true;
+    m->waiting = false;
+    m->next_send = now;
+    for (unsigned i = 0; i < m->num_slaves; i++) {
+        m->slaves[i].fcb_first = true;
+        m->slaves[i].due = now;
+        set_phase(m, i, DPM_PHASE_FDL_STATUS, now);
+    }
+}
+
+/* ---- sending ------------------------------------------------------------------------------ */
+
+static uint32_t idle_before_request_us(const dp_master_t *m)
+{
+    /* TSYN (33 bit) is the minimum; TID1 (37 bit) is the usual idle after a reply. One extra
+     * microsecond absorbs the rounding of microsecond timestamps at high rates. */
+    return hal_uart_bits_us(m->cfg.baud, 37u) + 1u;
+}
+
+static void send(dp_master_t *m, hal_time_us_t now, bool expect_reply, unsigned idx)
+{
+    uint32_t char_ns = hal_uart_char_ns(m->cfg.baud);
+    uint32_t tx_us = (uint32_t)(((uint64_t)char_ns * m->request_len + 999u) / 1000u);
+    if (m->cfg.uart.ops != NULL && m->cfg.uart.ops->transmit != NULL) {
+        (void)m->cfg.uart.ops->transmit(m->cfg.uart.ctx, m->request, m->request_len, now);
+    }
+    fdl_rx_reset(&m->rx);
+    if (expect_reply) {
+        m->waiting = true;
+        m->waiting_for = (uint8_t)idx;
+        m->reply_deadline = now + tx_us + m->cfg.slot_time_us;
+    } else {
+        m->next_send = now + tx_us + hal_uart_bits_us(m->cfg.baud, 100u); /* TID2 after SDN */
+    }
+}
+
+static uint8_t next_fc(dpm_slave_t *s, bool high)
+{
+    uint8_t code = high ? FDL_REQ_SRD_HIGH : FDL_REQ_SRD_LOW;
+    if (s->fcb_first) {
+        return (uint8_t)(FDL_FC_REQUEST | FDL_FC_FCB | code);
+    }
+    return (uint8_t)(FDL_FC_REQUEST | FDL_FC_FCV | (s->fcb ? FDL_FC_FCB : 0u) | code);
+}
+
+static void build_request(dp_master_t *m, dpm_slave_t *s)
+{
+    uint8_t da = s->cfg.address;
+    uint8_t sa = m->cfg.address;
+    size_t n = 0;
+    switch (s->phase) {
+    case DPM_PHASE_FDL_STATUS:
+        n = fdl_encode(m->request, da, sa, FDL_FC_REQUEST | FDL_REQ_FDL_STATUS, false, 0, 0,
+                       NULL, 0);
+        break;
+    case DPM_PHASE_DIAG_1:
+    case DPM_PHASE_DIAG_2:
+    case DPM_PHASE_DIAG_DX:
+        n = fdl_encode(m->request, da, sa, next_fc(s, true), true, DP_SAP_SLAVE_DIAG,
+                       DP_SAP_MASTER, NULL, 0);
+        break;
+    case DPM_PHASE_SET_PRM:
+        n = fdl_encode(m->request, da, sa, next_fc(s, true), true, DP_SAP_SET_PRM, DP_SAP_MASTER,
+                       s->cfg.prm, s->cfg.prm_len);
+        break;
+    case DPM_PHASE_CHK_CFG:
+        n = fdl_encode(m->request, da, sa, next_fc(s, true), true, DP_SAP_CHK_CFG, DP_SAP_MASTER,
+                       s->cfg.cfg, s->cfg.cfg_len);
+        break;
+    case DPM_PHASE_DATA_EXCH:
+        n = fdl_encode(m->request, da, sa, next_fc(s, true), false, 0, 0, s->outputs,
+                       s->out_len);
+        break;
+    case DPM_PHASE_BACKOFF:
+        break;
+    }
+    m->request_len = (uint16_t)n;
+}
+
+/* ---- receiving ---------------------------------------------------------------------------- */
+
+static void reply_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, bool sc,
+                           hal_time_us_t t)
+{
+    dpm_slave_t *s = &m->slaves[idx];
+    if (s->phase != DPM_PHASE_FDL_STATUS) {
+        /* The request completed: the next one toggles FCB. */
+        s->fcb = s->fcb_first ? false : !s->fcb;
+        s->fcb_first = false;
+    }
+    uint8_t code = sc ? 0xFFu : (uint8_t)(msg->fc & FDL_FC_CODE_MASK);
+    switch (s->phase) {
+    case DPM_PHASE_FDL_STATUS:
+        if (sc || (msg->fc & FDL_FC_REQUEST) != 0u) {
+            restart_slave(m, idx, t, "unexpected answer to FDL status");
+            return;
+        }
+        set_phase(m, idx, DPM_PHASE_DIAG_1, t);
+        return;
+    case DPM_PHASE_DIAG_1:
+    case DPM_PHASE_DIAG_2:
+    case DPM_PHASE_DIAG_DX: {
+        if (sc || code != FDL_RSP_DL || msg->data_len < DP_DIAG_STD_LEN) {
+            restart_slave(m, idx, t, "no valid diagnosis");
+            return;
+        }
+        const uint8_t *d = msg->data;
+        s->last_diag_len = msg->data_len;
+        memcpy(s->last_diag, d, msg->data_len);
+        dpm_event_t ev = {.type = DPM_EV_DIAG, .t = t, .slave = s->cfg.address, .data = d,
+                          .len = msg->data_len, .old_phase = s->phase, .new_phase = s->phase};
+        emit(m, &ev);
+        uint16_t ident = (uint16_t)((d[DP_DIAG_IDENT_HIGH] << 8) | d[DP_DIAG_IDENT_LOW]);
+        uint16_t want = (uint16_t)((s->cfg.prm[DP_PRM_IDENT_HIGH] << 8) |
+                                   s->cfg.prm[DP_PRM_IDENT_LOW]);
+        if (s->phase == DPM_PHASE_DIAG_1) {
+            if (ident != want) {
+                restart_slave(m, idx, t, "ident number differs from the configuration");
+            } else if (d[DP_DIAG_MASTER_ADD] != DP_MASTER_ADD_NONE &&
+                       d[DP_DIAG_MASTER_ADD] != m->cfg.address &&
+                       (d[DP_DIAG_STATUS_2] & DP_DIAG2_PRM_REQ) == 0u) {
+                restart_slave(m, idx, t, "slave is locked by another master");
+            } else {
+                set_phase(m, idx, DPM_PHASE_SET_PRM, t);
+            }
+            return;
+        }
+        uint8_t st1 = d[DP_DIAG_STATUS_1];
+        uint8_t st2 = d[DP_DIAG_STATUS_2];
+        if ((st1 & DP_DIAG1_PRM_FAULT) != 0u) {
+            restart_slave(m, idx, t, "Prm_Fault: slave refused the parameters");
+        } else if ((st1 & DP_DIAG1_CFG_FAULT) != 0u) {
+            restart_slave(m, idx, t, "Cfg_Fault: slave refused the configuration");
+        } else if ((st1 & DP_DIAG1_NOT_SUPPORTED) != 0u) {
+            restart_slave(m, idx, t, "Not_Supported: slave lacks a requested function");
+        } else if ((st2 & DP_DIAG2_PRM_REQ) != 0u || (st1 & DP_DIAG1_STATION_NOT_READY) != 0u) {
+            if ((st2 & DP_DIAG2_STAT_DIAG) != 0u && s->stat_diag_repeats < 100u) {
+                s->stat_diag_repeats++; /* slave asks to be polled for diagnosis again */
+            } else {
+                restart_slave(m, idx, t, "slave is not ready for data exchange");
+            }
+        } else {
+            s->stat_diag_repeats = 0;
+            s->backoff_us = m->cfg.backoff_min_us;
+            set_phase(m, idx, DPM_PHASE_DATA_EXCH, t);
+        }
+        return;
+    }
+    case DPM_PHASE_SET_PRM:
+        if (!sc) {
+            restart_slave(m, idx, t, "Set_Prm not acknowledged");
+            return;
+        }
+        set_phase(m, idx, DPM_PHASE_CHK_CFG, t);
+        return;
+    case DPM_PHASE_CHK_CFG:
+        if (!sc) {
+            restart_slave(m, idx, t, "Chk_Cfg not acknowledged");
+            return;
+        }
+        set_phase(m, idx, DPM_PHASE_DIAG_2, t);
+        return;
+    case DPM_PHASE_DATA_EXCH: {
+        if (!sc && (code == FDL_RSP_RS || code == FDL_RSP_RR || code == FDL_RSP_UE)) {
+            restart_slave(m, idx, t, code == FDL_RSP_RS ? "RS: slave left data exchange"
+                                                        : "slave refused Data_Exchange");
+            return;
+        }
+        s->cycles++;
+        s->inputs_len = sc ? 0u : msg->data_len;
+        if (!sc) {
+            memcpy(s->inputs, msg->data, msg->data_len);
+        }
+        dpm_event_t ev = {.type = DPM_EV_INPUTS, .t = t, .slave = s->cfg.address,
+                          .data = s->inputs, .len = s->inputs_len, .old_phase = s->phase,
+                          .new_phase = s->phase};
+        emit(m, &ev);
+        if (!sc && (code == FDL_RSP_DH || code == FDL_RSP_RDH)) {
+            set_phase(m, idx, DPM_PHASE_DIAG_DX, t);
+        }
+        return;
+    }
+    case DPM_PHASE_BACKOFF:
+        return;
+    }
+}
+
+void dp_master_rx_char(dp_master_t *m, uint8_t byte, uint8_t flags, hal_time_us_t t)
+{
+    fdl_rx_result_t r = fdl_rx_char(&m->rx, byte, flags, t);
+    if (m->waiting && m->rx.collecting) {
+        /* The slot time bounds the first character of the answer; once it is coming, give
+         * the rest of the telegram the time its characters need. */
+        hal_time_us_t until = t + 2u * (hal_uart_char_ns(m->cfg.baud) / 1000u + 1u) +
+                              (m->cfg.strict_timing ? 0u : m->rx.relaxed_gap_us);
+        if (hal_time_diff(until, m->reply_deadline) > 0) {
+            m->reply_deadline = until;
+        }
+    }
+    if (r != FDL_RX_FRAME || !m->waiting) {
+        return;
+    }
+    unsigned idx = m->waiting_for;
+    const uint8_t *f = m->rx.buf;
+    fdl_msg_t msg = {0};
+    bool sc = f[0] == FDL_SC;
+    if (!sc) {
+        if (fdl_parse(f, m->rx.frame_len, &msg) != FDL_PARSE_OK ||
+            (msg.fc & FDL_FC_REQUEST) != 0u || msg.da != m->cfg.address ||
+            msg.sa != m->slaves[idx].cfg.address) {
+            return; /* not the answer we wait for */
+        }
+    }
+    m->waiting = false;
+    m->retries = 0;
+    m->next_send = m->rx.frame_end_t + idle_before_request_us(m);
+    reply_received(m, idx, &msg, sc, m->rx.frame_end_t);
+}
+
+static int pick_slave(dp_master_t *m, hal_time_us_t now)
+{
+    for (unsigned k = 0; k < m->num_slaves; k++) {
+        unsigned idx = (m->next_slave + k) % m->num_slaves;
+        dpm_slave_t *s = &m->slaves[idx];
+        if (!hal_time_reached(now, s->due)) {
+            continue;
+        }
+        if (s->phase == DPM_PHASE_BACKOFF) {
+            set_phase(m, idx, DPM_PHASE_FDL_STATUS, now);
+        }
+        m->next_slave = (uint8_t)((idx + 1u) % m->num_slaves);
+        return (int)idx;
+    }
+    return -1;
+}
+
+hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
+{
+    hal_time_us_t idle_deadline = now + HAL_TIME_NO_DEADLINE_US;
+    if (!m->running) {
+        return idle_deadline;
+    }
+    if (m->waiting) {
+        if (!hal_time_reached(now, m->reply_deadline)) {
+            return m->reply_deadline;
+        }
+        m->timeouts++;
+        unsigned idx = m->waiting_for;
+        m->waiting = false;
+        if (m->retries < m->cfg.max_retry) {
+            m->retries++;
+            m->total_retries++;
+            dpm_event_t ev = {.type = DPM_EV_RETRY, .t = now,
+                              .slave = m->slaves[idx].cfg.address,
+                              .old_phase = m->slaves[idx].phase,
+                              .new_phase = m->slaves[idx].phase};
+            emit(m, &ev);
+            send(m, now, true, idx); /* same frame, same FCB */
+            return m->reply_deadline;
+        }
+        m->retries = 0;
+        restart_slave(m, idx, now, "no answer");
+        m->next_send = now;
+    }
+    if (!hal_time_reached(now, m->next_send)) {
+        return m->next_send;
+    }
+    if (m->gc_pending) {
+        m->gc_pending = false;
+        uint8_t du[2] = {m->gc_command, m->gc_group};
+        m->request_len = (uint16_t)fdl_encode(m->request, FDL_ADDR_BROADCAST, m->cfg.address,
+                                              FDL_FC_REQUEST | FDL_REQ_SDN_HIGH, true,
+                                              DP_SAP_GLOBAL_CONTROL, DP_SAP_MASTER, du, 2);
+        send(m, now, false, 0);
+        dpm_event_t ev = {.type = DPM_EV_GLOBAL_CONTROL_SENT, .t = now, .data = du, .len = 2};
+        emit(m, &ev);
+        return m->next_send;
+    }
+    int idx = pick_slave(m, now);
+    if (idx < 0) {
+        hal_time_us_t next = idle_deadline;
+        for (unsigned i = 0; i < m->num_slaves; i++) {
+            if (hal_time_diff(m->slaves[i].due, next) < 0) {
+                next = m->slaves[i].due;
+            }
+        }
+        return next;
+    }
+    dpm_slave_t *s = &m->slaves[idx];
+    build_request(m, s);
+    if (s->phase == DPM_PHASE_DATA_EXCH) {
+        s->due = now + m->cfg.cycle_us;
+    }
+    send(m, now, true, (unsigned)idx);
+    return m->reply_deadline;
+}
