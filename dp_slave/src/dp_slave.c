@@ -522,6 +522,9 @@ static void handle_frame(dp_slave_t *s)
     hal_time_us_t t = s->rx.frame_end_t;
     uint8_t sd = frame[0];
     bool data_frame = sd == FDL_SD1 || sd == FDL_SD2 || sd == FDL_SD3;
+    if (data_frame) {
+        s->line_active = true;
+    }
     if (data_frame && s->baud_state == DP_BAUD_SEARCH) {
         s->baud_state = DP_BAUD_CONTROL;
         s->baud_deadline = t + baud_control_us(s);
@@ -629,6 +632,7 @@ hal_time_us_t dp_slave_poll(dp_slave_t *s, hal_time_us_t now)
             if (s->baud_state == DP_BAUD_CONTROL) {
                 s->baud_state = DP_BAUD_SEARCH;
                 s->baud_index = 0;
+                s->line_active = false;
                 emit(s, DP_EV_BAUD_LOST, now, s->baud, 0);
             } else {
                 s->baud_index = (uint8_t)((s->baud_index + 1u) % HAL_UART_NUM_BAUDS);

@@ -158,6 +158,7 @@ typedef struct dp_slave {
     uint8_t ext_diag_len;
     bool ext_diag_overflow;
 
+    bool line_active; /* an error-free telegram was heard since power-up or the last baud loss */
     uint32_t telegrams_for_me;
 } dp_slave_t;
 
@@ -181,6 +182,9 @@ size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max);
 static inline dp_state_t dp_slave_state(const dp_slave_t *s) { return s->state; }
 static inline uint32_t dp_slave_baud(const dp_slave_t *s) { return s->baud; }
 static inline dp_baud_state_t dp_slave_baud_state(const dp_slave_t *s) { return s->baud_state; }
+/* True once an error-free telegram was received at the current rate (the "baud found" of a
+ * fixed-rate slave); false again after the baud control time expires. */
+static inline bool dp_slave_line_active(const dp_slave_t *s) { return s->line_active; }
 static inline uint8_t dp_slave_master(const dp_slave_t *s) { return s->master_add; }
 static inline uint32_t dp_slave_wd_time_ms(const dp_slave_t *s)
 {

@@ -170,7 +170,7 @@ static void update_leds(dfp21b_t *c)
 {
     hal_led_mode_t run = c->on_bus ? HAL_LED_ON : HAL_LED_BLINK;
     hal_led_mode_t bus;
-    if (!c->on_bus || dp_slave_baud_state(&c->dp) == DP_BAUD_SEARCH || c->master_lost) {
+    if (!c->on_bus || !dp_slave_line_active(&c->dp) || c->master_lost) {
         bus = HAL_LED_ON; /* no baud rate, bus interrupted, or master gone (watchdog) */
     } else if (dp_slave_state(&c->dp) == DP_STATE_DATA_EXCH) {
         bus = HAL_LED_OFF;

@@ -135,6 +135,27 @@ int dp_master_add_slave(dp_master_t *m, const dpm_slave_cfg_t *sc)
     return m->num_slaves++;
 }
 
+int dp_master_reconfigure(dp_master_t *m, unsigned idx, const dpm_slave_cfg_t *sc,
+                          hal_time_us_t now)
+{
+    uint16_t out_len;
+    uint16_t in_len;
+    if (idx >= m->num_slaves || sc->prm_len < DP_PRM_LEN_STANDARD ||
+        !dp_cfg_io_lengths(sc->cfg, sc->cfg_len, &out_len, &in_len)) {
+        return -1;
+    }
+    dpm_slave_t *s = &m->slaves[idx];
+    s->cfg = *sc;
+    s->out_len = out_len;
+    s->in_len = in_len;
+    s->fcb_first = true;
+    s->due = now;
+    s->backoff_us = m->cfg.backoff_min_us;
+    memset(s->outputs, 0, sizeof s->outputs);
+    set_phase(m, idx, DPM_PHASE_FDL_STATUS, now);
+    return 0;
+}
+
 void dp_master_set_outputs(dp_master_t *m, unsigned idx, const uint8_t *out, size_t len)
 {
     if (idx >= m->num_slaves) {

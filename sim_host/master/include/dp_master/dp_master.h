@@ -124,6 +124,9 @@ typedef struct dp_master {
 void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t now);
 /* Returns the slave index or -1 (table full, malformed configuration). */
 int dp_master_add_slave(dp_master_t *m, const dpm_slave_cfg_t *slave);
+/* New parameters/configuration for a slave: its start-up is repeated with them. */
+int dp_master_reconfigure(dp_master_t *m, unsigned slave, const dpm_slave_cfg_t *cfg,
+                          hal_time_us_t now);
 void dp_master_set_outputs(dp_master_t *m, unsigned slave, const uint8_t *out, size_t len);
 /* Sent as SDN to address 127 at the next free moment. */
 void dp_master_global_control(dp_master_t *m, uint8_t command, uint8_t group_select);

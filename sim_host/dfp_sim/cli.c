@@ -1,0 +1,116 @@
+#include "cli.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "hal/hal_uart.h"
+
+void cli_error(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fputs("dfp-sim: ", stderr);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    va_end(ap);
+}
+
+const char *cli_value(int argc, char **argv, int *i)
+{
+    if (*i + 1 >= argc) {
+        cli_error("option %s needs a value (see dfp-sim --help)", argv[*i]);
+        return NULL;
+    }
+    (*i)++;
+    return argv[*i];
+}
+
+bool cli_u32(const char *opt, const char *text, uint32_t min, uint32_t max, uint32_t *out)
+{
+    char *end = NULL;
+    errno = 0;
+    unsigned long v = strtoul(text, &end, 0);
+    if (text[0] == '\0' || text[0] == '-' || *end != '\0' || errno != 0 || v < min || v > max) {
+        cli_error("%s: '%s' is not a number from %u to %u", opt, text, min, max);
+        return false;
+    }
+    *out = (uint32_t)v;
+    return true;
+}
+
+static int hexval(int c)
+{
+    if (c >= '0' && c <= '9') return c - '0';
+    c = tolower(c);
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    return -1;
+}
+
+bool cli_hex(const char *opt, const char *text, uint8_t *out, size_t max, size_t *len)
+{
+    size_t n = 0;
+    const char *p = text;
+    while (*p != '\0') {
+        if (*p == ' ' || *p == ',' || *p == ':' || *p == '-') {
+            p++;
+            continue;
+        }
+        if (p[0] == '0' && (p[1] == 'x' || p[1] == 'X')) {
+            p += 2;
+            continue;
+        }
+        int hi = hexval((unsigned char)p[0]);
+        int lo = p[1] != '\0' ? hexval((unsigned char)p[1]) : -1;
+        if (hi < 0 || lo < 0) {
+            cli_error("%s: '%s' is not a sequence of hex octets (e.g. F3F2)", opt, text);
+            return false;
+        }
+        if (n >= max) {
+            cli_error("%s: more than %zu octets", opt, max);
+            return false;
+        }
+        out[n++] = (uint8_t)(hi * 16 + lo);
+        p += 2;
+    }
+    if (n == 0) {
+        cli_error("%s: no octets given", opt);
+        return false;
+    }
+    *len = n;
+    return true;
+}
+
+bool cli_baud(const char *opt, const char *text, bool allow_auto, uint32_t *out)
+{
+    if (allow_auto && strcmp(text, "auto") == 0) {
+        *out = 0;
+        return true;
+    }
+    char *end = NULL;
+    double v = strtod(text, &end);
+    if (end != text) {
+        if (*end == 'k' || *end == 'K') {
+            v *= 1000.0;
+            end++;
+        } else if (*end == 'M') {
+            v *= 1000000.0;
+            end++;
+        }
+    }
+    if (end != text && *end == '\0') {
+        for (unsigned i = 0; i < HAL_UART_NUM_BAUDS; i++) {
+            double r = (double)hal_uart_bauds[i];
+            if (v > r - 0.5 && v < r + 0.5) {
+                *out = hal_uart_bauds[i];
+                return true;
+            }
+        }
+    }
+    cli_error("%s: '%s' is not a PROFIBUS rate (9600 19200 45450 93750 187500 500000 1.5M 3M "
+              "6M 12M%s)", opt, text, allow_auto ? " or auto" : "");
+    return false;
+}

@@ -1,0 +1,21 @@
+/* Command-line parsing shared by the dfp-sim subcommands. Every parse error prints one line
+ * naming the option and the bad value, and the caller exits with status 2. */
+#ifndef DFP_SIM_CLI_H
+#define DFP_SIM_CLI_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define EXIT_USAGE 2
+
+bool cli_u32(const char *opt, const char *text, uint32_t min, uint32_t max, uint32_t *out);
+/* "F3F2", "F3 F2", "f3:f2", "0xF3,0xF2". */
+bool cli_hex(const char *opt, const char *text, uint8_t *out, size_t max, size_t *len);
+/* "auto" (0), or one of the ten PROFIBUS rates: 19200, 19.2k, 1.5M, 1500000 ... */
+bool cli_baud(const char *opt, const char *text, bool allow_auto, uint32_t *out);
+/* For "--opt VALUE": returns argv[*i + 1] and advances, or reports the missing value. */
+const char *cli_value(int argc, char **argv, int *i);
+void cli_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+
+#endif

@@ -1,0 +1,8 @@
+#ifndef DFP_SIM_COMMANDS_H
+#define DFP_SIM_COMMANDS_H
+
+int cmd_demo(int argc, char **argv);
+int cmd_slave(int argc, char **argv);
+int cmd_master(int argc, char **argv);
+
+#endif

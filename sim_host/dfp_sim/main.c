@@ -1,0 +1,81 @@
+/* dfp-sim: the DFP21B PROFIBUS-DP card, simulated on Linux. */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "dfp21b/dfp21b.h"
+#include "dp_slave/dp_cfg.h"
+
+static const char usage[] =
+    "usage: dfp-sim COMMAND [options]\n"
+    "\n"
+    "  demo [--capture FILE]\n"
+    "      the card and a DP master on a simulated bus: start-up, cyclic data, watchdog,\n"
+    "      a wrong configuration; needs no hardware and ends by itself\n"
+    "  slave --port DEV [--address N] [--baud RATE|auto] [--capture FILE] [--duration S]\n"
+    "        [--echo-suppress]\n"
+    "      the emulated card on a tty (USB-RS485 adapter) or PTY until SIGINT/SIGTERM;\n"
+    "      --address is the DIP-switch setting (default 4; above 125 the card stays off the bus)\n"
+    "  master --port DEV --address N --config HEX [--prm HEX] [--cycles N] [--baud RATE]\n"
+    "         [--ident N] [--watchdog MS] [--master-address N] [--slot-time MS]\n"
+    "         [--outputs HEX] [--timeout S] [--capture FILE] [--verbose]\n"
+    "      the built-in class-1 master against a slave; exit 0 once it ran N cycles (default\n"
+    "      100) in data exchange. --prm is the user parameter part (Set_Prm from octet 7);\n"
+    "      default for ident 0x6003: 00 00 00 06 81 00 00 01 01\n"
+    "  check-cfg HEX\n"
+    "      would the card accept this Chk_Cfg configuration?\n"
+    "\n"
+    "RATE: 9600 19200 45450 93750 187500 500000 1.5M 3M 6M 12M (also 19.2k ...).\n"
+    "--capture writes every telegram as pcap (LINKTYPE_PROFIBUS_DL, 257).\n";
+
+static int cmd_check_cfg(int argc, char **argv)
+{
+    if (argc != 3) {
+        cli_error("check-cfg takes one argument: the configuration octets in hex");
+        return EXIT_USAGE;
+    }
+    uint8_t cfg[244];
+    size_t len = 0;
+    if (!cli_hex("check-cfg", argv[2], cfg, sizeof cfg, &len)) {
+        return EXIT_USAGE;
+    }
+    char hex[3 * sizeof cfg + 1];
+    size_t n = 0;
+    for (size_t i = 0; i < len; i++) {
+        n += (size_t)snprintf(hex + n, sizeof hex - n, "%02X", cfg[i]);
+    }
+    dfp21b_pd_cfg_t pd;
+    if (dfp21b_check_cfg(cfg, len, &pd)) {
+        unsigned bytes = (pd.param_channel ? 8u : 0u) + 2u * pd.pd_words;
+        printf("%s: accepted, %s%u PD, %u bytes out, %u bytes in\n", hex,
+               pd.param_channel ? "param channel + " : "", pd.pd_words, bytes, bytes);
+        return 0;
+    }
+    uint16_t out_len = 0;
+    uint16_t in_len = 0;
+    if (dp_cfg_io_lengths(cfg, len, &out_len, &in_len) && out_len != in_len) {
+        printf("%s: refused (Cfg_Fault, P090 = 0PD): %u bytes out but %u in; the card needs "
+               "equal lengths\n", hex, out_len, in_len);
+    } else {
+        printf("%s: refused (Cfg_Fault, P090 = 0PD): not one of the card's configurations "
+               "(optional parameter channel F3/B7 or 00, then 1..10 consistent PD words)\n", hex);
+    }
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2 || strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 ||
+        strcmp(argv[1], "help") == 0) {
+        fputs(usage, argc < 2 ? stderr : stdout);
+        return argc < 2 ? EXIT_USAGE : 0;
+    }
+    const char *cmd = argv[1];
+    if (strcmp(cmd, "demo") == 0) return cmd_demo(argc, argv);
+    if (strcmp(cmd, "slave") == 0) return cmd_slave(argc, argv);
+    if (strcmp(cmd, "master") == 0) return cmd_master(argc, argv);
+    if (strcmp(cmd, "check-cfg") == 0) return cmd_check_cfg(argc, argv);
+    cli_error("unknown command '%s' (commands: demo, slave, master, check-cfg; see --help)", cmd);
+    return EXIT_USAGE;
+}

@@ -1,0 +1,226 @@
+#include "report.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "dp_slave/dp_wire.h"
+#include "dp_slave/fdl_rx.h"
+#include "sim_hal/sim_board.h"
+
+void report_line(report_t *r, const char *who, const char *fmt, ...)
+{
+    uint64_t ns = r->now_ns != NULL ? r->now_ns(r->now_ctx) : 0u;
+    printf("%10.3f ms  %-6s  ", (double)ns / 1e6, who);
+    va_list ap;
+    va_start(ap, fmt);
+    vprintf(fmt, ap);
+    va_end(ap);
+    putchar('\n');
+    fflush(stdout);
+}
+
+const char *report_baud_text(uint32_t baud)
+{
+    switch (baud) {
+    case 12000000u: return "12 Mbit/s";
+    case 6000000u: return "6 Mbit/s";
+    case 3000000u: return "3 Mbit/s";
+    case 1500000u: return "1.5 Mbit/s";
+    case 500000u: return "500 kbit/s";
+    case 187500u: return "187.5 kbit/s";
+    case 93750u: return "93.75 kbit/s";
+    case 45450u: return "45.45 kbit/s";
+    case 19200u: return "19.2 kbit/s";
+    case 9600u: return "9.6 kbit/s";
+    default: return "?";
+    }
+}
+
+void report_diag_text(const uint8_t *d, size_t len, char *out, size_t max)
+{
+    static const char *const st1[8] = {"Station_Non_Existent", "Station_Not_Ready", "Cfg_Fault",
+                                       "Ext_Diag", "Not_Supported", "Invalid_Slave_Response",
+                                       "Prm_Fault", "Master_Lock"};
+    static const char *const st2[8] = {"Prm_Req", "Stat_Diag", NULL, "WD_On", "Freeze_Mode",
+                                       "Sync_Mode", NULL, "Deactivated"};
+    size_t n = 0;
+    out[0] = '\0';
+    if (len < DP_DIAG_STD_LEN) {
+        snprintf(out, max, "(short diagnosis, %zu octets)", len);
+        return;
+    }
+    for (unsigned b = 0; b < 8; b++) {
+        if ((d[0] >> b) & 1u) n += (size_t)snprintf(out + n, max - n, "%s ", st1[b]);
+    }
+    for (unsigned b = 0; b < 8 && n < max; b++) {
+        if (((d[1] >> b) & 1u) && st2[b] != NULL) {
+            n += (size_t)snprintf(out + n, max - n, "%s ", st2[b]);
+        }
+    }
+    if (n < max) {
+        if (d[DP_DIAG_MASTER_ADD] == DP_MASTER_ADD_NONE) {
+            n += (size_t)snprintf(out + n, max - n, "| no master");
+        } else {
+            n += (size_t)snprintf(out + n, max - n, "| Master_Add %u", d[DP_DIAG_MASTER_ADD]);
+        }
+    }
+    if (n < max) {
+        n += (size_t)snprintf(out + n, max - n, ", ident 0x%02X%02X", d[4], d[5]);
+    }
+    for (size_t i = DP_DIAG_STD_LEN; i < len && n + 4 < max; i++) {
+        n += (size_t)snprintf(out + n, max - n, "%s%02X", i == DP_DIAG_STD_LEN ? ", ext " : " ",
+                              d[i]);
+    }
+}
+
+static const char *prm_fault_text(uint32_t why)
+{
+    switch (why) {
+    case DP_PRM_FAULT_LENGTH: return "wrong length";
+    case DP_PRM_FAULT_IDENT: return "wrong ident number";
+    case DP_PRM_FAULT_WATCHDOG: return "invalid watchdog factors";
+    case DP_PRM_FAULT_RESERVED_BITS: return "reserved bits set";
+    case DP_PRM_FAULT_USER: return "user parameters not 00 00 00 06 81 00 00 01 0x";
+    case DP_PRM_FAULT_UNSUPPORTED: return "requested function not supported";
+    default: return "?";
+    }
+}
+
+void report_card_event(void *ctx, const dp_event_t *ev)
+{
+    report_t *r = ctx;
+    char p090[16] = "";
+    if (r->card != NULL) {
+        dfp21b_p090_text(&r->card->pd, p090, sizeof p090);
+    }
+    switch (ev->type) {
+    case DP_EV_STATE:
+        report_line(r, "card", "%s -> %s", dp_state_name(ev->old_state),
+                    dp_state_name(ev->new_state));
+        break;
+    case DP_EV_BAUD_SET:
+        report_line(r, "card", "baud search: listening at %s", report_baud_text(ev->value));
+        break;
+    case DP_EV_BAUD_FOUND:
+        report_line(r, "card", "baud rate found: %s (P092)", report_baud_text(ev->value));
+        break;
+    case DP_EV_BAUD_LOST:
+        report_line(r, "card", "no telegram for this station within the baud control time: "
+                               "searching again");
+        break;
+    case DP_EV_WD_EXPIRED:
+        report_line(r, "card", "DP watchdog expired (%u ms without the master): outputs "
+                               "cleared, inverter performs the P831 fieldbus timeout reaction",
+                    ev->value);
+        break;
+    case DP_EV_PRM_OK:
+        report_line(r, "card", "Set_Prm from master %u accepted; watchdog %u ms (P819)",
+                    ev->master, ev->value);
+        break;
+    case DP_EV_PRM_FAULT:
+        report_line(r, "card", "Set_Prm from master %u refused: %s -> Prm_Fault", ev->master,
+                    prm_fault_text(ev->value));
+        break;
+    case DP_EV_CFG_OK:
+        report_line(r, "card", "Chk_Cfg accepted: %u octets out, %u in; P090 = %s",
+                    ev->value >> 8, ev->value & 0xFFu, p090);
+        break;
+    case DP_EV_CFG_FAULT:
+        report_line(r, "card", "Chk_Cfg refused -> Cfg_Fault; P090 = 0PD");
+        break;
+    case DP_EV_GLOBAL_CONTROL:
+        report_line(r, "card", "Global_Control 0x%02X from master %u", ev->value, ev->master);
+        break;
+    case DP_EV_LOCKED_OUT:
+        report_line(r, "card", "request from master %u refused (RS): locked by master %u",
+                    ev->master, r->card != NULL ? dp_slave_master(&r->card->dp) : 0u);
+        break;
+    case DP_EV_RX_ERROR:
+        break; /* during a baud search these are expected by the thousand */
+    case DP_EV_FCB_REPEAT:
+        report_line(r, "card", "repeated request from master %u (same FCB): cached reply sent",
+                    ev->master);
+        break;
+    case DP_EV_ADDRESSED:
+        break;
+    }
+}
+
+void report_led(void *ctx, hal_led_id_t led, hal_led_mode_t mode)
+{
+    report_t *r = ctx;
+    report_line(r, "card", "LED %-9s %s", sim_led_name(led), hal_led_mode_name(mode));
+}
+
+void report_master_event(void *ctx, const dpm_event_t *ev)
+{
+    report_t *r = ctx;
+    char text[256];
+    switch (ev->type) {
+    case DPM_EV_PHASE:
+        if (r->slave_silent && (ev->new_phase == DPM_PHASE_FDL_STATUS ||
+                                ev->new_phase == DPM_PHASE_BACKOFF)) {
+            break;
+        }
+        if (ev->new_phase > DPM_PHASE_FDL_STATUS) {
+            r->slave_silent = false;
+        }
+        if (ev->new_phase == DPM_PHASE_DATA_EXCH) {
+            report_line(r, "master", "slave %u is in data exchange", ev->slave);
+        } else if (ev->new_phase != DPM_PHASE_BACKOFF) {
+            report_line(r, "master", "slave %u: %s", ev->slave, dpm_phase_name(ev->new_phase));
+        }
+        break;
+    case DPM_EV_DIAG:
+        report_diag_text(ev->data, ev->len, text, sizeof text);
+        report_line(r, "master", "slave %u diagnosis: %s", ev->slave, text);
+        break;
+    case DPM_EV_FAULT:
+        if (ev->old_phase == DPM_PHASE_FDL_STATUS) {
+            if (!r->slave_silent) {
+                report_line(r, "master", "slave %u: no answer; asking again every few ms "
+                                         "until it answers", ev->slave);
+            }
+            r->slave_silent = true;
+            break;
+        }
+        report_line(r, "master", "slave %u: %s; start-up again later", ev->slave, ev->text);
+        break;
+    case DPM_EV_RETRY:
+        if (!r->slave_silent && ev->old_phase != DPM_PHASE_FDL_STATUS) {
+            report_line(r, "master", "slave %u: no answer, retry", ev->slave);
+        }
+        break;
+    case DPM_EV_INPUTS:
+        if (r->show_inputs) {
+            size_t n = 0;
+            for (size_t i = 0; i < ev->len && n + 4 < sizeof text; i++) {
+                n += (size_t)snprintf(text + n, sizeof text - n, "%02X%s", ev->data[i],
+                                      (i % 2u) == 1u ? " " : "");
+            }
+            text[n] = '\0';
+            report_line(r, "master", "slave %u inputs: %s", ev->slave, text);
+        }
+        break;
+    case DPM_EV_GLOBAL_CONTROL_SENT:
+        report_line(r, "master", "Global_Control 0x%02X to group 0x%02X (broadcast)",
+                    ev->data[0], ev->data[1]);
+        break;
+    }
+}
+
+void report_tap(void *ctx, uint64_t t_start_ns, const uint8_t *frame, size_t len, bool local,
+                uint32_t baud)
+{
+    (void)local;
+    (void)baud;
+    report_t *r = ctx;
+    if (!r->capturing) {
+        return;
+    }
+    if (pcap_writer_frame(&r->capture, t_start_ns, frame, len) != 0) {
+        r->capture_failed = true;
+    }
+    r->frames_captured++;
+}

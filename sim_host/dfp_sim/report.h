@@ -1,0 +1,40 @@
+/* Human-readable output of dfp-sim: a timeline of card and master events, decoded diagnosis,
+ * and the --capture file. */
+#ifndef DFP_SIM_REPORT_H
+#define DFP_SIM_REPORT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "capture/pcap_writer.h"
+#include "dfp21b/dfp21b.h"
+#include "dp_master/dp_master.h"
+#include "hal/hal_led.h"
+
+typedef struct report {
+    const char *time_unit_note;
+    uint64_t (*now_ns)(void *ctx); /* time shown at the start of each line */
+    void *now_ctx;
+    dfp21b_t *card; /* for monitor values in the lines; may be NULL */
+    bool show_inputs;
+    bool show_addressed;
+    bool slave_silent; /* unanswered polls of a silent address are reported once */
+    pcap_writer_t capture;
+    bool capturing;
+    bool capture_failed;
+    uint64_t frames_captured;
+} report_t;
+
+void report_line(report_t *r, const char *who, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+void report_card_event(void *ctx, const dp_event_t *ev);
+void report_led(void *ctx, hal_led_id_t led, hal_led_mode_t mode);
+void report_master_event(void *ctx, const dpm_event_t *ev);
+/* Formats the standard diagnosis bits, e.g. "Station_Not_Ready Prm_Req | Master_Add 2". */
+void report_diag_text(const uint8_t *d, size_t len, char *out, size_t max);
+const char *report_baud_text(uint32_t baud);
+/* sim_frame_tap_t for --capture. */
+void report_tap(void *ctx, uint64_t t_start_ns, const uint8_t *frame, size_t len, bool local,
+                uint32_t baud);
+
+#endif
