@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# dfp-sim master drives dfp-sim slave over a PTY pair made by socat: start-up, 100 cycles,
+# the PO words come back as PI words; an address above 125 keeps the card off the bus.
+sim=$1
+. "$(dirname "$0")/lib.sh"
+tmp=$(mktemp -d)
+pids=()
+cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$tmp"; }
+trap cleanup EXIT
+
+pty_pair() { # makes $tmp/a and $tmp/b
+  rm -f "$tmp/a" "$tmp/b"
+  socat pty,raw,echo=0,link="$tmp/a" pty,raw,echo=0,link="$tmp/b" &
+  pids+=($!)
+  for _ in $(seq 50); do [ -e "$tmp/a" ] && [ -e "$tmp/b" ] && return 0; sleep 0.1; done
+  echo "socat did not create the PTY pair" >&2; return 1
+}
+
+pty_pair || exit 1
+"$sim" slave --port "$tmp/a" --address 4 --baud 19200 --capture "$tmp/slave.pcap" >"$tmp/slave.out" 2>&1 &
+slave=$!; pids+=($slave)
+sleep 0.3
+expect_exit 0 "master reaches 100 cycles" -- timeout 30 "$sim" master --port "$tmp/b" --address 4 \
+  --config F3F2 --baud 19200 --cycles 100 --outputs 0000000000000000000605DC0000
+expect_in "inputs echo the outputs" "last inputs 0000000000000000000605DC0000" "$out"
+kill -INT "$slave"; wait "$slave"; rc=$?
+if [ "$rc" = 0 ]; then ok; else bad "slave exit $rc on SIGINT"; fi
+slave_out=$(cat "$tmp/slave.out")
+expect_in "slave reached data exchange" "Wait_Cfg -> Data_Exch" "$slave_out"
+expect_in "slave LED off in data exchange" "LED BUS FAULT off" "$slave_out"
+expect_in "slave stops cleanly" "stopping (signal)" "$slave_out"
+size=$(stat -c %s "$tmp/slave.pcap")
+if [ "$size" -gt 1000 ]; then ok; else bad "slave capture only $size bytes"; fi
+
+# 8 output bytes: SD3 requests and replies.
+pty_pair || exit 1
+"$sim" slave --port "$tmp/a" --baud 19200 >"$tmp/slave2.out" 2>&1 &
+slave=$!; pids+=($slave)
+sleep 0.3
+expect_exit 0 "4 PD (8 bytes, SD3)" -- timeout 30 "$sim" master --port "$tmp/b" --address 4 \
+  --config F3 --baud 19200 --cycles 20 --outputs 1122334455667788 --capture "$tmp/m2.pcap"
+expect_in "SD3 inputs" "last inputs 1122334455667788" "$out"
+# The capture holds SD3 telegrams (start delimiter A2).
+if od -An -tx1 -v "$tmp/m2.pcap" | tr -s ' \n' ' ' | grep -q " a2 04 02 "; then ok; else bad "no SD3 request in capture"; fi
+kill -INT "$slave"; wait "$slave"
+
+# Address 126: the card stays off the bus, RUN blinks, the master gets no answer.
+pty_pair || exit 1
+"$sim" slave --port "$tmp/a" --address 126 --baud 19200 >"$tmp/slave3.out" 2>&1 &
+slave=$!; pids+=($slave)
+sleep 0.3
+expect_exit 1 "no answer from address 126" -- "$sim" master --port "$tmp/b" --address 125 \
+  --config F2 --baud 19200 --cycles 1 --timeout 2
+kill -INT "$slave"; wait "$slave"
+slave_out=$(cat "$tmp/slave3.out")
+expect_in "RUN blinks" "LED RUN       blink" "$slave_out"
+expect_in "off the bus" "stays off the bus" "$slave_out"
+finish
