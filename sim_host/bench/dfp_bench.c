@@ -1,0 +1,386 @@
+/* dfp-bench: what the card costs per telegram, and how fast start-up and cycles run.
+ *
+ * 1. Reply path per telegram type: the time (ns, median of many runs) and the instructions
+ *    (callgrind, deterministic) of the one call that receives the last octet of a request and
+ *    ends with the reply handed to the UART: decode, checks, FCB, service, encode. Everything
+ *    before the last octet happens while the request is still on the wire.
+ * 2. Start-up + N Data_Exchange cycles of master and card on the in-memory bus (simulated bus
+ *    time, and how much faster than real time the simulation runs).
+ * 3. The same over a PTY pair in one process (wall clock; the PTY ignores the baud rate).
+ *
+ * Instruction counts need valgrind: dfp-bench runs itself under callgrind once per telegram
+ * type (--instructions, default on when valgrind is installed). */
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "dp_slave/dp_wire.h"
+#include "dp_slave/fdl_frame.h"
+#include "sim_hal/membus.h"
+#include "sim_hal/tty_port.h"
+#include "sim_stations/stations.h"
+
+#define BAUD 12000000u
+
+static uint64_t mono_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
+}
+
+/* ---- 1. reply path ------------------------------------------------------------------------ */
+
+typedef struct sink {
+    size_t last_len;
+    unsigned transmits;
+} sink_t;
+
+static int sink_set_baud(void *ctx, uint32_t baud)
+{
+    (void)ctx;
+    (void)baud;
+    return 0;
+}
+
+static int sink_transmit(void *ctx, const uint8_t *frame, size_t len, hal_time_us_t nb)
+{
+    (void)frame;
+    (void)nb;
+    sink_t *s = ctx;
+    s->last_len = len;
+    s->transmits++;
+    return 0;
+}
+
+static const hal_uart_ops_t sink_ops = {.set_baud = sink_set_baud, .transmit = sink_transmit};
+
+typedef struct bench_case {
+    const char *name;
+    dp_state_t state; /* the card is brought into this state first */
+    uint8_t frame[2][FDL_FRAME_MAX]; /* FCB 0 and FCB 1 versions */
+    size_t len;
+    bool same_fcb; /* measure the FCB-retry path: always the same frame */
+} bench_case_t;
+
+static dfp21b_t card;
+static sink_t sink;
+static hal_time_us_t now_us;
+
+static void feed(const uint8_t *f, size_t len)
+{
+    uint32_t char_ns = hal_uart_char_ns(BAUD);
+    now_us += 10u; /* idle > TSYN before the request */
+    uint64_t t_ns = (uint64_t)now_us * 1000u;
+    for (size_t i = 0; i < len; i++) {
+        t_ns += char_ns;
+        dfp21b_rx_char(&card, f[i], 0, (hal_time_us_t)(t_ns / 1000u));
+    }
+    now_us = (hal_time_us_t)(t_ns / 1000u) + 1u;
+}
+
+static size_t request(uint8_t *out, uint8_t fc_code, bool fcb, bool saps, uint8_t dsap,
+                      const uint8_t *data, size_t len)
+{
+    uint8_t fc = (uint8_t)(0x40u | 0x10u | (fcb ? 0x20u : 0u) | fc_code);
+    if (fc_code == 0x9u || fc_code == 0x6u) {
+        fc = (uint8_t)(0x40u | fc_code);
+    }
+    return fdl_encode(out, saps ? 4u : 4u, 2u, fc, saps, dsap, 62u, data, len);
+}
+
+static const uint8_t prm[16] = {0x88, 0x01, 0x64, 0x0B, 0x60, 0x03, 0x00, 0x00,
+                                0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x01};
+
+static void card_setup(const uint8_t *cfg, size_t cfg_len, dp_state_t target)
+{
+    static sim_dip_t dip = {.switches = 4};
+    dfp21b_cfg_t cfg_ = {.uart = {.ops = &sink_ops, .ctx = &sink},
+                         .dip = sim_dip_hal(&dip), .fixed_baud = BAUD, .strict_timing = true};
+    now_us = 0;
+    dfp21b_init(&card, &cfg_, now_us);
+    uint8_t f[FDL_FRAME_MAX];
+    if (target == DP_STATE_WAIT_PRM) {
+        return;
+    }
+    feed(f, request(f, 0xD, true, true, DP_SAP_SET_PRM, prm, sizeof prm));
+    if (target == DP_STATE_WAIT_CFG) {
+        return;
+    }
+    feed(f, request(f, 0xD, false, true, DP_SAP_CHK_CFG, cfg, cfg_len));
+    dfp21b_poll(&card, now_us);
+}
+
+static const uint8_t cfg_3pd[] = {0xF3, 0xF2};
+static const uint8_t cfg_10pd[] = {0xF3, 0xF9};
+static const uint8_t cfg_4pd[] = {0xF3};
+
+typedef struct case_spec {
+    const char *name;
+    const uint8_t *cfg;
+    size_t cfg_len;
+    dp_state_t state;
+    uint8_t code;
+    bool saps;
+    uint8_t dsap;
+    const uint8_t *data;
+    size_t len;
+    bool same_fcb;
+} case_spec_t;
+
+static const uint8_t out14[14] = {0, 0, 0, 0, 0, 0, 0, 0, 0x00, 0x06, 0x05, 0xDC, 0, 0};
+static const uint8_t out28[28] = {0};
+static const uint8_t out8[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+static const uint8_t gc_sync[2] = {DP_GC_SYNC, 0};
+
+static const case_spec_t cases[] = {
+    {"FDL status -> SD1", cfg_3pd, 2, DP_STATE_DATA_EXCH, 0x9, false, 0, NULL, 0, false},
+    {"Slave_Diag -> SD2", cfg_3pd, 2, DP_STATE_DATA_EXCH, 0xD, true, DP_SAP_SLAVE_DIAG, NULL, 0, false},
+    {"Get_Cfg -> SD2", cfg_3pd, 2, DP_STATE_DATA_EXCH, 0xD, true, DP_SAP_GET_CFG, NULL, 0, false},
+    {"Set_Prm 16 B -> SC", cfg_3pd, 2, DP_STATE_WAIT_CFG, 0xD, true, DP_SAP_SET_PRM, prm, 16, false},
+    {"Chk_Cfg F3F2 -> SC", cfg_3pd, 2, DP_STATE_DATA_EXCH, 0xD, true, DP_SAP_CHK_CFG, cfg_3pd, 2, false},
+    {"Data_Exch 14 B -> 14 B", cfg_3pd, 2, DP_STATE_DATA_EXCH, 0xD, false, 0, out14, 14, false},
+    {"Data_Exch 28 B -> 28 B", cfg_10pd, 2, DP_STATE_DATA_EXCH, 0xD, false, 0, out28, 28, false},
+    {"Data_Exch SD3 8 B -> SD3", cfg_4pd, 1, DP_STATE_DATA_EXCH, 0xD, false, 0, out8, 8, false},
+    {"Data_Exch FCB retry", cfg_3pd, 2, DP_STATE_DATA_EXCH, 0xD, false, 0, out14, 14, true},
+    {"Global_Control (no reply)", cfg_3pd, 2, DP_STATE_DATA_EXCH, 0x6, true, DP_SAP_GLOBAL_CONTROL, gc_sync, 2, false},
+};
+#define NUM_CASES (sizeof cases / sizeof cases[0])
+
+/* The measured call. noinline and a stable name so callgrind can count exactly this. */
+__attribute__((noinline)) void bench_last_octet(uint8_t byte, hal_time_us_t t);
+__attribute__((noinline)) void bench_last_octet(uint8_t byte, hal_time_us_t t)
+{
+    dfp21b_rx_char(&card, byte, 0, t);
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a;
+    uint64_t y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Runs one case `iterations` times; returns the median ns of the last-octet call. */
+static uint64_t run_case(const case_spec_t *c, unsigned iterations, bool *replied_ok)
+{
+    card_setup(c->cfg, c->cfg_len, c->state);
+    uint8_t f[2][FDL_FRAME_MAX];
+    size_t len = request(f[0], c->code, false, c->saps, c->dsap, c->data, c->len);
+    request(f[1], c->code, true, c->saps, c->dsap, c->data, c->len);
+    static uint64_t samples[200000];
+    if (iterations > 200000u) iterations = 200000u;
+    uint32_t char_ns = hal_uart_char_ns(BAUD);
+    unsigned before = sink.transmits;
+    for (unsigned i = 0; i < iterations; i++) {
+        const uint8_t *fr = c->same_fcb ? f[1] : f[i & 1u];
+        now_us += 10u;
+        uint64_t t_ns = (uint64_t)now_us * 1000u;
+        for (size_t k = 0; k + 1u < len; k++) {
+            t_ns += char_ns;
+            dfp21b_rx_char(&card, fr[k], 0, (hal_time_us_t)(t_ns / 1000u));
+        }
+        t_ns += char_ns;
+        uint64_t a = mono_ns();
+        bench_last_octet(fr[len - 1u], (hal_time_us_t)(t_ns / 1000u));
+        uint64_t b = mono_ns();
+        samples[i] = b - a;
+        now_us = (hal_time_us_t)(t_ns / 1000u) + 1u;
+    }
+    bool expect_reply = c->code != 0x6u;
+    *replied_ok = expect_reply ? sink.transmits - before == iterations
+                               : sink.transmits == before;
+    uint64_t overhead[1000];
+    for (unsigned i = 0; i < 1000u; i++) {
+        uint64_t a = mono_ns();
+        uint64_t b = mono_ns();
+        overhead[i] = b - a;
+    }
+    qsort(overhead, 1000, sizeof overhead[0], cmp_u64);
+    qsort(samples, iterations, sizeof samples[0], cmp_u64);
+    uint64_t med = samples[iterations / 2u];
+    return med > overhead[500] ? med - overhead[500] : 0u;
+}
+
+/* Instructions of bench_last_octet per call, from callgrind run on this very program. */
+static double instructions_for(const char *self, unsigned idx)
+{
+    char out[256];
+    snprintf(out, sizeof out, "/tmp/dfp-bench-cg.%d.%u", (int)getpid(), idx);
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd,
+             "valgrind --tool=callgrind --callgrind-out-file=%s --collect-atstart=no "
+             "--toggle-collect=bench_last_octet %s --only %u --iterations 1000 >/dev/null 2>&1",
+             out, self, idx);
+    if (system(cmd) != 0) {
+        return -1.0;
+    }
+    FILE *f = fopen(out, "r");
+    if (f == NULL) {
+        return -1.0;
+    }
+    char line[512];
+    double total = -1.0;
+    while (fgets(line, sizeof line, f) != NULL) {
+        if (strncmp(line, "totals:", 7) == 0 || strncmp(line, "summary:", 8) == 0) {
+            total = strtod(line + (line[0] == 't' ? 7 : 8), NULL);
+        }
+    }
+    fclose(f);
+    unlink(out);
+    return total < 0 ? -1.0 : total / 1000.0;
+}
+
+/* ---- 2. in-memory bus --------------------------------------------------------------------- */
+
+static membus_t bus;
+static card_station_t bcard;
+static dp_master_t bmaster;
+
+static void bench_membus(unsigned cycles, uint32_t baud)
+{
+    membus_init(&bus);
+    memset(&bcard, 0, sizeof bcard);
+    hal_uart_t cu;
+    hal_uart_t mu;
+    sim_station_t cs = card_station(&bcard);
+    sim_station_t ms = master_station(&bmaster);
+    membus_attach(&bus, &cs, &cu);
+    membus_attach(&bus, &ms, &mu);
+    card_options_t co = {.address = 4, .fixed_baud = baud, .strict_timing = true};
+    card_station_init(&bcard, &co, cu, 0);
+    dp_master_cfg_t mc = {.address = 2, .baud = baud, .strict_timing = true, .uart = mu};
+    dp_master_init(&bmaster, &mc, 0);
+    dpm_slave_cfg_t sc = {.address = 4};
+    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 100, dfp21b_user_prm_default, 9);
+    memcpy(sc.cfg, cfg_3pd, 2);
+    sc.cfg_len = 2;
+    dp_master_add_slave(&bmaster, &sc);
+    uint64_t w0 = mono_ns();
+    uint64_t startup_ns = 0;
+    while (bmaster.slaves[0].cycles < cycles && bus.now_ns < 600000000000ull) {
+        membus_run_for_us(&bus, startup_ns == 0u ? 50u : 1000u);
+        if (startup_ns == 0u && bmaster.slaves[0].phase == DPM_PHASE_DATA_EXCH) {
+            startup_ns = bus.now_ns;
+        }
+    }
+    uint64_t wall = mono_ns() - w0;
+    double sim_ms = (double)bus.now_ns / 1e6;
+    printf("  %-12s start-up %8.3f ms, %u cycles in %9.1f ms bus time = %7.0f cycles/s on "
+           "the bus; simulated in %6.1f ms wall (%.0fx real time)\n",
+           baud == 12000000u ? "12 Mbit/s" : baud == 1500000u ? "1.5 Mbit/s" : "19.2 kbit/s",
+           (double)startup_ns / 1e6, bmaster.slaves[0].cycles, sim_ms,
+           bmaster.slaves[0].cycles / (sim_ms / 1000.0), (double)wall / 1e6,
+           sim_ms / ((double)wall / 1e6));
+}
+
+/* ---- 3. PTY ------------------------------------------------------------------------------- */
+
+static tty_port_t pa;
+static tty_port_t pb;
+static tty_runner_t runner;
+
+static int bench_pty(unsigned cycles)
+{
+    char err[256];
+    int m = posix_openpt(O_RDWR | O_NOCTTY);
+    if (m < 0 || grantpt(m) != 0 || unlockpt(m) != 0) {
+        printf("  PTY: cannot create a PTY pair: %s\n", strerror(errno));
+        return -1;
+    }
+    if (tty_port_open_fd(&pa, m, BAUD, err, sizeof err) != 0 ||
+        tty_port_open(&pb, ptsname(m), BAUD, err, sizeof err) != 0) {
+        printf("  PTY: %s\n", err);
+        return -1;
+    }
+    memset(&bcard, 0, sizeof bcard);
+    tty_runner_init(&runner);
+    sim_station_t cs = card_station(&bcard);
+    sim_station_t ms = master_station(&bmaster);
+    tty_runner_add(&runner, &pa, &cs);
+    tty_runner_add(&runner, &pb, &ms);
+    card_options_t co = {.address = 4, .fixed_baud = BAUD, .strict_timing = false};
+    card_station_init(&bcard, &co, tty_port_uart(&pa), tty_now_us());
+    dp_master_cfg_t mc = {.address = 2, .baud = BAUD, .strict_timing = false,
+                          .slot_time_us = 100000, .uart = tty_port_uart(&pb)};
+    dp_master_init(&bmaster, &mc, tty_now_us());
+    dpm_slave_cfg_t sc = {.address = 4};
+    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 1000, dfp21b_user_prm_default, 9);
+    memcpy(sc.cfg, cfg_3pd, 2);
+    sc.cfg_len = 2;
+    dp_master_add_slave(&bmaster, &sc);
+    uint64_t t0 = mono_ns();
+    uint64_t startup = 0;
+    uint64_t dx0 = 0;
+    while (bmaster.slaves[0].cycles < cycles && mono_ns() - t0 < 30000000000ull) {
+        if (tty_runner_run_until(&runner, tty_now_us() + 10000u, NULL) < 0) {
+            printf("  PTY: %s\n", tty_runner_error(&runner));
+            break;
+        }
+        if (startup == 0u && bmaster.slaves[0].phase == DPM_PHASE_DATA_EXCH) {
+            startup = mono_ns() - t0;
+            dx0 = mono_ns();
+        }
+    }
+    double dx_s = (double)(mono_ns() - dx0) / 1e9;
+    printf("  PTY pair    start-up %8.3f ms, %u cycles in %9.1f ms wall = %7.0f cycles/s "
+           "(card and master in one process)\n",
+           (double)startup / 1e6, bmaster.slaves[0].cycles, dx_s * 1000.0,
+           bmaster.slaves[0].cycles / dx_s);
+    tty_port_close(&pa);
+    tty_port_close(&pb);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    unsigned iterations = 100000;
+    int only = -1;
+    bool instructions = access("/usr/bin/valgrind", X_OK) == 0;
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--only") == 0 && i + 1 < argc) {
+            only = atoi(argv[++i]);
+        } else if (strcmp(argv[i], "--iterations") == 0 && i + 1 < argc) {
+            iterations = (unsigned)atoi(argv[++i]);
+        } else if (strcmp(argv[i], "--no-instructions") == 0) {
+            instructions = false;
+        } else {
+            fprintf(stderr, "usage: dfp-bench [--iterations N] [--no-instructions]\n");
+            return 2;
+        }
+    }
+    if (only >= 0) {
+        bool ok;
+        if ((unsigned)only < NUM_CASES) {
+            run_case(&cases[only], iterations, &ok);
+        }
+        return 0;
+    }
+    printf("dfp-bench: DFP21B card, reply path = the call that takes the last octet of a request\n"
+           "and hands the reply to the UART (x86-64 host, %u runs each, median)\n\n", iterations);
+    printf("  %-28s %10s %14s\n", "telegram", "ns", "instructions");
+    int rc = 0;
+    for (unsigned i = 0; i < NUM_CASES; i++) {
+        bool ok = false;
+        uint64_t ns = run_case(&cases[i], iterations, &ok);
+        double ins = instructions ? instructions_for(argv[0], i) : -1.0;
+        if (ins >= 0) {
+            printf("  %-28s %10llu %14.0f%s\n", cases[i].name, (unsigned long long)ns, ins,
+                   ok ? "" : "  (UNEXPECTED reply count)");
+        } else {
+            printf("  %-28s %10llu %14s%s\n", cases[i].name, (unsigned long long)ns, "n/a",
+                   ok ? "" : "  (UNEXPECTED reply count)");
+        }
+        if (!ok) rc = 1;
+    }
+    printf("\nStart-up (FDL status .. Data_Exch) and 10000 Data_Exchange cycles, Param + 3 PD:\n");
+    bench_membus(10000, 12000000u);
+    bench_membus(10000, 1500000u);
+    bench_membus(1000, 19200u);
+    bench_pty(5000);
+    return rc;
+}
