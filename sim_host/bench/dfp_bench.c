@@ -377,6 +377,10 @@ int main(int argc, char **argv)
         }
         if (!ok) rc = 1;
     }
+    printf("\nRAM of one card: dp_slave_t %zu bytes (fdl_rx_t %zu, FCB reply caches %zu), "
+           "dfp21b_t %zu bytes in all\n",
+           sizeof(dp_slave_t), sizeof(fdl_rx_t), sizeof(((dp_slave_t *)0)->fcb),
+           sizeof(dfp21b_t));
     printf("\nStart-up (FDL status .. Data_Exch) and 10000 Data_Exchange cycles, Param + 3 PD:\n");
     bench_membus(10000, 12000000u);
     bench_membus(10000, 1500000u);
