@@ -352,7 +352,8 @@ static void svc_global_control(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t 
     if ((cmd & DP_GC_CLEAR_DATA) != 0u) {
         clear_outputs(s, DP_OUTPUTS_CLEAR);
     }
-    /* When both a command and its cancellation are set, the cancellation wins. */
+    /* When both a command and its cancellation are set, the cancellation wins. Sync and Freeze
+     * are obeyed only when the master asked for them in Set_Prm (Sync_Req, Freeze_Req). */
     if ((cmd & DP_GC_UNSYNC) != 0u) {
         if (s->sync_latched) {
             memcpy(s->outputs, s->latched_outputs, s->out_len);
@@ -360,7 +361,8 @@ static void svc_global_control(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t 
         }
         s->sync_latched = false;
         s->sync_mode = false;
-    } else if ((cmd & DP_GC_SYNC) != 0u && s->cfg.sync_supported) {
+    } else if ((cmd & DP_GC_SYNC) != 0u && s->cfg.sync_supported &&
+               (s->station_status & DP_PRM_SYNC_REQ) != 0u) {
         if (s->sync_latched) {
             memcpy(s->outputs, s->latched_outputs, s->out_len);
             give_outputs(s, s->outputs, s->out_len, DP_OUTPUTS_DATA);
@@ -370,7 +372,8 @@ static void svc_global_control(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t 
     }
     if ((cmd & DP_GC_UNFREEZE) != 0u) {
         s->freeze_mode = false;
-    } else if ((cmd & DP_GC_FREEZE) != 0u && s->cfg.freeze_supported) {
+    } else if ((cmd & DP_GC_FREEZE) != 0u && s->cfg.freeze_supported &&
+               (s->station_status & DP_PRM_FREEZE_REQ) != 0u) {
         memcpy(s->frozen_inputs, s->inputs, s->in_len);
         s->freeze_mode = true;
     }
@@ -662,11 +665,14 @@ void dp_slave_set_ext_diag(dp_slave_t *s, const uint8_t *diag, size_t len)
     if (overflow) {
         len = DP_MAX_EXT_DIAG_LEN;
     }
+    /* len 0 may come with diag == NULL: memcmp/memcpy must not see it even then (C11 7.24.1). */
     if (len == s->ext_diag_len && overflow == s->ext_diag_overflow &&
-        memcmp(diag, s->ext_diag, len) == 0) {
+        (len == 0u || memcmp(diag, s->ext_diag, len) == 0)) {
         return;
     }
-    memcpy(s->ext_diag, diag, len);
+    if (len > 0u) {
+        memcpy(s->ext_diag, diag, len);
+    }
     s->ext_diag_len = (uint8_t)len;
     s->ext_diag_overflow = overflow;
     s->diag_pending = true;

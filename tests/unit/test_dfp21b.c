@@ -643,17 +643,6 @@ static void test_process_data_app(void)
 
 /* ---- external diagnosis ------------------------------------------------------------------- */
 
-/* CORE BUG (reported, not fixed here): dfp21b_set_inverter_fault() clears the external
- * diagnosis with dp_slave_set_ext_diag(&c->dp, NULL, 0), and dp_slave_set_ext_diag() hands that
- * NULL to memcmp() and memcpy(). With length 0 this is still undefined behaviour in C11
- * (7.24.1p2); UBSan stops the sanitizer build there ("null pointer passed as argument").
- * The tests that take that path (alarm off, fault cleared) pass in the normal build and are
- * left out of the sanitizer build only, until the core is fixed. */
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_UNDEFINED__)
-#define NULL_EXT_DIAG_PATH_TESTED 0
-#else
-#define NULL_EXT_DIAG_PATH_TESTED 1
-#endif
 
 static void test_ext_diag_alarm_on(void)
 {
@@ -684,7 +673,6 @@ static void test_ext_diag_alarm_on(void)
     CHECK_EQ(C.u.last[6], FDL_RSP_DL);
 }
 
-#if NULL_EXT_DIAG_PATH_TESTED
 static void test_ext_diag_fault_cleared(void)
 {
     crig_init(4, BAUD, false);
@@ -714,18 +702,12 @@ static void test_ext_diag_alarm_off(void)
     CHECK(dx(DX14, sizeof DX14));
     CHECK_EQ(C.u.last[6], FDL_RSP_DL);
 }
-#endif
 
-#if 0
-/* CORE BUG (reported): dfp21b.c keeps the external diagnosis of the user-prm setting it was
- * made under. hook_prm_check() only updates c->diag_alarm; nothing re-evaluates the Ext_Diag
- * block for the current c->inverter_fault. dfp21b.md §4: with user prm octet 8 = 01 the card
- * does not report inverter faults, with 00 every inverter fault is signalled.
- * Enable these two when fixed (they take the NULL path above too, so they also need that fix
- * for the sanitizer build). */
+/* dfp21b.md §4: with user prm octet 8 = 01 the card does not report inverter faults, with 00
+ * every inverter fault is signalled; a new Set_Prm re-evaluates the fault that is active. */
 
 /* Re-parameterised from 00 to 01 while a fault is reported: the master must not keep seeing
- * it. Today the diagnosis still reads 08 0C 00 02 60 03 02 11. */
+ * it (it read 08 0C 00 02 60 03 02 11 before the fix). */
 static void test_ext_diag_alarm_switched_off(void)
 {
     crig_init(4, BAUD, false);
@@ -753,7 +735,6 @@ static void test_ext_diag_alarm_switched_on(void)
     CHECK(C.c.diag_alarm);
     DIAG_IS(0x08, 0x0C, 0x00, 0x02, 0x60, 0x03, 0x02, 0x11);
 }
-#endif
 
 int main(void)
 {
@@ -769,13 +750,9 @@ int main(void)
     RUN_TEST(test_pi_echo);
     RUN_TEST(test_process_data_app);
     RUN_TEST(test_ext_diag_alarm_on);
-#if NULL_EXT_DIAG_PATH_TESTED
     RUN_TEST(test_ext_diag_fault_cleared);
     RUN_TEST(test_ext_diag_alarm_off);
-#endif
-#if 0 /* core bug, see above */
     RUN_TEST(test_ext_diag_alarm_switched_off);
     RUN_TEST(test_ext_diag_alarm_switched_on);
-#endif
     return check_report();
 }

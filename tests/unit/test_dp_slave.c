@@ -918,13 +918,9 @@ static void test_gc_reserved_bits(void)
     CHECK_EQ(R.a.outputs_calls, outputs);
 }
 
-#if 0
-/* CORE BUG (reported, not fixed here): dp_slave.c svc_global_control() enters Sync/Freeze
- * mode whenever the device supports it (cfg.sync_supported / cfg.freeze_supported) and never
- * looks at the Sync_Req / Freeze_Req bits of the accepted Set_Prm (s->station_status).
- * profibus-dp.md §3.5: "Freeze/Sync must be enabled via Set_Prm Freeze_Req/Sync_Req (and
- * supported)". Today the diagnosis reads 00 34 00 02 60 03 (Sync_Mode + Freeze_Mode) and the
- * outputs are held. Enable when fixed. */
+/* profibus-dp.md §3.5: "Freeze/Sync must be enabled via Set_Prm Freeze_Req/Sync_Req (and
+ * supported)". Without the request bits a Sync|Freeze command changes nothing (before the fix
+ * the diagnosis read 00 34 00 02 60 03 and the outputs were held). */
 static void test_gc_sync_freeze_not_requested(void)
 {
     rig_init(BAUD, 0);
@@ -939,7 +935,6 @@ static void test_gc_sync_freeze_not_requested(void)
     CHECK_EQ(R.a.outputs_calls, outputs + 1u); /* applied at once, not held */
     CHECK(memcmp(R.a.out, o2, 14) == 0);
 }
-#endif
 
 static void test_set_prm_sync_unsupported(void)
 {
@@ -1357,9 +1352,7 @@ int main(void)
     RUN_TEST(test_gc_freeze);
     RUN_TEST(test_gc_group_select);
     RUN_TEST(test_gc_reserved_bits);
-#if 0 /* core bug, see above */
     RUN_TEST(test_gc_sync_freeze_not_requested);
-#endif
     RUN_TEST(test_set_prm_sync_unsupported);
     RUN_TEST(test_ext_diag_dh);
     RUN_TEST(test_tsyn_violation);

@@ -236,6 +236,9 @@ static void hook_event(void *ctx, const dp_event_t *ev)
         break;
     case DP_EV_PRM_OK:
         c->p819_ms = ev->value;
+        /* The master may have switched the diagnostic alarm (user prm octet 8): report the
+         * fault that is active now under the new setting. */
+        dfp21b_set_inverter_fault(c, c->inverter_fault);
         break;
     case DP_EV_CFG_OK:
         c->pd = c->pd_candidate;
