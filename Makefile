@@ -39,10 +39,8 @@ $(PYTHON):
 
 deps-python: $(PYTHON)
 
-build/host/build.ninja: | deps-apt
-	cmake --preset host -DDFP_PYTHON=$(abspath $(PYTHON))
-
-build: deps build/host/build.ninja
+build: deps
+	cmake --preset host -DDFP_PYTHON=$(abspath $(PYTHON)) -DDFP_REQUIRE_INTEROP=ON
 	cmake --build build/host
 
 demo: build
@@ -52,7 +50,7 @@ test-host: build
 	ctest --test-dir build/host $(CTEST_FLAGS)
 
 test-asan: deps
-	cmake --preset asan -DDFP_PYTHON=$(abspath $(PYTHON))
+	cmake --preset asan -DDFP_PYTHON=$(abspath $(PYTHON)) -DDFP_REQUIRE_INTEROP=ON
 	cmake --build build/asan
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --test-dir build/asan $(CTEST_FLAGS)
