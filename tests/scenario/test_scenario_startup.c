@@ -144,6 +144,56 @@ static void test_wrong_configuration_gives_cfg_fault_and_backoff(void)
     CHECK(rig.restarts_seen <= 8);
 }
 
+static void test_inverter_fault_dh_and_diagnosis(void)
+{
+    /* User prm octet 8 = 00: inverter faults go to the master as external diagnosis. */
+    const uint8_t cfg[] = {0xF3, 0xF2};
+    rig_setup(1500000, 1500000, cfg, sizeof cfg, 100);
+    const uint8_t user[9] = {0x00, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x00};
+    dpm_slave_cfg_t sc = rig.master.slaves[0].cfg;
+    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 100, user, sizeof user);
+    dp_master_reconfigure(&rig.master, 0, &sc, 0);
+    membus_run_for_us(&rig.bus, 20000);
+    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    uint32_t cycles = rig.master.slaves[0].cycles;
+
+    dfp21b_set_inverter_fault(&rig.card.card, 0x11);
+    membus_run_for_us(&rig.bus, 10000);
+    /* DH made the master read the diagnosis, then it went back to cyclic exchange. */
+    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_BYTES(rig.master.slaves[0].last_diag, rig.master.slaves[0].last_diag_len,
+                0x08, 0x0C, 0x00, 0x02, 0x60, 0x03, 0x02, 0x11);
+    CHECK(rig.master.slaves[0].cycles > cycles + 2);
+    CHECK_EQ(rig.restarts_seen, 0);
+
+    dfp21b_set_inverter_fault(&rig.card.card, 0);
+    membus_run_for_us(&rig.bus, 10000);
+    CHECK_BYTES(rig.master.slaves[0].last_diag, rig.master.slaves[0].last_diag_len,
+                0x00, 0x0C, 0x00, 0x02, 0x60, 0x03);
+}
+
+static void test_master_global_control_clear_data(void)
+{
+    const uint8_t cfg[] = {0xF3, 0xF2};
+    rig_setup(1500000, 1500000, cfg, sizeof cfg, 100);
+    membus_run_for_us(&rig.bus, 20000);
+    const uint8_t out[14] = {0, 0, 0, 0, 0, 0, 0, 0, 0x00, 0x06, 0x05, 0xDC, 0, 0};
+    dp_master_set_outputs(&rig.master, 0, out, sizeof out);
+    /* A long cycle time leaves a gap after the Global_Control before the next Data_Exchange. */
+    rig.master.cfg.cycle_us = 20000;
+    membus_run_for_us(&rig.bus, 30000);
+    CHECK_EQ(rig.card.card.dp.outputs[9], 0x06);
+    dp_master_global_control(&rig.master, DP_GC_CLEAR_DATA, 0);
+    membus_wake(rig.master_port);
+    membus_run_for_us(&rig.bus, 500);
+    /* Broadcast Clear_Data: the card cleared its outputs; the next Data_Exchange sets them. */
+    CHECK_EQ(rig.card.card.dp.outputs[9], 0x00);
+    CHECK_EQ(rig.card.card.dp.outputs[11], 0x00);
+    membus_run_for_us(&rig.bus, 30000);
+    CHECK_EQ(rig.card.card.dp.outputs[9], 0x06);
+    CHECK_EQ(dp_slave_state(&rig.card.card.dp), DP_STATE_DATA_EXCH);
+}
+
 static void test_card_finds_each_rate(void)
 {
     const uint8_t cfg[] = {0xF1};
@@ -161,6 +211,8 @@ int main(void)
     RUN_TEST(test_startup_auto_baud_to_data_exchange);
     RUN_TEST(test_watchdog_expiry_and_recovery);
     RUN_TEST(test_wrong_configuration_gives_cfg_fault_and_backoff);
+    RUN_TEST(test_inverter_fault_dh_and_diagnosis);
+    RUN_TEST(test_master_global_control_clear_data);
     RUN_TEST(test_card_finds_each_rate);
     return check_report();
 }
