@@ -433,22 +433,18 @@ static void dp_service(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
         reply_rs(s, m);
         return;
     }
+    bool parameterising = m->dsap == DP_SAP_SET_PRM || m->dsap == DP_SAP_CHK_CFG;
+    if (parameterising && locked_by_other(s, m->sa)) {
+        emit(s, DP_EV_LOCKED_OUT, t, m->dsap, m->sa);
+        reply_rs(s, m);
+        return;
+    }
     switch (m->dsap) {
     case DP_SAP_SET_PRM:
-        if (locked_by_other(s, m->sa)) {
-            emit(s, DP_EV_LOCKED_OUT, t, m->dsap, m->sa);
-            reply_rs(s, m);
-        } else {
-            svc_set_prm(s, m, t);
-        }
+        svc_set_prm(s, m, t);
         break;
     case DP_SAP_CHK_CFG:
-        if (locked_by_other(s, m->sa)) {
-            emit(s, DP_EV_LOCKED_OUT, t, m->dsap, m->sa);
-            reply_rs(s, m);
-        } else {
-            svc_chk_cfg(s, m, t);
-        }
+        svc_chk_cfg(s, m, t);
         break;
     case DP_SAP_SLAVE_DIAG:
         svc_slave_diag(s, m);

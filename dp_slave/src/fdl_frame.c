@@ -13,6 +13,28 @@ uint8_t fdl_fcs(const uint8_t *p, size_t n)
     return sum;
 }
 
+/* One address extension: the first octet carries the SAP; further octets (bit 7 chain) are
+ * segment/network addresses a DP slave does not route on, so they are skipped. */
+static fdl_parse_result_t take_extension(const uint8_t *du, size_t du_len, size_t *pos,
+                                         uint8_t *sap)
+{
+    if (*pos >= du_len) {
+        return FDL_PARSE_SHORT;
+    }
+    uint8_t ae = du[(*pos)++];
+    if ((ae & FDL_AE_SEGMENT) != 0u) {
+        return FDL_PARSE_SEGMENT;
+    }
+    *sap = (uint8_t)(ae & FDL_AE_SAP_MASK);
+    while ((ae & FDL_AE_MORE) != 0u) {
+        if (*pos >= du_len) {
+            return FDL_PARSE_SHORT;
+        }
+        ae = du[(*pos)++];
+    }
+    return FDL_PARSE_OK;
+}
+
 fdl_parse_result_t fdl_parse(const uint8_t *frame, size_t len, fdl_msg_t *msg)
 {
     *msg = (fdl_msg_t){0};
@@ -43,41 +65,18 @@ fdl_parse_result_t fdl_parse(const uint8_t *frame, size_t len, fdl_msg_t *msg)
     msg->fc = frame[hdr + 2u];
     const uint8_t *du = &frame[hdr + 3u];
     size_t pos = 0;
-    /* DAE octets come first, then SAE octets. Only the first octet of each carries the SAP;
-     * further octets (bit 7 chain) are segment/network addresses we do not route on. */
+    /* DAE octets come first, then SAE octets. */
+    fdl_parse_result_t r = FDL_PARSE_OK;
     if ((da & FDL_ADDR_EXT) != 0u) {
-        if (pos >= du_len) {
-            return FDL_PARSE_SHORT;
-        }
-        uint8_t ae = du[pos++];
-        if ((ae & FDL_AE_SEGMENT) != 0u) {
-            return FDL_PARSE_SEGMENT;
-        }
-        msg->has_dsap = true;
-        msg->dsap = (uint8_t)(ae & FDL_AE_SAP_MASK);
-        while ((ae & FDL_AE_MORE) != 0u) {
-            if (pos >= du_len) {
-                return FDL_PARSE_SHORT;
-            }
-            ae = du[pos++];
-        }
+        r = take_extension(du, du_len, &pos, &msg->dsap);
+        msg->has_dsap = r == FDL_PARSE_OK;
     }
-    if ((sa & FDL_ADDR_EXT) != 0u) {
-        if (pos >= du_len) {
-            return FDL_PARSE_SHORT;
-        }
-        uint8_t ae = du[pos++];
-        if ((ae & FDL_AE_SEGMENT) != 0u) {
-            return FDL_PARSE_SEGMENT;
-        }
-        msg->has_ssap = true;
-        msg->ssap = (uint8_t)(ae & FDL_AE_SAP_MASK);
-        while ((ae & FDL_AE_MORE) != 0u) {
-            if (pos >= du_len) {
-                return FDL_PARSE_SHORT;
-            }
-            ae = du[pos++];
-        }
+    if (r == FDL_PARSE_OK && (sa & FDL_ADDR_EXT) != 0u) {
+        r = take_extension(du, du_len, &pos, &msg->ssap);
+        msg->has_ssap = r == FDL_PARSE_OK;
+    }
+    if (r != FDL_PARSE_OK) {
+        return r;
     }
     msg->data = &du[pos];
     msg->data_len = (uint8_t)(du_len - pos);
