@@ -76,12 +76,40 @@ static int close_capture(report_t *rep, const char *path)
     return 0;
 }
 
-/* ---- slave ------------------------------------------------------------------------------ */
+/* ---- one station on one tty ------------------------------------------------------------ */
 
 static card_station_t card;
 static tty_port_t port;
 static tty_runner_t runner;
 static dp_master_t master;
+static report_t rep;
+static tty_clock_t clk;
+
+/* Opens the port and the capture, and puts the station on the port. Returns false after
+ * reporting the reason (nothing left open). */
+static bool session_open(const char *dev, uint32_t baud, const char *capture,
+                         const sim_station_t *st)
+{
+    char err[256];
+    if (tty_port_open(&port, dev, baud, err, sizeof err) != 0) {
+        cli_error("%s", err);
+        return false;
+    }
+    clk.start_ns = mono_ns();
+    rep.now_ns = tty_clock_now;
+    rep.now_ctx = &clk;
+    if (!open_capture(&rep, capture)) {
+        tty_port_close(&port);
+        return false;
+    }
+    install_signals();
+    tty_runner_init(&runner);
+    tty_runner_set_tap(&runner, report_tap, &rep);
+    tty_runner_add(&runner, &port, st);
+    return true;
+}
+
+/* ---- slave ------------------------------------------------------------------------------ */
 
 int cmd_slave(int argc, char **argv)
 {
@@ -117,27 +145,12 @@ int cmd_slave(int argc, char **argv)
         cli_error("slave: --port DEV is required (a tty such as /dev/ttyUSB0, or a PTY)");
         return EXIT_USAGE;
     }
-    char err[256];
-    if (tty_port_open(&port, dev, baud != 0u ? baud : hal_uart_bauds[0], err, sizeof err) != 0) {
-        cli_error("%s", err);
+    sim_station_t st = card_station(&card);
+    if (!session_open(dev, baud != 0u ? baud : hal_uart_bauds[0], capture, &st)) {
         return 1;
     }
     port.echo_suppress = echo;
-    static report_t rep;
-    static tty_clock_t clk;
-    clk.start_ns = mono_ns();
-    rep.now_ns = tty_clock_now;
-    rep.now_ctx = &clk;
     rep.card = &card.card;
-    if (!open_capture(&rep, capture)) {
-        tty_port_close(&port);
-        return 1;
-    }
-    install_signals();
-    tty_runner_init(&runner);
-    tty_runner_set_tap(&runner, report_tap, &rep);
-    sim_station_t st = card_station(&card);
-    tty_runner_add(&runner, &port, &st);
     printf("dfp-sim slave: DFP21B on %s, DIP address %u, %s%s%s\n", dev, address,
            baud != 0u ? "fixed " : "automatic baud rate",
            baud != 0u ? report_baud_text(baud) : "",
@@ -249,26 +262,11 @@ int cmd_master(int argc, char **argv)
     memcpy(sc.cfg, cfg, cfg_len);
     sc.cfg_len = (uint8_t)cfg_len;
 
-    char err[256];
-    if (tty_port_open(&port, dev, baud, err, sizeof err) != 0) {
-        cli_error("%s", err);
-        return 1;
-    }
-    static report_t rep;
-    static tty_clock_t clk;
-    clk.start_ns = mono_ns();
-    rep.now_ns = tty_clock_now;
-    rep.now_ctx = &clk;
-    rep.show_inputs = verbose;
-    if (!open_capture(&rep, capture)) {
-        tty_port_close(&port);
-        return 1;
-    }
-    install_signals();
-    tty_runner_init(&runner);
-    tty_runner_set_tap(&runner, report_tap, &rep);
     sim_station_t st = master_station(&master);
-    tty_runner_add(&runner, &port, &st);
+    if (!session_open(dev, baud, capture, &st)) {
+        return 1;
+    }
+    rep.show_inputs = verbose;
     dp_master_cfg_t mc = {.address = (uint8_t)own, .baud = baud, .strict_timing = false,
                           .slot_time_us = slot_ms * 1000u, .uart = tty_port_uart(&port),
                           .event = report_master_event, .event_ctx = &rep};
