@@ -27,6 +27,8 @@ import re
 import subprocess
 import sys
 
+from checker import Checker  # sibling module in tests/interop
+
 SKIP = 77
 
 IDENT = 0x6003
@@ -105,25 +107,6 @@ DPV1_KEYS = {
     "DPV1_Data_Types": 0,
     "WD_Base_1ms_supp": 1,
 }
-
-
-class Checker:
-    def __init__(self):
-        self.passed = 0
-        self.failed = 0
-
-    def check(self, ok, what, detail=""):
-        if ok:
-            self.passed += 1
-            print("PASS %s" % what)
-        else:
-            self.failed += 1
-            print("FAIL %s%s" % (what, (": " + detail) if detail else ""))
-        return ok
-
-    def equal(self, actual, expected, what):
-        return self.check(actual == expected, what,
-                          "got %r, expected %r" % (actual, expected))
 
 
 def raw_keys(text):

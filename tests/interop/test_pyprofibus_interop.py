@@ -40,6 +40,8 @@ import sys
 import tempfile
 import time
 
+from checker import Checker  # sibling module in tests/interop
+
 SKIP = 77
 SLAVE_ADDR = 4
 MASTER_ADDR = 2
@@ -96,21 +98,6 @@ SCENARIOS = [
                      words(0x0000, 0x0000, 0x0000, 0x0000)],
     },
 ]
-
-
-class Checker:
-    def __init__(self):
-        self.passed = 0
-        self.failed = 0
-
-    def check(self, ok, what, detail=""):
-        if ok:
-            self.passed += 1
-            print("PASS %s" % what)
-        else:
-            self.failed += 1
-            print("FAIL %s%s" % (what, (": " + detail) if detail else ""))
-        return ok
 
 
 def wait_for(pred, timeout, step=0.02):
