@@ -1,0 +1,150 @@
+/* An emulated MOVIDRIVE MDX61B: the inverter behind the DFP21B card.
+ *
+ * It speaks what the real unit speaks to an option card or on SBus: 8-byte MOVILINK parameter
+ * telegrams (movidrive_param) and process-data words (movidrive_process_outputs/_inputs). The
+ * parameter table comes from shared/spec/movidrive-parameters.csv; non-volatile values live in an
+ * EEPROM image file that survives restarts, written so that a crash leaves the old or the new
+ * value. Time is passed in (movidrive_tick) so ramps and timeouts run in simulated time too.
+ *
+ * The struct is caller-owned; nothing is allocated. */
+#ifndef MOVIDRIVE_MOVIDRIVE_H
+#define MOVIDRIVE_MOVIDRIVE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "hal/hal_nvm.h"
+#include "hal/hal_time.h"
+#include "movilink/movilink_link.h"
+#include "movilink/movilink_wire.h"
+
+/* Some indices the card, the demo and the tests use by name. */
+#define MD_IDX_FIRMWARE 8300u      /* P076, reads 0x311C7289 */
+#define MD_IDX_SPEED 8318u         /* P000, 0.001 rpm */
+#define MD_IDX_STATUS 8310u        /* P010..P013, low word = status word 1 */
+#define MD_IDX_P090 8451u
+#define MD_IDX_P100_SETPOINT_SOURCE 8461u
+#define MD_IDX_P101_CONTROL_SOURCE 8462u
+#define MD_IDX_P130_RAMP_UP 8470u
+#define MD_IDX_P131_RAMP_DOWN 8471u
+#define MD_IDX_P160_N11 8489u
+#define MD_IDX_P302_MAX_SPEED 8517u
+#define MD_IDX_P803_PARAM_LOCK 8595u
+#define MD_IDX_P819_FIELDBUS_TIMEOUT 8606u
+#define MD_IDX_P831_FIELDBUS_REACTION 8610u
+#define MD_IDX_P870_PO1 8304u
+#define MD_IDX_P876_PO_ENABLE 8622u
+#define MD_IDX_IPOS_H0 11000u
+#define MD_IPOS_VARS 512u
+#define MD_SOURCE_FIELDBUS_SETPOINT 3u /* P100 = FIELDBUS */
+#define MD_SOURCE_FIELDBUS_CONTROL 2u  /* P101 = FIELDBUS */
+
+/* Status word 1, low byte (movidrive.md §3.3). */
+#define MD_SW_OUTPUT_STAGE_ENABLED 0x0001u
+#define MD_SW_READY 0x0002u
+#define MD_SW_PO_DATA_ENABLED 0x0004u
+#define MD_SW_RAMP_SET_2 0x0008u
+#define MD_SW_PARAM_SET_2 0x0010u
+#define MD_SW_FAULT 0x0020u
+
+/* Control word 1, basic block (movidrive.md §3.1). */
+#define MD_CW_CONTROLLER_INHIBIT 0x0001u
+#define MD_CW_ENABLE_RAPID_STOP 0x0002u /* 1 = enable, 0 = rapid stop */
+#define MD_CW_ENABLE_STOP 0x0004u       /* 1 = enable, 0 = stop */
+#define MD_CW_HOLD 0x0008u
+#define MD_CW_RAMP_SET_2 0x0010u
+#define MD_CW_PARAM_SET_2 0x0020u
+#define MD_CW_RESET 0x0040u /* fault reset on the rising edge */
+
+/* Fault numbers the emulation raises. F28 for the fieldbus timeout is an assumption
+ * (movidrive.md §3.3 lists it as inferred). */
+#define MD_FAULT_FIELDBUS_TIMEOUT 28u
+
+#define MD_MAX_PARAMS 512u
+
+typedef struct md_param_def {
+    uint16_t index;
+    int32_t min;
+    int32_t max;
+    int32_t def;
+    uint8_t quantity;   /* PNO quantity index (read scale), 0xFF none */
+    int8_t conversion;  /* PNO conversion index */
+    uint8_t flags;      /* MD_PF_* */
+} md_param_def_t;
+
+#define MD_PF_READ_ONLY 0x01u
+#define MD_PF_NON_VOLATILE 0x02u   /* kept in EEPROM ("N") */
+#define MD_PF_INHIBIT_REQUIRED 0x04u /* "R": write only with controller inhibit */
+#define MD_PF_LOCK_EXEMPT 0x08u    /* "S": writable even with parameter lock P803 */
+#define MD_PF_NO_VOLATILE 0x10u    /* write volatile not permitted */
+#define MD_PF_HAS_MIN 0x20u
+#define MD_PF_HAS_MAX 0x40u
+
+typedef struct movidrive_cfg {
+    hal_nvm_t eeprom;        /* ops == NULL: no persistence (values reset at every start) */
+    uint8_t sbus_address;    /* P813 */
+    bool terminal_enable;    /* DI00 /CONTROLLER INHIBIT wired to +24 V (true = enabled) */
+} movidrive_cfg_t;
+
+typedef struct movidrive {
+    movidrive_cfg_t cfg;
+    const md_param_def_t *defs; /* the generated table */
+    size_t num_defs;
+    int32_t ram[MD_MAX_PARAMS];   /* current values, parallel to defs */
+    int32_t ipos[MD_IPOS_VARS];   /* H0..H511 */
+    /* drive state */
+    uint16_t po[ML_MAX_PD];
+    uint16_t control_word;
+    int32_t speed_setpoint_mrpm;  /* 0.001 rpm */
+    int32_t speed_actual_mrpm;
+    uint8_t fault;                /* 0 = none */
+    bool warning;
+    bool fieldbus_timeout;
+    bool output_stage_enabled;
+    ml_fieldbus_status_t fieldbus;
+    hal_time_us_t last_tick;
+    bool ticked;
+    uint32_t eeprom_writes;
+} movidrive_t;
+
+/* Loads defaults, then the EEPROM image if there is a valid one. Returns 0, or -1 with a reason
+ * (unreadable or corrupt image: the reason says which, and factory defaults are used). */
+int movidrive_init(movidrive_t *md, const movidrive_cfg_t *cfg, char *err, size_t errlen);
+/* One MOVILINK service, answered at once: rsp = the 8-octet response (error bit + class 8 code,
+ * or the value). The handshake bit of req is ignored (SBus asynchronous mode). */
+void movidrive_param(movidrive_t *md, const uint8_t req[ML_TELEGRAM_LEN],
+                     uint8_t rsp[ML_TELEGRAM_LEN]);
+/* Process data from the fieldbus (only acted on when P100/P101 = FIELDBUS and P876 = YES). */
+void movidrive_process_outputs(movidrive_t *md, const uint16_t *po, uint8_t n);
+void movidrive_process_inputs(const movidrive_t *md, uint16_t *pi, uint8_t n);
+/* Fieldbus monitor values, P819 and the timeout flag from the card. */
+void movidrive_fieldbus_status(movidrive_t *md, const ml_fieldbus_status_t *st);
+/* Ramps, timeout reactions. Returns the next instant it wants to be called. */
+hal_time_us_t movidrive_tick(movidrive_t *md, hal_time_us_t now);
+/* P802 factory setting: defaults into RAM and EEPROM. */
+int movidrive_factory_reset(movidrive_t *md);
+
+/* An in-process ml_link for the card: requests are answered through the given completion
+ * function (normally dfp21b's) after `delay_us` of simulated time, to show that the card never
+ * waits for its inverter. */
+typedef struct md_inproc_link {
+    movidrive_t *md;
+    void (*param_response)(void *card, uint8_t channel, const uint8_t rsp[ML_TELEGRAM_LEN]);
+    void (*process_inputs)(void *card, const uint16_t *pi, uint8_t n);
+    void *card;
+    uint32_t delay_us;
+    struct {
+        bool pending;
+        uint8_t rsp[ML_TELEGRAM_LEN];
+        hal_time_us_t due;
+    } ch[ML_MAX_CHANNELS];
+    hal_time_us_t now;
+    uint8_t pd_words;
+} md_inproc_link_t;
+
+ml_link_t md_inproc_link(md_inproc_link_t *l);
+/* Delivers due responses and fresh PI words. Returns the next deadline. */
+hal_time_us_t md_inproc_link_poll(md_inproc_link_t *l, hal_time_us_t now);
+
+#endif
