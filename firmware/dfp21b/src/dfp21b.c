@@ -227,6 +227,7 @@ static void hook_event(void *ctx, const dp_event_t *ev)
     switch (ev->type) {
     case DP_EV_WD_EXPIRED:
         c->master_lost = true;
+        c->fieldbus_timeout = true;
         if (c->cfg.app.fieldbus_timeout != NULL) {
             c->cfg.app.fieldbus_timeout(c->cfg.app.ctx);
         }
@@ -246,8 +247,19 @@ static void hook_event(void *ctx, const dp_event_t *ev)
     case DP_EV_CFG_FAULT:
         c->pd = (dfp21b_pd_cfg_t){0};
         break;
+    case DP_EV_STATE:
+        if (ev->new_state == DP_STATE_DATA_EXCH) {
+            c->fieldbus_timeout = false; /* telegrams are back: a P831 warning clears */
+            ml_channel_init(&c->param, &c->ml, DFP21B_CH_CYCLIC);
+            c->inputs_dirty = true;
+        }
+        break;
     default:
         break;
+    }
+    if (ev->type != DP_EV_ADDRESSED && ev->type != DP_EV_RX_ERROR &&
+        ev->type != DP_EV_FCB_REPEAT) {
+        c->status_dirty = true;
     }
     update_leds(c);
     if (c->cfg.event != NULL) {
@@ -281,6 +293,9 @@ void dfp21b_init(dfp21b_t *c, const dfp21b_cfg_t *cfg, hal_time_us_t now)
         .hooks = {.ctx = c, .prm_check = hook_prm_check, .cfg_check = hook_cfg_check,
                   .outputs = hook_outputs, .event = hook_event},
     };
+    ml_client_init(&c->ml, cfg->inverter, 0);
+    ml_channel_init(&c->param, &c->ml, DFP21B_CH_CYCLIC);
+    c->status_dirty = true;
     dp_slave_init(&c->dp, &dcfg, now);
     update_leds(c);
 }
@@ -292,13 +307,54 @@ void dfp21b_rx_char(dfp21b_t *c, uint8_t byte, uint8_t flags, hal_time_us_t t)
     }
 }
 
+/* P090 codes of the predefined configurations (movidrive.md §4); a universal module that is
+ * not one of them shows 254, no valid configuration 255 ("0PD"). */
+static uint8_t p090_code(const dfp21b_pd_cfg_t *pd)
+{
+    if (!pd->valid) {
+        return 255u;
+    }
+    static const uint8_t words[5] = {1u, 2u, 3u, 6u, 10u};
+    for (uint8_t i = 0; i < 5u; i++) {
+        if (pd->pd_words == words[i]) {
+            return (uint8_t)(2u * i + (pd->param_channel ? 0u : 1u));
+        }
+    }
+    return 254u;
+}
+
+static void push_fieldbus_status(dfp21b_t *c)
+{
+    c->status_dirty = false;
+    if (c->cfg.inverter.ops == NULL || c->cfg.inverter.ops->fieldbus_status == NULL) {
+        return;
+    }
+    ml_fieldbus_status_t st = {
+        .pd_config = p090_code(&c->pd),
+        .pd_words = c->pd.valid ? c->pd.pd_words : 0u,
+        .param_channel = c->pd.valid && c->pd.param_channel,
+        .baud = dfp21b_p092_baud(c),
+        .address = c->address,
+        .watchdog_ms = c->p819_ms,
+        .data_exchange = dp_slave_state(&c->dp) == DP_STATE_DATA_EXCH,
+        .timeout = c->fieldbus_timeout,
+    };
+    c->cfg.inverter.ops->fieldbus_status(c->cfg.inverter.ctx, &st);
+}
+
 static void put_be16(uint8_t *p, uint16_t v)
 {
     p[0] = (uint8_t)(v >> 8);
     p[1] = (uint8_t)(v & 0xFFu);
 }
 
-static void exchange_process_data(dfp21b_t *c)
+static bool have_inverter(const dfp21b_t *c)
+{
+    return c->cfg.inverter.ops != NULL;
+}
+
+/* New outputs from the master: parameter channel and PO words go to the inverter. */
+static void take_outputs(dfp21b_t *c, hal_time_us_t now)
 {
     size_t off = c->pd.param_channel ? DFP21B_PARAM_LEN : 0u;
     uint8_t n = c->pd.valid ? c->pd.pd_words : 0u;
@@ -310,21 +366,86 @@ static void exchange_process_data(dfp21b_t *c)
                                       c->out_image[off + 2u * i + 1u])
                          : 0u;
     }
-    if (c->cfg.app.process_data != NULL) {
-        c->cfg.app.process_data(c->cfg.app.ctx, c->po, c->pi, n, c->outputs_reason);
+    if (have_inverter(c)) {
+        if (c->pd.param_channel) {
+            ml_channel_request(&c->param, c->param_req, now);
+        }
+        /* Leaving Data_Exch is not a setpoint: the inverter reacts through P831 instead. */
+        if (c->outputs_reason != DP_OUTPUTS_SAFE_STATE && c->cfg.inverter.ops->process_outputs) {
+            c->cfg.inverter.ops->process_outputs(c->cfg.inverter.ctx, c->po, n);
+        }
     } else {
-        memcpy(c->pi, c->po, sizeof c->pi); /* loopback: a defined answer without an inverter */
-    }
-    if (c->pd.param_channel) {
-        if (c->cfg.app.param_channel != NULL) {
+        if (c->cfg.app.process_data != NULL) {
+            c->cfg.app.process_data(c->cfg.app.ctx, c->po, c->pi, n, c->outputs_reason);
+        } else {
+            memcpy(c->pi, c->po, sizeof c->pi); /* loopback: a defined answer without inverter */
+        }
+        if (c->pd.param_channel && c->cfg.app.param_channel != NULL) {
             c->cfg.app.param_channel(c->cfg.app.ctx, c->param_req, c->param_rsp);
         }
-        memcpy(c->in_image, c->param_rsp, DFP21B_PARAM_LEN);
+    }
+    c->inputs_dirty = true;
+}
+
+/* The input image the next Data_Exchange reply carries: parameter reply + PI words. */
+static void build_inputs(dfp21b_t *c)
+{
+    size_t off = c->pd.param_channel ? DFP21B_PARAM_LEN : 0u;
+    uint8_t n = c->pd.valid ? c->pd.pd_words : 0u;
+    if (c->pd.param_channel) {
+        memcpy(c->in_image,
+               have_inverter(c) ? ml_channel_reply(&c->param) : c->param_rsp, DFP21B_PARAM_LEN);
     }
     for (uint8_t i = 0; i < n; i++) {
         put_be16(&c->in_image[off + 2u * i], c->pi[i]);
     }
     dp_slave_set_inputs(&c->dp, c->in_image, off + 2u * n);
+    c->inputs_dirty = false;
+}
+
+void dfp21b_inverter_param_response(dfp21b_t *c, uint8_t channel,
+                                    const uint8_t rsp[ML_TELEGRAM_LEN])
+{
+    ml_client_response(&c->ml, channel, rsp);
+    c->inputs_dirty = true;
+}
+
+void dfp21b_inverter_process_inputs(dfp21b_t *c, const uint16_t *pi, uint8_t n)
+{
+    if (n > DFP21B_MAX_PD) {
+        n = DFP21B_MAX_PD;
+    }
+    memcpy(c->pi, pi, n * sizeof pi[0]);
+    c->inputs_dirty = true;
+}
+
+/* Status word 1 (low word of index 8310): bit 5 fault/warning, high byte its number. */
+static void on_status(void *ctx, uint8_t channel, const uint8_t rsp[ML_TELEGRAM_LEN])
+{
+    (void)channel;
+    dfp21b_t *c = ctx;
+    c->status_poll_busy = false;
+    if ((rsp[ML_OFF_MANAGEMENT] & ML_MGMT_ERROR) != 0u) {
+        return;
+    }
+    uint32_t sw = ml_data(rsp) & 0xFFFFu;
+    dfp21b_set_inverter_fault(c, (sw & 0x20u) != 0u ? (uint8_t)(sw >> 8) : 0u);
+}
+
+static void poll_inverter_status(dfp21b_t *c, hal_time_us_t now)
+{
+    if (!have_inverter(c) || !c->diag_alarm || c->status_poll_busy ||
+        !hal_time_reached(now, c->next_status_poll)) {
+        return;
+    }
+    const uint8_t req[ML_TELEGRAM_LEN] = {ML_MGMT_LENGTH_4 | ML_SVC_READ, 0x00,
+                                          (uint8_t)(8310u >> 8), (uint8_t)(8310u & 0xFFu),
+                                          0, 0, 0, 0};
+    c->status_poll_busy = true;
+    c->next_status_poll = now + DFP21B_STATUS_POLL_US;
+    if (ml_client_request(&c->ml, DFP21B_CH_STATUS_POLL, req, on_status, c, now) != 0) {
+        c->status_poll_busy = false;
+    }
 }
 
 hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now)
@@ -332,10 +453,25 @@ hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now)
     if (!c->on_bus) {
         return now + HAL_TIME_NO_DEADLINE_US;
     }
+    c->now = now;
     hal_time_us_t next = dp_slave_poll(&c->dp, now);
     if (c->outputs_new) {
         c->outputs_new = false;
-        exchange_process_data(c);
+        take_outputs(c, now);
+    }
+    hal_time_us_t ml_next = ml_client_poll(&c->ml, now);
+    if (hal_time_diff(ml_next, next) < 0) {
+        next = ml_next;
+    }
+    poll_inverter_status(c, now);
+    if (have_inverter(c) && c->diag_alarm && hal_time_diff(c->next_status_poll, next) < 0) {
+        next = c->next_status_poll;
+    }
+    if (c->status_dirty) {
+        push_fieldbus_status(c);
+    }
+    if (c->inputs_dirty) {
+        build_inputs(c);
     }
     update_leds(c);
     return next;

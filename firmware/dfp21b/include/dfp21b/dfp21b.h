@@ -14,6 +14,9 @@
 #include "hal/hal_dip.h"
 #include "hal/hal_led.h"
 #include "hal/hal_uart.h"
+#include "movilink/movilink_channel.h"
+#include "movilink/movilink_client.h"
+#include "movilink/movilink_link.h"
 
 #define DFP21B_IDENT 0x6003u
 #define DFP21B_MAX_ADDRESS 125u
@@ -29,8 +32,14 @@ typedef struct dfp21b_pd_cfg {
     uint8_t pd_words;    /* 1..10 */
 } dfp21b_pd_cfg_t;
 
-/* The inverter behind the card. All optional; without them PI words echo the PO words and the
- * parameter channel answers 8 zero octets, so a master sees defined data. */
+/* Channel numbers on the inverter link (movilink_link.h). */
+#define DFP21B_CH_CYCLIC 0u      /* the 8-byte channel in the cyclic data */
+#define DFP21B_CH_STATUS_POLL 3u /* the card's own reads of the inverter status (fault number) */
+/* With diagnostic alarms on, the card reads the inverter status (index 8310) this often. */
+#define DFP21B_STATUS_POLL_US 100000u
+
+/* Test hooks replacing the inverter link. All optional; with neither a link nor these, PI words
+ * echo the PO words and the parameter channel answers 8 zero octets. */
 typedef struct dfp21b_app {
     void *ctx;
     /* From the main loop (dfp21b_poll), after new outputs arrived. po/pi are host-order words. */
@@ -50,6 +59,10 @@ typedef struct dfp21b_cfg {
     bool strict_timing;
     uint32_t baud_control_ms;
     dfp21b_app_t app;
+    /* The inverter: parameter telegrams and process data cross this link (in-process emulation,
+     * SBus over CAN, or the option connector). ops == NULL: no inverter (loopback). Responses
+     * come back through dfp21b_inverter_param_response() / dfp21b_inverter_process_inputs(). */
+    ml_link_t inverter;
     /* Every DP event, after the personality has acted on it. Optional. */
     void (*event)(void *ctx, const dp_event_t *ev);
     void *event_ctx;
@@ -76,6 +89,14 @@ typedef struct dfp21b {
     uint8_t param_rsp[DFP21B_PARAM_LEN];
     uint8_t inverter_fault;
     uint32_t p819_ms;
+    ml_client_t ml;
+    ml_channel_t param;
+    bool inputs_dirty;
+    bool status_dirty;
+    bool status_poll_busy;
+    bool fieldbus_timeout;
+    hal_time_us_t next_status_poll;
+    hal_time_us_t now;
 } dfp21b_t;
 
 /* Power-up: reads the DIP switches once. Address > 125: the card stays off the bus. */
@@ -83,6 +104,11 @@ void dfp21b_init(dfp21b_t *c, const dfp21b_cfg_t *cfg, hal_time_us_t now);
 void dfp21b_rx_char(dfp21b_t *c, uint8_t byte, uint8_t flags, hal_time_us_t t);
 /* Main-loop work: timers, process data to and from the inverter. Returns the next deadline. */
 hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now);
+
+/* From the inverter link: a parameter response, and fresh process input words (host order). */
+void dfp21b_inverter_param_response(dfp21b_t *c, uint8_t channel,
+                                    const uint8_t rsp[ML_TELEGRAM_LEN]);
+void dfp21b_inverter_process_inputs(dfp21b_t *c, const uint16_t *pi, uint8_t n);
 
 /* Inverter fault number (0 = none). With diagnostic alarms enabled (user prm byte 8 = 00) a
  * fault is reported as device-related Ext_Diag: header 0x02 + fault number (8 octets in all). */
