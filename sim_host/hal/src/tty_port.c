@@ -594,6 +594,48 @@ const char *tty_runner_error(const tty_runner_t *r)
     return r->error;
 }
 
+int tty_runner_add_fd(tty_runner_t *r, int fd, tty_fd_readable_fn readable, void *ctx)
+{
+    if (r->num_fds >= TTY_RUNNER_MAX_FDS || fd < 0 || readable == NULL) {
+        return -1;
+    }
+    r->fds[r->num_fds++] = (tty_runner_fd_t){.fd = fd, .readable = readable, .ctx = ctx};
+    return 0;
+}
+
+int tty_runner_remove_fd(tty_runner_t *r, int fd)
+{
+    for (uint8_t i = 0; i < r->num_fds; i++) {
+        if (r->fds[i].fd == fd) {
+            memmove(&r->fds[i], &r->fds[i + 1u], (size_t)(r->num_fds - i - 1u) * sizeof r->fds[0]);
+            r->num_fds--;
+            return 0;
+        }
+    }
+    return -1;
+}
+
+int tty_runner_add_timer(tty_runner_t *r, tty_timer_fn poll, void *ctx)
+{
+    if (r->num_timers >= TTY_RUNNER_MAX_TIMERS || poll == NULL) {
+        return -1;
+    }
+    r->timers[r->num_timers++] =
+        (tty_runner_timer_t){.poll = poll, .ctx = ctx, .deadline = tty_now_us()};
+    return 0;
+}
+
+void tty_runner_set_error(tty_runner_t *r, const char *fmt, ...)
+{
+    if (r->error[0] != '\0') {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(r->error, sizeof r->error, fmt, ap);
+    va_end(ap);
+}
+
 static void runner_baud_changed(tty_port_t *p)
 {
     if (p->runner != NULL) {
@@ -689,12 +731,33 @@ static int read_port(tty_runner_t *r, tty_runner_slot_t *s, short revents)
                        e == EIO ? " (device gone or PTY peer closed)" : "");
 }
 
+static void poll_timer(tty_runner_timer_t *t)
+{
+    t->deadline = t->poll(t->ctx, tty_now_us());
+}
+
 static void poll_due_stations(tty_runner_t *r)
 {
     for (uint8_t i = 0; i < r->num_slots; i++) {
         if (hal_time_reached(tty_now_us(), r->slots[i].deadline)) {
             poll_slot(&r->slots[i]);
         }
+    }
+    for (uint8_t i = 0; i < r->num_timers; i++) {
+        if (hal_time_reached(tty_now_us(), r->timers[i].deadline)) {
+            poll_timer(&r->timers[i]);
+        }
+    }
+}
+
+/* After an fd delivered something: everybody may have news. */
+static void poll_all(tty_runner_t *r)
+{
+    for (uint8_t i = 0; i < r->num_slots; i++) {
+        poll_slot(&r->slots[i]);
+    }
+    for (uint8_t i = 0; i < r->num_timers; i++) {
+        poll_timer(&r->timers[i]);
     }
 }
 
@@ -712,18 +775,31 @@ static int32_t wait_budget_us(const tty_runner_t *r, hal_time_us_t t_end)
             w = d;
         }
     }
+    for (uint8_t i = 0; i < r->num_timers; i++) {
+        int32_t d = hal_time_diff(r->timers[i].deadline, now);
+        if (d < w) {
+            w = d;
+        }
+    }
     return w < 0 ? 0 : w;
 }
 
+/* Ports first, then the other descriptors. A callback may remove its own descriptor, so the
+ * fd entries are looked up by descriptor after the wait rather than by position. */
 static int wait_and_read(tty_runner_t *r, int32_t wait_us)
 {
-    struct pollfd pfd[TTY_RUNNER_MAX_PORTS];
+    struct pollfd pfd[TTY_RUNNER_MAX_PORTS + TTY_RUNNER_MAX_FDS];
+    nfds_t n = 0;
     for (uint8_t i = 0; i < r->num_slots; i++) {
-        pfd[i] = (struct pollfd){.fd = r->slots[i].port->fd, .events = POLLIN};
+        pfd[n++] = (struct pollfd){.fd = r->slots[i].port->fd, .events = POLLIN};
+    }
+    uint8_t num_fds = r->num_fds;
+    for (uint8_t i = 0; i < num_fds; i++) {
+        pfd[n++] = (struct pollfd){.fd = r->fds[i].fd, .events = POLLIN};
     }
     struct timespec ts = {.tv_sec = wait_us / 1000000,
                           .tv_nsec = (long)(wait_us % 1000000) * 1000L};
-    int rc = ppoll(pfd, r->num_slots, &ts, NULL);
+    int rc = ppoll(pfd, n, &ts, NULL);
     if (rc < 0) {
         return errno == EINTR ? 0 : runner_fail(r, "poll: %s", strerror(errno));
     }
@@ -731,6 +807,25 @@ static int wait_and_read(tty_runner_t *r, int32_t wait_us)
         if (pfd[i].revents != 0 && read_port(r, &r->slots[i], pfd[i].revents) != 0) {
             return -1;
         }
+    }
+    bool delivered = false;
+    for (nfds_t k = r->num_slots; k < n && rc > 0; k++) {
+        if (pfd[k].revents == 0) {
+            continue;
+        }
+        if ((pfd[k].revents & POLLNVAL) != 0) {
+            return runner_fail(r, "fd %d: not an open descriptor", pfd[k].fd);
+        }
+        for (uint8_t i = 0; i < r->num_fds; i++) {
+            if (r->fds[i].fd == pfd[k].fd) {
+                r->fds[i].readable(r->fds[i].ctx, tty_now_us());
+                delivered = true;
+                break;
+            }
+        }
+    }
+    if (delivered && r->error[0] == '\0') {
+        poll_all(r);
     }
     return 0;
 }

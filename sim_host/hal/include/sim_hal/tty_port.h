@@ -7,7 +7,8 @@
  *
  * One thread runs everything: tty_runner_run_until() waits on all ports with poll(), hands
  * received characters to each port's station and calls the stations' poll functions at their
- * deadlines. transmit() is called from inside those callbacks and blocks until its not_before
+ * deadlines. Other descriptors (a CAN socket) and port-less timers can join the same loop
+ * (tty_runner_add_fd, tty_runner_add_timer). transmit() is called from inside those callbacks and blocks until its not_before
  * instant, so a frame always leaves in one piece.
  *
  * Structs are caller-owned; nothing is allocated. */
@@ -93,9 +94,35 @@ typedef struct tty_runner_slot {
     uint64_t rx_frame_start_ns; /* arrival of the chunk holding the frame's first byte */
 } tty_runner_slot_t;
 
+/* Other descriptors the runner waits on (a CAN socket): readable() runs when poll() reports
+ * the descriptor readable (or in error: the callback's read() then tells which), with the wall
+ * clock as now. It must drain what it can without blocking. */
+#define TTY_RUNNER_MAX_FDS 8u
+typedef void (*tty_fd_readable_fn)(void *ctx, hal_time_us_t now);
+/* Timers without a port (an emulated inverter's ramps, a link's response deadlines): poll()
+ * returns the next instant it wants to run, like a station's poll. */
+#define TTY_RUNNER_MAX_TIMERS 8u
+typedef hal_time_us_t (*tty_timer_fn)(void *ctx, hal_time_us_t now);
+
+typedef struct tty_runner_fd {
+    int fd;
+    tty_fd_readable_fn readable;
+    void *ctx;
+} tty_runner_fd_t;
+
+typedef struct tty_runner_timer {
+    tty_timer_fn poll;
+    void *ctx;
+    hal_time_us_t deadline;
+} tty_runner_timer_t;
+
 struct tty_runner {
     tty_runner_slot_t slots[TTY_RUNNER_MAX_PORTS];
     uint8_t num_slots;
+    tty_runner_fd_t fds[TTY_RUNNER_MAX_FDS];
+    uint8_t num_fds;
+    tty_runner_timer_t timers[TTY_RUNNER_MAX_TIMERS];
+    uint8_t num_timers;
     sim_frame_tap_t tap;
     void *tap_ctx;
     uint64_t t0_ns; /* CLOCK_MONOTONIC at init: the tap's time origin */
@@ -106,6 +133,18 @@ void tty_runner_init(tty_runner_t *r);
 /* Drive port p for station st (copied). The station is first polled when the runner next runs.
  * Returns 0, or -1 when the runner is full or the port already belongs to a runner. */
 int tty_runner_add(tty_runner_t *r, tty_port_t *p, const sim_station_t *st);
+/* Wait on fd as well and call readable(ctx, now) when it has data. After each such call every
+ * station and timer is polled at once, since what arrived may be for them (a CAN frame with the
+ * inverter's answer for the card). The caller keeps owning fd. Returns 0, or -1 when full. */
+int tty_runner_add_fd(tty_runner_t *r, int fd, tty_fd_readable_fn readable, void *ctx);
+/* Stop waiting on fd (before closing it). Returns 0, or -1 if it was not added. */
+int tty_runner_remove_fd(tty_runner_t *r, int fd);
+/* A timer: poll(ctx, now) first runs when the runner next runs, then at the instant it returns.
+ * Returns 0, or -1 when full. */
+int tty_runner_add_timer(tty_runner_t *r, tty_timer_fn poll, void *ctx);
+/* For fd users and timers: end the current run with -1 and this message (the first one set in a
+ * run is kept). */
+void tty_runner_set_error(tty_runner_t *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Every frame transmitted by a port of this runner (from_local_station = true) and every valid
  * frame received on one (false) goes to tap; t_start_ns counts from tty_runner_init(). */
 void tty_runner_set_tap(tty_runner_t *r, sim_frame_tap_t tap, void *ctx);
