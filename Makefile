@@ -8,7 +8,8 @@
 #   make bench     the benchmark program (figures for docs/performance.md)
 
 SHELL := /bin/bash
-APT_PACKAGES := cmake ninja-build gcc make python3 socat gcc-arm-none-eabi libnewlib-arm-none-eabi
+APT_PACKAGES := cmake ninja-build gcc make python3 socat gcc-arm-none-eabi libnewlib-arm-none-eabi \
+  qemu-system-x86 busybox-static cpio iproute2
 VENV := build/venv
 PYTHON := $(VENV)/bin/python3
 CTEST_FLAGS := --output-on-failure --timeout 300
