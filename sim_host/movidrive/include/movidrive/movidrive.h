@@ -71,6 +71,7 @@ typedef struct md_param_def {
     uint8_t quantity;   /* PNO quantity index (read scale), 0xFF none */
     int8_t conversion;  /* PNO conversion index */
     uint8_t flags;      /* MD_PF_* */
+    uint32_t enum_mask; /* added: bit n set = value n defined (enumeration); 0 = no enumeration */
 } md_param_def_t;
 
 #define MD_PF_READ_ONLY 0x01u
@@ -80,6 +81,29 @@ typedef struct md_param_def {
 #define MD_PF_NO_VOLATILE 0x10u    /* write volatile not permitted */
 #define MD_PF_HAS_MIN 0x20u
 #define MD_PF_HAS_MAX 0x40u
+#define MD_PF_UNSIGNED 0x80u       /* added: min/max/value compared as uint32 (P092, P221, P222) */
+
+/* Unit status (status word 1 high byte when bit 5 is clear; README.md lists the sources). */
+#define MD_UNIT_CONTROLLER_INHIBIT 1u
+#define MD_UNIT_NO_ENABLE 2u
+#define MD_UNIT_ENABLED 4u
+#define MD_UNIT_WAITING_FOR_DATA 16u
+
+/* Read attribute, bytes 6..7 (MOVITRAC B coding, movidrive.md 1.3; assumed for MOVIDRIVE). */
+#define MD_ATTR_WRITE_ALLOWED 0x0001u
+#define MD_ATTR_EEPROM 0x0002u
+#define MD_ATTR_FACTORY_RAM 0x0004u
+#define MD_ATTR_FACTORY_EEPROM 0x0008u
+#define MD_ATTR_EEPROM_VALID_AT_INIT 0x0010u
+#define MD_ATTR_NO_INHIBIT_REQUIRED 0x0020u
+
+/* EEPROM image (inside the hal_nvm byte array): header "MDEE", version, record count, IPOS
+ * count; records (index u16, value i32, big-endian) for every N parameter in table order;
+ * then H0..H511. movidrive_eeprom_size() gives the bytes the NVM must offer. */
+#define MD_EE_MAGIC 0x4D444545u
+#define MD_EE_VERSION 1u
+#define MD_EE_HEADER 12u
+#define MD_EE_RECORD 6u
 
 typedef struct movidrive_cfg {
     hal_nvm_t eeprom;        /* ops == NULL: no persistence (values reset at every start) */
@@ -106,6 +130,30 @@ typedef struct movidrive {
     hal_time_us_t last_tick;
     bool ticked;
     uint32_t eeprom_writes;
+    /* added: */
+    int32_t ee[MD_MAX_PARAMS];      /* the EEPROM's values, parallel to defs (write volatile
+                                       changes ram only) */
+    int32_t ee_ipos[MD_IPOS_VARS];
+    bool ee_layout_ok;              /* the image in the NVM has this table's record layout;
+                                       otherwise the next save writes the whole image */
+    bool ee_usable;                 /* an NVM of sufficient size is configured */
+    uint8_t po_count;               /* words in po[] */
+    bool po_received;               /* any PO since init ("waiting for data" until then) */
+    uint16_t ipos_po[ML_MAX_PD];    /* IPOS data area: every received PO word (PO4..PO10 only
+                                       here; PO1..PO3 too, whatever P870..P872 say) */
+    uint16_t ipos_pi[ML_MAX_PD];    /* what an IPOS program sends: PI words with P873..P875 =
+                                       IPOS PI-DATA, and PI4..PI10 */
+    uint8_t mode;                   /* internal drive mode (inhibit, stop kinds, run) */
+    uint8_t fault_reaction;         /* P83x value that latched `fault` */
+    uint8_t warning_code;           /* fault number shown with a warning (F28) */
+    uint8_t warning_reaction;       /* P83x value of the active warning */
+    int8_t accel;                   /* +1 speeding up, -1 slowing down, 0 steady (last tick) */
+    int64_t ramp_residue;           /* ramp integration remainder (0.001 rpm x ms units) */
+    int64_t pos_residue;
+    int32_t position_inc;           /* P003, 4096 increments per motor revolution */
+    int32_t current_mpct;           /* output current, 0.001 % I_N */
+    int32_t active_current_mpct;
+    bool have_fieldbus;             /* movidrive_fieldbus_status() was called */
 } movidrive_t;
 
 /* Loads defaults, then the EEPROM image if there is a valid one. Returns 0, or -1 with a reason
@@ -124,6 +172,17 @@ void movidrive_fieldbus_status(movidrive_t *md, const ml_fieldbus_status_t *st);
 hal_time_us_t movidrive_tick(movidrive_t *md, hal_time_us_t now);
 /* P802 factory setting: defaults into RAM and EEPROM. */
 int movidrive_factory_reset(movidrive_t *md);
+
+/* Added. Status word 1 as PI "STATUS WORD1" and the low word of index 8310 show it. */
+uint16_t movidrive_status_word(const movidrive_t *md);
+/* DI00 /CONTROLLER INHIBIT changed (true = +24 V, enabled). */
+void movidrive_set_terminal_enable(movidrive_t *md, bool enabled);
+/* Bytes the EEPROM (hal_nvm) must offer for the image. */
+size_t movidrive_eeprom_size(void);
+/* The table entry of an index, NULL if none (H0..H511 share one entry). */
+const md_param_def_t *movidrive_param_def(const movidrive_t *md, uint16_t index);
+/* A parameter's current value as "Read" returns it; false for an unknown index. */
+bool movidrive_read_value(const movidrive_t *md, uint16_t index, int32_t *value);
 
 /* An in-process ml_link for the card: requests are answered through the given completion
  * function (normally dfp21b's) after `delay_us` of simulated time, to show that the card never
