@@ -1,0 +1,47 @@
+/* hal_nvm_t on a file: the EEPROM of the emulated MOVIDRIVE (and anything else on the host that
+ * needs non-volatile bytes).
+ *
+ * File = 20-byte header (magic "DFPE", version 1, header length, data length, sequence number,
+ * CRC-32 over header and data, all big-endian) + data. Every write rewrites the whole image:
+ * PATH.tmp is written and fsync'ed, the current PATH is hard-linked to PATH.bak (the previous
+ * generation), PATH.tmp is renamed over PATH and the directory is fsync'ed. A crash at any
+ * moment leaves PATH holding the old or the new image; should PATH itself be damaged
+ * (truncated, overwritten), the previous generation in PATH.bak is used and the open says so. */
+#ifndef SIM_HAL_FILE_NVM_H
+#define SIM_HAL_FILE_NVM_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "hal/hal_nvm.h"
+
+#define FILE_NVM_MAX_SIZE 16384u
+#define FILE_NVM_PATH_MAX 480u
+#define FILE_NVM_HEADER 20u
+#define FILE_NVM_MAGIC 0x44465045u /* "DFPE" */
+#define FILE_NVM_VERSION 1u
+
+typedef struct file_nvm {
+    char path[FILE_NVM_PATH_MAX];
+    size_t size;
+    bool readable;   /* false: no usable image; reads fail until the next write */
+    bool main_valid; /* PATH holds a valid image (kept as PATH.bak by the next write) */
+    bool sync;       /* fsync file and directory on every write (default true) */
+    uint32_t seq;    /* sequence number of the current image */
+    uint32_t writes;
+    uint8_t data[FILE_NVM_MAX_SIZE];
+} file_nvm_t;
+
+/* Opens (does not create) the image at path with `size` data bytes (<= FILE_NVM_MAX_SIZE).
+ *  0  image loaded, or no file yet (all bytes 0xFF, a blank EEPROM);
+ *  1  PATH unusable, the previous generation PATH.bak was loaded; err says why;
+ * -1  no usable image (corrupt, short, garbage, unreadable; err says which): reads fail until
+ *     the next write, which starts from a blank image; or bad arguments.
+ * A shorter or longer image from another size is accepted: cut or padded with 0xFF. */
+int file_nvm_open(file_nvm_t *f, const char *path, size_t size, char *err, size_t errlen);
+hal_nvm_t file_nvm_hal(file_nvm_t *f);
+/* CRC-32 (IEEE 802.3, reflected, as zlib), exposed for tests that build images. */
+uint32_t file_nvm_crc32(uint32_t crc, const uint8_t *p, size_t n);
+
+#endif

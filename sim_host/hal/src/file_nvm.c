@@ -1,0 +1,307 @@
+#define _POSIX_C_SOURCE 200809L
+
+#include "sim_hal/file_nvm.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+uint32_t file_nvm_crc32(uint32_t crc, const uint8_t *p, size_t n)
+{
+    crc = ~crc;
+    for (size_t i = 0; i < n; i++) {
+        crc ^= p[i];
+        for (int b = 0; b < 8; b++) {
+            crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+        }
+    }
+    return ~crc;
+}
+
+static void put_u16(uint8_t *p, uint32_t v)
+{
+    p[0] = (uint8_t)(v >> 8);
+    p[1] = (uint8_t)v;
+}
+
+static void put_u32(uint8_t *p, uint32_t v)
+{
+    p[0] = (uint8_t)(v >> 24);
+    p[1] = (uint8_t)(v >> 16);
+    p[2] = (uint8_t)(v >> 8);
+    p[3] = (uint8_t)v;
+}
+
+static uint32_t get_u16(const uint8_t *p)
+{
+    return ((uint32_t)p[0] << 8) | p[1];
+}
+
+static uint32_t get_u32(const uint8_t *p)
+{
+    return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | p[3];
+}
+
+/* A file image being read: header + data, at most one byte more than the largest image so a
+ * too-long file is noticed. */
+typedef struct {
+    uint8_t bytes[FILE_NVM_HEADER + FILE_NVM_MAX_SIZE + 1u];
+} image_buf_t;
+
+static image_buf_t rd_buf;
+static uint8_t wr_buf[FILE_NVM_HEADER + FILE_NVM_MAX_SIZE];
+
+/* 0 loaded into f->data; -1 missing (ENOENT, no message); -2 unusable, why in err. */
+static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        if (errno == ENOENT) {
+            return -1;
+        }
+        snprintf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
+        return -2;
+    }
+    size_t got = 0;
+    for (;;) {
+        ssize_t r = read(fd, rd_buf.bytes + got, sizeof rd_buf.bytes - got);
+        if (r < 0) {
+            if (errno == EINTR) {
+                continue;
+            }
+            snprintf(err, errlen, "%s: read error: %s", path, strerror(errno));
+            close(fd);
+            return -2;
+        }
+        if (r == 0 || got + (size_t)r == sizeof rd_buf.bytes) {
+            got += (size_t)r;
+            break;
+        }
+        got += (size_t)r;
+    }
+    close(fd);
+    const uint8_t *h = rd_buf.bytes;
+    if (got < FILE_NVM_HEADER) {
+        snprintf(err, errlen, "%s: file too short (%zu bytes; the header alone has %u)", path, got,
+                 (unsigned)FILE_NVM_HEADER);
+        return -2;
+    }
+    uint32_t magic = get_u32(h);
+    if (magic != FILE_NVM_MAGIC) {
+        snprintf(err, errlen, "%s: not an EEPROM image (magic 0x%08X, expected 0x%08X)", path,
+                 (unsigned)magic, (unsigned)FILE_NVM_MAGIC);
+        return -2;
+    }
+    uint32_t version = get_u16(h + 4);
+    uint32_t hlen = get_u16(h + 6);
+    uint32_t len = get_u32(h + 8);
+    if (version != FILE_NVM_VERSION || hlen != FILE_NVM_HEADER) {
+        snprintf(err, errlen, "%s: image version %u / header length %u not supported", path,
+                 (unsigned)version, (unsigned)hlen);
+        return -2;
+    }
+    if (len > FILE_NVM_MAX_SIZE || got != FILE_NVM_HEADER + len) {
+        snprintf(err, errlen,
+                 "%s: length field says %u data bytes but the file holds %zu (truncated or "
+                 "appended to)",
+                 path, (unsigned)len, got - FILE_NVM_HEADER);
+        return -2;
+    }
+    uint32_t stored = get_u32(h + 16);
+    uint32_t crc = file_nvm_crc32(0, h, 16);
+    crc = file_nvm_crc32(crc, h + FILE_NVM_HEADER, len);
+    if (crc != stored) {
+        snprintf(err, errlen, "%s: CRC mismatch (stored 0x%08X, computed 0x%08X): contents damaged",
+                 path, (unsigned)stored, (unsigned)crc);
+        return -2;
+    }
+    memset(f->data, 0xFF, f->size);
+    memcpy(f->data, h + FILE_NVM_HEADER, len < f->size ? len : f->size);
+    f->seq = get_u32(h + 12);
+    return 0;
+}
+
+int file_nvm_open(file_nvm_t *f, const char *path, size_t size, char *err, size_t errlen)
+{
+    char dummy[1];
+    if (err == NULL || errlen == 0) {
+        err = dummy;
+        errlen = sizeof dummy;
+    }
+    err[0] = '\0';
+    memset(f, 0, sizeof *f);
+    f->sync = true;
+    if (path == NULL || strlen(path) + 5 > sizeof f->path) {
+        snprintf(err, errlen, "EEPROM path missing or too long");
+        return -1;
+    }
+    if (size == 0 || size > FILE_NVM_MAX_SIZE) {
+        snprintf(err, errlen, "EEPROM size %zu out of range (1..%u)", size,
+                 (unsigned)FILE_NVM_MAX_SIZE);
+        return -1;
+    }
+    memcpy(f->path, path, strlen(path) + 1);
+    f->size = size;
+    memset(f->data, 0xFF, size);
+
+    char why[FILE_NVM_PATH_MAX + 160];
+    why[0] = '\0';
+    int rc = load_image(f, path, why, sizeof why);
+    if (rc == 0) {
+        f->readable = true;
+        f->main_valid = true;
+        return 0;
+    }
+    char bak[FILE_NVM_PATH_MAX];
+    snprintf(bak, sizeof bak, "%s.bak", path);
+    char bwhy[FILE_NVM_PATH_MAX + 160];
+    bwhy[0] = '\0';
+    int brc = load_image(f, bak, bwhy, sizeof bwhy);
+    if (brc == 0) {
+        f->readable = true;
+        snprintf(err, errlen, "%s; using the previous image %s",
+                 rc == -1 ? "EEPROM image missing" : why, bak);
+        return 1;
+    }
+    memset(f->data, 0xFF, size);
+    if (rc == -1 && brc == -1) {
+        f->readable = true; /* first start: a blank EEPROM */
+        return 0;
+    }
+    f->readable = false;
+    if (rc == -1) {
+        snprintf(err, errlen, "%s (EEPROM image missing)", bwhy);
+    } else if (brc == -1) {
+        snprintf(err, errlen, "%s", why);
+    } else {
+        snprintf(err, errlen, "%s; previous image: %s", why, bwhy);
+    }
+    return -1;
+}
+
+static size_t nvm_size(void *ctx)
+{
+    const file_nvm_t *f = ctx;
+    return f->size;
+}
+
+static int nvm_read(void *ctx, size_t offset, uint8_t *data, size_t len)
+{
+    const file_nvm_t *f = ctx;
+    if (!f->readable || offset > f->size || len > f->size - offset) {
+        return -1;
+    }
+    memcpy(data, f->data + offset, len);
+    return 0;
+}
+
+static int write_all(int fd, const uint8_t *p, size_t n)
+{
+    while (n > 0) {
+        ssize_t w = write(fd, p, n);
+        if (w < 0) {
+            if (errno == EINTR) {
+                continue;
+            }
+            return -1;
+        }
+        p += w;
+        n -= (size_t)w;
+    }
+    return 0;
+}
+
+static int sync_dir(const char *path)
+{
+    char dir[FILE_NVM_PATH_MAX];
+    const char *slash = strrchr(path, '/');
+    if (slash == NULL) {
+        snprintf(dir, sizeof dir, ".");
+    } else if (slash == path) {
+        snprintf(dir, sizeof dir, "/");
+    } else {
+        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    }
+    int fd = open(dir, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        return -1;
+    }
+    int rc = fsync(fd);
+    close(fd);
+    return rc;
+}
+
+static int nvm_write(void *ctx, size_t offset, const uint8_t *data, size_t len)
+{
+    file_nvm_t *f = ctx;
+    if (offset > f->size || len > f->size - offset) {
+        return -1;
+    }
+    uint8_t *img = wr_buf;
+    uint8_t *payload = img + FILE_NVM_HEADER;
+    if (f->readable) {
+        memcpy(payload, f->data, f->size);
+    } else {
+        memset(payload, 0xFF, f->size); /* the old image was unusable: start blank */
+    }
+    memcpy(payload + offset, data, len);
+    uint32_t seq = f->seq + 1u;
+    put_u32(img, FILE_NVM_MAGIC);
+    put_u16(img + 4, FILE_NVM_VERSION);
+    put_u16(img + 6, FILE_NVM_HEADER);
+    put_u32(img + 8, (uint32_t)f->size);
+    put_u32(img + 12, seq);
+    uint32_t crc = file_nvm_crc32(0, img, 16);
+    put_u32(img + 16, file_nvm_crc32(crc, payload, f->size));
+
+    char tmp[FILE_NVM_PATH_MAX + 8];
+    char bak[FILE_NVM_PATH_MAX + 8];
+    snprintf(tmp, sizeof tmp, "%s.tmp", f->path);
+    snprintf(bak, sizeof bak, "%s.bak", f->path);
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        return -1;
+    }
+    if (write_all(fd, img, FILE_NVM_HEADER + f->size) != 0 || (f->sync && fsync(fd) != 0)) {
+        close(fd);
+        unlink(tmp);
+        return -1;
+    }
+    if (close(fd) != 0) {
+        unlink(tmp);
+        return -1;
+    }
+    if (f->main_valid) {
+        /* Keep the current generation. Without hard links there is simply no backup. */
+        if (unlink(bak) == 0 || errno == ENOENT) {
+            (void)link(f->path, bak);
+        }
+    }
+    if (rename(tmp, f->path) != 0) {
+        unlink(tmp);
+        return -1;
+    }
+    if (f->sync) {
+        (void)sync_dir(f->path);
+    }
+    memcpy(f->data, payload, f->size);
+    f->seq = seq;
+    f->readable = true;
+    f->main_valid = true;
+    f->writes++;
+    return 0;
+}
+
+static const hal_nvm_ops_t file_nvm_ops = {
+    .size = nvm_size,
+    .read = nvm_read,
+    .write = nvm_write,
+};
+
+hal_nvm_t file_nvm_hal(file_nvm_t *f)
+{
+    return (hal_nvm_t){.ops = &file_nvm_ops, .ctx = f};
+}
