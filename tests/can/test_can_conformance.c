@@ -557,6 +557,19 @@ static void test_runner_fd_and_timer(void)
     CHECK_EQ(write(rt.fds[1], &b, 1), 1);
     CHECK_EQ(tty_runner_run_until(&rt.runner, tty_now_us() + 100000u, NULL), 0);
     CHECK_EQ(rt.reads, 2);
+    /* wake: a timer that asked for no deadline runs again at the next loop turn. */
+    int before_wake = rt.timer_calls;
+    CHECK_EQ(tty_runner_run_until(&rt.runner, tty_now_us() + 20000u, NULL), 0);
+    CHECK_EQ(rt.timer_calls, before_wake);
+    tty_runner_wake(&rt.runner);
+    CHECK_EQ(tty_runner_run_until(&rt.runner, tty_now_us() + 20000u, NULL), 0);
+    CHECK_EQ(rt.timer_calls, before_wake + 1);
+    /* A removed timer is not run any more. */
+    int calls = rt.timer_calls;
+    CHECK_EQ(tty_runner_remove_timer(&rt.runner, rt_timer, NULL), 0);
+    CHECK_EQ(tty_runner_remove_timer(&rt.runner, rt_timer, NULL), -1);
+    CHECK_EQ(tty_runner_run_until(&rt.runner, tty_now_us() + 50000u, NULL), 0);
+    CHECK_EQ(rt.timer_calls, calls);
     /* Limits. */
     for (unsigned i = 0; i < TTY_RUNNER_MAX_FDS; i++) {
         CHECK_EQ(tty_runner_add_fd(&rt.runner, rt.fds[0], rt_readable, NULL), 0);

@@ -625,6 +625,27 @@ int tty_runner_add_timer(tty_runner_t *r, tty_timer_fn poll, void *ctx)
     return 0;
 }
 
+void tty_runner_wake(tty_runner_t *r)
+{
+    hal_time_us_t now = tty_now_us();
+    for (uint8_t i = 0; i < r->num_timers; i++) {
+        r->timers[i].deadline = now;
+    }
+}
+
+int tty_runner_remove_timer(tty_runner_t *r, tty_timer_fn poll, void *ctx)
+{
+    for (uint8_t i = 0; i < r->num_timers; i++) {
+        if (r->timers[i].poll == poll && r->timers[i].ctx == ctx) {
+            memmove(&r->timers[i], &r->timers[i + 1u],
+                    (size_t)(r->num_timers - i - 1u) * sizeof r->timers[0]);
+            r->num_timers--;
+            return 0;
+        }
+    }
+    return -1;
+}
+
 void tty_runner_set_error(tty_runner_t *r, const char *fmt, ...)
 {
     if (r->error[0] != '\0') {
