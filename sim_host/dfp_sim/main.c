@@ -23,6 +23,11 @@ static const char usage[] =
     "      the built-in class-1 master against a slave; exit 0 once it ran N cycles (default\n"
     "      100) in data exchange. --prm is the user parameter part (Set_Prm from octet 7);\n"
     "      default for ident 0x6003: 00 00 00 06 81 00 00 01 01\n"
+    "  inverter --can IFACE [--sbus-address N] [--eeprom FILE] [--duration S] [--channel2]\n"
+    "           [--quiet]\n"
+    "      the emulated MOVIDRIVE on SBus (SocketCAN, e.g. vcan0) until SIGINT/SIGTERM; prints\n"
+    "      every parameter service and state change. --sbus-address is P813 (0..63, default 0);\n"
+    "      --eeprom keeps non-volatile parameters in FILE across runs\n"
     "  check-cfg HEX\n"
     "      would the card accept this Chk_Cfg configuration?\n"
     "\n"
@@ -76,6 +81,8 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "slave") == 0) return cmd_slave(argc, argv);
     if (strcmp(cmd, "master") == 0) return cmd_master(argc, argv);
     if (strcmp(cmd, "check-cfg") == 0) return cmd_check_cfg(argc, argv);
-    cli_error("unknown command '%s' (commands: demo, slave, master, check-cfg; see --help)", cmd);
+    if (strcmp(cmd, "inverter") == 0) return cmd_inverter(argc, argv);
+    cli_error("unknown command '%s' (commands: demo, slave, master, inverter, check-cfg; see "
+              "--help)", cmd);
     return EXIT_USAGE;
 }

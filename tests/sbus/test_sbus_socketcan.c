@@ -6,7 +6,9 @@
  *                                                  sbus_inverter_t on its own socket (in the VM)
  *   test_sbus_socketcan --can vcan0 --external A + round trips against another program, e.g.
  *                                                  `dfp-sim inverter --can vcan0 --sbus-address A`
- *                                                  (the emulated MOVIDRIVE: checks P076 and H0)
+ *                                                  (the emulated MOVIDRIVE: checks P076 and H0;
+ *                                                  --write-h1/--expect-h1/--expect-h0 check the
+ *                                                  EEPROM across a restart of that program)
  */
 #include <errno.h>
 #include <stdbool.h>
@@ -17,8 +19,15 @@
 #include "inverter_can.h"
 #include "movilink/movilink_client.h"
 
+#define MD_P100_FIELDBUS 3u /* setpoint source (index 8461) */
+#define MD_P101_FIELDBUS 2u /* control signal source (index 8462) */
+
 static const char *ifname;
 static int external_address = -1;
+static long write_h1 = -1;  /* --write-h1 N: non-volatile write of H1 (index 11001) */
+static long expect_h1 = -1; /* --expect-h1 N: H1 must read N (after a restart: from EEPROM) */
+static long expect_h0 = -1; /* --expect-h0 N: H0 must read N before this run writes it */
+static bool drive_test;     /* --drive: P100/P101 = FIELDBUS, enable, ramp, PO stop */
 
 /* ---- the card side: a service client on the inverter_can link ------------------------------ */
 
@@ -240,12 +249,74 @@ static void test_round_trips_in_process(void)
     CHECK_EQ(card.runner.num_timers, 1); /* the client's own timer stays */
 }
 
+/* Keep sending PO every 10 ms for ms milliseconds, as the card does every DP cycle. */
+static void pd_for(const uint16_t po[3], int ms)
+{
+    for (int t = 0; t < ms; t += 10) {
+        (void)exchange_pd(po);
+        (void)tty_runner_run_until(&card.runner, tty_now_us() + 10000u, NULL);
+    }
+}
+
+/* The drive over SBus: sources to FIELDBUS, enable with 300 rpm, the actual speed ramps up;
+ * PO frames stop (a DP timeout on the card) and the drive's SBus timeout reacts (F28 here, see
+ * cmd_inverter.c); a reset edge in control word bit 6 clears it. */
+static void test_drive_external(void)
+{
+    /* P100 first: both need controller inhibit, which P101 = FIELDBUS with an enabling
+     * control word would end. */
+    uint8_t w2[8] = {0x33, 0x00, 0x21, 0x0D, 0, 0, 0, MD_P100_FIELDBUS};
+    CHECK(service(w2, 0));
+    CHECK_EQ(card.rsp[0], 0x33);
+    uint8_t w[8] = {0x33, 0x00, 0x21, 0x0E, 0, 0, 0, MD_P101_FIELDBUS};
+    CHECK(service(w, 0));
+    CHECK_EQ(card.rsp[0], 0x33);
+    const uint16_t run[3] = {0x0006, 1500, 0}; /* enable, 1500 x 0.2 rpm = 300 rpm */
+    pd_for(run, 300);
+    CHECK((card.pi[0] & 0x0001u) != 0u); /* output stage enabled */
+    CHECK((card.pi[0] & 0x0004u) != 0u); /* PO data enabled */
+    CHECK((card.pi[0] & 0x0020u) == 0u);
+    CHECK(card.pi[1] > 0u && card.pi[1] <= 1500u); /* ramping up (PI2 = speed, 0.2 rpm) */
+    printf("drive after 300 ms: PI1 %04X, speed %.1f rpm\n", card.pi[0], card.pi[1] * 0.2);
+    /* No PO for 300 ms: more than P815 (100 ms by default). */
+    (void)tty_runner_run_until(&card.runner, tty_now_us() + 300000u, NULL);
+    pd_for(run, 50);
+    CHECK((card.pi[0] & 0x0020u) != 0u); /* fault latched */
+    CHECK_EQ(card.pi[0] >> 8, 28);          /* F28 in the high byte */
+    printf("after a PO gap: PI1 %04X (fault F%u)\n", card.pi[0], card.pi[0] >> 8);
+    const uint16_t reset[3] = {0x0046, 0, 0};
+    pd_for(reset, 50);
+    const uint16_t stop[3] = {0x0000, 0, 0};
+    pd_for(stop, 50);
+    CHECK((card.pi[0] & 0x0020u) == 0u); /* reset on the bit 6 edge */
+}
+
 /* Against the emulated MOVIDRIVE in another process (dfp-sim inverter). */
 static void test_round_trips_external(void)
 {
     CHECK(open_card((uint8_t)external_address));
     CHECK(service(read_fw, 0));
     CHECK_BYTES(card.rsp, 8, 0x01, 0x00, 0x20, 0x6C, 0x31, 0x1C, 0x72, 0x89);
+    const uint8_t rd_h1[8] = {0x01, 0x00, 0x2A, 0xF9, 0, 0, 0, 0};
+    if (expect_h0 >= 0) {
+        const uint8_t rd_h0[8] = {0x01, 0x00, 0x2A, 0xF8, 0, 0, 0, 0};
+        CHECK(service(rd_h0, 2));
+        CHECK_EQ(card.rsp[0], 0x01);
+        CHECK_EQ(ml_data(card.rsp), (uint32_t)expect_h0);
+    }
+    if (expect_h1 >= 0) {
+        CHECK(service(rd_h1, 2));
+        CHECK_EQ(card.rsp[0], 0x01);
+        CHECK_EQ(ml_data(card.rsp), (uint32_t)expect_h1);
+    }
+    if (write_h1 >= 0) {
+        uint8_t w[8] = {0x32, 0x00, 0x2A, 0xF9, 0, 0, 0, 0};
+        ml_put_data(w, (uint32_t)write_h1);
+        CHECK(service(w, 1));
+        CHECK_EQ(card.rsp[0], 0x32);
+        CHECK(service(rd_h1, 0));
+        CHECK_EQ(ml_data(card.rsp), (uint32_t)write_h1);
+    }
     const uint8_t wv[8] = {0x33, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x0B, 0xB8}; /* H0 = 3000 */
     CHECK(service(wv, 1));
     CHECK_BYTES(card.rsp, 8, 0x33, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x0B, 0xB8);
@@ -262,6 +333,9 @@ static void test_round_trips_external(void)
     CHECK_EQ(card.n_pi, 3);
     printf("external inverter at SBus address %d: PI %04X %04X %04X\n", external_address,
            card.pi[0], card.pi[1], card.pi[2]);
+    if (drive_test) {
+        test_drive_external();
+    }
     inverter_can_close(&card.inv);
 }
 
@@ -272,8 +346,17 @@ int main(int argc, char **argv)
             ifname = argv[++i];
         } else if (strcmp(argv[i], "--external") == 0 && i + 1 < argc) {
             external_address = atoi(argv[++i]);
+        } else if (strcmp(argv[i], "--write-h1") == 0 && i + 1 < argc) {
+            write_h1 = atol(argv[++i]);
+        } else if (strcmp(argv[i], "--expect-h1") == 0 && i + 1 < argc) {
+            expect_h1 = atol(argv[++i]);
+        } else if (strcmp(argv[i], "--drive") == 0) {
+            drive_test = true;
+        } else if (strcmp(argv[i], "--expect-h0") == 0 && i + 1 < argc) {
+            expect_h0 = atol(argv[++i]);
         } else {
-            fprintf(stderr, "usage: %s [--can IFACE [--external ADDR]]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--can IFACE [--external ADDR [--expect-h0 N] "
+                            "[--expect-h1 N] [--write-h1 N]]]\n", argv[0]);
             return 2;
         }
     }

@@ -183,6 +183,9 @@ trap 'rm -rf "$rundir"' EXIT
 {
   echo "export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin"
   echo "export HOME=/tmp TMPDIR=/tmp DFP_VM=1 DFP_VM_OUT=$(printf %q "$rundir")"
+  for v in ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS; do
+    if [ -n "${!v:-}" ]; then echo "export $v=$(printf %q "${!v}")"; fi
+  done
   echo "cd $(printf %q "$PWD") || exit 125"
   printf '%q ' "$@"
   echo
