@@ -252,7 +252,8 @@ static void bench_membus(unsigned cycles, uint32_t baud)
     membus_attach(&bus, &cs, &cu);
     membus_attach(&bus, &ms, &mu);
     card_options_t co = {.address = 4, .fixed_baud = baud, .strict_timing = true};
-    card_station_init(&bcard, &co, cu, 0);
+    char err[256];
+    card_station_init(&bcard, &co, cu, 0, err, sizeof err);
     dp_master_cfg_t mc = {.address = 2, .baud = baud, .strict_timing = true, .uart = mu};
     dp_master_init(&bmaster, &mc, 0);
     dpm_slave_cfg_t sc = {.address = 4};
@@ -304,7 +305,7 @@ static int bench_pty(unsigned cycles)
     tty_runner_add(&runner, &pa, &cs);
     tty_runner_add(&runner, &pb, &ms);
     card_options_t co = {.address = 4, .fixed_baud = BAUD, .strict_timing = false};
-    card_station_init(&bcard, &co, tty_port_uart(&pa), tty_now_us());
+    card_station_init(&bcard, &co, tty_port_uart(&pa), tty_now_us(), err, sizeof err);
     dp_master_cfg_t mc = {.address = 2, .baud = BAUD, .strict_timing = false,
                           .slot_time_us = 100000, .uart = tty_port_uart(&pb)};
     dp_master_init(&bmaster, &mc, tty_now_us());

@@ -1,11 +1,14 @@
-/* dfp-sim demo: the card and a master on the in-memory bus, told as a timeline. Everything runs
- * in simulated time, so the run takes milliseconds and is the same every time. */
+/* dfp-sim demo: the card, its emulated MOVIDRIVE and a DP master on the in-memory bus, told as
+ * a timeline: start-up, commissioning through the parameter channel as the manual's §4.3 does it,
+ * a drive that ramps up, a fieldbus timeout and its fault reset, a wrong configuration. Everything
+ * runs in simulated time, so the run takes milliseconds and is the same every time. */
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
 
 #include "cli.h"
 #include "commands.h"
+#include "dp_master/param_channel.h"
 #include "report.h"
 #include "sim_hal/membus.h"
 #include "sim_stations/stations.h"
@@ -14,6 +17,7 @@
 #define DEMO_MASTER 2u
 #define DEMO_BAUD 1500000u
 #define DEMO_WATCHDOG_MS 100u
+#define DEMO_INVERTER_DELAY_US 3000u /* each parameter service takes a few bus cycles */
 
 typedef struct demo {
     membus_t bus;
@@ -21,6 +25,9 @@ typedef struct demo {
     dp_master_t master;
     membus_port_t *master_port;
     report_t rep;
+    uint8_t out[14]; /* parameter channel + PO1..PO3 */
+    dpm_param_t param;
+    bool ok;
 } demo_t;
 
 static demo_t demo; /* several kB of telegram buffers: not on the stack */
@@ -47,6 +54,14 @@ static bool run_until(bool (*cond)(void), uint64_t limit_us)
     return cond != NULL && cond();
 }
 
+static void expect(bool cond, const char *what)
+{
+    if (!cond) {
+        report_line(&demo.rep, "demo", "UNEXPECTED: %s", what);
+        demo.ok = false;
+    }
+}
+
 static bool card_in_data_exchange(void)
 {
     return dp_slave_state(&demo.card.card.dp) == DP_STATE_DATA_EXCH &&
@@ -60,13 +75,85 @@ static bool card_in_wait_prm(void)
 
 static void slave_cfg(dpm_slave_cfg_t *sc, const uint8_t *cfg, size_t len)
 {
+    /* User prm octet 8 = 00: inverter faults reach the master as external diagnosis. */
+    static const uint8_t user[9] = {0x00, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x00};
     memset(sc, 0, sizeof *sc);
     sc->address = DEMO_ADDRESS;
-    sc->prm_len = (uint8_t)dpm_build_prm(sc->prm, DFP21B_IDENT, DEMO_WATCHDOG_MS,
-                                         dfp21b_user_prm_default,
-                                         sizeof dfp21b_user_prm_default);
+    sc->prm_len = (uint8_t)dpm_build_prm(sc->prm, DFP21B_IDENT, DEMO_WATCHDOG_MS, user,
+                                         sizeof user);
     memcpy(sc->cfg, cfg, len);
     sc->cfg_len = (uint8_t)len;
+}
+
+static void set_po(uint16_t cw, uint16_t speed)
+{
+    demo.out[8] = (uint8_t)(cw >> 8);
+    demo.out[9] = (uint8_t)cw;
+    demo.out[10] = (uint8_t)(speed >> 8);
+    demo.out[11] = (uint8_t)speed;
+    dp_master_set_outputs(&demo.master, 0, demo.out, sizeof demo.out);
+}
+
+static bool param_done(void)
+{
+    return dpm_param_done(&demo.param, demo.master.slaves[0].inputs);
+}
+
+/* One MOVILINK service through the cyclic channel, the way a PLC program does it: toggle the
+ * handshake, keep sending, wait for the reply with the same handshake. */
+static bool param(uint8_t service, uint16_t index, uint32_t value, const char *what,
+                  uint32_t *result)
+{
+    dpm_param_start(&demo.param, service, index, value, demo.out);
+    dp_master_set_outputs(&demo.master, 0, demo.out, sizeof demo.out);
+    uint32_t cycles0 = demo.master.slaves[0].cycles;
+    if (!run_until(param_done, 1000000u)) {
+        report_line(&demo.rep, "master", "%s: no answer in the parameter channel", what);
+        demo.ok = false;
+        return false;
+    }
+    const uint8_t *rsp = demo.master.slaves[0].inputs;
+    uint32_t cycles = demo.master.slaves[0].cycles - cycles0;
+    if ((rsp[0] & ML_MGMT_ERROR) != 0u) {
+        char text[128];
+        ml_error_text(rsp, text, sizeof text);
+        report_line(&demo.rep, "master", "%s -> error: %s (%u bus cycles)", what, text, cycles);
+        return false;
+    }
+    uint32_t v = ml_data(rsp);
+    if (result != NULL) {
+        *result = v;
+    }
+    if (service == ML_SVC_READ) {
+        report_line(&demo.rep, "master", "%s -> %u (0x%08X) (%u bus cycles)", what, v, v, cycles);
+    } else {
+        report_line(&demo.rep, "master", "%s -> done (%u bus cycles)", what, cycles);
+    }
+    return true;
+}
+
+static void show_pi(const char *label)
+{
+    const uint8_t *in = demo.master.slaves[0].inputs;
+    uint16_t sw = (uint16_t)((in[8] << 8) | in[9]);
+    int16_t speed = (int16_t)((in[10] << 8) | in[11]);
+    uint16_t cur = (uint16_t)((in[12] << 8) | in[13]);
+    report_line(&demo.rep, "master",
+                "%s PI1 status %04X (%s%s%s%s, %s %u) PI2 %5.1f rpm PI3 %4.1f %% I_N", label, sw,
+                (sw & 0x01u) ? "enabled" : "not enabled", (sw & 0x02u) ? ", ready" : "",
+                (sw & 0x04u) ? ", PO enabled" : "", (sw & 0x20u) ? ", FAULT" : "",
+                (sw & 0x20u) ? "fault" : "unit status", sw >> 8, speed * 0.2, cur * 0.1);
+}
+
+static bool drive_at_300_rpm(void)
+{
+    const uint8_t *in = demo.master.slaves[0].inputs;
+    return (int16_t)((in[10] << 8) | in[11]) >= 1500;
+}
+
+static bool status_shows_fault(void)
+{
+    return (demo.master.slaves[0].inputs[9] & 0x20u) != 0u;
 }
 
 static void print_monitor(void)
@@ -85,6 +172,52 @@ static void print_monitor(void)
     printf("      P819 fieldbus timeout  %u ms\n", dfp21b_p819_timeout_ms(c));
 }
 
+static int open_capture(const char *capture)
+{
+    char err[256];
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    uint64_t base = (uint64_t)ts.tv_sec * 1000000000ull;
+    if (pcap_writer_open(&demo.rep.capture, capture, PCAP_LINKTYPE_PROFIBUS_DL, false, base, err,
+                         sizeof err) != 0) {
+        cli_error("%s", err);
+        return -1;
+    }
+    demo.rep.capturing = true;
+    return 0;
+}
+
+static void setup(void)
+{
+    membus_init(&demo.bus);
+    membus_set_tap(&demo.bus, report_tap, &demo.rep);
+    hal_uart_t card_uart;
+    hal_uart_t master_uart;
+    sim_station_t cs = card_station(&demo.card);
+    sim_station_t ms = master_station(&demo.master);
+    membus_attach(&demo.bus, &cs, &card_uart);
+    demo.master_port = membus_attach(&demo.bus, &ms, &master_uart);
+    card_options_t co = {.address = DEMO_ADDRESS, .fixed_baud = 0, .strict_timing = true,
+                         .inverter = CARD_INVERTER_SIM,
+                         .inverter_delay_us = DEMO_INVERTER_DELAY_US,
+                         .event = report_card_event, .led_change = report_led,
+                         .ctx = &demo.rep};
+    char err[256];
+    card_station_init(&demo.card, &co, card_uart, 0, err, sizeof err);
+    dp_master_cfg_t mc = {.address = DEMO_MASTER, .baud = DEMO_BAUD, .strict_timing = true,
+                          .cycle_us = 2000, .uart = master_uart, .event = report_master_event,
+                          .event_ctx = &demo.rep};
+    dp_master_init(&demo.master, &mc, 0);
+}
+
+static void reconfigure(const uint8_t *cfg, size_t len)
+{
+    dpm_slave_cfg_t sc;
+    slave_cfg(&sc, cfg, len);
+    dp_master_reconfigure(&demo.master, 0, &sc, membus_now_us(&demo.bus));
+    membus_wake(demo.master_port);
+}
+
 int cmd_demo(int argc, char **argv)
 {
     const char *capture = NULL;
@@ -97,89 +230,86 @@ int cmd_demo(int argc, char **argv)
         }
     }
     memset(&demo, 0, sizeof demo);
+    demo.ok = true;
     demo.rep.now_ns = demo_now_ns;
     demo.rep.now_ctx = &demo;
     demo.rep.card = &demo.card.card;
-    if (capture != NULL) {
-        char err[256];
-        struct timespec ts;
-        clock_gettime(CLOCK_REALTIME, &ts);
-        uint64_t base = (uint64_t)ts.tv_sec * 1000000000ull;
-        if (pcap_writer_open(&demo.rep.capture, capture, PCAP_LINKTYPE_PROFIBUS_DL, false, base,
-                             err, sizeof err) != 0) {
-            cli_error("%s", err);
-            return 1;
-        }
-        demo.rep.capturing = true;
+    if (capture != NULL && open_capture(capture) != 0) {
+        return 1;
     }
-
-    membus_init(&demo.bus);
-    membus_set_tap(&demo.bus, report_tap, &demo.rep);
-    hal_uart_t card_uart;
-    hal_uart_t master_uart;
-    sim_station_t cs = card_station(&demo.card);
-    sim_station_t ms = master_station(&demo.master);
-    membus_attach(&demo.bus, &cs, &card_uart);
-    demo.master_port = membus_attach(&demo.bus, &ms, &master_uart);
-
-    printf("dfp-sim demo: a DFP21B (DIP address %u, automatic baud rate) and a DP master\n"
-           "(address %u, %s, watchdog %u ms) on a simulated RS-485 segment.\n"
+    printf("dfp-sim demo: a DFP21B (DIP address %u, automatic baud rate) in an emulated MOVIDRIVE,\n"
+           "and a DP master (address %u, %s, watchdog %u ms) on a simulated RS-485 segment.\n"
            "Times are simulated bus time.\n",
            DEMO_ADDRESS, DEMO_MASTER, report_baud_text(DEMO_BAUD), DEMO_WATCHDOG_MS);
 
-    scene("1. Power-up, baud search and start-up");
-    card_options_t co = {.address = DEMO_ADDRESS, .fixed_baud = 0, .strict_timing = true,
-                         .event = report_card_event, .led_change = report_led,
-                         .ctx = &demo.rep};
-    card_station_init(&demo.card, &co, card_uart, 0);
-    dp_master_cfg_t mc = {.address = DEMO_MASTER, .baud = DEMO_BAUD, .strict_timing = true,
-                          .cycle_us = 2000, .uart = master_uart, .event = report_master_event,
-                          .event_ctx = &demo.rep};
-    dp_master_init(&demo.master, &mc, 0);
+    scene("1. Power-up, baud search and start-up with \"Param + 3 PD\" (F3 F2)");
+    setup();
     const uint8_t param_3pd[] = {0xF3, 0xF2};
     dpm_slave_cfg_t sc;
     slave_cfg(&sc, param_3pd, sizeof param_3pd);
     dp_master_add_slave(&demo.master, &sc);
-    bool ok = run_until(card_in_data_exchange, 2000000u);
+    expect(run_until(card_in_data_exchange, 2000000u), "start-up reaches Data_Exch");
+    run_until(NULL, 10000u);
+    show_pi("drive as delivered:");
 
-    scene("2. Cyclic data: PO1 = 0006 (enable), PO2 = 1500 (300 rpm at 0.2 rpm/digit)");
-    const uint8_t out[14] = {0, 0, 0, 0, 0, 0, 0, 0, 0x00, 0x06, 0x05, 0xDC, 0x00, 0x00};
-    dp_master_set_outputs(&demo.master, 0, out, sizeof out);
-    demo.rep.show_inputs = true;
-    run_until(NULL, 6000u);
-    demo.rep.show_inputs = false;
-    run_until(NULL, 100000u);
-    report_line(&demo.rep, "master", "%u Data_Exchange cycles so far",
-                demo.master.slaves[0].cycles);
+    scene("2. Commissioning through the parameter channel (manual 4.3)");
+    uint32_t v = 0;
+    expect(param(ML_SVC_READ, 8300, 0, "read index 8300 (P076 firmware)", &v) &&
+               v == 0x311C7289u,
+           "index 8300 reads 0x311C7289");
+    expect(param(ML_SVC_WRITE, 8461, 3, "write P100 setpoint source = 3 FIELDBUS", NULL),
+           "P100 written");
+    expect(param(ML_SVC_WRITE, 8462, 2, "write P101 control signal source = 2 FIELDBUS", NULL),
+           "P101 written");
+    expect(!param(ML_SVC_WRITE_VOLATILE, 8517, 99000000u,
+                  "write volatile P302 maximum speed = 99000 rpm", NULL),
+           "P302 refuses 99000 rpm");
+    param(ML_SVC_READ, 8318, 0, "read P000 speed (0.001 rpm)", NULL);
+    run_until(NULL, 10000u);
+    show_pi("after P100/P101:");
+
+    scene("3. Enable: control word 0006, PO2 = 1500 (300 rpm at 0.2 rpm/digit), ramp P130");
+    set_po(0x0006, 1500);
+    for (int i = 0; i < 4; i++) {
+        run_until(NULL, 50000u);
+        show_pi("ramping:");
+    }
+    expect(run_until(drive_at_300_rpm, 1000000u), "the drive reaches 300 rpm");
+    show_pi("at speed:");
     print_monitor();
 
-    scene("3. The master stops (PLC in STOP, cable pulled): DP watchdog");
+    scene("4. The master stops (PLC in STOP, cable pulled): DP watchdog, P831 reaction");
     dp_master_stop(&demo.master);
     report_line(&demo.rep, "master", "stopped sending");
-    ok = run_until(card_in_wait_prm, 500000u) && ok;
-    run_until(NULL, 20000u);
+    expect(run_until(card_in_wait_prm, 500000u), "watchdog expiry");
+    run_until(NULL, 300000u);
     report_line(&demo.rep, "master", "running again");
     dp_master_start(&demo.master, membus_now_us(&demo.bus));
     membus_wake(demo.master_port);
-    ok = run_until(card_in_data_exchange, 500000u) && ok;
+    expect(run_until(card_in_data_exchange, 500000u), "back in Data_Exch");
+    expect(run_until(status_shows_fault, 500000u), "status word 1 shows the fault");
+    run_until(NULL, 250000u); /* the card's status poll turns the fault into Ext_Diag */
+    show_pi("after the timeout:");
+    report_line(&demo.rep, "master", "reset: control word bit 6 rising edge (0046, then 0006)");
+    set_po(0x0046, 1500);
+    run_until(NULL, 10000u);
+    set_po(0x0006, 1500);
+    run_until(NULL, 400000u);
+    expect(!status_shows_fault(), "fault reset");
+    show_pi("after the reset:");
 
-    scene("4. A wrong configuration: F3 E2 D1 (parameter channel, 3 PD out but 2 PD in)");
-    const uint8_t wrong[] = {0xF3, 0xE2, 0xD1};
-    slave_cfg(&sc, wrong, sizeof wrong);
-    dp_master_reconfigure(&demo.master, 0, &sc, membus_now_us(&demo.bus));
-    membus_wake(demo.master_port);
+    scene("5. A wrong configuration: F3 E2 D1 (parameter channel, 3 PD out but 2 PD in)");
+    reconfigure((const uint8_t[]){0xF3, 0xE2, 0xD1}, 3);
     run_until(NULL, 100000u);
-    ok = !card_in_data_exchange() && ok;
+    expect(!card_in_data_exchange(), "the card refuses F3 E2 D1");
     print_monitor();
 
-    scene("5. Configuration corrected to F3 F2 (Param + 3 PD)");
-    slave_cfg(&sc, param_3pd, sizeof param_3pd);
-    dp_master_reconfigure(&demo.master, 0, &sc, membus_now_us(&demo.bus));
-    membus_wake(demo.master_port);
-    ok = run_until(card_in_data_exchange, 2000000u) && ok;
-    dp_master_set_outputs(&demo.master, 0, out, sizeof out);
-    run_until(NULL, 50000u);
-    print_monitor();
+    scene("6. Configuration corrected to F3 F2 (Param + 3 PD)");
+    reconfigure(param_3pd, sizeof param_3pd);
+    expect(run_until(card_in_data_exchange, 2000000u), "Data_Exch again");
+    set_po(0x0006, 1500);
+    run_until(NULL, 300000u);
+    show_pi("running:");
 
     printf("\n--- Summary\n");
     printf("    %llu telegrams on the bus, %u Data_Exchange cycles, %u master timeouts, "
@@ -187,15 +317,14 @@ int cmd_demo(int argc, char **argv)
            (unsigned long long)demo.bus.frames_sent, demo.master.slaves[0].cycles,
            demo.master.timeouts, (double)demo.bus.now_ns / 1e6);
     if (demo.rep.capturing) {
-        bool bad = pcap_writer_close(&demo.rep.capture) != 0 || demo.rep.capture_failed;
-        if (bad) {
+        if (pcap_writer_close(&demo.rep.capture) != 0 || demo.rep.capture_failed) {
             cli_error("could not write the whole capture to %s", capture);
             return 1;
         }
         printf("    capture: %llu telegrams written to %s (pcap, LINKTYPE_PROFIBUS_DL)\n",
                (unsigned long long)demo.rep.frames_captured, capture);
     }
-    printf("    result: %s\n", ok ? "every scene behaved as the manual describes"
-                                  : "UNEXPECTED: a scene did not reach its expected state");
-    return ok ? 0 : 1;
+    printf("    result: %s\n", demo.ok ? "every scene behaved as the manual describes"
+                                       : "UNEXPECTED: a scene did not reach its expected state");
+    return demo.ok ? 0 : 1;
 }

@@ -8,6 +8,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "report.h"
+#include "inverter_can.h"
 #include "sim_hal/tty_port.h"
 #include "sim_stations/stations.h"
 
@@ -119,6 +120,8 @@ int cmd_slave(int argc, char **argv)
     uint32_t baud = 0;
     uint32_t duration_s = 0;
     bool echo = false;
+    const char *inverter = "sim";
+    const char *eeprom = NULL;
     for (int i = 2; i < argc; i++) {
         const char *v;
         if (strcmp(argv[i], "--port") == 0) {
@@ -136,6 +139,10 @@ int cmd_slave(int argc, char **argv)
                 !cli_u32("--duration", v, 1, 86400u * 365u, &duration_s)) return EXIT_USAGE;
         } else if (strcmp(argv[i], "--echo-suppress") == 0) {
             echo = true;
+        } else if (strcmp(argv[i], "--inverter") == 0) {
+            if ((inverter = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if (strcmp(argv[i], "--eeprom") == 0) {
+            if ((eeprom = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
         } else {
             cli_error("slave: unknown option '%s' (see dfp-sim --help)", argv[i]);
             return EXIT_USAGE;
@@ -145,21 +152,56 @@ int cmd_slave(int argc, char **argv)
         cli_error("slave: --port DEV is required (a tty such as /dev/ttyUSB0, or a PTY)");
         return EXIT_USAGE;
     }
+    card_inverter_t kind;
+    if (strcmp(inverter, "sim") == 0) {
+        kind = CARD_INVERTER_SIM;
+    } else if (strcmp(inverter, "none") == 0) {
+        kind = CARD_INVERTER_NONE;
+    } else if (strncmp(inverter, "can:", 4) == 0) {
+        kind = CARD_INVERTER_LINK;
+    } else {
+        cli_error("slave: --inverter '%s': use sim (emulated MOVIDRIVE), none (PI echoes PO) or "
+                  "can:IFACE[:ADDR] (a MOVIDRIVE on SBus)", inverter);
+        return EXIT_USAGE;
+    }
+    if (eeprom != NULL && kind != CARD_INVERTER_SIM) {
+        cli_error("slave: --eeprom belongs to the emulated inverter (--inverter sim)");
+        return EXIT_USAGE;
+    }
     sim_station_t st = card_station(&card);
     if (!session_open(dev, baud != 0u ? baud : hal_uart_bauds[0], capture, &st)) {
         return 1;
     }
     port.echo_suppress = echo;
     rep.card = &card.card;
-    printf("dfp-sim slave: DFP21B on %s, DIP address %u, %s%s%s\n", dev, address,
-           baud != 0u ? "fixed " : "automatic baud rate",
+    static inverter_can_t can_link;
+    char err[256];
+    ml_link_t external = {0};
+    if (kind == CARD_INVERTER_LINK) {
+        if (inverter_can_open(&can_link, inverter, card_station_param_response,
+                              card_station_process_inputs, &card, &runner, err,
+                              sizeof err) != 0) {
+            cli_error("%s", err);
+            tty_port_close(&port);
+            close_capture(&rep, capture);
+            return 1;
+        }
+        external = inverter_can_link(&can_link);
+    }
+    printf("dfp-sim slave: DFP21B on %s, DIP address %u, %s%s%s; inverter: %s%s%s\n", dev,
+           address, baud != 0u ? "fixed " : "automatic baud rate",
            baud != 0u ? report_baud_text(baud) : "",
-           port.parity_ok ? "" : " (device has no parity: a PTY)");
+           port.parity_ok ? "" : " (device has no parity: a PTY)",
+           kind == CARD_INVERTER_SIM ? "emulated MOVIDRIVE" : inverter,
+           eeprom != NULL ? ", EEPROM " : "", eeprom != NULL ? eeprom : "");
     fflush(stdout);
     card_options_t co = {.address = (uint8_t)address, .fixed_baud = baud,
-                         .strict_timing = false, .event = report_card_event,
+                         .strict_timing = false, .inverter = kind, .eeprom_path = eeprom,
+                         .external_link = external, .event = report_card_event,
                          .led_change = report_led, .ctx = &rep};
-    card_station_init(&card, &co, tty_port_uart(&port), tty_now_us());
+    if (card_station_init(&card, &co, tty_port_uart(&port), tty_now_us(), err, sizeof err) != 0) {
+        report_line(&rep, "card", "inverter EEPROM: %s", err);
+    }
     if (address > DFP21B_MAX_ADDRESS) {
         report_line(&rep, "card", "address %u is above 125: the card stays off the bus", address);
     }
@@ -174,6 +216,9 @@ int cmd_slave(int argc, char **argv)
     }
     report_line(&rep, "card", "stopping (%s); state %s", stop_requested ? "signal" : "end",
                 dp_state_name(dp_slave_state(&card.card.dp)));
+    if (kind == CARD_INVERTER_LINK) {
+        inverter_can_close(&can_link);
+    }
     tty_port_close(&port);
     return close_capture(&rep, capture) != 0 ? 1 : rc;
 }

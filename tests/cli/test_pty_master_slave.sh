@@ -17,7 +17,7 @@ pty_pair() { # makes $tmp/a and $tmp/b
 }
 
 pty_pair || exit 1
-"$sim" slave --port "$tmp/a" --address 4 --baud 19200 --capture "$tmp/slave.pcap" >"$tmp/slave.out" 2>&1 &
+"$sim" slave --inverter none --port "$tmp/a" --address 4 --baud 19200 --capture "$tmp/slave.pcap" >"$tmp/slave.out" 2>&1 &
 slave=$!; pids+=($slave)
 sleep 0.3
 expect_exit 0 "master reaches 100 cycles" -- timeout 30 "$sim" master --port "$tmp/b" --address 4 \
@@ -34,7 +34,7 @@ if [ "$size" -gt 1000 ]; then ok; else bad "slave capture only $size bytes"; fi
 
 # 8 output bytes: SD3 requests and replies.
 pty_pair || exit 1
-"$sim" slave --port "$tmp/a" --baud 19200 >"$tmp/slave2.out" 2>&1 &
+"$sim" slave --inverter none --port "$tmp/a" --baud 19200 >"$tmp/slave2.out" 2>&1 &
 slave=$!; pids+=($slave)
 sleep 0.3
 expect_exit 0 "4 PD (8 bytes, SD3)" -- timeout 30 "$sim" master --port "$tmp/b" --address 4 \

@@ -399,7 +399,8 @@ def run_scenario(c, pb, sc, dfp_sim, gsd_dir, baud, verbose):
                        tag + "socat PTY pair up"):
             return
         with open(sim_out, "w") as out, open(sim_err, "w") as err:
-            sim = subprocess.Popen([dfp_sim, "slave", "--port", a, "--address", str(SLAVE_ADDR),
+            sim = subprocess.Popen([dfp_sim, "slave", "--inverter", "none", "--port", a,
+                                    "--address", str(SLAVE_ADDR),
                                     "--baud", str(baud)],
                                    stdin=subprocess.DEVNULL, stdout=out, stderr=err)
         # dfp-sim prints its banner once the port is open; pyprofibus would retry anyway.

@@ -51,7 +51,8 @@ static void rig_setup(uint32_t master_baud, uint32_t card_fixed_baud, const uint
     rig.master_port = membus_attach(&rig.bus, &ms, &master_uart);
     card_options_t co = {.address = 4, .fixed_baud = card_fixed_baud, .strict_timing = true,
                          .event = card_event, .ctx = &rig};
-    card_station_init(&rig.card, &co, card_uart, 0);
+    char err[256];
+    CHECK_EQ(card_station_init(&rig.card, &co, card_uart, 0, err, sizeof err), 0);
     dp_master_cfg_t mc = {.address = 2, .baud = master_baud, .strict_timing = true,
                           .cycle_us = 2000, .uart = master_uart, .event = master_event,
                           .event_ctx = &rig};

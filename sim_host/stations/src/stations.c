@@ -1,5 +1,6 @@
 #include "sim_stations/stations.h"
 
+#include <stdio.h>
 #include <string.h>
 
 const uint8_t dfp21b_user_prm_default[9] = {0x00, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x01};
@@ -10,10 +11,40 @@ static void card_rx(void *ctx, uint8_t byte, uint8_t flags, hal_time_us_t t)
     dfp21b_rx_char(&c->card, byte, flags, t);
 }
 
+static hal_time_us_t earlier(hal_time_us_t a, hal_time_us_t b)
+{
+    return hal_time_diff(a, b) < 0 ? a : b;
+}
+
+/* The card's main loop and, with the emulated inverter, the inverter's: answers that became due
+ * are delivered before the card builds its next input image. */
 static hal_time_us_t card_poll(void *ctx, hal_time_us_t now)
 {
     card_station_t *c = ctx;
-    return dfp21b_poll(&c->card, now);
+    if (c->inverter != CARD_INVERTER_SIM) {
+        return dfp21b_poll(&c->card, now);
+    }
+    hal_time_us_t next = md_inproc_link_poll(&c->md_link, now);
+    next = earlier(next, movidrive_tick(&c->md, now));
+    next = earlier(next, dfp21b_poll(&c->card, now));
+    next = earlier(next, md_inproc_link_poll(&c->md_link, now)); /* PI for the PO just taken */
+    if (c->card.inputs_dirty) {
+        next = earlier(next, dfp21b_poll(&c->card, now));
+    }
+    return next;
+}
+
+void card_station_param_response(void *card_station, uint8_t channel,
+                                 const uint8_t rsp[ML_TELEGRAM_LEN])
+{
+    card_station_t *c = card_station;
+    dfp21b_inverter_param_response(&c->card, channel, rsp);
+}
+
+void card_station_process_inputs(void *card_station, const uint16_t *pi, uint8_t n)
+{
+    card_station_t *c = card_station;
+    dfp21b_inverter_process_inputs(&c->card, pi, n);
 }
 
 sim_station_t card_station(card_station_t *c)
@@ -21,9 +52,44 @@ sim_station_t card_station(card_station_t *c)
     return (sim_station_t){.ctx = c, .rx_char = card_rx, .poll = card_poll};
 }
 
-void card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t uart,
-                       hal_time_us_t now)
+/* The emulated MOVIDRIVE, commissioned as the manual's §4.3 wiring leaves it: DI00 at +24 V. */
+static int start_inverter(card_station_t *c, const card_options_t *opt, char *err,
+                          size_t errlen)
 {
+    int rc = 0;
+    movidrive_cfg_t mcfg = {.terminal_enable = true};
+    if (opt->eeprom_path != NULL) {
+        if (file_nvm_open(&c->nvm, opt->eeprom_path, movidrive_eeprom_size(), err, errlen) < 0) {
+            rc = -1;
+        }
+        mcfg.eeprom = file_nvm_hal(&c->nvm);
+    }
+    char merr[256] = "";
+    if (movidrive_init(&c->md, &mcfg, merr, sizeof merr) != 0) {
+        snprintf(err, errlen, "%s", merr);
+        rc = -1;
+    }
+    c->md_link = (md_inproc_link_t){.md = &c->md, .param_response = card_station_param_response,
+                                    .process_inputs = card_station_process_inputs, .card = c,
+                                    .delay_us = opt->inverter_delay_us};
+    return rc;
+}
+
+int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t uart,
+                      hal_time_us_t now, char *err, size_t errlen)
+{
+    int rc = 0;
+    if (errlen > 0u) {
+        err[0] = '\0';
+    }
+    c->inverter = opt->inverter;
+    ml_link_t link = {0};
+    if (opt->inverter == CARD_INVERTER_SIM) {
+        rc = start_inverter(c, opt, err, errlen);
+        link = md_inproc_link(&c->md_link);
+    } else if (opt->inverter == CARD_INVERTER_LINK) {
+        link = opt->external_link;
+    }
     memset(&c->leds, 0, sizeof c->leds);
     c->leds.on_change = opt->led_change;
     c->leds.ctx = opt->ctx;
@@ -37,8 +103,10 @@ void card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t 
         .baud_control_ms = opt->baud_control_ms,
         .event = opt->event,
         .event_ctx = opt->ctx,
+        .inverter = link,
     };
     dfp21b_init(&c->card, &cfg, now);
+    return rc;
 }
 
 static void master_rx(void *ctx, uint8_t byte, uint8_t flags, hal_time_us_t t)

@@ -4,13 +4,25 @@
 
 #include "dfp21b/dfp21b.h"
 #include "dp_master/dp_master.h"
+#include "movidrive/movidrive.h"
+#include "sim_hal/file_nvm.h"
 #include "sim_hal/sim_board.h"
 #include "sim_hal/sim_station.h"
+
+typedef enum card_inverter {
+    CARD_INVERTER_NONE = 0, /* no inverter: PI words echo PO words (loopback) */
+    CARD_INVERTER_SIM,      /* the emulated MOVIDRIVE in this process */
+    CARD_INVERTER_LINK,     /* an external ml_link (SBus over CAN) */
+} card_inverter_t;
 
 typedef struct card_station {
     dfp21b_t card;
     sim_leds_t leds;
     sim_dip_t dip;
+    card_inverter_t inverter;
+    movidrive_t md;
+    md_inproc_link_t md_link;
+    file_nvm_t nvm;
 } card_station_t;
 
 typedef struct card_options {
@@ -18,15 +30,25 @@ typedef struct card_options {
     uint32_t fixed_baud; /* 0 = automatic */
     bool strict_timing;
     uint32_t baud_control_ms;
+    card_inverter_t inverter;
+    const char *eeprom_path;     /* CARD_INVERTER_SIM: EEPROM image file, NULL = none */
+    uint32_t inverter_delay_us;  /* CARD_INVERTER_SIM: how long each parameter service takes */
+    ml_link_t external_link;     /* CARD_INVERTER_LINK */
     void (*event)(void *ctx, const dp_event_t *ev);
     void (*led_change)(void *ctx, hal_led_id_t led, hal_led_mode_t mode);
     void *ctx;
 } card_options_t;
 
 sim_station_t card_station(card_station_t *c);
-/* Call after attaching the station to a medium (which supplies uart). */
-void card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t uart,
-                       hal_time_us_t now);
+/* Call after attaching the station to a medium (which supplies uart). Returns 0, or -1 with a
+ * reason in err (EEPROM file unusable: the inverter then starts from factory values, which is
+ * reported but not fatal, so -1 means only that err has something to say). */
+int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t uart,
+                      hal_time_us_t now, char *err, size_t errlen);
+/* For links that deliver inverter answers (SBus): forwards to the card. */
+void card_station_param_response(void *card_station, uint8_t channel,
+                                 const uint8_t rsp[ML_TELEGRAM_LEN]);
+void card_station_process_inputs(void *card_station, const uint16_t *pi, uint8_t n);
 
 sim_station_t master_station(dp_master_t *m);
 
