@@ -10,7 +10,8 @@
 #     installed into the host's /boot.
 #   * initramfs: busybox-static and the modules can, can-raw, can-dev, vcan and the virtio/9p
 #     stack; /init creates vcan0, mounts the host's / read-only over virtio-9p, chroots into it
-#     and runs CMD in the current directory with bash, with a tmpfs /tmp.
+#     and runs CMD in the current directory with bash; /tmp shows the host's files, but what
+#     the guest writes there stays in the guest (an overlay on a tmpfs).
 #   * the exit status comes back twice: as the file rc in a writable 9p share (the run
 #     directory, $DFP_VM_OUT inside the guest, for files the command wants to hand back) and as
 #     the console line "DFP_VM_EXIT=<rc>"; then the guest does `reboot -f` and QEMU exits.
@@ -45,16 +46,13 @@ while [ $# -gt 0 ]; do
 done
 [ "$prepare_only" = 1 ] || [ $# -gt 0 ] || die "usage: vm-run.sh [--vm-dir DIR] [--timeout S] -- CMD [ARG...]"
 
-# The guest mounts a fresh tmpfs on /tmp: host files there are out of its sight.
-[ "$prepare_only" = 1 ] || case "$PWD/" in /tmp/*) die "the current directory $PWD is under /tmp, which the VM cannot see" ;; esac
-for a in "$@"; do
-  case "$a" in /tmp/*) die "$a is under /tmp, which the VM cannot see (the guest has its own /tmp)" ;; esac
-done
-case "$vm_dir/" in /tmp/*) die "--vm-dir must not be under /tmp (the guest has its own /tmp)" ;; esac
+# The run directory is mounted writable inside the guest; under the guest's /tmp overlay that
+# mount would be hidden.
+case "$vm_dir/" in /tmp/*) die "--vm-dir must not be under /tmp (the guest overlays its own /tmp)" ;; esac
 
 # Load order matters: the Debian .deb has no modules.dep, so dependencies come first.
 MODULES="virtio_ring virtio virtio_pci_modern_dev virtio_pci_legacy_dev virtio_pci netfs fscache
-9pnet 9pnet_virtio 9p can can-raw can-dev vcan"
+9pnet 9pnet_virtio 9p overlay can can-raw can-dev vcan"
 
 for tool in qemu-system-x86_64 cpio dpkg-deb timeout; do
   command -v "$tool" >/dev/null 2>&1 || die "$tool not found (apt-get install qemu-system-x86 cpio)"
@@ -84,7 +82,10 @@ if mount -t 9p -o "$opts,ro,cache=loose" hostroot /host &&
   mount -t devtmpfs dev /host/dev
   mkdir -p /host/dev/pts 2>/dev/null
   mount -t devpts -o ptmxmode=666 devpts /host/dev/pts
-  mount -t tmpfs tmp /host/tmp
+  # /tmp: the host's files stay visible, the guest's writes go to a tmpfs (overlay).
+  mkdir -p /scratch && mount -t tmpfs scratch /scratch && mkdir -p /scratch/up /scratch/work
+  mount -t overlay -o lowerdir=/host/tmp,upperdir=/scratch/up,workdir=/scratch/work tmp /host/tmp ||
+    { echo "DFP_VM: no overlay for /tmp, using an empty tmpfs"; mount -t tmpfs tmp /host/tmp; }
   mount -t tmpfs run /host/run 2>/dev/null
   echo "DFP_VM_BOOTED uptime=$(cut -d' ' -f1 /proc/uptime)"
   chroot /host /bin/bash "$run"
