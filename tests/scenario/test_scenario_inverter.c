@@ -1,0 +1,250 @@
+/* Master, card and emulated MOVIDRIVE on the in-memory bus: the cyclic parameter channel end to
+ * end (exactly once, many bus cycles, inverter timeout), process data and the status word, the
+ * fieldbus timeout reaction and its reset, external diagnosis on and off. */
+#include <string.h>
+
+#include "check.h"
+#include "dp_master/param_channel.h"
+#include "dp_slave/dp_wire.h"
+#include "sim_hal/membus.h"
+#include "sim_stations/stations.h"
+
+typedef struct rig {
+    membus_t bus;
+    card_station_t card;
+    dp_master_t master;
+    membus_port_t *master_port;
+    uint8_t out[14];
+    dpm_param_t param;
+} rig_t;
+
+static rig_t rig;
+
+static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
+
+static void setup(uint32_t inverter_delay_us, uint8_t diag_alarm_octet)
+{
+    memset(&rig, 0, sizeof rig);
+    membus_init(&rig.bus);
+    hal_uart_t cu;
+    hal_uart_t mu;
+    sim_station_t cs = card_station(&rig.card);
+    sim_station_t ms = master_station(&rig.master);
+    membus_attach(&rig.bus, &cs, &cu);
+    rig.master_port = membus_attach(&rig.bus, &ms, &mu);
+    card_options_t co = {.address = 4, .fixed_baud = 1500000, .strict_timing = true,
+                         .inverter = CARD_INVERTER_SIM, .inverter_delay_us = inverter_delay_us};
+    char err[256];
+    CHECK_EQ(card_station_init(&rig.card, &co, cu, 0, err, sizeof err), 0);
+    dp_master_cfg_t mc = {.address = 2, .baud = 1500000, .strict_timing = true,
+                          .cycle_us = 2000, .uart = mu};
+    dp_master_init(&rig.master, &mc, 0);
+    const uint8_t user[9] = {0x00, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, diag_alarm_octet};
+    dpm_slave_cfg_t sc = {.address = 4};
+    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 50, user, sizeof user);
+    memcpy(sc.cfg, cfg_param_3pd, sizeof cfg_param_3pd);
+    sc.cfg_len = sizeof cfg_param_3pd;
+    CHECK_EQ(dp_master_add_slave(&rig.master, &sc), 0);
+    membus_run_for_us(&rig.bus, 20000);
+    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+}
+
+static const uint8_t *inputs(void)
+{
+    return rig.master.slaves[0].inputs;
+}
+
+static void start(uint8_t service, uint16_t index, uint32_t value)
+{
+    dpm_param_start(&rig.param, service, index, value, rig.out);
+    dp_master_set_outputs(&rig.master, 0, rig.out, sizeof rig.out);
+}
+
+/* Runs until the reply to the running service is in the inputs; returns the cycles it took. */
+static uint32_t finish(uint32_t limit_us)
+{
+    uint32_t c0 = rig.master.slaves[0].cycles;
+    for (uint32_t t = 0; t < limit_us; t += 500u) {
+        if (dpm_param_done(&rig.param, inputs())) {
+            return rig.master.slaves[0].cycles - c0;
+        }
+        membus_run_for_us(&rig.bus, 500u);
+    }
+    return UINT32_MAX;
+}
+
+static void set_po(uint16_t cw, uint16_t speed)
+{
+    rig.out[8] = (uint8_t)(cw >> 8);
+    rig.out[9] = (uint8_t)cw;
+    rig.out[10] = (uint8_t)(speed >> 8);
+    rig.out[11] = (uint8_t)speed;
+    dp_master_set_outputs(&rig.master, 0, rig.out, sizeof rig.out);
+}
+
+static uint16_t pi_word(unsigned i)
+{
+    return (uint16_t)((inputs()[8u + 2u * i] << 8) | inputs()[9u + 2u * i]);
+}
+
+static void test_read_8300_through_the_cyclic_channel(void)
+{
+    setup(0, 0x01);
+    start(ML_SVC_READ, 8300, 0);
+    CHECK(finish(100000) != UINT32_MAX);
+    CHECK_BYTES(inputs(), 8, 0x71, 0x00, 0x20, 0x6C, 0x31, 0x1C, 0x72, 0x89);
+}
+
+static void test_slow_inverter_keeps_old_reply_and_exchange_running(void)
+{
+    setup(20000, 0x01); /* each service takes 20 ms: about ten bus cycles */
+    start(ML_SVC_READ, 8300, 0);
+    uint32_t cycles = finish(100000);
+    CHECK(cycles != UINT32_MAX);
+    CHECK(cycles >= 8);
+    uint8_t first[8];
+    memcpy(first, inputs(), 8);
+    /* The next service: until it completes every reply repeats the previous one exactly. */
+    start(ML_SVC_READ, 8489, 0);
+    bool same_until_done = true;
+    uint32_t c0 = rig.master.slaves[0].cycles;
+    for (int i = 0; i < 200 && !dpm_param_done(&rig.param, inputs()); i++) {
+        same_until_done = same_until_done && memcmp(inputs(), first, 8) == 0;
+        membus_run_for_us(&rig.bus, 500);
+    }
+    CHECK(same_until_done);
+    CHECK(rig.master.slaves[0].cycles - c0 >= 8);
+    CHECK_BYTES(inputs(), 8, 0x31, 0x00, 0x21, 0x29, 0x00, 0x02, 0x49, 0xF0); /* 150000 */
+}
+
+static void test_write_executes_exactly_once(void)
+{
+    setup(5000, 0x01);
+    uint32_t writes0 = rig.card.md.eeprom_writes;
+    uint32_t services0 = rig.card.card.param.services;
+    start(ML_SVC_WRITE, 8489, 300000);
+    CHECK(finish(100000) != UINT32_MAX);
+    /* The same request keeps arriving with an unchanged handshake for 100 more cycles. */
+    uint32_t c0 = rig.master.slaves[0].cycles;
+    while (rig.master.slaves[0].cycles - c0 < 100u) {
+        membus_run_for_us(&rig.bus, 1000);
+    }
+    CHECK_EQ(rig.card.card.param.services - services0, 1);
+    CHECK_EQ(rig.card.md.eeprom_writes - writes0, 0); /* no EEPROM file in this rig */
+    int32_t v = 0;
+    CHECK(movidrive_read_value(&rig.card.md, 8489, &v));
+    CHECK_EQ(v, 300000);
+    CHECK_BYTES(inputs(), 8, 0x72, 0x00, 0x21, 0x29, 0x00, 0x04, 0x93, 0xE0);
+}
+
+static void test_inverter_error_and_card_error(void)
+{
+    setup(0, 0x01);
+    start(ML_SVC_WRITE_VOLATILE, 8517, 99000000u); /* P302 above its maximum */
+    CHECK(finish(100000) != UINT32_MAX);
+    CHECK_BYTES(inputs(), 8, 0xF3, 0x00, 0x21, 0x45, 0x08, 0x00, 0x00, 0x15);
+    /* Reserved octet not 0: the card answers class 5 code 5 without asking the inverter. */
+    dpm_param_start(&rig.param, ML_SVC_READ, 8300, 0, rig.out);
+    rig.out[1] = 0x01;
+    dp_master_set_outputs(&rig.master, 0, rig.out, sizeof rig.out);
+    CHECK(finish(100000) != UINT32_MAX);
+    CHECK_BYTES(inputs(), 8, 0xB1, 0x01, 0x20, 0x6C, 0x05, 0x05, 0x00, 0x00);
+}
+
+static void test_inverter_not_answering_gives_6_2(void)
+{
+    setup(500000, 0x01); /* slower than the card's 200 ms limit */
+    start(ML_SVC_READ, 8300, 0);
+    uint32_t cycles = finish(400000);
+    CHECK(cycles != UINT32_MAX);
+    CHECK_BYTES(inputs(), 8, 0xF1, 0x00, 0x20, 0x6C, 0x06, 0x02, 0x00, 0x00);
+    membus_run_for_us(&rig.bus, 400000); /* the late answer arrives and must change nothing */
+    CHECK_BYTES(inputs(), 8, 0xF1, 0x00, 0x20, 0x6C, 0x06, 0x02, 0x00, 0x00);
+    CHECK_EQ(rig.card.card.ml.stale_responses, 1);
+}
+
+static void commission(void)
+{
+    start(ML_SVC_WRITE, 8461, 3);
+    CHECK(finish(100000) != UINT32_MAX);
+    start(ML_SVC_WRITE, 8462, 2);
+    CHECK(finish(100000) != UINT32_MAX);
+    CHECK_EQ(inputs()[0] & ML_MGMT_ERROR, 0);
+}
+
+static void test_process_data_ramp_and_status_word(void)
+{
+    setup(0, 0x01);
+    membus_run_for_us(&rig.bus, 5000);
+    CHECK_EQ(pi_word(0) & 0x0007u, 0x0002u); /* ready, PO data not enabled yet */
+    commission();
+    membus_run_for_us(&rig.bus, 5000);
+    CHECK_EQ(pi_word(0) & 0x0007u, 0x0006u); /* PO data enabled, not enabled */
+    set_po(0x0006, 1500);
+    membus_run_for_us(&rig.bus, 100000);
+    CHECK_EQ(pi_word(0) & 0x0007u, 0x0007u);
+    int16_t speed = (int16_t)pi_word(1);
+    CHECK(speed > 600 && speed < 900); /* 150 rpm after 100 ms with P130 = 2 s per 3000 rpm */
+    membus_run_for_us(&rig.bus, 200000);
+    CHECK_EQ(pi_word(1), 1500);
+    CHECK_EQ(rig.card.card.po[0], 0x0006);
+    CHECK_EQ(rig.card.card.po[1], 1500);
+}
+
+static void test_fieldbus_timeout_fault_ext_diag_and_reset(void)
+{
+    setup(0, 0x00); /* diagnostic alarm on */
+    commission();
+    set_po(0x0006, 1500);
+    membus_run_for_us(&rig.bus, 400000);
+    CHECK_EQ(pi_word(1), 1500);
+    dp_master_stop(&rig.master);
+    membus_run_for_us(&rig.bus, 100000); /* 50 ms watchdog */
+    CHECK_EQ(dp_slave_state(&rig.card.card.dp), DP_STATE_WAIT_PRM);
+    CHECK_EQ(rig.card.md.fault, 28); /* P831 default 4: rapid stop with fault */
+    dp_master_start(&rig.master, membus_now_us(&rig.bus));
+    membus_wake(rig.master_port);
+    membus_run_for_us(&rig.bus, 300000);
+    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(pi_word(0), 0x1C24); /* fault 28 in the high byte, fault bit, PO enabled */
+    CHECK_BYTES(rig.master.slaves[0].last_diag, rig.master.slaves[0].last_diag_len, 0x08, 0x0C,
+                0x00, 0x02, 0x60, 0x03, 0x02, 0x1C);
+    set_po(0x0046, 1500); /* rising edge of bit 6 */
+    membus_run_for_us(&rig.bus, 10000);
+    set_po(0x0006, 1500);
+    membus_run_for_us(&rig.bus, 300000);
+    CHECK_EQ(rig.card.md.fault, 0);
+    CHECK_EQ(pi_word(0) & 0x0027u, 0x0007u);
+    CHECK_BYTES(rig.master.slaves[0].last_diag, rig.master.slaves[0].last_diag_len, 0x00, 0x0C,
+                0x00, 0x02, 0x60, 0x03);
+}
+
+static void test_no_ext_diag_with_alarm_off(void)
+{
+    setup(0, 0x01); /* factory setting: no diagnostic alarm */
+    commission();
+    set_po(0x0006, 1500);
+    membus_run_for_us(&rig.bus, 50000);
+    dp_master_stop(&rig.master);
+    membus_run_for_us(&rig.bus, 100000);
+    dp_master_start(&rig.master, membus_now_us(&rig.bus));
+    membus_wake(rig.master_port);
+    membus_run_for_us(&rig.bus, 300000);
+    CHECK_EQ(rig.card.md.fault, 28);
+    CHECK_EQ(pi_word(0) & 0x0020u, 0x0020u);
+    CHECK_BYTES(rig.master.slaves[0].last_diag, rig.master.slaves[0].last_diag_len, 0x00, 0x0C,
+                0x00, 0x02, 0x60, 0x03);
+}
+
+int main(void)
+{
+    RUN_TEST(test_read_8300_through_the_cyclic_channel);
+    RUN_TEST(test_slow_inverter_keeps_old_reply_and_exchange_running);
+    RUN_TEST(test_write_executes_exactly_once);
+    RUN_TEST(test_inverter_error_and_card_error);
+    RUN_TEST(test_inverter_not_answering_gives_6_2);
+    RUN_TEST(test_process_data_ramp_and_status_word);
+    RUN_TEST(test_fieldbus_timeout_fault_ext_diag_and_reset);
+    RUN_TEST(test_no_ext_diag_with_alarm_off);
+    return check_report();
+}
