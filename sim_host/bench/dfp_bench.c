@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "dp_slave/dp_wire.h"
+#include "dp_master/param_channel.h"
 #include "dp_slave/fdl_frame.h"
 #include "sim_hal/membus.h"
 #include "sim_hal/tty_port.h"
@@ -279,6 +280,65 @@ static void bench_membus(unsigned cycles, uint32_t baud)
            sim_ms / ((double)wall / 1e6));
 }
 
+/* ---- 2b. parameter service latency through the cyclic channel ---------------------------- */
+
+/* Master, card and emulated inverter on the in-memory bus: the time from the master putting a
+ * new request into its outputs to the master seeing the matching reply, for `n` reads of 8300.
+ * inverter_us is how long the inverter takes per service (0: answers within the card's poll). */
+static void bench_param_latency(uint32_t baud, uint32_t inverter_us, unsigned n)
+{
+    membus_init(&bus);
+    memset(&bcard, 0, sizeof bcard);
+    hal_uart_t cu;
+    hal_uart_t mu;
+    sim_station_t cs = card_station(&bcard);
+    sim_station_t ms = master_station(&bmaster);
+    membus_attach(&bus, &cs, &cu);
+    membus_attach(&bus, &ms, &mu);
+    card_options_t co = {.address = 4, .fixed_baud = baud, .strict_timing = true,
+                         .inverter = CARD_INVERTER_SIM, .inverter_delay_us = inverter_us};
+    char err[256];
+    card_station_init(&bcard, &co, cu, 0, err, sizeof err);
+    dp_master_cfg_t mc = {.address = 2, .baud = baud, .strict_timing = true, .uart = mu};
+    dp_master_init(&bmaster, &mc, 0);
+    dpm_slave_cfg_t sc = {.address = 4};
+    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 1000, dfp21b_user_prm_default, 9);
+    memcpy(sc.cfg, cfg_3pd, 2);
+    sc.cfg_len = 2;
+    dp_master_add_slave(&bmaster, &sc);
+    membus_run_for_us(&bus, 200000);
+    dpm_param_t p = {0};
+    uint8_t out[14] = {0};
+    uint64_t sum_ns = 0;
+    uint64_t max_ns = 0;
+    uint32_t sum_cycles = 0;
+    uint32_t max_cycles = 0;
+    unsigned done = 0;
+    for (unsigned i = 0; i < n; i++) {
+        dpm_param_start(&p, ML_SVC_READ, 8300, 0, out);
+        dp_master_set_outputs(&bmaster, 0, out, sizeof out);
+        uint64_t t0 = bus.now_ns;
+        uint32_t c0 = bmaster.slaves[0].cycles;
+        while (!dpm_param_done(&p, bmaster.slaves[0].inputs) && bus.now_ns - t0 < 1000000000ull) {
+            membus_run_for_us(&bus, 10);
+        }
+        uint64_t dt = bus.now_ns - t0;
+        uint32_t dc = bmaster.slaves[0].cycles - c0;
+        if (ml_data(bmaster.slaves[0].inputs) == 0x311C7289u) {
+            done++;
+        }
+        sum_ns += dt;
+        sum_cycles += dc;
+        if (dt > max_ns) max_ns = dt;
+        if (dc > max_cycles) max_cycles = dc;
+    }
+    printf("  %-12s inverter %5u us: %u/%u reads of 8300 correct, %5.2f cycles (max %u), "
+           "%7.1f us (max %7.1f us) bus time each\n",
+           baud == 12000000u ? "12 Mbit/s" : baud == 1500000u ? "1.5 Mbit/s" : "19.2 kbit/s",
+           inverter_us, done, n, (double)sum_cycles / n, max_cycles, (double)sum_ns / n / 1e3,
+           (double)max_ns / 1e3);
+}
+
 /* ---- 3. PTY ------------------------------------------------------------------------------- */
 
 static tty_port_t pa;
@@ -387,5 +447,11 @@ int main(int argc, char **argv)
     bench_membus(10000, 1500000u);
     bench_membus(1000, 19200u);
     bench_pty(5000);
+    printf("\nParameter service through the cyclic channel (master output -> matching reply), "
+           "emulated inverter in-process:\n");
+    bench_param_latency(12000000u, 0, 200);
+    bench_param_latency(1500000u, 0, 200);
+    bench_param_latency(1500000u, 1000, 200);
+    bench_param_latency(19200u, 0, 50);
     return rc;
 }
