@@ -5,7 +5,9 @@
 # 1. parameter read/write/error and PO -> PI against the inverter at SBus address 1;
 # 2. a non-volatile write survives a restart of the inverter (--eeprom), a volatile one does not;
 # 3. an inverter at address 2 on the same bus does not answer address-1 traffic twice;
-# 4. the inverter prints its services and stops on SIGINT with status 0.
+# 4. the inverter prints its services and stops on SIGINT with status 0;
+# 5. the drive over SBus: enable, ramp, a PO gap -> SBus timeout -> F28, reset;
+# 6. the whole chain master -> PTY -> dfp-sim slave --inverter can:vcan0:1 -> dfp-sim inverter.
 #   sbus_e2e.sh DFP_SIM TEST_SBUS_SOCKETCAN
 set -u
 sim="$1"
@@ -62,6 +64,34 @@ echo "---- inverter 1, drive ----"; cat "$work/inv1c.log"
 check "inverter logged the enable" 'grep -q "output stage enabled" "$work/inv1c.log"'
 check "inverter logged the SBus timeout" 'grep -q "SBus timeout: no PO frame for 100 ms" "$work/inv1c.log"'
 check "inverter logged F28" 'grep -q "fault F28" "$work/inv1c.log"'
+
+# 6. The whole chain: dfp-sim master -> PTY pair -> dfp-sim slave --inverter can:vcan0:1 ->
+#    SBus on vcan0 -> dfp-sim inverter. The master reads P076 (index 8300) through the cyclic
+#    parameter channel (handshake bit set: a new service) and sends PO 0006 05DC 0000.
+start_inverter 1 "$work/inv1d.log"; p1=$pid
+rm -f "$work/a" "$work/b"
+socat pty,raw,echo=0,link="$work/a" pty,raw,echo=0,link="$work/b" &
+psocat=$!
+for _ in $(seq 50); do [ -e "$work/a" ] && [ -e "$work/b" ] && break; sleep 0.1; done
+"$sim" slave --port "$work/a" --address 4 --baud 19200 --inverter can:vcan0:1 >"$work/slave.log" 2>&1 &
+pslave=$!
+sleep 0.3
+timeout 60 "$sim" master --port "$work/b" --address 4 --config F3F2 --baud 19200 --cycles 100 \
+  --outputs 4100206C00000000000605DC0000 >"$work/master.log" 2>&1
+check "master ran 100 cycles through the card" '[ $? = 0 ]'
+sleep 0.3 # PO frames have stopped with the master: the inverter's SBus timeout runs out
+kill -INT "$pslave"; wait "$pslave"
+check "slave exits 0 on SIGINT" '[ $? = 0 ]'
+stop_inverter "$p1"
+kill "$psocat" 2>/dev/null; wait "$psocat" 2>/dev/null
+echo "---- master ----"; tail -n 3 "$work/master.log"
+echo "---- slave ----"; head -n 3 "$work/slave.log"
+echo "---- inverter 1, chain ----"; cat "$work/inv1d.log"
+check "master got P076 through card and SBus" 'grep -q "last inputs 4100206C311C7289" "$work/master.log"'
+check "inverter answered the card's read" 'grep -q "param  read 8300 -> 0x311C7289" "$work/inv1d.log"'
+check "card sent PO frames" 'grep -Eq "stopping \(signal\): 1 parameter services \(0 refused\), [1-9][0-9]* PO frames" "$work/inv1d.log"'
+check "no PO after the master left: SBus timeout" 'grep -q "SBus timeout" "$work/inv1d.log"'
+check "slave named its inverter" 'grep -q "inverter: can:vcan0:1" "$work/slave.log"'
 
 # Errors: no such interface, one line, status 1.
 "$sim" inverter --can nosuchcan0 >"$work/err.log" 2>&1
