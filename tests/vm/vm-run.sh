@@ -168,6 +168,7 @@ prepare() {
   (cd "$ird" && find . | cpio -o -H newc --quiet | gzip -1) >"$vm_dir/initrd.gz.tmp"
   mv "$vm_dir/initrd.gz.tmp" "$vm_dir/initrd.gz"
   cp "$vmlinuz" "$vm_dir/vmlinuz"
+  rm -rf "$vm_dir/kernel" "$ird" # 400 MB of unpacked modules; the .deb stays for the next build
   echo "$stamp" >"$vm_dir/ready"
   echo "vm-run: prepared $pkg in $((SECONDS - t0)) s under $vm_dir" >&2
 }
