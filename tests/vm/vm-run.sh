@@ -46,9 +46,6 @@ while [ $# -gt 0 ]; do
 done
 [ "$prepare_only" = 1 ] || [ $# -gt 0 ] || die "usage: vm-run.sh [--vm-dir DIR] [--timeout S] -- CMD [ARG...]"
 
-# The run directory is mounted writable inside the guest; under the guest's /tmp overlay that
-# mount would be hidden.
-case "$vm_dir/" in /tmp/*) die "--vm-dir must not be under /tmp (the guest overlays its own /tmp)" ;; esac
 
 # Load order matters: the Debian .deb has no modules.dep, so dependencies come first.
 MODULES="virtio_ring virtio virtio_pci_modern_dev virtio_pci_legacy_dev virtio_pci netfs fscache
@@ -71,12 +68,11 @@ for m in $(cat /modules.list); do
 done
 ip link set up dev lo
 ip link add dev vcan0 type vcan && ip link set up dev vcan0 || echo "DFP_VM: cannot create vcan0"
-run=$(sed -n 's/.*dfp_run=\([^ ]*\).*/\1/p' /proc/cmdline)
-rundir=${run%/*}
 mkdir -p /host
 opts=trans=virtio,version=9p2000.L,msize=262144
+out=/host/run/dfp-vm
 if mount -t 9p -o "$opts,ro,cache=loose" hostroot /host &&
-   mount -t 9p -o "$opts" vmout "/host$rundir"; then
+   mount -t tmpfs run /host/run && mkdir -p $out && mount -t 9p -o "$opts" vmout $out; then
   mount -t proc proc /host/proc
   mount -t sysfs sys /host/sys
   mount -t devtmpfs dev /host/dev
@@ -86,11 +82,10 @@ if mount -t 9p -o "$opts,ro,cache=loose" hostroot /host &&
   mkdir -p /scratch && mount -t tmpfs scratch /scratch && mkdir -p /scratch/up /scratch/work
   mount -t overlay -o lowerdir=/host/tmp,upperdir=/scratch/up,workdir=/scratch/work tmp /host/tmp ||
     { echo "DFP_VM: no overlay for /tmp, using an empty tmpfs"; mount -t tmpfs tmp /host/tmp; }
-  mount -t tmpfs run /host/run 2>/dev/null
   echo "DFP_VM_BOOTED uptime=$(cut -d' ' -f1 /proc/uptime)"
-  chroot /host /bin/bash "$run"
+  chroot /host /bin/bash /run/dfp-vm/cmd.sh
   rc=$?
-  echo "$rc" >"/host$rundir/rc"
+  echo "$rc" >$out/rc
   sync
 else
   echo "DFP_VM: cannot mount the host's root over virtio-9p"
@@ -184,7 +179,7 @@ rundir="$(mktemp -d "$vm_dir/run.XXXXXX")"
 trap 'rm -rf "$rundir"' EXIT
 {
   echo "export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin"
-  echo "export HOME=/tmp TMPDIR=/tmp DFP_VM=1 DFP_VM_OUT=$(printf %q "$rundir")"
+  echo "export HOME=/tmp TMPDIR=/tmp DFP_VM=1 DFP_VM_OUT=/run/dfp-vm"
   for v in ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS; do
     if [ -n "${!v:-}" ]; then echo "export $v=$(printf %q "${!v}")"; fi
   done
@@ -198,7 +193,7 @@ set +e
 timeout --kill-after=5 "$timeout_s" qemu-system-x86_64 -accel tcg -M pc -m "$mem_mb" \
   -display none -monitor none -serial stdio -no-reboot \
   -kernel "$vm_dir/vmlinuz" -initrd "$vm_dir/initrd.gz" \
-  -append "console=ttyS0 quiet loglevel=3 panic=-1 reboot=t dfp_run=$rundir/cmd.sh" \
+  -append "console=ttyS0 quiet loglevel=3 panic=-1 reboot=t" \
   -virtfs local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap \
   -virtfs "local,path=$rundir,mount_tag=vmout,security_model=none,multidevs=remap" \
   </dev/null 2>&1 | tr -d '\r' | tee "$rundir/console.log"
