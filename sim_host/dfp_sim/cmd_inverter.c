@@ -40,7 +40,7 @@ static struct {
     socketcan_t sock;
     sbus_inverter_t sbus;
     tty_runner_t runner;
-    hal_time_us_t t0;
+    uint64_t t0_ms;
     bool quiet;
     /* last reported state */
     uint16_t status;
@@ -53,11 +53,18 @@ static struct {
     uint32_t service_errors;
 } inv;
 
+static uint64_t mono_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000u + (uint64_t)ts.tv_nsec / 1000000u;
+}
+
 static void line(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
 static void line(const char *fmt, ...)
 {
-    double t = (double)hal_time_diff(tty_now_us(), inv.t0) / 1e6;
+    double t = (double)(mono_ms() - inv.t0_ms) / 1e3;
     printf("%9.3f s  ", t);
     va_list ap;
     va_start(ap, fmt);
@@ -248,17 +255,18 @@ int cmd_inverter(int argc, char **argv)
     sigaction(SIGTERM, &sa, NULL);
 
     uint8_t a = (uint8_t)address;
-    inv.t0 = tty_now_us();
+    inv.t0_ms = mono_ms();
     printf("dfp-sim inverter: emulated MOVIDRIVE at SBus address %u on %s: PO %u -> PI %u, "
            "parameters %u -> %u%s; EEPROM %s\n",
            a, ifname, sbus_id_po(a), sbus_id_pi(a), sbus_id_param_req(a), sbus_id_param_rsp(a),
            channel2 ? " and channel 2" : "", eeprom != NULL ? eeprom : "none (RAM only)");
     int rc = 0;
-    hal_time_us_t end = inv.t0 + duration_s * 1000000u;
-    while (!inv_stop && (duration_s == 0u || !hal_time_reached(tty_now_us(), end))) {
+    /* The duration on a 64-bit clock: hal_time_us_t wraps after 71 minutes. */
+    uint64_t end_ms = mono_ms() + (uint64_t)duration_s * 1000u;
+    while (!inv_stop && (duration_s == 0u || mono_ms() < end_ms)) {
         hal_time_us_t until = tty_now_us() + 200000u;
-        if (duration_s != 0u && hal_time_diff(end, until) < 0) {
-            until = end;
+        if (duration_s != 0u && end_ms - mono_ms() < 200u) {
+            until = tty_now_us() + (hal_time_us_t)((end_ms - mono_ms()) * 1000u);
         }
         if (tty_runner_run_until(&inv.runner, until, &inv_stop) < 0) {
             cli_error("%s", tty_runner_error(&inv.runner));
