@@ -256,6 +256,7 @@ int cmd_inverter(int argc, char **argv)
 
     uint8_t a = (uint8_t)address;
     inv.t0_ms = mono_ms();
+    inv.next_speed_report = tty_now_us(); /* not 0: on the wall clock 0 may lie in the future */
     printf("dfp-sim inverter: emulated MOVIDRIVE at SBus address %u on %s: PO %u -> PI %u, "
            "parameters %u -> %u%s; EEPROM %s\n",
            a, ifname, sbus_id_po(a), sbus_id_pi(a), sbus_id_param_req(a), sbus_id_param_rsp(a),
