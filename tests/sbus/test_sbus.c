@@ -461,6 +461,38 @@ static void test_timeout_frees_channel(void)
     CHECK_EQ(t.link.timeouts, 2);
 }
 
+/* The same near the wrap of the 32-bit microsecond clock and past 2^31 (a wall clock after 36
+ * minutes of uptime): no instant is taken for "long ago" or "never". */
+static void test_timeouts_across_wrap(void)
+{
+    static const hal_time_us_t bases[2] = {0xFFFFFF00u, 0x80000010u};
+    for (int b = 0; b < 2; b++) {
+        hal_time_us_t t0 = bases[b];
+        setup(1, 1, false, false);
+        CHECK_EQ(request(0, read_fw), 0);
+        CHECK_EQ(request(1, read_h0), 0);
+        deliver();
+        CHECK_EQ(sbus_card_link_poll(&t.link, t0), t0 + 50000u);
+        CHECK_EQ(sbus_card_link_poll(&t.link, t0 + 49999u), t0 + 50000u);
+        CHECK_EQ(t.link.timeouts, 0);
+        (void)sbus_card_link_poll(&t.link, t0 + 50000u);
+        CHECK_EQ(t.link.timeouts, 1);
+        deliver();
+        CHECK_EQ(t.mon.n, 2);
+        /* The inverter's P815 timeout from a PO received at t0. */
+        setup(1, 1, false, true);
+        t.now = t0;
+        ml_link_t l = sbus_card_link(&t.link);
+        const uint16_t po[3] = {6, 0, 0};
+        l.ops->process_outputs(l.ctx, po, 3);
+        deliver();
+        CHECK_EQ(sbus_inverter_poll(&t.inv, t0 + 99999u), t0 + 100000u);
+        CHECK_EQ(t.ip.n_timeout_events, 0);
+        (void)sbus_inverter_poll(&t.inv, t0 + 100000u);
+        CHECK_EQ(t.ip.n_timeout_events, 1);
+    }
+}
+
 /* The link cannot send: the request is refused at once (the client answers 6/2); a queued
  * request whose turn comes while the bus refuses gets the card's 6/2 answer from the link. */
 static int refuse_count;
@@ -661,6 +693,7 @@ int main(void)
     RUN_TEST(test_channel_2);
     RUN_TEST(test_stale_response);
     RUN_TEST(test_timeout_frees_channel);
+    RUN_TEST(test_timeouts_across_wrap);
     RUN_TEST(test_send_failure);
     RUN_TEST(test_fieldbus_timeout_stops_po);
     RUN_TEST(test_inverter_side);
