@@ -19,6 +19,8 @@ typedef struct rig {
 } rig_t;
 
 static rig_t rig;
+/* Where simulated time starts: 0, or a wall-clock-like instant past 2^31 us (35.8 min uptime). */
+static uint64_t start_ns;
 
 static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
 
@@ -26,6 +28,7 @@ static void setup(uint32_t inverter_delay_us, uint8_t diag_alarm_octet)
 {
     memset(&rig, 0, sizeof rig);
     membus_init(&rig.bus);
+    rig.bus.now_ns = start_ns;
     hal_uart_t cu;
     hal_uart_t mu;
     sim_station_t cs = card_station(&rig.card);
@@ -35,10 +38,10 @@ static void setup(uint32_t inverter_delay_us, uint8_t diag_alarm_octet)
     card_options_t co = {.address = 4, .fixed_baud = 1500000, .strict_timing = true,
                          .inverter = CARD_INVERTER_SIM, .inverter_delay_us = inverter_delay_us};
     char err[256];
-    CHECK_EQ(card_station_init(&rig.card, &co, cu, 0, err, sizeof err), 0);
+    CHECK_EQ(card_station_init(&rig.card, &co, cu, membus_now_us(&rig.bus), err, sizeof err), 0);
     dp_master_cfg_t mc = {.address = 2, .baud = 1500000, .strict_timing = true,
                           .cycle_us = 2000, .uart = mu};
-    dp_master_init(&rig.master, &mc, 0);
+    dp_master_init(&rig.master, &mc, membus_now_us(&rig.bus));
     const uint8_t user[9] = {0x00, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, diag_alarm_octet};
     dpm_slave_cfg_t sc = {.address = 4};
     sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 50, user, sizeof user);
@@ -236,6 +239,15 @@ static void test_no_ext_diag_with_alarm_off(void)
                 0x00, 0x02, 0x60, 0x03);
 }
 
+/* Regression: deadlines that started at 0 never came due once the clock was past 2^31 us. */
+static void test_everything_works_after_35_minutes_of_uptime(void)
+{
+    start_ns = 0x90000000ull * 1000u; /* 2415 s */
+    test_read_8300_through_the_cyclic_channel();
+    test_fieldbus_timeout_fault_ext_diag_and_reset();
+    start_ns = 0;
+}
+
 int main(void)
 {
     RUN_TEST(test_read_8300_through_the_cyclic_channel);
@@ -246,5 +258,6 @@ int main(void)
     RUN_TEST(test_process_data_ramp_and_status_word);
     RUN_TEST(test_fieldbus_timeout_fault_ext_diag_and_reset);
     RUN_TEST(test_no_ext_diag_with_alarm_off);
+    RUN_TEST(test_everything_works_after_35_minutes_of_uptime);
     return check_report();
 }

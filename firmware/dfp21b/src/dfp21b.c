@@ -296,6 +296,8 @@ void dfp21b_init(dfp21b_t *c, const dfp21b_cfg_t *cfg, hal_time_us_t now)
     ml_client_init(&c->ml, cfg->inverter, 0);
     ml_channel_init(&c->param, &c->ml, DFP21B_CH_CYCLIC);
     c->status_dirty = true;
+    c->now = now;
+    c->next_status_poll = now; /* a timestamp, never 0: see hal_time_diff() */
     dp_slave_init(&c->dp, &dcfg, now);
     update_leds(c);
 }

@@ -132,6 +132,9 @@ int dp_master_add_slave(dp_master_t *m, const dpm_slave_cfg_t *sc)
     s->fcb_first = true;
     s->phase = DPM_PHASE_FDL_STATUS;
     s->backoff_us = m->cfg.backoff_min_us;
+    /* Due at once. Not 0: on a wall clock 0 can be more than 2^31 us in the past, which the
+     * wrapping comparison reads as the future. */
+    s->due = m->next_send;
     return m->num_slaves++;
 }
 
