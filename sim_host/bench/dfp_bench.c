@@ -242,7 +242,9 @@ static membus_t bus;
 static card_station_t bcard;
 static dp_master_t bmaster;
 
-static void bench_membus(unsigned cycles, uint32_t baud)
+/* Master (2) and card (4) on a fresh in-memory bus, "Param + 3 PD", watchdog wd_ms. */
+static void bench_rig(uint32_t baud, card_inverter_t inverter, uint32_t inverter_us,
+                      uint32_t wd_ms)
 {
     membus_init(&bus);
     memset(&bcard, 0, sizeof bcard);
@@ -252,16 +254,22 @@ static void bench_membus(unsigned cycles, uint32_t baud)
     sim_station_t ms = master_station(&bmaster);
     membus_attach(&bus, &cs, &cu);
     membus_attach(&bus, &ms, &mu);
-    card_options_t co = {.address = 4, .fixed_baud = baud, .strict_timing = true};
+    card_options_t co = {.address = 4, .fixed_baud = baud, .strict_timing = true,
+                         .inverter = inverter, .inverter_delay_us = inverter_us};
     char err[256];
     card_station_init(&bcard, &co, cu, 0, err, sizeof err);
     dp_master_cfg_t mc = {.address = 2, .baud = baud, .strict_timing = true, .uart = mu};
     dp_master_init(&bmaster, &mc, 0);
     dpm_slave_cfg_t sc = {.address = 4};
-    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 100, dfp21b_user_prm_default, 9);
+    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, wd_ms, dfp21b_user_prm_default, 9);
     memcpy(sc.cfg, cfg_3pd, 2);
     sc.cfg_len = 2;
     dp_master_add_slave(&bmaster, &sc);
+}
+
+static void bench_membus(unsigned cycles, uint32_t baud)
+{
+    bench_rig(baud, CARD_INVERTER_NONE, 0, 100);
     uint64_t w0 = mono_ns();
     uint64_t startup_ns = 0;
     while (bmaster.slaves[0].cycles < cycles && bus.now_ns < 600000000000ull) {
@@ -287,25 +295,7 @@ static void bench_membus(unsigned cycles, uint32_t baud)
  * inverter_us is how long the inverter takes per service (0: answers within the card's poll). */
 static void bench_param_latency(uint32_t baud, uint32_t inverter_us, unsigned n)
 {
-    membus_init(&bus);
-    memset(&bcard, 0, sizeof bcard);
-    hal_uart_t cu;
-    hal_uart_t mu;
-    sim_station_t cs = card_station(&bcard);
-    sim_station_t ms = master_station(&bmaster);
-    membus_attach(&bus, &cs, &cu);
-    membus_attach(&bus, &ms, &mu);
-    card_options_t co = {.address = 4, .fixed_baud = baud, .strict_timing = true,
-                         .inverter = CARD_INVERTER_SIM, .inverter_delay_us = inverter_us};
-    char err[256];
-    card_station_init(&bcard, &co, cu, 0, err, sizeof err);
-    dp_master_cfg_t mc = {.address = 2, .baud = baud, .strict_timing = true, .uart = mu};
-    dp_master_init(&bmaster, &mc, 0);
-    dpm_slave_cfg_t sc = {.address = 4};
-    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 1000, dfp21b_user_prm_default, 9);
-    memcpy(sc.cfg, cfg_3pd, 2);
-    sc.cfg_len = 2;
-    dp_master_add_slave(&bmaster, &sc);
+    bench_rig(baud, CARD_INVERTER_SIM, inverter_us, 1000);
     membus_run_for_us(&bus, 200000);
     dpm_param_t p = {0};
     uint8_t out[14] = {0};

@@ -1,6 +1,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "sim_hal/file_nvm.h"
+#include "sim_hal/be_bytes.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -19,30 +20,6 @@ uint32_t file_nvm_crc32(uint32_t crc, const uint8_t *p, size_t n)
         }
     }
     return ~crc;
-}
-
-static void put_u16(uint8_t *p, uint32_t v)
-{
-    p[0] = (uint8_t)(v >> 8);
-    p[1] = (uint8_t)v;
-}
-
-static void put_u32(uint8_t *p, uint32_t v)
-{
-    p[0] = (uint8_t)(v >> 24);
-    p[1] = (uint8_t)(v >> 16);
-    p[2] = (uint8_t)(v >> 8);
-    p[3] = (uint8_t)v;
-}
-
-static uint32_t get_u16(const uint8_t *p)
-{
-    return ((uint32_t)p[0] << 8) | p[1];
-}
-
-static uint32_t get_u32(const uint8_t *p)
-{
-    return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | p[3];
 }
 
 /* A file image being read: header + data, at most one byte more than the largest image so a

@@ -1,6 +1,7 @@
 /* The emulated MOVIDRIVE: parameter services, EEPROM image, process data, drive model.
  * Sources and assumptions: sim_host/movidrive/README.md. */
 #include "movidrive/movidrive.h"
+#include "sim_hal/be_bytes.h"
 
 #include <limits.h>
 #include <stdio.h>
@@ -172,30 +173,6 @@ size_t movidrive_eeprom_size(void)
         n += (md_params[k].flags & MD_PF_NON_VOLATILE) ? 1u : 0u;
     }
     return MD_EE_HEADER + n * MD_EE_RECORD + MD_IPOS_VARS * 4u;
-}
-
-static void put_u16(uint8_t *p, uint16_t v)
-{
-    p[0] = (uint8_t)(v >> 8);
-    p[1] = (uint8_t)v;
-}
-
-static void put_u32(uint8_t *p, uint32_t v)
-{
-    p[0] = (uint8_t)(v >> 24);
-    p[1] = (uint8_t)(v >> 16);
-    p[2] = (uint8_t)(v >> 8);
-    p[3] = (uint8_t)v;
-}
-
-static uint16_t get_u16(const uint8_t *p)
-{
-    return (uint16_t)((p[0] << 8) | p[1]);
-}
-
-static uint32_t get_u32(const uint8_t *p)
-{
-    return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | p[3];
 }
 
 /* Largest image: header + every parameter + the IPOS variables. */
