@@ -81,6 +81,7 @@ static void set_state(dp_slave_t *s, dp_state_t next, hal_time_us_t t)
     s->state = next;
     if (next == DP_STATE_WAIT_PRM) {
         s->wd_on = false;
+        s->dpv1_mode = false;
     }
     if (s->cfg.hooks.event != NULL) {
         dp_event_t ev = {.type = DP_EV_STATE, .t = t, .old_state = prev, .new_state = next,
@@ -253,6 +254,7 @@ static void svc_set_prm(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
     s->prm_fault = false;
     s->cfg_fault = false;
     s->not_supported = false;
+    s->dpv1_mode = len >= DP_PRM_LEN_DPV1 && (dpv1[0] & DP_DPV1_1_ENABLE) != 0u;
     set_state(s, DP_STATE_WAIT_CFG, t);
     s->wd_on = wd_on;
     uint32_t base_ms = (dpv1[0] & DP_DPV1_1_WD_BASE_1MS) != 0u ? 1u : 10u;
@@ -421,6 +423,27 @@ static void svc_data_exchange(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t
     reply_plain(s, m, code, s->freeze_mode ? s->frozen_inputs : s->inputs, s->in_len);
 }
 
+/* DP-V1 and anything else below SAP 55: the device decides, the FDL encodes. */
+static void svc_extension(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
+{
+    uint8_t reply[DP_SAP_REPLY_MAX];
+    size_t len = 0;
+    dp_sap_answer_t a = s->cfg.hooks.sap_request(s->cfg.hooks.ctx, m->sa, m->dsap, m->ssap,
+                                                 m->data, m->data_len, reply, &len, t);
+    switch (a) {
+    case DP_SAP_ANSWER_SC:
+        reply_sc(s);
+        break;
+    case DP_SAP_ANSWER_DATA:
+        reply_sap(s, m, reply, len <= DP_SAP_REPLY_MAX ? len : DP_SAP_REPLY_MAX);
+        break;
+    case DP_SAP_NOT_SERVED:
+    default:
+        reply_rs(s, m);
+        break;
+    }
+}
+
 /* Routes one request to its service; leaves the reply (if any) in s->reply. */
 static void dp_service(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
 {
@@ -469,8 +492,13 @@ static void dp_service(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
     case DP_SAP_GLOBAL_CONTROL:
         svc_global_control(s, m, t);
         break;
-    default: /* includes Set_Slave_Add: the address comes from the DIP switches */
-        reply_rs(s, m);
+    default:
+        if (m->dsap < DP_SAP_SET_SLAVE_ADD && s->cfg.hooks.sap_request != NULL) {
+            svc_extension(s, m, t);
+        } else {
+            /* includes Set_Slave_Add: the address comes from the DIP switches */
+            reply_rs(s, m);
+        }
         break;
     }
 }

@@ -71,8 +71,22 @@ typedef enum dp_outputs_reason {
     DP_OUTPUTS_SAFE_STATE,  /* left Data_Exch (watchdog, new parameterisation, unlock) */
 } dp_outputs_reason_t;
 
+/* Answer of a SAP served outside the DP-V0 core (DP-V1: 0..54). */
+typedef enum dp_sap_answer {
+    DP_SAP_NOT_SERVED = 0, /* RS: SAP not activated */
+    DP_SAP_ANSWER_SC,      /* short acknowledge: request taken, or no response ready yet */
+    DP_SAP_ANSWER_DATA,    /* reply with the octets written to reply (SAPs swapped) */
+} dp_sap_answer_t;
+
+#define DP_SAP_REPLY_MAX 244u
+
 typedef struct dp_slave_hooks {
     void *ctx;
+    /* A request (SRD) to a SAP below 55, i.e. everything DP-V1 uses. Called on the receive path:
+     * copy, do not work. reply holds DP_SAP_REPLY_MAX octets. Optional (without it: RS). */
+    dp_sap_answer_t (*sap_request)(void *ctx, uint8_t master, uint8_t dsap, uint8_t ssap,
+                                   const uint8_t *data, size_t len, uint8_t *reply,
+                                   size_t *reply_len, hal_time_us_t t);
     /* Set_Prm octets from index 7 on (DP-V1 status and user parameters), len may be 0. */
     bool (*prm_check)(void *ctx, const uint8_t *prm, size_t len);
     /* Chk_Cfg identifiers; on success the output and input lengths in octets. */
@@ -158,6 +172,7 @@ typedef struct dp_slave {
     uint8_t ext_diag_len;
     bool ext_diag_overflow;
 
+    bool dpv1_mode;   /* accepted Set_Prm had >= 10 octets and DPV1_Enable */
     bool line_active; /* an error-free telegram was heard since power-up or the last baud loss */
     uint32_t telegrams_for_me;
 } dp_slave_t;
@@ -186,6 +201,8 @@ static inline dp_baud_state_t dp_slave_baud_state(const dp_slave_t *s) { return 
  * fixed-rate slave); false again after the baud control time expires. */
 static inline bool dp_slave_line_active(const dp_slave_t *s) { return s->line_active; }
 static inline uint8_t dp_slave_master(const dp_slave_t *s) { return s->master_add; }
+/* DP-V1 parameterised: MSAC1 may be opened (with Data_Exch). */
+static inline bool dp_slave_dpv1_mode(const dp_slave_t *s) { return s->dpv1_mode; }
 static inline uint32_t dp_slave_wd_time_ms(const dp_slave_t *s)
 {
     return s->wd_on ? s->wd_time_ms : 0u;

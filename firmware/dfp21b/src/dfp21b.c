@@ -221,9 +221,23 @@ static void hook_outputs(void *ctx, const uint8_t *out, size_t len, dp_outputs_r
     c->outputs_reason = why;
 }
 
+static dp_sap_answer_t hook_sap_request(void *ctx, uint8_t master, uint8_t dsap, uint8_t ssap,
+                                        const uint8_t *data, size_t len, uint8_t *reply,
+                                        size_t *reply_len, hal_time_us_t t)
+{
+    dfp21b_t *c = ctx;
+    return dpv1_sap_request(&c->dpv1, master, dsap, ssap, data, len, reply, reply_len, t);
+}
+
 static void hook_event(void *ctx, const dp_event_t *ev)
 {
     dfp21b_t *c = ctx;
+    if (ev->type == DP_EV_STATE || ev->type == DP_EV_PRM_OK) {
+        /* MSAC1 follows the DP state; a new Set_Prm (even in Data_Exch) closes it. */
+        dpv1_dp_state(&c->dpv1,
+                      ev->type == DP_EV_STATE && ev->new_state == DP_STATE_DATA_EXCH,
+                      dp_slave_dpv1_mode(&c->dp), dp_slave_master(&c->dp));
+    }
     switch (ev->type) {
     case DP_EV_WD_EXPIRED:
         c->master_lost = true;
@@ -291,10 +305,31 @@ void dfp21b_init(dfp21b_t *c, const dfp21b_cfg_t *cfg, hal_time_us_t now)
         .default_cfg_len = (uint8_t)sizeof dfp21b_default_cfg,
         .uart = c->on_bus ? cfg->uart : (hal_uart_t){0},
         .hooks = {.ctx = c, .prm_check = hook_prm_check, .cfg_check = hook_cfg_check,
-                  .outputs = hook_outputs, .event = hook_event},
+                  .outputs = hook_outputs, .event = hook_event, .sap_request = hook_sap_request},
     };
     ml_client_init(&c->ml, cfg->inverter, 0);
     ml_channel_init(&c->param, &c->ml, DFP21B_CH_CYCLIC);
+    dpv1_cfg_t vcfg = {
+        .ml = &c->ml,
+        .ch_c1 = DFP21B_CH_C1,
+        .ch_c2 = {DFP21B_CH_C2_FIRST, DFP21B_CH_C2_FIRST + 1u},
+        .identity = {.manufacturer_id = DFP21B_MANUFACTURER_ID,
+                     .order_id = DFP21B_ORDER_ID,
+                     .hardware_revision = cfg->hardware_revision,
+                     .software_revision = {'V', cfg->software_revision[0],
+                                           cfg->software_revision[1], cfg->software_revision[2]},
+                     .profile_id = 0x0000u},
+        .nvm = cfg->nvm,
+        .nvm_offset = 0,
+    };
+    if (cfg->serial != NULL) {
+        size_t n = 0;
+        while (n < sizeof vcfg.identity.serial - 1u && cfg->serial[n] != '\0') {
+            vcfg.identity.serial[n] = cfg->serial[n];
+            n++;
+        }
+    }
+    dpv1_init(&c->dpv1, &vcfg);
     c->status_dirty = true;
     c->now = now;
     c->next_status_poll = now; /* a timestamp, never 0: see hal_time_diff() */
@@ -464,6 +499,10 @@ hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now)
     hal_time_us_t ml_next = ml_client_poll(&c->ml, now);
     if (hal_time_diff(ml_next, next) < 0) {
         next = ml_next;
+    }
+    hal_time_us_t v1_next = dpv1_poll(&c->dpv1, now);
+    if (hal_time_diff(v1_next, next) < 0) {
+        next = v1_next;
     }
     poll_inverter_status(c, now);
     if (have_inverter(c) && c->diag_alarm && hal_time_diff(c->next_status_poll, next) < 0) {

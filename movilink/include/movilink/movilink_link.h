@@ -18,7 +18,7 @@
 #include "movilink/movilink_wire.h"
 
 #ifndef ML_MAX_CHANNELS
-#define ML_MAX_CHANNELS 4u
+#define ML_MAX_CHANNELS 5u /* cyclic channel, MSAC1, two MSAC2, the card's status poll */
 #endif
 #define ML_MAX_PD 10u
 

@@ -11,8 +11,10 @@
 #include <stdint.h>
 
 #include "dp_slave/dp_slave.h"
+#include "dpv1/dpv1.h"
 #include "hal/hal_dip.h"
 #include "hal/hal_led.h"
+#include "hal/hal_nvm.h"
 #include "hal/hal_uart.h"
 #include "movilink/movilink_channel.h"
 #include "movilink/movilink_client.h"
@@ -34,7 +36,11 @@ typedef struct dfp21b_pd_cfg {
 
 /* Channel numbers on the inverter link (movilink_link.h). */
 #define DFP21B_CH_CYCLIC 0u      /* the 8-byte channel in the cyclic data */
-#define DFP21B_CH_STATUS_POLL 3u /* the card's own reads of the inverter status (fault number) */
+#define DFP21B_CH_C1 1u          /* data set 47 over MSAC1 */
+#define DFP21B_CH_C2_FIRST 2u    /* data set 47 over the two MSAC2 connections: 2 and 3 */
+#define DFP21B_CH_STATUS_POLL 4u /* the card's own reads of the inverter status (fault number) */
+#define DFP21B_MANUFACTURER_ID 0x010Au
+#define DFP21B_ORDER_ID "824 240 2"
 /* With diagnostic alarms on, the card reads the inverter status (index 8310) this often. */
 #define DFP21B_STATUS_POLL_US 100000u
 
@@ -63,6 +69,12 @@ typedef struct dfp21b_cfg {
      * SBus over CAN, or the option connector). ops == NULL: no inverter (loopback). Responses
      * come back through dfp21b_inverter_param_response() / dfp21b_inverter_process_inputs(). */
     ml_link_t inverter;
+    /* The card's own non-volatile storage (I&M1..I&M4). ops == NULL: kept until power-off. */
+    hal_nvm_t nvm;
+    /* I&M0: serial number and revisions of this card. */
+    const char *serial;
+    uint16_t hardware_revision;
+    uint8_t software_revision[3]; /* major, minor, bugfix */
     /* Every DP event, after the personality has acted on it. Optional. */
     void (*event)(void *ctx, const dp_event_t *ev);
     void *event_ctx;
@@ -91,6 +103,7 @@ typedef struct dfp21b {
     uint32_t p819_ms;
     ml_client_t ml;
     ml_channel_t param;
+    dpv1_t dpv1;
     bool inputs_dirty;
     bool status_dirty;
     bool status_poll_busy;

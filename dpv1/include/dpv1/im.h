@@ -1,0 +1,51 @@
+/* Identification & Maintenance through the DP-V1 call service on index 255 (profibus-dp.md §7,
+ * docs/dpv1.md). I&M0 comes from the card's identity; I&M1..I&M4 are written by the master and
+ * kept in the card's non-volatile storage. */
+#ifndef DPV1_IM_H
+#define DPV1_IM_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "hal/hal_nvm.h"
+
+#define IM_RECORD_LEN 64u
+#define IM_CALL_HEADER_LEN 4u /* 08 00 FI_Index(u16) */
+#define IM_FN_CALL 0x08u
+#define IM_INDEX_0 65000u
+#define IM_INDEX_LAST 65004u
+#define IM_WRITABLE 4u
+#define IM_NVM_MAGIC 0x494D3031u /* "IM01" */
+#define IM_NVM_SIZE (4u + IM_WRITABLE * IM_RECORD_LEN)
+
+typedef struct im_identity {
+    uint16_t manufacturer_id;  /* 0x010A = SEW-EURODRIVE */
+    char order_id[21];         /* blank-padded to 20 in the record */
+    char serial[17];           /* blank-padded to 16 */
+    uint16_t hardware_revision;
+    uint8_t software_revision[4]; /* 'V', major, minor, bugfix */
+    uint16_t revision_counter;
+    uint16_t profile_id;
+    uint16_t profile_specific_type;
+} im_identity_t;
+
+typedef struct im {
+    im_identity_t id;
+    hal_nvm_t nvm;
+    size_t nvm_offset;
+    uint16_t selected; /* FI_Index of the next Read */
+    uint8_t records[IM_WRITABLE][IM_RECORD_LEN];
+    bool nvm_ok;
+} im_t;
+
+/* Loads I&M1..4 from nvm (blank records if there is none or it is not ours). */
+void im_init(im_t *im, const im_identity_t *id, hal_nvm_t nvm, size_t nvm_offset);
+/* Write.req on index 255: 0 or a DP-V1 Error_Code_1 (B0 unknown FI_Index, B1 length, B6 I&M0
+ * is read-only, B7 call header, A1 storage failed). */
+uint8_t im_write(im_t *im, const uint8_t *data, size_t len);
+/* Read.req on index 255: call header + the selected record. 0 or an Error_Code_1. */
+uint8_t im_read(const im_t *im, uint8_t *out, size_t max, size_t *len);
+void im_build_record0(const im_identity_t *id, uint8_t out[IM_RECORD_LEN]);
+
+#endif

@@ -1,0 +1,274 @@
+#include "dpv1/dpv1.h"
+
+#include <string.h>
+
+#include "dpv1/dpv1_wire.h"
+
+static void conn_close(dpv1_conn_t *c)
+{
+    c->open = false;
+    c->mailbox = DPV1_MB_EMPTY;
+    c->req_len = 0;
+    c->rsp_len = 0;
+    ds47_reset(&c->ds47);
+}
+
+void dpv1_init(dpv1_t *d, const dpv1_cfg_t *cfg)
+{
+    memset(d, 0, sizeof *d);
+    ds47_init(&d->c1.ds47, cfg->ml, cfg->ch_c1);
+    for (uint8_t i = 0; i < DPV1_C2_CONNECTIONS; i++) {
+        ds47_init(&d->c2[i].ds47, cfg->ml, cfg->ch_c2[i]);
+    }
+    im_init(&d->im, &cfg->identity, cfg->nvm, cfg->nvm_offset);
+}
+
+void dpv1_dp_state(dpv1_t *d, bool data_exch, bool dpv1_mode, uint8_t master)
+{
+    bool want = data_exch && dpv1_mode;
+    if (want && (!d->c1.open || d->c1.master != master)) {
+        conn_close(&d->c1);
+        d->c1.open = true;
+        d->c1.master = master;
+    } else if (!want && d->c1.open) {
+        conn_close(&d->c1); /* left Data_Exch or re-parameterised: MSAC1 closes */
+    }
+}
+
+/* ---- receive path ------------------------------------------------------------------------- */
+
+/* A poll hands out a ready response; a PDU goes into the mailbox. Either way: no work here. */
+static dp_sap_answer_t mailbox_request(dpv1_conn_t *c, const uint8_t *data, size_t len,
+                                       uint8_t *reply, size_t *reply_len)
+{
+    if (len == 0u) {
+        if (c->mailbox != DPV1_MB_RESPONSE) {
+            return DP_SAP_ANSWER_SC;
+        }
+        memcpy(reply, c->rsp, c->rsp_len);
+        *reply_len = c->rsp_len;
+        c->mailbox = DPV1_MB_EMPTY;
+        return DP_SAP_ANSWER_DATA;
+    }
+    if (len > DPV1_MAX_PDU) {
+        len = DPV1_MAX_PDU;
+    }
+    memcpy(c->req, data, len);
+    c->req_len = (uint8_t)len;
+    c->mailbox = DPV1_MB_REQUEST; /* replaces an unfetched response */
+    return DP_SAP_ANSWER_SC;
+}
+
+static dp_sap_answer_t abort_reply(uint8_t reason, uint8_t *reply, size_t *reply_len)
+{
+    reply[0] = DPV1_FN_ABORT;
+    reply[1] = 0; /* subnet: none */
+    reply[2] = (uint8_t)(DPV1_ABORT_INSTANCE_C2 | reason);
+    reply[3] = 0;
+    *reply_len = 4;
+    return DP_SAP_ANSWER_DATA;
+}
+
+static dp_sap_answer_t resource_manager(dpv1_t *d, uint8_t master, uint8_t ssap,
+                                        const uint8_t *data, size_t len, uint8_t *reply,
+                                        size_t *reply_len, hal_time_us_t t)
+{
+    if (len < DPV1_INITIATE_MIN || data[0] != DPV1_FN_INITIATE) {
+        return abort_reply(0x02u, reply, reply_len); /* FE: bad request PDU */
+    }
+    int free_slot = -1;
+    for (uint8_t i = 0; i < DPV1_C2_CONNECTIONS; i++) {
+        dpv1_conn_t *c = &d->c2[i];
+        if (c->open && c->master == master && c->ssap == ssap) {
+            conn_close(c); /* the same master initiates again: its old connection is gone */
+        }
+        if (!c->open && free_slot < 0) {
+            free_slot = (int)i;
+        }
+    }
+    if (free_slot < 0) {
+        d->c2_refused++;
+        return abort_reply(DPV1_ABORT_REASON_RESOURCE, reply, reply_len);
+    }
+    dpv1_conn_t *c = &d->c2[free_slot];
+    conn_close(c);
+    c->open = true;
+    c->master = master;
+    c->ssap = ssap;
+    uint32_t timeout_10ms = (uint32_t)((data[4] << 8) | data[5]);
+    c->send_timeout_us = (timeout_10ms == 0u ? 1u : timeout_10ms) * 10000u;
+    c->last_rx = t;
+    (void)mailbox_request(c, data, len, reply, reply_len); /* Initiate.res comes from poll */
+    reply[0] = DPV1_FN_RM;
+    reply[1] = (uint8_t)(DPV1_C2_FIRST_SAP + (uint8_t)free_slot);
+    reply[2] = 0;
+    reply[3] = 0;
+    *reply_len = 4;
+    return DP_SAP_ANSWER_DATA;
+}
+
+dp_sap_answer_t dpv1_sap_request(dpv1_t *d, uint8_t master, uint8_t dsap, uint8_t ssap,
+                                 const uint8_t *data, size_t len, uint8_t *reply,
+                                 size_t *reply_len, hal_time_us_t t)
+{
+    if (dsap == DPV1_SAP_C1) {
+        if (!d->c1.open || d->c1.master != master) {
+            return DP_SAP_NOT_SERVED;
+        }
+        return mailbox_request(&d->c1, data, len, reply, reply_len);
+    }
+    if (dsap == DPV1_SAP_RM) {
+        return resource_manager(d, master, ssap, data, len, reply, reply_len, t);
+    }
+    if (dsap < DPV1_C2_FIRST_SAP + DPV1_C2_CONNECTIONS) {
+        dpv1_conn_t *c = &d->c2[dsap - DPV1_C2_FIRST_SAP];
+        if (!c->open || c->master != master || c->ssap != ssap) {
+            return DP_SAP_NOT_SERVED;
+        }
+        c->last_rx = t;
+        if (len > 0u && data[0] == DPV1_FN_ABORT) {
+            conn_close(c);
+            d->c2_aborts++;
+            return DP_SAP_ANSWER_SC;
+        }
+        if (len > 0u && data[0] == DPV1_FN_IDLE) {
+            size_t n = len < DPV1_HEADER_LEN ? len : DPV1_HEADER_LEN;
+            memcpy(reply, data, n); /* keep-alive: echoed, the mailbox is left alone */
+            *reply_len = n;
+            return DP_SAP_ANSWER_DATA;
+        }
+        return mailbox_request(c, data, len, reply, reply_len);
+    }
+    return DP_SAP_NOT_SERVED;
+}
+
+/* ---- main loop ---------------------------------------------------------------------------- */
+
+static size_t negative(uint8_t *rsp, uint8_t fn, uint8_t code)
+{
+    rsp[0] = (uint8_t)(fn | DPV1_FN_ERROR);
+    rsp[1] = DPV1_ERROR_DECODE;
+    rsp[2] = code;
+    rsp[3] = 0;
+    return 4;
+}
+
+static size_t do_read(dpv1_t *d, dpv1_conn_t *c, const uint8_t *pdu, size_t len, uint8_t *rsp)
+{
+    if (len < DPV1_HEADER_LEN) {
+        return negative(rsp, DPV1_FN_READ, DPV1_ERR_INVALID_RANGE);
+    }
+    uint8_t index = pdu[2];
+    uint8_t want = pdu[3];
+    if (want == 0u || want > DPV1_MAX_DATA) {
+        return negative(rsp, DPV1_FN_READ, DPV1_ERR_INVALID_RANGE);
+    }
+    size_t n = 0;
+    uint8_t err;
+    if (index == DPV1_INDEX_DS47) {
+        err = ds47_read(&c->ds47, &rsp[DPV1_HEADER_LEN], want, &n);
+    } else if (index == DPV1_INDEX_IM) {
+        err = im_read(&d->im, &rsp[DPV1_HEADER_LEN], want, &n);
+    } else {
+        err = DPV1_ERR_INVALID_INDEX;
+    }
+    if (err != 0u) {
+        return negative(rsp, DPV1_FN_READ, err);
+    }
+    memcpy(rsp, pdu, 3);
+    rsp[3] = (uint8_t)n;
+    return DPV1_HEADER_LEN + n;
+}
+
+static size_t do_write(dpv1_t *d, dpv1_conn_t *c, const uint8_t *pdu, size_t len, uint8_t *rsp,
+                       hal_time_us_t now)
+{
+    if (len < DPV1_HEADER_LEN) {
+        return negative(rsp, DPV1_FN_WRITE, DPV1_ERR_WRITE_LENGTH);
+    }
+    uint8_t index = pdu[2];
+    uint8_t n = pdu[3];
+    if (n == 0u || n > DPV1_MAX_DATA || (size_t)n != len - DPV1_HEADER_LEN) {
+        return negative(rsp, DPV1_FN_WRITE, DPV1_ERR_WRITE_LENGTH);
+    }
+    uint8_t err;
+    if (index == DPV1_INDEX_DS47) {
+        err = ds47_write(&c->ds47, &pdu[DPV1_HEADER_LEN], n, now);
+    } else if (index == DPV1_INDEX_IM) {
+        err = im_write(&d->im, &pdu[DPV1_HEADER_LEN], n);
+    } else {
+        err = DPV1_ERR_INVALID_INDEX;
+    }
+    if (err != 0u) {
+        return negative(rsp, DPV1_FN_WRITE, err);
+    }
+    memcpy(rsp, pdu, DPV1_HEADER_LEN);
+    return DPV1_HEADER_LEN;
+}
+
+/* Initiate.res: our limits, the requested profile features and ident mirrored. */
+static size_t do_initiate(const uint8_t *pdu, uint8_t *rsp)
+{
+    rsp[0] = DPV1_FN_INITIATE;
+    rsp[1] = DPV1_MAX_DATA;
+    rsp[2] = 0x01; /* Features_Supported_1: DPV1_RW */
+    rsp[3] = 0x00;
+    rsp[4] = pdu[8];
+    rsp[5] = pdu[9];
+    rsp[6] = pdu[10];
+    rsp[7] = pdu[11];
+    memset(&rsp[8], 0, 4);
+    return 12;
+}
+
+static void serve(dpv1_t *d, dpv1_conn_t *c, bool class2, hal_time_us_t now)
+{
+    ds47_poll(&c->ds47, now);
+    if (c->mailbox != DPV1_MB_REQUEST) {
+        return;
+    }
+    const uint8_t *pdu = c->req;
+    size_t len = c->req_len;
+    size_t n;
+    switch (pdu[0]) {
+    case DPV1_FN_READ:
+        n = do_read(d, c, pdu, len, c->rsp);
+        break;
+    case DPV1_FN_WRITE:
+        n = do_write(d, c, pdu, len, c->rsp, now);
+        break;
+    case DPV1_FN_INITIATE:
+        n = class2 ? do_initiate(pdu, c->rsp) : negative(c->rsp, pdu[0], DPV1_ERR_NOT_SUPPORTED);
+        break;
+    default:
+        n = negative(c->rsp, pdu[0], DPV1_ERR_NOT_SUPPORTED);
+        break;
+    }
+    c->rsp_len = (uint8_t)n;
+    c->mailbox = DPV1_MB_RESPONSE;
+}
+
+hal_time_us_t dpv1_poll(dpv1_t *d, hal_time_us_t now)
+{
+    hal_time_us_t next = now + HAL_TIME_NO_DEADLINE_US;
+    if (d->c1.open) {
+        serve(d, &d->c1, false, now);
+    }
+    for (uint8_t i = 0; i < DPV1_C2_CONNECTIONS; i++) {
+        dpv1_conn_t *c = &d->c2[i];
+        if (!c->open) {
+            continue;
+        }
+        hal_time_us_t deadline = c->last_rx + c->send_timeout_us;
+        if (hal_time_reached(now, deadline)) {
+            conn_close(c); /* the master fell silent: the connection is free again */
+            d->c2_timeouts++;
+            continue;
+        }
+        if (hal_time_diff(deadline, next) < 0) {
+            next = deadline;
+        }
+        serve(d, c, true, now);
+    }
+    return next;
+}

@@ -1,0 +1,132 @@
+#include "dpv1/im.h"
+
+#include <string.h>
+
+#include "dpv1/dpv1_wire.h"
+
+static void put16(uint8_t *p, uint16_t v)
+{
+    p[0] = (uint8_t)(v >> 8);
+    p[1] = (uint8_t)v;
+}
+
+static void put_text(uint8_t *p, const char *s, size_t width)
+{
+    size_t n = 0;
+    while (n < width && s[n] != '\0') {
+        p[n] = (uint8_t)s[n];
+        n++;
+    }
+    memset(&p[n], ' ', width - n);
+}
+
+void im_build_record0(const im_identity_t *id, uint8_t out[IM_RECORD_LEN])
+{
+    memset(out, 0, IM_RECORD_LEN); /* 10-octet manufacturer header: unused */
+    size_t n = 10;
+    put16(&out[n], id->manufacturer_id);
+    n += 2u;
+    put_text(&out[n], id->order_id, 20u);
+    n += 20u;
+    put_text(&out[n], id->serial, 16u);
+    n += 16u;
+    put16(&out[n], id->hardware_revision);
+    n += 2u;
+    memcpy(&out[n], id->software_revision, 4u);
+    n += 4u;
+    put16(&out[n], id->revision_counter);
+    n += 2u;
+    put16(&out[n], id->profile_id);
+    n += 2u;
+    put16(&out[n], id->profile_specific_type);
+    n += 2u;
+    out[n++] = 0x01; /* IM_VERSION 1.1 */
+    out[n++] = 0x01;
+    put16(&out[n], 0x001Eu); /* IM_SUPPORTED: I&M1..I&M4 */
+}
+
+void im_init(im_t *im, const im_identity_t *id, hal_nvm_t nvm, size_t nvm_offset)
+{
+    memset(im, 0, sizeof *im);
+    im->id = *id;
+    im->nvm = nvm;
+    im->nvm_offset = nvm_offset;
+    im->selected = IM_INDEX_0;
+    if (nvm.ops == NULL) {
+        return;
+    }
+    uint8_t magic[4];
+    if (nvm.ops->read(nvm.ctx, nvm_offset, magic, sizeof magic) == 0 &&
+        ((uint32_t)magic[0] << 24 | (uint32_t)magic[1] << 16 | (uint32_t)magic[2] << 8 |
+         magic[3]) == IM_NVM_MAGIC &&
+        nvm.ops->read(nvm.ctx, nvm_offset + 4u, &im->records[0][0], sizeof im->records) == 0) {
+        im->nvm_ok = true;
+        return;
+    }
+    memset(im->records, 0, sizeof im->records);
+}
+
+static int store(im_t *im)
+{
+    if (im->nvm.ops == NULL) {
+        return 0; /* no storage on this card: kept until power-off */
+    }
+    uint8_t image[IM_NVM_SIZE];
+    image[0] = (uint8_t)(IM_NVM_MAGIC >> 24);
+    image[1] = (uint8_t)(IM_NVM_MAGIC >> 16);
+    image[2] = (uint8_t)(IM_NVM_MAGIC >> 8);
+    image[3] = (uint8_t)IM_NVM_MAGIC;
+    memcpy(&image[4], im->records, sizeof im->records);
+    /* One write of the whole image: the backend keeps it all-old or all-new. */
+    return im->nvm.ops->write(im->nvm.ctx, im->nvm_offset, image, sizeof image);
+}
+
+uint8_t im_write(im_t *im, const uint8_t *data, size_t len)
+{
+    if (len < IM_CALL_HEADER_LEN || data[0] != IM_FN_CALL || data[1] != 0u) {
+        return DPV1_ERR_INVALID_RANGE;
+    }
+    uint16_t fi = (uint16_t)((data[2] << 8) | data[3]);
+    if (fi < IM_INDEX_0 || fi > IM_INDEX_LAST) {
+        return DPV1_ERR_INVALID_INDEX;
+    }
+    if (len == IM_CALL_HEADER_LEN) {
+        im->selected = fi; /* selects the record the next Read returns */
+        return 0;
+    }
+    if (len != IM_CALL_HEADER_LEN + IM_RECORD_LEN) {
+        return DPV1_ERR_WRITE_LENGTH;
+    }
+    if (fi == IM_INDEX_0) {
+        return DPV1_ERR_ACCESS_DENIED;
+    }
+    uint8_t *rec = im->records[fi - IM_INDEX_0 - 1u];
+    uint8_t old[IM_RECORD_LEN];
+    memcpy(old, rec, sizeof old);
+    memcpy(rec, &data[IM_CALL_HEADER_LEN], IM_RECORD_LEN);
+    if (store(im) != 0) {
+        memcpy(rec, old, sizeof old);
+        return 0xA1u; /* application: write error */
+    }
+    im->selected = fi;
+    return 0;
+}
+
+uint8_t im_read(const im_t *im, uint8_t *out, size_t max, size_t *len)
+{
+    if (max < IM_CALL_HEADER_LEN + IM_RECORD_LEN) {
+        return DPV1_ERR_INVALID_RANGE;
+    }
+    out[0] = IM_FN_CALL;
+    out[1] = 0;
+    out[2] = (uint8_t)(im->selected >> 8);
+    out[3] = (uint8_t)im->selected;
+    if (im->selected == IM_INDEX_0) {
+        im_build_record0(&im->id, &out[IM_CALL_HEADER_LEN]);
+    } else {
+        memcpy(&out[IM_CALL_HEADER_LEN], im->records[im->selected - IM_INDEX_0 - 1u],
+               IM_RECORD_LEN);
+    }
+    *len = IM_CALL_HEADER_LEN + IM_RECORD_LEN;
+    return 0;
+}
