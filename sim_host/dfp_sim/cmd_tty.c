@@ -122,6 +122,7 @@ int cmd_slave(int argc, char **argv)
     bool echo = false;
     const char *inverter = "sim";
     const char *eeprom = NULL;
+    const char *card_nvm = NULL;
     for (int i = 2; i < argc; i++) {
         const char *v;
         if (strcmp(argv[i], "--port") == 0) {
@@ -143,6 +144,8 @@ int cmd_slave(int argc, char **argv)
             if ((inverter = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
         } else if (strcmp(argv[i], "--eeprom") == 0) {
             if ((eeprom = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if (strcmp(argv[i], "--card-nvm") == 0) {
+            if ((card_nvm = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
         } else {
             cli_error("slave: unknown option '%s' (see dfp-sim --help)", argv[i]);
             return EXIT_USAGE;
@@ -197,10 +200,11 @@ int cmd_slave(int argc, char **argv)
     fflush(stdout);
     card_options_t co = {.address = (uint8_t)address, .fixed_baud = baud,
                          .strict_timing = false, .inverter = kind, .eeprom_path = eeprom,
-                         .external_link = external, .event = report_card_event,
+                         .external_link = external, .card_nvm_path = card_nvm,
+                         .event = report_card_event,
                          .led_change = report_led, .ctx = &rep};
     if (card_station_init(&card, &co, tty_port_uart(&port), tty_now_us(), err, sizeof err) != 0) {
-        report_line(&rep, "card", "inverter EEPROM: %s", err);
+        report_line(&rep, "card", "non-volatile storage: %s", err);
     }
     if (address > DFP21B_MAX_ADDRESS) {
         report_line(&rep, "card", "address %u is above 125: the card stays off the bus", address);

@@ -90,6 +90,17 @@ int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t u
     } else if (opt->inverter == CARD_INVERTER_LINK) {
         link = opt->external_link;
     }
+    hal_nvm_t card_nvm = {0};
+    if (opt->card_nvm_path != NULL) {
+        char nerr[256] = "";
+        if (file_nvm_open(&c->card_nvm, opt->card_nvm_path, IM_NVM_SIZE, nerr, sizeof nerr) < 0) {
+            snprintf(err, errlen, "%s", nerr);
+            rc = -1;
+        }
+        card_nvm = file_nvm_hal(&c->card_nvm);
+    }
+    static char default_serial[24];
+    snprintf(default_serial, sizeof default_serial, "DFP-SIM-%03u", opt->address);
     memset(&c->leds, 0, sizeof c->leds);
     c->leds.on_change = opt->led_change;
     c->leds.ctx = opt->ctx;
@@ -104,6 +115,10 @@ int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t u
         .event = opt->event,
         .event_ctx = opt->ctx,
         .inverter = link,
+        .nvm = card_nvm,
+        .serial = opt->serial != NULL ? opt->serial : default_serial,
+        .hardware_revision = 1,
+        .software_revision = {0, 4, 0},
     };
     dfp21b_init(&c->card, &cfg, now);
     return rc;

@@ -22,7 +22,8 @@ typedef struct card_station {
     card_inverter_t inverter;
     movidrive_t md;
     md_inproc_link_t md_link;
-    file_nvm_t nvm;
+    file_nvm_t nvm;      /* the inverter's EEPROM */
+    file_nvm_t card_nvm; /* the card's own storage: I&M1..I&M4 */
 } card_station_t;
 
 typedef struct card_options {
@@ -34,6 +35,8 @@ typedef struct card_options {
     const char *eeprom_path;     /* CARD_INVERTER_SIM: EEPROM image file, NULL = none */
     uint32_t inverter_delay_us;  /* CARD_INVERTER_SIM: how long each parameter service takes */
     ml_link_t external_link;     /* CARD_INVERTER_LINK */
+    const char *card_nvm_path;   /* the card's non-volatile storage file, NULL = none */
+    const char *serial;          /* I&M0 serial number; NULL: "DFP-SIM-<address>" */
     void (*event)(void *ctx, const dp_event_t *ev);
     void (*led_change)(void *ctx, hal_led_id_t led, hal_led_mode_t mode);
     void *ctx;
