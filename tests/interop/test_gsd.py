@@ -190,8 +190,12 @@ def check_file(c, gsd_dir, name, info, GsdInterp):
                 tag + "User_Prm_Data with the DP-V1 override 80 00 00")
     else:
         c.check(keys.get("DPV1_Slave", "0") == "0", tag + "no DPV1_Slave in the DP-V0 file")
-    # I&M is not implemented: the file must not announce it.
-    c.check("Ident_Maintenance_supp" not in keys, tag + "no Ident_Maintenance_supp")
+    # I&M (call service on index 255) exists with DP-V1 only: the DP-V1 file announces it, the
+    # DP-V0 file cannot (a DP-V0 master has no way to reach it).
+    if info["dpv1"]:
+        c.equal(keys.get("Ident_Maintenance_supp"), "1", tag + "Ident_Maintenance_supp = 1")
+    else:
+        c.check("Ident_Maintenance_supp" not in keys, tag + "no Ident_Maintenance_supp")
     return gsd
 
 
