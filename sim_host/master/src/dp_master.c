@@ -2,6 +2,8 @@
 
 #include <string.h>
 
+#include "dp_master/dpv1_c2.h"
+
 #include "dp_slave/dp_cfg.h"
 #include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_frame.h"
@@ -51,6 +53,24 @@ size_t dpm_build_prm(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t
     return DP_PRM_LEN_STANDARD + user_len;
 }
 
+size_t dpm_build_prm_dpv1(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
+                          size_t user_len)
+{
+    uint8_t u[DPM_MAX_PRM - DP_PRM_LEN_STANDARD] = {0};
+    if (user_len > sizeof u) {
+        user_len = sizeof u;
+    }
+    memcpy(u, user, user_len);
+    size_t n = user_len < 3u ? 3u : user_len; /* DPMV1_Status_1..3 at least */
+    u[0] |= DP_DPV1_1_ENABLE;
+    return dpm_build_prm(out, ident, wd_ms, u, n);
+}
+
+bool dpm_prm_is_dpv1(const uint8_t *prm, size_t len)
+{
+    return len >= DP_PRM_LEN_DPV1 && (prm[DP_PRM_DPV1_STATUS_1] & DP_DPV1_1_ENABLE) != 0u;
+}
+
 static void emit(dp_master_t *m, const dpm_event_t *ev)
 {
     if (m->cfg.event != NULL) {
@@ -68,6 +88,17 @@ static void set_phase(dp_master_t *m, unsigned idx, dpm_phase_t next, hal_time_u
                       .old_phase = s->phase, .new_phase = next};
     s->phase = next;
     emit(m, &ev);
+}
+
+/* MSAC1 closes when the slave leaves Data_Exch: a request the card already took is lost. One
+ * not sent yet waits for the next Data_Exch. */
+static void c1_lost(dpm_slave_t *s, hal_time_us_t t, const char *why)
+{
+    s->c1_turn = false;
+    if (dpm_xfer_busy(&s->c1) && s->c1.started) {
+        dpm_xfer_fail(&s->c1, t, "slave %u restarted (%s); the request is lost", s->cfg.address,
+                      why);
+    }
 }
 
 static void restart_slave(dp_master_t *m, unsigned idx, hal_time_us_t t, const char *why)
@@ -90,6 +121,7 @@ static void restart_slave(dp_master_t *m, unsigned idx, hal_time_us_t t, const c
                                                                    : s->backoff_us * 2u;
     }
     set_phase(m, idx, DPM_PHASE_BACKOFF, t);
+    c1_lost(s, t, why);
 }
 
 void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t now)
@@ -106,6 +138,7 @@ void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t no
     if (m->cfg.backoff_min_us == 0u) m->cfg.backoff_min_us = 10000u;
     if (m->cfg.backoff_max_us == 0u) m->cfg.backoff_max_us = 1000000u;
     if (m->cfg.lost_poll_us == 0u) m->cfg.lost_poll_us = 5000u;
+    if (m->cfg.c1_timeout_us == 0u) m->cfg.c1_timeout_us = DPM_C1_TIMEOUT_US_DEFAULT;
     fdl_rx_init(&m->rx, cfg->baud, cfg->strict_timing);
     if (cfg->uart.ops != NULL && cfg->uart.ops->set_baud != NULL) {
         (void)cfg->uart.ops->set_baud(cfg->uart.ctx, cfg->baud);
@@ -156,6 +189,7 @@ int dp_master_reconfigure(dp_master_t *m, unsigned idx, const dpm_slave_cfg_t *s
     s->backoff_us = m->cfg.backoff_min_us;
     memset(s->outputs, 0, sizeof s->outputs);
     set_phase(m, idx, DPM_PHASE_FDL_STATUS, now);
+    c1_lost(s, now, "new parameters");
     return 0;
 }
 
@@ -190,7 +224,84 @@ void dp_master_start(dp_master_t *m, hal_time_us_t now)
         m->slaves[i].fcb_first = true;
         m->slaves[i].due = now;
         set_phase(m, i, DPM_PHASE_FDL_STATUS, now);
+        c1_lost(&m->slaves[i], now, "master restarted");
     }
+}
+
+/* ---- DP-V1 -------------------------------------------------------------------------------- */
+
+int dp_master_c1_submit(dp_master_t *m, unsigned idx, const uint8_t *pdu, size_t len,
+                        dpm_acyc_done_t done, void *ctx)
+{
+    if (idx >= m->num_slaves) {
+        return -1;
+    }
+    dpm_slave_t *s = &m->slaves[idx];
+    if (!dpm_prm_is_dpv1(s->cfg.prm, s->cfg.prm_len)) {
+        return -1;
+    }
+    return dpm_xfer_start(&s->c1, DPMV1_SAP_C1, DPMV1_SAP_C1, pdu, len, m->cfg.c1_timeout_us, done,
+                          ctx);
+}
+
+bool dp_master_c1_busy(const dp_master_t *m, unsigned idx)
+{
+    return idx < m->num_slaves && dpm_xfer_busy(&m->slaves[idx].c1);
+}
+
+static int c1_port_submit(void *ctx, unsigned idx, const uint8_t *pdu, size_t len,
+                          dpm_acyc_done_t done, void *done_ctx, hal_time_us_t now)
+{
+    (void)now;
+    return dp_master_c1_submit(ctx, idx, pdu, len, done, done_ctx);
+}
+
+dpm_acyc_port_t dp_master_c1_port(dp_master_t *m, unsigned idx)
+{
+    return (dpm_acyc_port_t){.submit = c1_port_submit, .ctx = m, .idx = idx};
+}
+
+int dp_master_add_c2(dp_master_t *m, struct dpm_c2 *c)
+{
+    if (m->num_c2 >= DPM_MAX_C2) {
+        return -1;
+    }
+    m->c2[m->num_c2++] = c;
+    return 0;
+}
+
+/* The FCB sequence of one (our address, slave) pair. The slave keeps one FCB per initiator
+ * address, whatever the SAP, so class-1 telegrams, DP-V0 services and class-2 connections from
+ * the same address to the same slave share one sequence. */
+static void pair_fcb(dp_master_t *m, uint8_t own, uint8_t slave, bool **first, bool **fcb)
+{
+    if (own == m->cfg.address) {
+        for (unsigned i = 0; i < m->num_slaves; i++) {
+            if (m->slaves[i].cfg.address == slave) {
+                *first = &m->slaves[i].fcb_first;
+                *fcb = &m->slaves[i].fcb;
+                return;
+            }
+        }
+    }
+    dpm_fcb_t *free_slot = NULL;
+    for (unsigned i = 0; i < sizeof m->fcbs / sizeof m->fcbs[0]; i++) {
+        dpm_fcb_t *f = &m->fcbs[i];
+        if (f->used && f->own == own && f->slave == slave) {
+            *first = &f->first;
+            *fcb = &f->fcb;
+            return;
+        }
+        if (!f->used && free_slot == NULL) {
+            free_slot = f;
+        }
+    }
+    if (free_slot == NULL) {
+        free_slot = &m->fcbs[0]; /* more pairs than slots: start that pair afresh */
+    }
+    *free_slot = (dpm_fcb_t){.used = true, .own = own, .slave = slave, .first = true};
+    *first = &free_slot->first;
+    *fcb = &free_slot->fcb;
 }
 
 /* ---- sending ------------------------------------------------------------------------------ */
@@ -219,13 +330,25 @@ static void send(dp_master_t *m, hal_time_us_t now, bool expect_reply, unsigned 
     }
 }
 
-static uint8_t next_fc(dpm_slave_t *s, bool high)
+static uint8_t fc_with(bool first, bool fcb, bool high)
 {
     uint8_t code = high ? FDL_REQ_SRD_HIGH : FDL_REQ_SRD_LOW;
-    if (s->fcb_first) {
+    if (first) {
         return (uint8_t)(FDL_FC_REQUEST | FDL_FC_FCB | code);
     }
-    return (uint8_t)(FDL_FC_REQUEST | FDL_FC_FCV | (s->fcb ? FDL_FC_FCB : 0u) | code);
+    return (uint8_t)(FDL_FC_REQUEST | FDL_FC_FCV | (fcb ? FDL_FC_FCB : 0u) | code);
+}
+
+static uint8_t next_fc(dpm_slave_t *s, bool high)
+{
+    return fc_with(s->fcb_first, s->fcb, high);
+}
+
+/* A reply completed the request: the next one toggles FCB. */
+static void fcb_advance(bool *first, bool *fcb)
+{
+    *fcb = *first ? false : !*fcb;
+    *first = false;
 }
 
 static void build_request(dp_master_t *m, dpm_slave_t *s)
@@ -269,9 +392,7 @@ static void reply_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, b
 {
     dpm_slave_t *s = &m->slaves[idx];
     if (s->phase != DPM_PHASE_FDL_STATUS) {
-        /* The request completed: the next one toggles FCB. */
-        s->fcb = s->fcb_first ? false : !s->fcb;
-        s->fcb_first = false;
+        fcb_advance(&s->fcb_first, &s->fcb);
     }
     uint8_t code = sc ? 0xFFu : (uint8_t)(msg->fc & FDL_FC_CODE_MASK);
     switch (s->phase) {
@@ -352,6 +473,7 @@ static void reply_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, b
             return;
         }
         s->cycles++;
+        s->c1_turn = true;
         s->inputs_len = sc ? 0u : msg->data_len;
         if (!sc) {
             memcpy(s->inputs, msg->data, msg->data_len);
@@ -391,25 +513,55 @@ void dp_master_rx_char(dp_master_t *m, uint8_t byte, uint8_t flags, hal_time_us_
     bool sc = f[0] == FDL_SC;
     if (!sc) {
         if (fdl_parse(f, m->rx.frame_len, &msg) != FDL_PARSE_OK ||
-            (msg.fc & FDL_FC_REQUEST) != 0u || msg.da != m->cfg.address ||
-            msg.sa != m->slaves[idx].cfg.address) {
+            (msg.fc & FDL_FC_REQUEST) != 0u || msg.da != m->expect_da ||
+            msg.sa != m->expect_sa) {
             return; /* not the answer we wait for */
         }
     }
     m->waiting = false;
     m->retries = 0;
     m->next_send = m->rx.frame_end_t + idle_before_request_us(m);
-    reply_received(m, idx, &msg, sc, m->rx.frame_end_t);
+    hal_time_us_t te = m->rx.frame_end_t;
+    switch (m->waiting_kind) {
+    case DPM_WAIT_CYCLIC:
+        m->c2_turn = true;
+        reply_received(m, idx, &msg, sc, te);
+        return;
+    case DPM_WAIT_C1: {
+        dpm_slave_t *s = &m->slaves[idx];
+        m->c2_turn = true;
+        fcb_advance(&s->fcb_first, &s->fcb);
+        dpm_xfer_answer(&s->c1, &msg, sc, te);
+        return;
+    }
+    case DPM_WAIT_C2: {
+        dpm_c2_t *c = m->c2[m->waiting_c2];
+        bool *first;
+        bool *fcb;
+        pair_fcb(m, m->expect_da, m->expect_sa, &first, &fcb);
+        fcb_advance(first, fcb);
+        dpm_c2_answer(c, &msg, sc, te);
+        return;
+    }
+    }
 }
 
-static int pick_slave(dp_master_t *m, hal_time_us_t now)
+/* The next slave to address: *c1 says whether its queued class-1 request (or poll) goes out
+ * now, between two Data_Exchange. */
+static int pick_slave(dp_master_t *m, hal_time_us_t now, bool *c1)
 {
     for (unsigned k = 0; k < m->num_slaves; k++) {
         unsigned idx = (m->next_slave + k) % m->num_slaves;
         dpm_slave_t *s = &m->slaves[idx];
+        if (s->phase == DPM_PHASE_DATA_EXCH && s->c1_turn && dpm_xfer_busy(&s->c1)) {
+            *c1 = true;
+            m->next_slave = (uint8_t)((idx + 1u) % m->num_slaves);
+            return (int)idx;
+        }
         if (!hal_time_reached(now, s->due)) {
             continue;
         }
+        *c1 = false;
         if (s->phase == DPM_PHASE_BACKOFF) {
             set_phase(m, idx, DPM_PHASE_FDL_STATUS, now);
         }
@@ -417,6 +569,37 @@ static int pick_slave(dp_master_t *m, hal_time_us_t now)
         return (int)idx;
     }
     return -1;
+}
+
+/* One telegram of an attached class-2 connection that has something to send, round robin. */
+static bool send_c2(dp_master_t *m, hal_time_us_t now)
+{
+    for (unsigned k = 0; k < m->num_c2; k++) {
+        unsigned i = (m->next_c2 + k) % m->num_c2;
+        dpm_c2_t *c = m->c2[i];
+        if (!dpm_c2_ready(c, now)) {
+            continue;
+        }
+        uint8_t dsap = 0;
+        const uint8_t *du = NULL;
+        size_t n = dpm_c2_telegram(c, now, &dsap, &du);
+        bool *first;
+        bool *fcb;
+        pair_fcb(m, c->cfg.address, c->cfg.slave, &first, &fcb);
+        m->request_len = (uint16_t)fdl_encode(m->request, c->cfg.slave, c->cfg.address,
+                                              fc_with(*first, *fcb, true), true, dsap,
+                                              c->cfg.ssap, du, n);
+        m->next_c2 = (uint8_t)((i + 1u) % m->num_c2);
+        m->waiting_kind = DPM_WAIT_C2;
+        m->waiting_c2 = (uint8_t)i;
+        m->expect_da = c->cfg.address;
+        m->expect_sa = c->cfg.slave;
+        m->c2_turn = false;
+        m->acyclic_telegrams++;
+        send(m, now, true, 0);
+        return true;
+    }
+    return false;
 }
 
 hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
@@ -435,17 +618,29 @@ hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
         if (m->retries < m->cfg.max_retry) {
             m->retries++;
             m->total_retries++;
-            dpm_event_t ev = {.type = DPM_EV_RETRY, .t = now,
-                              .slave = m->slaves[idx].cfg.address,
-                              .old_phase = m->slaves[idx].phase,
-                              .new_phase = m->slaves[idx].phase};
-            emit(m, &ev);
+            if (m->waiting_kind != DPM_WAIT_C2) {
+                dpm_event_t ev = {.type = DPM_EV_RETRY, .t = now,
+                                  .slave = m->slaves[idx].cfg.address,
+                                  .old_phase = m->slaves[idx].phase,
+                                  .new_phase = m->slaves[idx].phase};
+                emit(m, &ev);
+            } else {
+                m->c2[m->waiting_c2]->x.telegrams++;
+            }
             send(m, now, true, idx); /* same frame, same FCB */
             return m->reply_deadline;
         }
         m->retries = 0;
-        restart_slave(m, idx, now, "no answer");
         m->next_send = now;
+        if (m->waiting_kind == DPM_WAIT_C2) {
+            bool *first;
+            bool *fcb;
+            pair_fcb(m, m->expect_da, m->expect_sa, &first, &fcb);
+            *first = true;
+            dpm_c2_no_answer(m->c2[m->waiting_c2], now);
+        } else {
+            restart_slave(m, idx, now, "no answer");
+        }
     }
     if (!hal_time_reached(now, m->next_send)) {
         return m->next_send;
@@ -461,21 +656,57 @@ hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
         emit(m, &ev);
         return m->next_send;
     }
-    int idx = pick_slave(m, now);
+    /* Class-1 response timers run while their slave is busy with other things. */
+    for (unsigned i = 0; i < m->num_slaves; i++) {
+        (void)dpm_xfer_check_timeout(&m->slaves[i].c1, now);
+    }
+    if (m->c2_turn && send_c2(m, now)) {
+        return m->reply_deadline;
+    }
+    bool c1 = false;
+    int idx = pick_slave(m, now, &c1);
     if (idx < 0) {
+        if (send_c2(m, now)) {
+            return m->reply_deadline;
+        }
         hal_time_us_t next = idle_deadline;
         for (unsigned i = 0; i < m->num_slaves; i++) {
             if (hal_time_diff(m->slaves[i].due, next) < 0) {
                 next = m->slaves[i].due;
             }
+            hal_time_us_t d = dpm_xfer_check_timeout(&m->slaves[i].c1, now);
+            if (hal_time_diff(d, next) < 0) {
+                next = d;
+            }
+        }
+        for (unsigned i = 0; i < m->num_c2; i++) {
+            hal_time_us_t d = dpm_c2_next_deadline(m->c2[i], now);
+            if (hal_time_diff(d, next) < 0) {
+                next = d;
+            }
         }
         return next;
     }
     dpm_slave_t *s = &m->slaves[idx];
+    m->expect_da = m->cfg.address;
+    m->expect_sa = s->cfg.address;
+    if (c1) {
+        const uint8_t *du = NULL;
+        size_t n = dpm_xfer_telegram(&s->c1, now, &du);
+        m->request_len = (uint16_t)fdl_encode(m->request, s->cfg.address, m->cfg.address,
+                                              next_fc(s, true), true, DPMV1_SAP_C1, DPMV1_SAP_C1,
+                                              du, n);
+        s->c1_turn = false;
+        m->waiting_kind = DPM_WAIT_C1;
+        m->acyclic_telegrams++;
+        send(m, now, true, (unsigned)idx);
+        return m->reply_deadline;
+    }
     build_request(m, s);
     if (s->phase == DPM_PHASE_DATA_EXCH) {
         s->due = now + m->cfg.cycle_us;
     }
+    m->waiting_kind = DPM_WAIT_CYCLIC;
     send(m, now, true, (unsigned)idx);
     return m->reply_deadline;
 }

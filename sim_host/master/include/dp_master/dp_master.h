@@ -8,7 +8,14 @@
  * lost_poll_us (like a GAP update), a slave that answers but refuses after a back-off that
  * doubles from backoff_min_us to backoff_max_us, so a broken slave is not hammered. RS to
  * Data_Exchange, Prm_Fault, Cfg_Fault and Not_Supported in the diagnosis do the same. DH makes
- * the master read the diagnosis before the next Data_Exchange. */
+ * the master read the diagnosis before the next Data_Exchange.
+ *
+ * DP-V1 (docs/dpv1.md): a slave parameterised for DP-V1 (dpm_build_prm_dpv1) takes class-1
+ * Read/Write requests (dp_master_c1_submit, queue depth 1). They travel between Data_Exchange
+ * cycles, at most one acyclic telegram between two Data_Exchange of that slave: the request as
+ * SRD to DSAP 51 / SSAP 51, then empty polls with the same SAPs until the response or the C1
+ * response timeout. Class-2 connections (dpv1_c2.h) attached with dp_master_add_c2 share the
+ * station: one of their telegrams, then the cyclic slaves that are due, and so on. */
 #ifndef DP_MASTER_DP_MASTER_H
 #define DP_MASTER_DP_MASTER_H
 
@@ -16,6 +23,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "dp_master/dpv1_xfer.h"
 #include "dp_slave/fdl_rx.h"
 #include "hal/hal_time.h"
 #include "hal/hal_uart.h"
@@ -26,6 +34,10 @@
 #define DPM_MAX_PRM 244u
 #define DPM_MAX_CFG 244u
 #define DPM_MAX_IO 244u
+#ifndef DPM_MAX_C2
+#define DPM_MAX_C2 4u
+#endif
+#define DPM_C1_TIMEOUT_US_DEFAULT 1000000u
 
 typedef enum dpm_phase {
     DPM_PHASE_BACKOFF = 0, /* waiting before the next start-up attempt */
@@ -76,6 +88,7 @@ typedef struct dp_master_cfg {
     uint32_t backoff_min_us; /* 0: 10 ms */
     uint32_t backoff_max_us; /* 0: 1 s */
     uint32_t lost_poll_us;   /* 0: 5 ms between FDL status requests to a silent address */
+    uint32_t c1_timeout_us;  /* 0: 1 s, DP-V1 class-1 response timeout (request to response) */
     hal_uart_t uart;
     void (*event)(void *ctx, const dpm_event_t *ev);
     void *event_ctx;
@@ -98,7 +111,28 @@ typedef struct dpm_slave {
     uint8_t last_diag_len;
     uint32_t cycles;
     uint32_t restarts;
+    /* DP-V1 class 1 */
+    dpm_xfer_t c1;
+    bool c1_turn; /* a Data_Exchange completed since the last acyclic telegram */
 } dpm_slave_t;
+
+struct dpm_c2;
+
+typedef enum dpm_wait_kind {
+    DPM_WAIT_CYCLIC = 0, /* start-up, Data_Exchange, diagnosis */
+    DPM_WAIT_C1,
+    DPM_WAIT_C2,
+} dpm_wait_kind_t;
+
+/* FCB state of one (our address, slave address) pair that no dpm_slave_t carries (class-2
+ * connections from another address, or to a slave that is not in cyclic exchange). */
+typedef struct dpm_fcb {
+    bool used;
+    uint8_t own;
+    uint8_t slave;
+    bool first;
+    bool fcb;
+} dpm_fcb_t;
 
 typedef struct dp_master {
     dp_master_cfg_t cfg;
@@ -119,6 +153,17 @@ typedef struct dp_master {
     uint8_t gc_group;
     uint32_t timeouts;
     uint32_t total_retries;
+    /* DP-V1 */
+    dpm_wait_kind_t waiting_kind;
+    uint8_t waiting_c2;  /* index into c2[] */
+    uint8_t expect_da;   /* the reply must come to this address ... */
+    uint8_t expect_sa;   /* ... from this one */
+    struct dpm_c2 *c2[DPM_MAX_C2];
+    uint8_t num_c2;
+    uint8_t next_c2;
+    bool c2_turn;        /* a cyclic telegram went out since the last class-2 one */
+    dpm_fcb_t fcbs[2u * DPM_MAX_C2];
+    uint32_t acyclic_telegrams;
 } dp_master_t;
 
 void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t now);
@@ -142,5 +187,31 @@ const char *dpm_phase_name(dpm_phase_t p);
 /* Standard DP-V0 Set_Prm: Lock_Req, WD_On with the given time (10 ms base), min TSDR 11. */
 size_t dpm_build_prm(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
                      size_t user_len);
+/* The same for a DP-V1 slave: user[0..2] are DPMV1_Status_1..3 (octets 7..9; zeros if user is
+ * shorter), and DPMV1_Status_1 gets DPMV1_Enable (0x80). For the DFP21B the user parameters
+ * 00 00 00 06 81 00 00 01 01 go out as 80 00 00 06 81 00 00 01 01. */
+size_t dpm_build_prm_dpv1(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
+                          size_t user_len);
+/* Set_Prm asks for DP-V1 (>= 10 octets and DPMV1_Enable): MSAC1 opens with Data_Exch. */
+bool dpm_prm_is_dpv1(const uint8_t *prm, size_t len);
+
+/* ---- DP-V1 class 1 ------------------------------------------------------------------------ */
+
+/* Queues a Read/Write (any) request PDU for the slave; it goes out once the slave is in
+ * Data_Exchange, between two cycles. done runs with the response PDU (possibly a negative
+ * response), or with an error: C1 response timeout, RS (MSAC1 closed), no answer, the slave
+ * restarted while the request was in the card. -1: not a DP-V1 slave (see dpm_prm_is_dpv1),
+ * a request is already queued, or the PDU is empty or longer than 244 octets. */
+int dp_master_c1_submit(dp_master_t *m, unsigned slave, const uint8_t *pdu, size_t len,
+                        dpm_acyc_done_t done, void *ctx);
+bool dp_master_c1_busy(const dp_master_t *m, unsigned slave);
+/* The slave as a path for dpv1_ds47.h jobs. */
+dpm_acyc_port_t dp_master_c1_port(dp_master_t *m, unsigned slave);
+
+/* ---- DP-V1 class 2 ------------------------------------------------------------------------ */
+
+/* Attaches a class-2 connection (dpv1_c2.h) to this station; its telegrams go out in the
+ * gaps of the cyclic traffic. Returns 0, or -1 when DPM_MAX_C2 are attached. */
+int dp_master_add_c2(dp_master_t *m, struct dpm_c2 *c);
 
 #endif

@@ -1,0 +1,134 @@
+/* One DP-V1 request/response exchange at FDL level, as docs/dpv1.md fixes it for our card and
+ * our master, shared by the class-1 client (dp_master.h) and the class-2 client (dpv1_c2.h):
+ *
+ *   SRD  DSAP/SSAP + request PDU      ->  SC   (the card copied it)
+ *   SRD  DSAP/SSAP, no data (a poll)  ->  SC   (response not ready yet)   ... repeated
+ *   SRD  DSAP/SSAP, no data           ->  DL   SAPs swapped + response PDU
+ *
+ * until the response arrives or the response timeout (from the first transmission of the
+ * request) runs out. FCB and retries are the master station's business (dp_master.c); this
+ * module only says what to send next and judges the answers. Nothing is allocated. */
+#ifndef DP_MASTER_DPV1_XFER_H
+#define DP_MASTER_DPV1_XFER_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "dp_slave/fdl_frame.h"
+#include "hal/hal_time.h"
+
+/* SAPs (profibus-dp.md §3.1, docs/dpv1.md). */
+#define DPMV1_SAP_C2_RM 49u  /* MSAC2 resource manager: Initiate.req only */
+#define DPMV1_SAP_C2_MASTER 50u /* the SSAP our class-2 client uses by default */
+#define DPMV1_SAP_C1 51u     /* MSAC1 Read/Write, on both sides */
+
+/* Function numbers (profibus-dp.md §4.1). */
+#define DPMV1_FN_IDLE 0x48u
+#define DPMV1_FN_DATA_TRANSPORT 0x51u
+#define DPMV1_FN_RM 0x56u
+#define DPMV1_FN_INITIATE 0x57u
+#define DPMV1_FN_ABORT 0x58u
+#define DPMV1_FN_ALARM_ACK 0x5Cu
+#define DPMV1_FN_READ 0x5Eu
+#define DPMV1_FN_WRITE 0x5Fu
+#define DPMV1_FN_ERROR 0x80u       /* set in the function number of a negative response */
+#define DPMV1_ERROR_DECODE_DPV1 0x80u
+
+/* Error_Code_1 values (class high nibble, code low nibble) the card uses (docs/dpv1.md). */
+#define DPMV1_ERR_INVALID_INDEX 0xB0u
+#define DPMV1_ERR_WRITE_LENGTH 0xB1u
+#define DPMV1_ERR_STATE_CONFLICT 0xB5u
+#define DPMV1_ERR_ACCESS_DENIED 0xB6u
+#define DPMV1_ERR_INVALID_RANGE 0xB7u
+#define DPMV1_ERR_FEATURE_NOT_SUPPORTED 0xA9u
+
+#define DPMV1_HEADER_LEN 4u  /* fn slot index length */
+#define DPMV1_DATA_MAX 240u
+#define DPMV1_PDU_MAX (DPMV1_HEADER_LEN + DPMV1_DATA_MAX)
+
+/* How an exchange ended. ok: a response PDU came back (it may be a negative DP-V1 response;
+ * the layer above judges it). !ok: error says why (timeout, RS, no answer ...). */
+typedef struct dpm_acyc_result {
+    bool ok;
+    const uint8_t *pdu; /* valid during the callback only */
+    size_t len;
+    const char *error;
+    uint32_t polls;      /* empty SRDs sent after the request */
+    uint32_t telegrams;  /* every SRD of this exchange, request, polls and retries */
+    hal_time_us_t t_start; /* first transmission of the request */
+    hal_time_us_t t_end;
+} dpm_acyc_result_t;
+
+typedef void (*dpm_acyc_done_t)(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now);
+
+/* Where requests go: a class-1 slave of a master or a class-2 connection. submit returns 0, or
+ * -1 when the path is busy (queue depth 1), closed, or the PDU too long. The callback may
+ * submit the next request at once. */
+typedef struct dpm_acyc_port {
+    int (*submit)(void *ctx, unsigned idx, const uint8_t *pdu, size_t len, dpm_acyc_done_t done,
+                  void *done_ctx, hal_time_us_t now);
+    void *ctx;
+    unsigned idx;
+} dpm_acyc_port_t;
+
+static inline int dpm_acyc_submit(const dpm_acyc_port_t *p, const uint8_t *pdu, size_t len,
+                                  dpm_acyc_done_t done, void *done_ctx, hal_time_us_t now)
+{
+    return p->submit(p->ctx, p->idx, pdu, len, done, done_ctx, now);
+}
+
+typedef enum dpm_xfer_state {
+    DPM_XFER_IDLE = 0,
+    DPM_XFER_REQUEST, /* the request PDU is (still) to be sent */
+    DPM_XFER_POLL,    /* the request was taken (SC): empty SRDs until the response */
+} dpm_xfer_state_t;
+
+typedef struct dpm_xfer {
+    dpm_xfer_state_t state;
+    bool no_response; /* any FDL answer ends it (Abort: the card sends no DP-V1 answer) */
+    bool started;     /* the response timer runs (first telegram sent) */
+    uint8_t dsap;
+    uint8_t ssap;
+    uint8_t pdu[DPMV1_PDU_MAX];
+    uint16_t len;
+    uint32_t timeout_us;
+    hal_time_us_t t_start;
+    hal_time_us_t deadline;
+    uint32_t polls;
+    uint32_t telegrams;
+    dpm_acyc_done_t done;
+    void *ctx;
+    char error[128];
+    /* Totals over the life of the struct. */
+    uint32_t completed;
+    uint32_t failed;
+} dpm_xfer_t;
+
+/* A request PDU to DSAP/SSAP. -1 if busy or len is 0 or above DPMV1_PDU_MAX. */
+int dpm_xfer_start(dpm_xfer_t *x, uint8_t dsap, uint8_t ssap, const uint8_t *pdu, size_t len,
+                   uint32_t timeout_us, dpm_acyc_done_t done, void *ctx);
+/* Only polls: the request reached the slave another way (an Initiate.req handed from the
+ * resource manager to the connection SAP). */
+int dpm_xfer_start_polling(dpm_xfer_t *x, uint8_t dsap, uint8_t ssap, uint32_t timeout_us,
+                           dpm_acyc_done_t done, void *ctx);
+static inline bool dpm_xfer_busy(const dpm_xfer_t *x) { return x->state != DPM_XFER_IDLE; }
+
+/* The telegram to send now: returns the DU length (0 for a poll) and points *du at it. Starts
+ * the response timer with the first call. */
+size_t dpm_xfer_telegram(dpm_xfer_t *x, hal_time_us_t now, const uint8_t **du);
+/* The slave's answer to the telegram just sent (sc: a short acknowledgement E5; else msg). */
+void dpm_xfer_answer(dpm_xfer_t *x, const fdl_msg_t *msg, bool sc, hal_time_us_t t);
+/* Ends the exchange with an error (no answer after the retries, slave restarted ...). */
+void dpm_xfer_fail(dpm_xfer_t *x, hal_time_us_t now, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+/* The response timer: fails the exchange when it ran out. Returns the deadline to watch (or
+ * now + HAL_TIME_NO_DEADLINE_US when none runs). */
+hal_time_us_t dpm_xfer_check_timeout(dpm_xfer_t *x, hal_time_us_t now);
+
+/* "invalid index", "state conflict" ... for Error_Code_1 (dfp21b.md §8). */
+const char *dpm_v1_error_text(uint8_t code1);
+/* True when pdu is a negative response (fn | 0x80); *code1 gets Error_Code_1. */
+bool dpm_v1_is_negative(const uint8_t *pdu, size_t len, uint8_t *code1);
+
+#endif
