@@ -5,5 +5,6 @@ int cmd_demo(int argc, char **argv);
 int cmd_slave(int argc, char **argv);
 int cmd_master(int argc, char **argv);
 int cmd_inverter(int argc, char **argv);
+int cmd_param(int argc, char **argv);
 
 #endif

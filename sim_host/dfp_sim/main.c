@@ -32,6 +32,17 @@ static const char usage[] =
     "      the emulated MOVIDRIVE on SBus (SocketCAN, e.g. vcan0) until SIGINT/SIGTERM; prints\n"
     "      every parameter service and state change. --sbus-address is P813 (0..63, default 0);\n"
     "      --eeprom keeps non-volatile parameters in FILE across runs\n"
+    "  param --port DEV --address N [--via channel|movilink|profidrive|c2] [--baud RATE]\n"
+    "        [--master-address N] [--timeout S] [--json] [--capture FILE] [--verbose]\n"
+    "        read INDEX | write INDEX VALUE [--volatile] | im0\n"
+    "      one parameter service against the card: channel (default) brings the slave up with\n"
+    "      Param + 3 PD and uses the cyclic 8-byte channel; movilink / profidrive bring it up\n"
+    "      with DP-V1 parameters and use class-1 data set 47 (request id 0x40 / 0x01, write\n"
+    "      0x02 non-volatile); c2 opens a class-2 connection (no start-up), id 0x40, aborts it.\n"
+    "      im0 reads I&M0 (class 1, or --via c2). --volatile: write to RAM only (movilink,\n"
+    "      channel). --master-address: default 2 (1 with c2). Exit 0 on a positive result, 1 on\n"
+    "      a negative one or none within --timeout (default 10 s); --json: one JSON object\n"
+    "      per result\n"
     "  check-cfg HEX\n"
     "      would the card accept this Chk_Cfg configuration?\n"
     "\n"
@@ -86,7 +97,8 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "master") == 0) return cmd_master(argc, argv);
     if (strcmp(cmd, "check-cfg") == 0) return cmd_check_cfg(argc, argv);
     if (strcmp(cmd, "inverter") == 0) return cmd_inverter(argc, argv);
-    cli_error("unknown command '%s' (commands: demo, slave, master, inverter, check-cfg; see "
-              "--help)", cmd);
+    if (strcmp(cmd, "param") == 0) return cmd_param(argc, argv);
+    cli_error("unknown command '%s' (commands: demo, slave, master, inverter, param, check-cfg; "
+              "see --help)", cmd);
     return EXIT_USAGE;
 }

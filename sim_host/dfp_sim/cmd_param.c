@@ -1,0 +1,639 @@
+/* dfp-sim param: one parameter service against a DFP21B (or dfp-sim slave) on a tty/PTY, by
+ * one of four paths:
+ *   channel     DP start-up with "Param + 3 PD" (F3 F2), the cyclic 8-byte MOVILINK channel
+ *   movilink    DP start-up with DP-V1 parameters, class-1 data set 47, request id 0x40
+ *   profidrive  the same with request id 0x01 (read) / 0x02 (change, non-volatile)
+ *   c2          a class-2 connection (no start-up), data set 47 with id 0x40, then Abort
+ * and I&M0 through class 1 or class 2. Exit 0 on a positive result, 1 on a negative one or no
+ * result in time, 2 on a bad command line. */
+#include <errno.h>
+#include <stdarg.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "dp_master/dpv1_c2.h"
+#include "dp_master/dpv1_ds47.h"
+#include "dp_master/param_channel.h"
+#include "report.h"
+#include "sim_hal/tty_port.h"
+#include "sim_stations/stations.h"
+
+typedef enum via { VIA_CHANNEL = 0, VIA_MOVILINK, VIA_PROFIDRIVE, VIA_C2 } via_t;
+typedef enum op { OP_READ = 0, OP_WRITE, OP_IM0 } op_t;
+
+static const char *const via_names[] = {"channel", "movilink", "profidrive", "c2"};
+static const char *const op_names[] = {"read", "write", "im0"};
+
+static volatile int stop_requested;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop_requested = 1;
+}
+
+static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
+
+/* ---- the run ----------------------------------------------------------------------------- */
+
+typedef enum stage {
+    ST_START = 0,  /* waiting for data exchange / opening the connection */
+    ST_RUNNING,    /* the service is on its way */
+    ST_ABORTING,   /* class 2: closing the connection after the result */
+    ST_DONE,
+} stage_t;
+
+typedef struct run {
+    op_t op;
+    via_t via;
+    uint16_t index;
+    uint32_t value;
+    bool volatile_write;
+    bool json;
+    stage_t stage;
+    /* result */
+    bool ok;
+    bool have_value;
+    uint32_t result;
+    char error[32];  /* "0x0815", "DP-V1 0xB0", "timeout", "failed" */
+    char text[256];
+    dpm_im0_t im0;
+    /* paths */
+    dp_master_t master;
+    dpm_param_t pc;
+    uint8_t out[14];
+    dpm_call_t call;
+    dpm_ds47_req_t req;
+    dpm_c2_t c2;
+    bool c2_open_done;
+    bool c2_open_ok;
+    bool c2_abort_done;
+    uint32_t cycles_at_start;
+} run_t;
+
+static run_t run;
+static tty_port_t port;
+static tty_runner_t runner;
+static report_t rep;
+
+static void set_result_error(const char *code, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+static void set_result_error(const char *code, const char *fmt, ...)
+{
+    run.ok = false;
+    snprintf(run.error, sizeof run.error, "%s", code);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(run.text, sizeof run.text, fmt, ap);
+    va_end(ap);
+}
+
+/* ---- output ------------------------------------------------------------------------------ */
+
+static void json_str(const char *key, const char *s)
+{
+    printf(",\"%s\":\"", key);
+    for (; *s != '\0'; s++) {
+        unsigned char ch = (unsigned char)*s;
+        if (ch == '"' || ch == '\\') {
+            printf("\\%c", ch);
+        } else if (ch < 0x20u || ch >= 0x7Fu) {
+            printf("\\u%04x", ch);
+        } else {
+            putchar(ch);
+        }
+    }
+    putchar('"');
+}
+
+/* Copy without the blanks a fixed-width I&M text is padded with. */
+static void trimmed(char *out, size_t max, const char *in)
+{
+    snprintf(out, max, "%s", in);
+    size_t n = strlen(out);
+    while (n > 0u && (out[n - 1u] == ' ' || out[n - 1u] == '\0')) {
+        out[--n] = '\0';
+    }
+}
+
+static void print_result(void)
+{
+    char what[64];
+    if (run.op == OP_IM0) {
+        snprintf(what, sizeof what, "im0 via %s", via_names[run.via]);
+    } else if (run.op == OP_READ) {
+        snprintf(what, sizeof what, "read %u via %s", run.index, via_names[run.via]);
+    } else {
+        snprintf(what, sizeof what, "write%s %u = %d via %s", run.volatile_write ? " volatile" : "",
+                 run.index, (int32_t)run.value, via_names[run.via]);
+    }
+    char order[24];
+    char serial[20];
+    trimmed(order, sizeof order, run.im0.order_id);
+    trimmed(serial, sizeof serial, run.im0.serial_number);
+    char sw[24];
+    snprintf(sw, sizeof sw, "%c%u.%u.%u", run.im0.sw_prefix != '\0' ? run.im0.sw_prefix : '?',
+             run.im0.sw_major, run.im0.sw_minor, run.im0.sw_bugfix);
+    if (run.json) {
+        printf("{\"op\":\"%s\"", op_names[run.op]);
+        if (run.op != OP_IM0) {
+            printf(",\"index\":%u", run.index);
+        }
+        json_str("via", via_names[run.via]);
+        if (run.op == OP_WRITE) {
+            printf(",\"volatile\":%s,\"value\":%d", run.volatile_write ? "true" : "false",
+                   (int32_t)run.value);
+        }
+        printf(",\"ok\":%s", run.ok ? "true" : "false");
+        if (run.ok && run.have_value) {
+            printf(",\"value\":%d,\"hex\":\"0x%08X\"", (int32_t)run.result, run.result);
+        }
+        if (run.ok && run.op == OP_IM0) {
+            printf(",\"manufacturer_id\":%u", run.im0.manufacturer_id);
+            char hex[8];
+            snprintf(hex, sizeof hex, "0x%04X", run.im0.manufacturer_id);
+            json_str("manufacturer", hex);
+            json_str("order_id", order);
+            json_str("serial_number", serial);
+            printf(",\"hardware_revision\":%u", run.im0.hardware_revision);
+            json_str("software_revision", sw);
+            printf(",\"rev_counter\":%u,\"profile_id\":%u,\"profile_specific_type\":%u",
+                   run.im0.rev_counter, run.im0.profile_id, run.im0.profile_specific_type);
+            snprintf(hex, sizeof hex, "%u.%u", run.im0.im_version_major,
+                     run.im0.im_version_minor);
+            json_str("im_version", hex);
+            snprintf(hex, sizeof hex, "0x%04X", run.im0.im_supported);
+            json_str("im_supported", hex);
+        }
+        if (!run.ok) {
+            json_str("error", run.error);
+            json_str("text", run.text);
+        }
+        printf("}\n");
+        fflush(stdout);
+        return;
+    }
+    if (!run.ok) {
+        printf("%s: error %s: %s\n", what, run.error, run.text);
+    } else if (run.op == OP_IM0) {
+        printf("%s:\n"
+               "  manufacturer id    0x%04X\n"
+               "  order id           %s\n"
+               "  serial number      %s\n"
+               "  hardware revision  %u\n"
+               "  software revision  %s\n"
+               "  revision counter   %u\n"
+               "  profile id         0x%04X (specific type 0x%04X)\n"
+               "  I&M version        %u.%u, supported 0x%04X\n",
+               what, run.im0.manufacturer_id, order, serial, run.im0.hardware_revision, sw,
+               run.im0.rev_counter, run.im0.profile_id, run.im0.profile_specific_type,
+               run.im0.im_version_major, run.im0.im_version_minor, run.im0.im_supported);
+    } else if (run.have_value) {
+        printf("%s: %d (0x%08X)\n", what, (int32_t)run.result, run.result);
+    } else {
+        printf("%s: ok\n", what);
+    }
+    fflush(stdout);
+}
+
+/* ---- results of the paths ------------------------------------------------------------------ */
+
+static void finish_call(void)
+{
+    dpm_call_t *c = &run.call;
+    if (!c->ok) {
+        if (c->dpv1_negative) {
+            char code[32];
+            snprintf(code, sizeof code, "DP-V1 0x%02X", c->neg_code1);
+            set_result_error(code, "%s", c->error);
+        } else {
+            set_result_error("failed", "%s", c->error);
+        }
+        return;
+    }
+    char err[160];
+    if (run.op == OP_IM0) {
+        if (!dpm_im0_decode(c->data, c->len, &run.im0, err, sizeof err)) {
+            set_result_error("failed", "%s", err);
+            return;
+        }
+        run.ok = true;
+        return;
+    }
+    dpm_ds47_rsp_t rsp;
+    if (!dpm_ds47_parse(&run.req, c->data, c->len, &rsp, err, sizeof err)) {
+        set_result_error("failed", "malformed data set 47 response: %s", err);
+        return;
+    }
+    if (!rsp.p[0].ok) {
+        char code[16];
+        snprintf(code, sizeof code, "0x%04X", rsp.p[0].error);
+        dpm_ds47_error_text(rsp.id, rsp.p[0].error, err, sizeof err);
+        set_result_error(code, "%s", err);
+        return;
+    }
+    run.ok = true;
+    run.have_value = rsp.p[0].has_value;
+    run.result = rsp.p[0].value;
+}
+
+static void finish_channel(const uint8_t *in)
+{
+    if ((in[ML_OFF_MANAGEMENT] & ML_MGMT_ERROR) != 0u) {
+        uint8_t cls = in[4];
+        uint16_t v = cls == ML_CLASS_OTHER ? (uint16_t)(0x0800u | in[7])
+                                           : (uint16_t)((cls << 8) | in[5]);
+        char code[16];
+        char text[160];
+        snprintf(code, sizeof code, "0x%04X", v);
+        ml_error_text(in, text, sizeof text);
+        set_result_error(code, "%s", text);
+        return;
+    }
+    run.ok = true;
+    run.have_value = run.op == OP_READ;
+    run.result = ml_data(in);
+}
+
+static void c2_opened(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+{
+    (void)ctx;
+    (void)now;
+    run.c2_open_done = true;
+    run.c2_open_ok = r->ok;
+}
+
+static void c2_aborted(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+{
+    (void)ctx;
+    (void)r;
+    (void)now;
+    run.c2_abort_done = true;
+}
+
+static dpm_ds47_req_t build_request(void)
+{
+    dpm_ds47_req_t q = {.ref = 1, .axis = 0, .n = 1};
+    q.p[0].number = run.index;
+    q.p[0].value = run.value;
+    if (run.via == VIA_PROFIDRIVE) {
+        q.id = run.op == OP_WRITE ? DPM_DS47_ID_CHANGE : DPM_DS47_ID_READ;
+        q.p[0].attribute = DPM_DS47_ATTR_VALUE;
+    } else {
+        q.id = DPM_DS47_ID_MOVILINK;
+        q.p[0].attribute = run.op == OP_READ ? DPM_DS47_ATTR_ML_READ
+                           : run.volatile_write ? DPM_DS47_ATTR_ML_WRITE_VOLATILE
+                                                : DPM_DS47_ATTR_ML_WRITE;
+    }
+    return q;
+}
+
+static bool start_call(dpm_acyc_port_t p, hal_time_us_t now)
+{
+    memset(&run.call, 0, sizeof run.call);
+    int rc;
+    if (run.op == OP_IM0) {
+        rc = dpm_im0_start(&run.call, p, NULL, NULL, now);
+    } else {
+        run.req = build_request();
+        rc = dpm_ds47_start(&run.call, p, &run.req, NULL, NULL, now);
+    }
+    if (rc != 0) {
+        set_result_error("failed", "the request could not be queued");
+        return false;
+    }
+    tty_runner_wake(&runner);
+    return true;
+}
+
+/* One look at the state after the runner ran; moves the run along. */
+static void step(void)
+{
+    hal_time_us_t now = tty_now_us();
+    dpm_slave_t *s = run.master.num_slaves > 0u ? &run.master.slaves[0] : NULL;
+    switch (run.stage) {
+    case ST_START:
+        if (run.via == VIA_C2) {
+            if (!run.c2_open_done) {
+                return;
+            }
+            if (!run.c2_open_ok) {
+                set_result_error("failed", "%s", dpm_c2_error(&run.c2));
+                run.stage = ST_DONE;
+                return;
+            }
+            run.stage = start_call(dpm_c2_port(&run.c2), now) ? ST_RUNNING : ST_ABORTING;
+            if (run.stage == ST_ABORTING) {
+                (void)dpm_c2_abort(&run.c2, 0, c2_aborted, NULL, now);
+                tty_runner_wake(&runner);
+            }
+            return;
+        }
+        if (s->phase != DPM_PHASE_DATA_EXCH) {
+            return;
+        }
+        if (run.via == VIA_CHANNEL) {
+            uint8_t svc = run.op == OP_READ ? ML_SVC_READ
+                          : run.volatile_write ? ML_SVC_WRITE_VOLATILE : ML_SVC_WRITE;
+            dpm_param_start(&run.pc, svc, run.index, run.value, run.out);
+            dp_master_set_outputs(&run.master, 0, run.out, sizeof run.out);
+            run.stage = ST_RUNNING;
+            return;
+        }
+        run.stage = start_call(dp_master_c1_port(&run.master, 0), now) ? ST_RUNNING : ST_DONE;
+        return;
+    case ST_RUNNING:
+        if (run.via == VIA_CHANNEL) {
+            if (dpm_param_done(&run.pc, s->inputs)) {
+                finish_channel(s->inputs);
+                run.stage = ST_DONE;
+            }
+            return;
+        }
+        if (!dpm_call_done(&run.call)) {
+            return;
+        }
+        finish_call();
+        if (run.via == VIA_C2 && dpm_c2_state(&run.c2) != DPM_C2_CLOSED &&
+            dpm_c2_abort(&run.c2, 0, c2_aborted, NULL, now) == 0) {
+            tty_runner_wake(&runner);
+            run.stage = ST_ABORTING;
+            return;
+        }
+        run.stage = ST_DONE;
+        return;
+    case ST_ABORTING:
+        if (run.c2_abort_done || dpm_c2_state(&run.c2) == DPM_C2_CLOSED) {
+            run.stage = ST_DONE;
+        }
+        return;
+    case ST_DONE:
+        return;
+    }
+}
+
+static void timeout_text(uint32_t timeout_s)
+{
+    dpm_slave_t *s = run.master.num_slaves > 0u ? &run.master.slaves[0] : NULL;
+    if (run.stage == ST_START && s != NULL) {
+        set_result_error("timeout", "no result within %u s: slave %u did not reach data "
+                         "exchange (phase %s)", timeout_s, s->cfg.address,
+                         dpm_phase_name(s->phase));
+    } else if (run.stage == ST_START) {
+        set_result_error("timeout", "no result within %u s: the class-2 connection did not "
+                         "open (%s)", timeout_s, dpm_c2_state_name(dpm_c2_state(&run.c2)));
+    } else if (run.via == VIA_CHANNEL) {
+        set_result_error("timeout", "no result within %u s: no reply with the request's "
+                         "handshake in the cyclic channel", timeout_s);
+    } else {
+        set_result_error("timeout", "no result within %u s (%u Read.req, %u answered B5)",
+                         timeout_s, run.call.reads, run.call.busy);
+    }
+}
+
+static hal_time_us_t master_timer(void *ctx, hal_time_us_t now)
+{
+    return dp_master_poll(ctx, now);
+}
+
+static void quiet_event(void *ctx, const dpm_event_t *ev)
+{
+    (void)ctx;
+    (void)ev;
+}
+
+/* ---- command line ------------------------------------------------------------------------ */
+
+static bool parse_value(const char *text, uint32_t *out)
+{
+    char *end = NULL;
+    errno = 0;
+    long long v = strtoll(text, &end, 0);
+    if (text[0] == '\0' || *end != '\0' || errno != 0 || v < INT32_MIN || v > (long long)UINT32_MAX) {
+        cli_error("param: VALUE '%s' is not a 32-bit number (decimal, -N or 0xHEX)", text);
+        return false;
+    }
+    *out = (uint32_t)(int64_t)v;
+    return true;
+}
+
+static uint64_t mono_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
+}
+
+static uint64_t clock_now(void *ctx)
+{
+    return mono_ns() - *(uint64_t *)ctx;
+}
+
+int cmd_param(int argc, char **argv)
+{
+    const char *dev = NULL;
+    const char *capture = NULL;
+    uint32_t address = 0;
+    bool have_address = false;
+    uint32_t own = 0;
+    bool have_own = false;
+    uint32_t baud = 19200;
+    uint32_t timeout_s = 10;
+    bool via_given = false;
+    bool verbose = false;
+    const char *pos[4];
+    int npos = 0;
+    memset(&run, 0, sizeof run);
+    for (int i = 2; i < argc; i++) {
+        const char *v;
+        const char *o = argv[i];
+        if (strcmp(o, "--port") == 0) {
+            if ((dev = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if (strcmp(o, "--address") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 0, 125, &address))
+                return EXIT_USAGE;
+            have_address = true;
+        } else if (strcmp(o, "--master-address") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 0, 126, &own))
+                return EXIT_USAGE;
+            have_own = true;
+        } else if (strcmp(o, "--baud") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_baud(o, v, false, &baud))
+                return EXIT_USAGE;
+        } else if (strcmp(o, "--timeout") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 1, 3600u, &timeout_s))
+                return EXIT_USAGE;
+        } else if (strcmp(o, "--via") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+            unsigned k = 0;
+            while (k < 4u && strcmp(v, via_names[k]) != 0) k++;
+            if (k == 4u) {
+                cli_error("param: --via '%s': use channel, movilink, profidrive or c2", v);
+                return EXIT_USAGE;
+            }
+            run.via = (via_t)k;
+            via_given = true;
+        } else if (strcmp(o, "--volatile") == 0) {
+            run.volatile_write = true;
+        } else if (strcmp(o, "--json") == 0) {
+            run.json = true;
+        } else if (strcmp(o, "--verbose") == 0) {
+            verbose = true;
+        } else if (strcmp(o, "--capture") == 0) {
+            if ((capture = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if (o[0] == '-' && o[1] == '-') {
+            cli_error("param: unknown option '%s' (see dfp-sim --help)", o);
+            return EXIT_USAGE;
+        } else {
+            if (npos == 4) {
+                cli_error("param: too many arguments ('%s')", o);
+                return EXIT_USAGE;
+            }
+            pos[npos++] = o;
+        }
+    }
+    if (dev == NULL || !have_address) {
+        cli_error("param: --port DEV and --address N are required");
+        return EXIT_USAGE;
+    }
+    if (npos == 0) {
+        cli_error("param: say what to do: read INDEX, write INDEX VALUE or im0");
+        return EXIT_USAGE;
+    }
+    uint32_t index = 0;
+    if (strcmp(pos[0], "read") == 0) {
+        run.op = OP_READ;
+        if (npos != 2) {
+            cli_error("param: read takes one argument, the parameter INDEX (e.g. read 8300)");
+            return EXIT_USAGE;
+        }
+    } else if (strcmp(pos[0], "write") == 0) {
+        run.op = OP_WRITE;
+        if (npos != 3) {
+            cli_error("param: write takes two arguments, INDEX and VALUE (e.g. write 8489 1500)");
+            return EXIT_USAGE;
+        }
+        if (!parse_value(pos[2], &run.value)) return EXIT_USAGE;
+    } else if (strcmp(pos[0], "im0") == 0) {
+        run.op = OP_IM0;
+        if (npos != 1) {
+            cli_error("param: im0 takes no argument ('%s')", pos[1]);
+            return EXIT_USAGE;
+        }
+        if (!via_given) {
+            run.via = VIA_MOVILINK; /* class 1 */
+        } else if (run.via == VIA_CHANNEL) {
+            cli_error("param: im0 needs DP-V1: --via movilink, profidrive (class 1) or c2");
+            return EXIT_USAGE;
+        }
+    } else {
+        cli_error("param: unknown operation '%s' (read, write or im0)", pos[0]);
+        return EXIT_USAGE;
+    }
+    if (run.op != OP_IM0 && !cli_u32("INDEX", pos[1], 0, 65535, &index)) return EXIT_USAGE;
+    run.index = (uint16_t)index;
+    if (run.volatile_write && run.op != OP_WRITE) {
+        cli_error("param: --volatile belongs to write");
+        return EXIT_USAGE;
+    }
+    if (run.volatile_write && run.via != VIA_MOVILINK && run.via != VIA_CHANNEL) {
+        cli_error("param: --volatile works with --via movilink or channel (PROFIdrive change "
+                  "parameter always writes non-volatile)");
+        return EXIT_USAGE;
+    }
+    if (!have_own) {
+        own = run.via == VIA_C2 ? 1u : 2u;
+    }
+    if (own == address) {
+        cli_error("param: --master-address %u is the slave's address", own);
+        return EXIT_USAGE;
+    }
+
+    char err[256];
+    if (tty_port_open(&port, dev, baud, err, sizeof err) != 0) {
+        cli_error("%s", err);
+        return 1;
+    }
+    static uint64_t t0;
+    t0 = mono_ns();
+    rep.now_ns = clock_now;
+    rep.now_ctx = &t0;
+    if (capture != NULL) {
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        uint64_t base = (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
+        if (pcap_writer_open(&rep.capture, capture, PCAP_LINKTYPE_PROFIBUS_DL, false, base, err,
+                             sizeof err) != 0) {
+            cli_error("%s", err);
+            tty_port_close(&port);
+            return 1;
+        }
+        rep.capturing = true;
+    }
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+
+    dp_master_cfg_t mc = {.address = (uint8_t)own, .baud = baud, .strict_timing = false,
+                          .slot_time_us = 100000u, .uart = tty_port_uart(&port),
+                          .event = verbose ? report_master_event : quiet_event,
+                          .event_ctx = &rep};
+    dp_master_init(&run.master, &mc, tty_now_us());
+    if (run.via != VIA_C2) {
+        dpm_slave_cfg_t sc = {.address = (uint8_t)address};
+        if (run.via == VIA_CHANNEL) {
+            sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 1000,
+                                                dfp21b_user_prm_default,
+                                                sizeof dfp21b_user_prm_default);
+        } else {
+            sc.prm_len = (uint8_t)dpm_build_prm_dpv1(sc.prm, DFP21B_IDENT, 1000,
+                                                     dfp21b_user_prm_default,
+                                                     sizeof dfp21b_user_prm_default);
+        }
+        memcpy(sc.cfg, cfg_param_3pd, sizeof cfg_param_3pd);
+        sc.cfg_len = sizeof cfg_param_3pd;
+        (void)dp_master_add_slave(&run.master, &sc);
+    } else {
+        dpm_c2_cfg_t cc = {.slave = (uint8_t)address, .address = (uint8_t)own};
+        dpm_c2_init(&run.c2, &cc);
+        (void)dp_master_add_c2(&run.master, &run.c2);
+        (void)dpm_c2_open(&run.c2, c2_opened, NULL, tty_now_us());
+    }
+    tty_runner_init(&runner);
+    tty_runner_set_tap(&runner, report_tap, &rep);
+    sim_station_t st = master_station(&run.master);
+    tty_runner_add(&runner, &port, &st);
+    tty_runner_add_timer(&runner, master_timer, &run.master); /* so a new request goes at once */
+
+    uint64_t end_ns = mono_ns() + (uint64_t)timeout_s * 1000000000ull;
+    const char *fail = NULL;
+    while (run.stage != ST_DONE && !stop_requested && mono_ns() < end_ns) {
+        if (tty_runner_run_until(&runner, tty_now_us() + 5000u, &stop_requested) < 0) {
+            fail = tty_runner_error(&runner);
+            break;
+        }
+        step();
+    }
+    if (run.stage != ST_DONE) {
+        if (fail != NULL) {
+            set_result_error("failed", "%s", fail);
+        } else if (stop_requested) {
+            set_result_error("failed", "interrupted");
+        } else {
+            timeout_text(timeout_s);
+        }
+    }
+    print_result();
+    tty_port_close(&port);
+    if (rep.capturing && (pcap_writer_close(&rep.capture) != 0 || rep.capture_failed)) {
+        cli_error("could not write the whole capture to %s", capture);
+    }
+    return run.ok ? 0 : 1;
+}
