@@ -1,0 +1,119 @@
+#!/usr/bin/env bash
+# dfp-sim param against dfp-sim slave (emulated MOVIDRIVE) over a socat PTY pair: read 8300 by
+# every path, writes read back by another path, --volatile, a value above the maximum (exit 1
+# and the error text), I&M0 by class 1 and class 2, --json parsed by python3, a slave that does
+# not answer, and bad command lines (exit 2, one line on stderr, nothing on stdout).
+sim=$1
+. "$(dirname "$0")/lib.sh"
+tmp=$(mktemp -d)
+pids=()
+cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$tmp"; }
+trap cleanup EXIT
+
+socat pty,raw,echo=0,link="$tmp/a" pty,raw,echo=0,link="$tmp/b" &
+pids+=($!)
+for _ in $(seq 50); do [ -e "$tmp/a" ] && [ -e "$tmp/b" ] && break; sleep 0.1; done
+"$sim" slave --port "$tmp/a" --address 4 --baud 19200 >"$tmp/slave.out" 2>&1 &
+slave=$!; pids+=($slave)
+sleep 0.3
+
+param() { "$sim" param --port "$tmp/b" --address 4 --timeout 10 "$@"; }
+# json_get JSON KEY: the value as Python prints it (True/False for booleans).
+json_get() { python3 -c 'import json,sys; print(json.loads(sys.argv[1])[sys.argv[2]])' "$1" "$2"; }
+
+# Firmware version 8300 by each path.
+for via in channel movilink profidrive c2; do
+  expect_exit 0 "read 8300 via $via" -- param read 8300 --via "$via"
+  expect_in "8300 via $via" "read 8300 via $via: 823947913 (0x311C7289)" "$out"
+done
+expect_exit 0 "read without --via is the cyclic channel" -- param read 8300
+expect_in "default path" "read 8300 via channel: 823947913" "$out"
+
+# JSON, one object, parsed.
+expect_exit 0 "read 8300 --json" -- param read 8300 --via movilink --json
+if [ "$(printf '%s\n' "$out" | wc -l)" = 1 ]; then ok; else bad "--json printed more than one line: $out"; fi
+[ "$(json_get "$out" value)" = 823947913 ] && ok || bad "json value: $out"
+[ "$(json_get "$out" hex)" = 0x311C7289 ] && ok || bad "json hex: $out"
+[ "$(json_get "$out" ok)" = True ] && ok || bad "json ok: $out"
+[ "$(json_get "$out" via)" = movilink ] && ok || bad "json via: $out"
+[ "$(json_get "$out" index)" = 8300 ] && ok || bad "json index: $out"
+
+# Writes, each read back by another path (P160 n11 = 8489, IPOS H0 = 11000).
+expect_exit 0 "write 8489 via profidrive (id 0x02)" -- param write 8489 1500 --via profidrive
+expect_in "write ok" "write 8489 = 1500 via profidrive: ok" "$out"
+expect_exit 0 "read back via c2" -- param read 8489 --via c2
+expect_in "read back 1500" "read 8489 via c2: 1500 (0x000005DC)" "$out"
+expect_exit 0 "write 8489 via c2" -- param write 8489 2250 --via c2 --json
+[ "$(json_get "$out" ok)" = True ] && ok || bad "c2 write json: $out"
+expect_exit 0 "read back via channel" -- param read 8489
+expect_in "read back 2250" "read 8489 via channel: 2250" "$out"
+expect_exit 0 "write 8489 via channel" -- param write 8489 3000 --via channel
+expect_exit 0 "read back via movilink" -- param read 8489 --via movilink
+expect_in "read back 3000" "read 8489 via movilink: 3000" "$out"
+expect_exit 0 "write volatile H0 via movilink" -- param write 11000 -7 --via movilink --volatile
+expect_in "volatile write" "write volatile 11000 = -7 via movilink: ok" "$out"
+expect_exit 0 "read H0 via profidrive" -- param read 11000 --via profidrive --json
+[ "$(json_get "$out" value)" = -7 ] && ok || bad "H0 = -7: $out"
+[ "$(json_get "$out" hex)" = 0xFFFFFFF9 ] && ok || bad "H0 hex: $out"
+expect_exit 0 "write volatile H0 via channel" -- param write 11000 0x1234 --volatile
+expect_exit 0 "read H0 via c2" -- param read 11000 --via c2
+expect_in "H0 = 0x1234" "read 11000 via c2: 4660 (0x00001234)" "$out"
+
+# A value above P302's maximum: exit 1 and the meaning, by every path.
+expect_exit 1 "P302 = 99000000 via movilink" -- param write 8517 99000000 --via movilink --volatile
+expect_in "MOVILINK error text" "error 0x0815: class 8, additional code 0x15: value too high" "$out"
+expect_exit 1 "P302 = 99000000 via channel" -- param write 8517 99000000
+expect_in "channel error text" "error 0x0815: class 8, additional code 0x15: value too high" "$out"
+expect_exit 1 "P302 = 99000000 via profidrive" -- param write 8517 99000000 --via profidrive --json
+[ "$(json_get "$out" ok)" = False ] && ok || bad "json ok false: $out"
+[ "$(json_get "$out" error)" = 0x0002 ] && ok || bad "PROFIdrive error 0x0002: $out"
+expect_in "PROFIdrive text" "low or high limit exceeded" "$out"
+expect_exit 1 "P302 = 99000000 via c2" -- param write 8517 99000000 --via c2 --json
+[ "$(json_get "$out" error)" = 0x0815 ] && ok || bad "c2 error 0x0815: $out"
+expect_exit 1 "index 1 does not exist" -- param read 1 --via movilink
+expect_in "illegal index" "error 0x0810: class 8, additional code 0x10: illegal parameter index" "$out"
+
+# I&M0 by class 1 and class 2.
+expect_exit 0 "im0 (class 1)" -- param im0
+expect_in "im0 manufacturer" "manufacturer id    0x010A" "$out"
+expect_in "im0 order id" "order id           824 240 2" "$out"
+expect_in "im0 serial" "serial number      DFP-SIM-004" "$out"
+expect_exit 0 "im0 via c2 --json" -- param im0 --via c2 --json
+[ "$(json_get "$out" manufacturer)" = 0x010A ] && ok || bad "im0 manufacturer: $out"
+[ "$(json_get "$out" manufacturer_id)" = 266 ] && ok || bad "im0 manufacturer_id: $out"
+[ "$(json_get "$out" order_id)" = "824 240 2" ] && ok || bad "im0 order_id: $out"
+[ "$(json_get "$out" im_supported)" = 0x001E ] && ok || bad "im0 im_supported: $out"
+
+# Nobody at address 5: exit 1 within the timeout, with the reason.
+expect_exit 1 "no slave at 5 (class 1)" -- "$sim" param --port "$tmp/b" --address 5 --timeout 1 read 8300 --via movilink
+expect_in "class-1 timeout text" "error timeout: no result within 1 s: slave 5 did not reach data exchange" "$out"
+expect_exit 1 "no slave at 5 (class 2)" -- "$sim" param --port "$tmp/b" --address 5 --timeout 2 read 8300 --via c2 --json
+expect_in "class-2 no answer" '"text":"Initiate (resource manager): no answer from slave 5"' "$out"
+
+# Bad command lines: exit 2, one line on stderr, nothing on stdout.
+usage() { # usage DESCRIPTION NEEDLE ARGS...
+  local what=$1 needle=$2; shift 2
+  "$sim" param "$@" >"$tmp/o" 2>"$tmp/e"; local rc=$?
+  if [ "$rc" = 2 ]; then ok; else bad "$what: exit $rc, expected 2"; fi
+  if [ ! -s "$tmp/o" ] && [ "$(wc -l <"$tmp/e")" = 1 ]; then ok; else bad "$what: output $(cat "$tmp/o" "$tmp/e")"; fi
+  expect_in "$what" "$needle" "$(cat "$tmp/e")"
+}
+P=(--port "$tmp/b" --address 4)
+usage "no operation" "say what to do" "${P[@]}"
+usage "no port" "--port DEV and --address N are required" read 8300
+usage "read without index" "read takes one argument" "${P[@]}" read
+usage "index too big" "'70000' is not a number from 0 to 65535" "${P[@]}" read 70000
+usage "write without value" "write takes two arguments" "${P[@]}" write 8489
+usage "value not a number" "VALUE 'x12' is not a 32-bit number" "${P[@]}" write 8489 x12
+usage "unknown path" "--via 'usb'" "${P[@]}" read 8300 --via usb
+usage "volatile on read" "--volatile belongs to write" "${P[@]}" read 8300 --volatile
+usage "volatile via profidrive" "--volatile works with --via movilink or channel" "${P[@]}" write 8489 1 --via profidrive --volatile
+usage "im0 via channel" "im0 needs DP-V1" "${P[@]}" im0 --via channel
+usage "unknown operation" "unknown operation 'frob'" "${P[@]}" frob 1
+usage "unknown option" "unknown option '--fast'" "${P[@]}" read 8300 --fast
+usage "bad baud" "--baud" "${P[@]}" read 8300 --baud 1234
+
+kill -INT "$slave"; wait "$slave"
+slave_out=$(cat "$tmp/slave.out")
+expect_in "slave saw DP-V1 parameterisation" "Data_Exch" "$slave_out"
+finish
