@@ -19,6 +19,8 @@
 #include <unistd.h>
 
 #include "dp_slave/dp_wire.h"
+#include "dp_master/dpv1_c2.h"
+#include "dp_master/dpv1_ds47.h"
 #include "dp_master/param_channel.h"
 #include "dp_slave/fdl_frame.h"
 #include "sim_hal/membus.h"
@@ -329,6 +331,100 @@ static void bench_param_latency(uint32_t baud, uint32_t inverter_us, unsigned n)
            (double)max_ns / 1e3);
 }
 
+/* ---- 2c. DP-V1 data set 47 through class 1 and class 2 ------------------------------------- */
+
+/* One data set 47 access (Write.req, polls, Read.req repeated while B5, polls) on port, in bus
+ * time; returns false when it did not end positively. */
+static bool dpv1_access(dpm_acyc_port_t port, const dpm_ds47_req_t *req, uint32_t step_us,
+                        uint32_t *us, uint32_t *cycles, uint32_t *telegrams, uint32_t *busy)
+{
+    dpm_call_t call;
+    memset(&call, 0, sizeof call);
+    uint32_t c0 = bmaster.slaves[0].cycles;
+    if (dpm_ds47_start(&call, port, req, NULL, NULL, membus_now_us(&bus)) != 0) {
+        return false;
+    }
+    uint64_t t0 = bus.now_ns;
+    while (!dpm_call_done(&call) && bus.now_ns - t0 < 5000000000ull) {
+        membus_run_for_us(&bus, step_us);
+    }
+    *us = call.t_end - call.t_start;
+    *cycles = bmaster.slaves[0].cycles - c0;
+    *telegrams = call.telegrams;
+    *busy = call.busy;
+    dpm_ds47_rsp_t rsp;
+    return dpm_call_done(&call) && call.ok &&
+           dpm_ds47_parse(req, call.data, call.len, &rsp, NULL, 0) && !rsp.negative &&
+           rsp.p[0].value == 0x311C7289u;
+}
+
+/* Master 2 with the card in cyclic exchange (Param + 3 PD, DP-V1 parameters) and, for class 2,
+ * a connection from address 1 on the same station: n reads of 8300 with 1 parameter and with
+ * 19 parameters per request, time and Data_Exchange cycles per access. */
+static void bench_dpv1(uint32_t baud, uint32_t inverter_us, unsigned n)
+{
+    static dpm_c2_t c2;
+    uint32_t step_us = baud >= 1500000u ? 5u : 200u;
+    const char *rate = baud == 12000000u ? "12 Mbit/s" : baud == 1500000u ? "1.5 Mbit/s"
+                                                                          : "19.2 kbit/s";
+    for (int cls = 1; cls <= 2; cls++) {
+        bench_rig(baud, CARD_INVERTER_SIM, inverter_us, 1000);
+        dpm_slave_cfg_t sc = bmaster.slaves[0].cfg;
+        sc.prm_len = (uint8_t)dpm_build_prm_dpv1(sc.prm, DFP21B_IDENT, 1000,
+                                                 dfp21b_user_prm_default, 9);
+        dp_master_reconfigure(&bmaster, 0, &sc, 0);
+        membus_run_for_us(&bus, 200000);
+        dpm_acyc_port_t port = dp_master_c1_port(&bmaster, 0);
+        uint32_t open_us = 0;
+        if (cls == 2) {
+            dpm_c2_cfg_t cc = {.slave = 4, .address = 1};
+            dpm_c2_init(&c2, &cc);
+            dp_master_add_c2(&bmaster, &c2);
+            hal_time_us_t t0 = membus_now_us(&bus);
+            dpm_c2_open(&c2, NULL, NULL, t0);
+            while (dpm_c2_state(&c2) != DPM_C2_OPEN && dpm_c2_state(&c2) != DPM_C2_CLOSED) {
+                membus_run_for_us(&bus, step_us);
+            }
+            open_us = membus_now_us(&bus) - t0;
+            port = dpm_c2_port(&c2);
+        }
+        for (unsigned params = 1; params <= DPM_DS47_MAX_PARAMS; params += 18u) {
+            dpm_ds47_req_t req = {.ref = 1, .id = DPM_DS47_ID_MOVILINK, .n = (uint8_t)params};
+            for (unsigned i = 0; i < params; i++) {
+                req.p[i] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_READ, .number = 8300};
+            }
+            uint64_t sum_us = 0;
+            uint32_t max_us = 0;
+            uint64_t sum_cycles = 0;
+            uint64_t sum_tel = 0;
+            uint64_t sum_busy = 0;
+            unsigned good = 0;
+            for (unsigned i = 0; i < n; i++) {
+                uint32_t us = 0;
+                uint32_t cycles = 0;
+                uint32_t tel = 0;
+                uint32_t busy = 0;
+                good += dpv1_access(port, &req, step_us, &us, &cycles, &tel, &busy) ? 1u : 0u;
+                req.ref = (uint8_t)(req.ref + 1u);
+                sum_us += us;
+                sum_cycles += cycles;
+                sum_tel += tel;
+                sum_busy += busy;
+                if (us > max_us) max_us = us;
+            }
+            double mean_us = (double)sum_us / n;
+            printf("  %-11s  C%d %5u %3u %5u/%-4u %10.1f %10.1f %6.1f %6.1f %5.1f %8.0f", rate,
+                   cls, inverter_us, params, good, n, mean_us, (double)max_us,
+                   (double)sum_cycles / n, (double)sum_tel / n, (double)sum_busy / n,
+                   params * 1e6 / mean_us);
+            if (cls == 2 && params == 1u) {
+                printf("   Initiate %.1f us", (double)open_us);
+            }
+            printf("\n");
+        }
+    }
+}
+
 /* ---- 3. PTY ------------------------------------------------------------------------------- */
 
 static tty_port_t pa;
@@ -443,5 +539,13 @@ int main(int argc, char **argv)
     bench_param_latency(1500000u, 0, 200);
     bench_param_latency(1500000u, 1000, 200);
     bench_param_latency(19200u, 0, 50);
+    printf("\nDP-V1 data set 47 (Write.req + Read.req until not B5, each with its polls), reads of "
+           "8300, cyclic exchange going on, emulated inverter in-process; per access, bus time:\n"
+           "  %-11s  %-2s %5s %3s %10s %10s %10s %6s %6s %5s %8s\n", "rate", "", "inv.us",
+           "par", "ok", "us mean", "us max", "DX", "acyc", "B5", "params/s");
+    bench_dpv1(12000000u, 0, 100);
+    bench_dpv1(1500000u, 0, 100);
+    bench_dpv1(1500000u, 1000, 100);
+    bench_dpv1(19200u, 0, 10);
     return rc;
 }
