@@ -38,6 +38,8 @@ typedef struct rig {
     frame_t frames[MAX_FRAMES];
     size_t nframes;
     bool recording;
+    bool drop_read_res;  /* the master misses the card's next Read.res from SAP 51 */
+    uint64_t dropped_at_ns;
 } rig_t;
 
 static rig_t rig;
@@ -48,6 +50,12 @@ static void tap(void *ctx, uint64_t t, const uint8_t *f, size_t len, bool local,
     (void)t;
     (void)local;
     (void)baud;
+    if (rig.drop_read_res && len > 10u && f[0] == FDL_SD2 && f[4] == (MASTER | 0x80u) &&
+        f[6] == FDL_RSP_DL && f[7] == DPMV1_SAP_C1 && f[9] == DPMV1_FN_READ) {
+        rig.master_port->silenced = true; /* deaf (and mute) until the test lifts it */
+        rig.drop_read_res = false;
+        rig.dropped_at_ns = rig.bus.now_ns;
+    }
     if (!rig.recording || rig.nframes >= MAX_FRAMES || len > FDL_FRAME_MAX) {
         return;
     }
@@ -213,8 +221,9 @@ static void check_request(const frame_t *f, const uint8_t *exp, size_t n, const 
 }
 
 /* Over the recorded telegrams: between two acyclic class-1 telegrams to slave 4 there is at
- * least one Data_Exchange; FCB toggles with every request from 2 to 4 (FCV set); every class-1
- * request is answered (SC or DL from SAP 51). Returns the number of class-1 telegrams. */
+ * least one Data_Exchange; FCB toggles with every request from 2 to 4 (FCV set). A retry (the
+ * request repeated byte for byte) is exempt, and there are exactly as many as the master
+ * counted. Returns the number of class-1 telegrams, retries included. */
 static unsigned check_c1_discipline(void)
 {
     unsigned c1 = 0;
@@ -223,9 +232,19 @@ static unsigned check_c1_discipline(void)
     bool fcb = false;
     bool interleave_ok = true;
     bool fcb_ok = true;
+    const frame_t *prev = NULL;
+    unsigned repeats = 0;
     for (size_t i = 0; i < rig.nframes; i++) {
         fdl_msg_t m;
-        if (!is_request_to(&rig.frames[i], SLAVE, MASTER, &m)) {
+        const frame_t *f = &rig.frames[i];
+        if (!is_request_to(f, SLAVE, MASTER, &m)) {
+            continue;
+        }
+        bool retry = prev != NULL && prev->len == f->len && memcmp(prev->b, f->b, f->len) == 0;
+        prev = f;
+        if (retry) {
+            repeats++;
+            c1 += m.has_dsap && m.dsap == DPMV1_SAP_C1;
             continue;
         }
         if ((m.fc & FDL_FC_FCV) != 0u) {
@@ -249,6 +268,7 @@ static unsigned check_c1_discipline(void)
     }
     CHECK(interleave_ok);
     CHECK(fcb_ok);
+    CHECK_EQ(repeats, rig.master.total_retries); /* identical telegrams are retries only */
     return c1;
 }
 
@@ -589,6 +609,77 @@ static void test_c1_refusals_and_timeouts(void)
     CHECK(rig.master.total_retries >= 1u);
 }
 
+static void test_c1_lost_response_is_repeated_by_the_card(void)
+{
+    /* The master misses the Read.res: it repeats the poll with the same FCB, and the card must
+     * repeat the response from its FCB cache (its mailbox is already empty: a fresh poll would
+     * get SC and the value would be lost). */
+    setup(true, true, 0);
+    rig.master.cfg.slot_time_us = 1000; /* the retry comes after the whole answer */
+    rig.recording = true;
+    rig.drop_read_res = true;
+    dpm_call_t call = {0};
+    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    CHECK_EQ(dpm_ds47_start(&call, dp_master_c1_port(&rig.master, 0), &req, NULL, NULL,
+                            membus_now_us(&rig.bus)), 0);
+    for (int i = 0; i < 100000 && !dpm_call_done(&call); i++) {
+        membus_run_for_us(&rig.bus, 10);
+        if (rig.master_port->silenced && rig.bus.now_ns - rig.dropped_at_ns > 400000u) {
+            rig.master_port->silenced = false;
+        }
+    }
+    CHECK(call.ok);
+    CHECK_EQ(rig.master.total_retries, 1);
+    dpm_ds47_rsp_t rsp;
+    CHECK(dpm_ds47_parse(&req, call.data, call.len, &rsp, NULL, 0));
+    CHECK_EQ(rsp.p[0].value, 0x311C7289u);
+    /* On the wire: poll, Read.res (missed), the same poll again, the same Read.res again. */
+    long first = -1;
+    for (size_t i = 0; i + 3u < rig.nframes; i++) {
+        const frame_t *f = &rig.frames[i + 1u];
+        if (f->len > 10u && f->b[6] == FDL_RSP_DL && f->b[9] == DPMV1_FN_READ) {
+            first = (long)i;
+            break;
+        }
+    }
+    CHECK(first >= 0);
+    if (first >= 0) {
+        const frame_t *poll1 = &rig.frames[first];
+        const frame_t *rsp1 = &rig.frames[first + 1];
+        const frame_t *poll2 = &rig.frames[first + 2];
+        const frame_t *rsp2 = &rig.frames[first + 3];
+        CHECK_EQ(poll1->len, 11);
+        CHECK(poll1->len == poll2->len && memcmp(poll1->b, poll2->b, poll1->len) == 0);
+        CHECK(rsp1->len == rsp2->len && memcmp(rsp1->b, rsp2->b, rsp1->len) == 0);
+    }
+    check_c1_discipline();
+}
+
+static void test_c1_inverter_timeout_texts(void)
+{
+    /* The inverter does not answer within the card's 200 ms: MOVILINK 0x0602, and through
+     * PROFIdrive the card's manufacturer-range number for it. */
+    setup(true, true, 500000);
+    dpm_acyc_port_t port = dp_master_c1_port(&rig.master, 0);
+    dpm_call_t call;
+    dpm_ds47_rsp_t rsp;
+    char text[200];
+    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    CHECK(ds47(port, &req, &call, &rsp));
+    CHECK_EQ(rsp.p[0].error, 0x0602);
+    dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
+    CHECK_STR(text, "class 6 code 2: card <-> inverter communication fault");
+    CHECK(call.busy > 10u);
+    membus_run_for_us(&rig.bus, 600000); /* let the late answer pass */
+    req = (dpm_ds47_req_t){.ref = 3, .id = DPM_DS47_ID_READ, .n = 1};
+    req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_VALUE, .number = 8300};
+    CHECK(ds47(port, &req, &call, &rsp));
+    CHECK_EQ(rsp.p[0].error, 0x0082);
+    dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
+    CHECK_STR(text, "manufacturer specific 0x0082 (MOVILINK 0x0602: class 6 code 2: card <-> "
+                    "inverter communication fault)");
+}
+
 /* ---- class 2 ------------------------------------------------------------------------------ */
 
 static void c2_setup(dpm_c2_t *c, uint8_t address, uint8_t ssap)
@@ -890,6 +981,8 @@ int main(void)
     RUN_TEST(test_c1_slow_inverter_b5_and_exchange_goes_on);
     RUN_TEST(test_c1_im0);
     RUN_TEST(test_c1_refusals_and_timeouts);
+    RUN_TEST(test_c1_lost_response_is_repeated_by_the_card);
+    RUN_TEST(test_c1_inverter_timeout_texts);
     RUN_TEST(test_c2_open_read_abort_on_the_wire);
     RUN_TEST(test_c2_im0_and_negative);
     RUN_TEST(test_c2_third_connection_refused);

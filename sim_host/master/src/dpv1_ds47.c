@@ -235,6 +235,14 @@ size_t dpm_ds47_error_text(uint8_t id, uint16_t error, char *out, size_t max)
     }
     if (pd != NULL) {
         n = snprintf(out, max, "PROFIdrive error 0x%02X: %s", error, pd);
+    } else if (error >= 0x0080u && error < 0x0090u) {
+        /* Class-8 additional codes start at 0x10; below that the card puts the code of a
+         * class-5/6 MOVILINK error (0x0505, 0x0602, 0x0608) after 0x80. */
+        uint16_t v = (uint16_t)(((error & 0x0Fu) == 0x05u ? 0x0500u : 0x0600u) | (error & 0x0Fu));
+        char ml[96];
+        ml[0] = '\0';
+        dpm_ml_error_value_text(v, ml, sizeof ml);
+        n = snprintf(out, max, "manufacturer specific 0x%04X (MOVILINK 0x%04X: %s)", error, v, ml);
     } else if (error >= 0x0080u && error <= 0x00FFu) {
         char ml[96];
         dpm_ml_error_value_text((uint16_t)(0x0800u | (error - 0x80u)), ml, sizeof ml);
