@@ -60,8 +60,10 @@ size_t dpm_build_prm_dpv1(uint8_t *out, uint16_t ident, uint32_t wd_ms, const ui
     if (user_len > sizeof u) {
         user_len = sizeof u;
     }
-    memcpy(u, user, user_len);
-    size_t n = user_len < 3u ? 3u : user_len; /* DPMV1_Status_1..3 at least */
+    if (user_len > 0u) {
+        memcpy(u, user, user_len);
+    }
+    size_t n = user_len < 3u ? 3u : user_len; /* DPV1_Status_1..3 at least */
     u[0] |= DP_DPV1_1_ENABLE;
     return dpm_build_prm(out, ident, wd_ms, u, n);
 }

@@ -187,12 +187,12 @@ const char *dpm_phase_name(dpm_phase_t p);
 /* Standard DP-V0 Set_Prm: Lock_Req, WD_On with the given time (10 ms base), min TSDR 11. */
 size_t dpm_build_prm(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
                      size_t user_len);
-/* The same for a DP-V1 slave: user[0..2] are DPMV1_Status_1..3 (octets 7..9; zeros if user is
- * shorter), and DPMV1_Status_1 gets DPMV1_Enable (0x80). For the DFP21B the user parameters
+/* The same for a DP-V1 slave: user[0..2] are DPV1_Status_1..3 (octets 7..9; zeros if user is
+ * shorter), and DPV1_Status_1 gets DPV1_Enable (0x80). For the DFP21B the user parameters
  * 00 00 00 06 81 00 00 01 01 go out as 80 00 00 06 81 00 00 01 01. */
 size_t dpm_build_prm_dpv1(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
                           size_t user_len);
-/* Set_Prm asks for DP-V1 (>= 10 octets and DPMV1_Enable): MSAC1 opens with Data_Exch. */
+/* Set_Prm asks for DP-V1 (>= 10 octets and DPV1_Enable): MSAC1 opens with Data_Exch. */
 bool dpm_prm_is_dpv1(const uint8_t *prm, size_t len);
 
 /* ---- DP-V1 class 1 ------------------------------------------------------------------------ */
