@@ -10,6 +10,7 @@ static void conn_close(dpv1_conn_t *c)
     c->mailbox = DPV1_MB_EMPTY;
     c->req_len = 0;
     c->rsp_len = 0;
+    c->im_selected = IM_INDEX_0;
     ds47_reset(&c->ds47);
 }
 
@@ -17,8 +18,10 @@ void dpv1_init(dpv1_t *d, const dpv1_cfg_t *cfg)
 {
     memset(d, 0, sizeof *d);
     ds47_init(&d->c1.ds47, cfg->ml, cfg->ch_c1);
+    d->c1.im_selected = IM_INDEX_0;
     for (uint8_t i = 0; i < DPV1_C2_CONNECTIONS; i++) {
         ds47_init(&d->c2[i].ds47, cfg->ml, cfg->ch_c2[i]);
+        d->c2[i].im_selected = IM_INDEX_0;
     }
     im_init(&d->im, &cfg->identity, cfg->nvm, cfg->nvm_offset);
 }
@@ -168,7 +171,7 @@ static size_t do_read(dpv1_t *d, dpv1_conn_t *c, const uint8_t *pdu, size_t len,
     if (index == DPV1_INDEX_DS47) {
         err = ds47_read(&c->ds47, &rsp[DPV1_HEADER_LEN], want, &n);
     } else if (index == DPV1_INDEX_IM) {
-        err = im_read(&d->im, &rsp[DPV1_HEADER_LEN], want, &n);
+        err = im_read(&d->im, c->im_selected, &rsp[DPV1_HEADER_LEN], want, &n);
     } else {
         err = DPV1_ERR_INVALID_INDEX;
     }
@@ -195,7 +198,7 @@ static size_t do_write(dpv1_t *d, dpv1_conn_t *c, const uint8_t *pdu, size_t len
     if (index == DPV1_INDEX_DS47) {
         err = ds47_write(&c->ds47, &pdu[DPV1_HEADER_LEN], n, now);
     } else if (index == DPV1_INDEX_IM) {
-        err = im_write(&d->im, &pdu[DPV1_HEADER_LEN], n);
+        err = im_write(&d->im, &pdu[DPV1_HEADER_LEN], n, &c->im_selected);
     } else {
         err = DPV1_ERR_INVALID_INDEX;
     }

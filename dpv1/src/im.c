@@ -51,7 +51,6 @@ void im_init(im_t *im, const im_identity_t *id, hal_nvm_t nvm, size_t nvm_offset
     im->id = *id;
     im->nvm = nvm;
     im->nvm_offset = nvm_offset;
-    im->selected = IM_INDEX_0;
     if (nvm.ops == NULL) {
         return;
     }
@@ -81,7 +80,7 @@ static int store(im_t *im)
     return im->nvm.ops->write(im->nvm.ctx, im->nvm_offset, image, sizeof image);
 }
 
-uint8_t im_write(im_t *im, const uint8_t *data, size_t len)
+uint8_t im_write(im_t *im, const uint8_t *data, size_t len, uint16_t *selected)
 {
     if (len < IM_CALL_HEADER_LEN || data[0] != IM_FN_CALL || data[1] != 0u) {
         return DPV1_ERR_INVALID_RANGE;
@@ -91,7 +90,7 @@ uint8_t im_write(im_t *im, const uint8_t *data, size_t len)
         return DPV1_ERR_INVALID_INDEX;
     }
     if (len == IM_CALL_HEADER_LEN) {
-        im->selected = fi; /* selects the record the next Read returns */
+        *selected = fi; /* selects the record the next Read returns */
         return 0;
     }
     if (len != IM_CALL_HEADER_LEN + IM_RECORD_LEN) {
@@ -108,23 +107,26 @@ uint8_t im_write(im_t *im, const uint8_t *data, size_t len)
         memcpy(rec, old, sizeof old);
         return 0xA1u; /* application: write error */
     }
-    im->selected = fi;
+    *selected = fi;
     return 0;
 }
 
-uint8_t im_read(const im_t *im, uint8_t *out, size_t max, size_t *len)
+uint8_t im_read(const im_t *im, uint16_t selected, uint8_t *out, size_t max, size_t *len)
 {
     if (max < IM_CALL_HEADER_LEN + IM_RECORD_LEN) {
         return DPV1_ERR_INVALID_RANGE;
     }
     out[0] = IM_FN_CALL;
     out[1] = 0;
-    out[2] = (uint8_t)(im->selected >> 8);
-    out[3] = (uint8_t)im->selected;
-    if (im->selected == IM_INDEX_0) {
+    if (selected < IM_INDEX_0 || selected > IM_INDEX_LAST) {
+        selected = IM_INDEX_0;
+    }
+    out[2] = (uint8_t)(selected >> 8);
+    out[3] = (uint8_t)selected;
+    if (selected == IM_INDEX_0) {
         im_build_record0(&im->id, &out[IM_CALL_HEADER_LEN]);
     } else {
-        memcpy(&out[IM_CALL_HEADER_LEN], im->records[im->selected - IM_INDEX_0 - 1u],
+        memcpy(&out[IM_CALL_HEADER_LEN], im->records[selected - IM_INDEX_0 - 1u],
                IM_RECORD_LEN);
     }
     *len = IM_CALL_HEADER_LEN + IM_RECORD_LEN;

@@ -34,6 +34,7 @@ typedef struct dpv1_conn {
     uint8_t rsp[DPV1_MAX_PDU];
     uint8_t rsp_len;
     ds47_t ds47;
+    uint16_t im_selected; /* FI_Index this connection's next Read of index 255 returns */
 } dpv1_conn_t;
 
 typedef struct dpv1_cfg {

@@ -34,7 +34,6 @@ typedef struct im {
     im_identity_t id;
     hal_nvm_t nvm;
     size_t nvm_offset;
-    uint16_t selected; /* FI_Index of the next Read */
     uint8_t records[IM_WRITABLE][IM_RECORD_LEN];
     bool nvm_ok;
 } im_t;
@@ -42,10 +41,11 @@ typedef struct im {
 /* Loads I&M1..4 from nvm (blank records if there is none or it is not ours). */
 void im_init(im_t *im, const im_identity_t *id, hal_nvm_t nvm, size_t nvm_offset);
 /* Write.req on index 255: 0 or a DP-V1 Error_Code_1 (B0 unknown FI_Index, B1 length, B6 I&M0
- * is read-only, B7 call header, A1 storage failed). */
-uint8_t im_write(im_t *im, const uint8_t *data, size_t len);
+ * is read-only, B7 call header, A1 storage failed). *selected is the connection's choice of the
+ * record its next Read returns: each master has its own, so two cannot mix up their calls. */
+uint8_t im_write(im_t *im, const uint8_t *data, size_t len, uint16_t *selected);
 /* Read.req on index 255: call header + the selected record. 0 or an Error_Code_1. */
-uint8_t im_read(const im_t *im, uint8_t *out, size_t max, size_t *len);
+uint8_t im_read(const im_t *im, uint16_t selected, uint8_t *out, size_t max, size_t *len);
 void im_build_record0(const im_identity_t *id, uint8_t out[IM_RECORD_LEN]);
 
 #endif
