@@ -115,7 +115,7 @@ dp_sap_answer_t dpv1_sap_request(dpv1_t *d, uint8_t master, uint8_t dsap, uint8_
                                  size_t *reply_len, hal_time_us_t t)
 {
     if (dsap == DPV1_SAP_C1) {
-        if (!d->c1.open || d->c1.master != master) {
+        if (!d->c1.open || d->c1.master != master || ssap != DPV1_SAP_C1) {
             return DP_SAP_NOT_SERVED;
         }
         return mailbox_request(&d->c1, data, len, reply, reply_len);
@@ -126,6 +126,13 @@ dp_sap_answer_t dpv1_sap_request(dpv1_t *d, uint8_t master, uint8_t dsap, uint8_
     if (dsap < DPV1_C2_FIRST_SAP + DPV1_C2_CONNECTIONS) {
         dpv1_conn_t *c = &d->c2[dsap - DPV1_C2_FIRST_SAP];
         if (!c->open || c->master != master || c->ssap != ssap) {
+            return DP_SAP_NOT_SERVED;
+        }
+        if (hal_time_diff(t, c->last_rx) > (int32_t)c->send_timeout_us) {
+            /* Silent for longer than its Send_Timeout: gone, even if the main loop has not
+             * noticed yet. */
+            conn_close(c);
+            d->c2_timeouts++;
             return DP_SAP_NOT_SERVED;
         }
         c->last_rx = t;

@@ -201,10 +201,14 @@ static void run_next(ds47_t *d, hal_time_us_t now)
     uint8_t req[ML_TELEGRAM_LEN] = {(uint8_t)(ML_MGMT_LENGTH_4 | p->service), 0,
                                     (uint8_t)(p->number >> 8), (uint8_t)p->number, 0, 0, 0, 0};
     ml_put_data(req, is_write(p->service) ? p->value : 0u);
+    uint32_t outstanding = d->running_generation;
     d->running_generation = d->generation;
     d->waiting = true;
     if (ml_client_request(d->ml, d->channel, req, on_done, d, now) != 0) {
-        d->waiting = false; /* a dropped request's service still occupies the channel: retry */
+        /* A dropped request's service still occupies the channel: its late answer must keep
+         * failing the generation check, so the generation it ran under stays recorded. */
+        d->running_generation = outstanding;
+        d->waiting = false;
     }
 }
 

@@ -12,9 +12,8 @@
  * connections, supervision, Idle and Abort, C1 + two C2 + Data_Exchange interleaved, I&M with
  * its per-connection selection and its persistence in the card's file-backed NVM.
  *
- * Kept out under #if 0 (a bug in dpv1/src/ds47.c run_next(), see the comments there): a
- * connection closed while its MOVILINK service runs lets that service's late answer complete
- * the next request on the same channel. */
+ * Two tests (..._while_service_runs) guard a fixed bug: a connection closed while its MOVILINK
+ * service ran let that service's late answer complete the next request on the same channel. */
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
 #include <stdio.h>
 #include <stdlib.h>
@@ -1054,11 +1053,9 @@ static void test_msac2_abort_while_service_runs(void)
     CHECK(!R.cs.card.dpv1.c2[0].open);
     main_loop();
     c2_open(__LINE__, 5, 0); /* the same SAP, the same MOVILINK channel */
-#if 0 /* BUG dpv1/src/ds47.c run_next(): the dropped read's answer (8300 = 0x311C7289) completes
-       * this PROFIdrive read of 8489 (expected 150000 = 0x000249F0). */
+    /* Not the dropped read's answer (8300 = 0x311C7289): 8489's own 150000 = 0x000249F0. */
     DS47(5, 0, SSAP_C2, B(0x02, 0x01, 0x00, 0x01, 0x10, 0x00, 0x21, 0x29, 0x00, 0x00),
          0x02, 0x01, 0x00, 0x01, 0x43, 0x01, 0x00, 0x02, 0x49, 0xF0);
-#endif
 }
 
 /* The same on MSAC1: a new parameterisation closes MSAC1 while a read of 8300 runs; the change
@@ -1071,15 +1068,13 @@ static void test_msac1_reopen_while_service_runs(void)
     set_prm(M1, USER_DPV1);
     chk_cfg(M1);
     CHECK(R.cs.card.dpv1.c1.open);
-#if 0 /* BUG dpv1/src/ds47.c run_next(): the dropped read's answer completes this write, which is
-       * answered positively (02 02 00 01) but never reaches the inverter: P160 stays 150000. */
+    /* Answered positively only once the write really reached the inverter. */
     DS47_C1(B(0x02, 0x02, 0x00, 0x01, 0x10, 0x00, 0x21, 0x29, 0x00, 0x00, 0x43, 0x01, 0x00,
               0x04, 0x93, 0xE0),
             0x02, 0x02, 0x00, 0x01);
     int32_t v = 0;
     CHECK(movidrive_read_value(&R.cs.md, MD_IDX_P160_N11, &v));
     CHECK_EQ(v, 300000);
-#endif
 }
 
 /* ---- interleaving ------------------------------------------------------------------------- */
