@@ -10,6 +10,11 @@
 SHELL := /bin/bash
 APT_PACKAGES := cmake ninja-build gcc make python3 socat gcc-arm-none-eabi libnewlib-arm-none-eabi \
   qemu-system-x86 busybox-static cpio iproute2
+# Each capability adds its own packages, build steps and test targets in mk/*.mk:
+#   APT_PACKAGES += ...      EXTRA_TEST_TARGETS += target
+EXTRA_TEST_TARGETS :=
+-include mk/*.mk
+
 VENV := build/venv
 PYTHON := $(VENV)/bin/python3
 CTEST_FLAGS := --output-on-failure --timeout 300
@@ -60,8 +65,8 @@ cross: deps-apt
 	cmake --preset cortex-m4
 	cmake --build build/cortex-m4
 
-test: test-host test-asan cross
-	@echo "make test: host, sanitizer and Cortex-M4 builds all passed"
+test: test-host test-asan cross $(EXTRA_TEST_TARGETS)
+	@echo "make test: host, sanitizer and Cortex-M4 builds$(if $(EXTRA_TEST_TARGETS), and $(EXTRA_TEST_TARGETS),) all passed"
 
 bench: build
 	./build/host/sim_host/bench/dfp-bench
