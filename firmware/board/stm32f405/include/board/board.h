@@ -1,0 +1,85 @@
+/* The STM32F405 reference board: pin map, clocks, interrupt priorities, and the services the
+ * main loop uses. Pins are this project's choice for a DFP21B-like card built around an
+ * STM32F405 (the real card's MCU is not documented); change them here for another layout.
+ *
+ *   USART1  TX PA9, RX PA10 (AF7)   RS-485 transceiver; DE (driver enable) PA8, active high
+ *   CAN1    RX PB8, TX PB9 (AF9)    SBus to the inverter, 500 kbit/s (P816 default)
+ *   LEDs    RUN PB0, BUS FAULT PB1  active high
+ *   DIP     PC0..PC6 = 2^0..2^6     switch ON pulls to ground (internal pull-ups)
+ *
+ * Interrupt priorities (4 bits, lower = more urgent): SysTick 0 (the time base must never
+ * stall), USART1 1 (the receive-to-reply path), CAN1 RX0 2. The main loop masks priority >= 1
+ * with BASEPRI while it runs the core's poll, so the ISR and the main loop never work on the
+ * card at the same time (the core has no locks; see docs/porting.md). */
+#ifndef BOARD_BOARD_H
+#define BOARD_BOARD_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "board/stm32f405_regs.h"
+
+#define BOARD_HSE_HZ 8000000u
+#define BOARD_HCLK_HZ 168000000u
+#define BOARD_PCLK1_HZ 42000000u
+#define BOARD_PCLK2_HZ 84000000u
+#define BOARD_HSI_HZ 16000000u
+
+#define BOARD_PRIO_SYSTICK 0u
+#define BOARD_PRIO_USART 1u
+#define BOARD_PRIO_CAN 2u
+#define BOARD_PRIO_SHIFT 4u
+
+typedef enum board_clock_source {
+    BOARD_CLOCK_PLL_HSE = 0, /* 8 MHz crystal -> PLL 168 MHz */
+    BOARD_CLOCK_PLL_HSI,     /* no crystal: HSI 16 MHz -> PLL 168 MHz (UART rates within 1 %) */
+    BOARD_CLOCK_HSI_ONLY,    /* PLL did not lock: 16 MHz, the card runs slowly */
+    BOARD_CLOCK_NOT_MODELLED, /* RCC reads as zero (QEMU): the machine's fixed 168 MHz */
+} board_clock_source_t;
+
+typedef struct board_clocks {
+    board_clock_source_t source;
+    uint32_t hclk_hz;
+    uint32_t pclk1_hz;
+    uint32_t pclk2_hz;
+} board_clocks_t;
+
+board_clocks_t board_clock_init(rcc_regs_t *rcc, flash_regs_t *flash);
+const char *board_clock_source_name(board_clock_source_t s);
+
+/* Fault record: survives a reset (.noinit RAM), readable with a debugger (`p board_fault`) or
+ * at the next power-up. */
+#define BOARD_FAULT_MAGIC 0xFA017EC0u
+typedef struct board_fault_record {
+    uint32_t magic;
+    uint32_t count;       /* faults since the record was last cleared */
+    uint32_t exception;   /* 3 HardFault, 4 MemManage, 5 BusFault, 6 UsageFault, 16+ IRQ */
+    uint32_t r0, r1, r2, r3, r12, lr, pc, xpsr; /* the stacked frame */
+    uint32_t sp;          /* stack pointer before the exception */
+    uint32_t exc_return;
+    uint32_t cfsr, hfsr, mmfar, bfar;
+} board_fault_record_t;
+
+extern board_fault_record_t board_fault;
+/* Formats the record as one line of text ("fault: HardFault pc=0x... lr=... cfsr=..."). */
+unsigned board_fault_format(const board_fault_record_t *r, char *out, unsigned max);
+
+/* Semihosting (test images under QEMU with -semihosting-config enable=on): */
+void semihost_write0(const char *s);
+__attribute__((noreturn)) void semihost_exit(uint32_t code);
+
+/* Stack: painted at reset, measured later. */
+uint32_t board_stack_size(void);
+uint32_t board_stack_used(void);
+
+static inline void board_basepri(uint32_t prio)
+{
+#ifndef BOARD_HOST_TEST
+    uint32_t v = prio << BOARD_PRIO_SHIFT;
+    __asm volatile("msr basepri, %0" ::"r"(v) : "memory");
+#else
+    (void)prio;
+#endif
+}
+
+#endif

@@ -1,0 +1,1 @@
+print("size report TODO")
