@@ -21,7 +21,11 @@ uint8_t sbus_unpack_pd(const hal_can_frame_t *f, uint16_t words[SBUS_PD_WORDS])
         n = SBUS_PD_WORDS;
     }
     for (uint8_t i = 0; i < SBUS_PD_WORDS; i++) {
-        words[i] = i < n ? (uint16_t)((f->data[2u * i] << 8) | f->data[2u * i + 1u]) : 0u;
+        uint16_t w = 0u;
+        if (i < n) {
+            w = (uint16_t)((f->data[2u * i] << 8) | f->data[2u * i + 1u]);
+        }
+        words[i] = w;
     }
     return n;
 }

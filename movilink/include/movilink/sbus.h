@@ -71,7 +71,7 @@
 /* Identifier helpers; a = SBus address 0..63 (P813) or group address (P814). */
 static inline uint16_t sbus_id(uint8_t a, bool param, uint8_t fn)
 {
-    return (uint16_t)((param ? SBUS_PARAM_BIT : 0u) | ((uint16_t)(a & 0x3Fu) << 3) | (fn & 7u));
+    return (uint16_t)((param ? SBUS_PARAM_BIT : 0u) | ((a & 0x3Fu) << 3) | (fn & 7u));
 }
 static inline uint16_t sbus_id_po(uint8_t a) { return sbus_id(a, false, SBUS_FN_PO); }
 static inline uint16_t sbus_id_pi(uint8_t a) { return sbus_id(a, false, SBUS_FN_PI); }
