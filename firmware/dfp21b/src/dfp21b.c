@@ -399,9 +399,11 @@ static void take_outputs(dfp21b_t *c, hal_time_us_t now)
         memcpy(c->param_req, c->out_image, DFP21B_PARAM_LEN);
     }
     for (uint8_t i = 0; i < DFP21B_MAX_PD; i++) {
-        c->po[i] = i < n ? (uint16_t)((c->out_image[off + 2u * i] << 8) |
-                                      c->out_image[off + 2u * i + 1u])
-                         : 0u;
+        uint16_t w = 0u;
+        if (i < n) {
+            w = (uint16_t)((c->out_image[off + 2u * i] << 8) | c->out_image[off + 2u * i + 1u]);
+        }
+        c->po[i] = w;
     }
     if (have_inverter(c)) {
         if (c->pd.param_channel) {
