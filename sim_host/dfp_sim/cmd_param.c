@@ -246,8 +246,12 @@ static void finish_channel(const uint8_t *in)
 {
     if ((in[ML_OFF_MANAGEMENT] & ML_MGMT_ERROR) != 0u) {
         uint8_t cls = in[4];
-        uint16_t v = cls == ML_CLASS_OTHER ? (uint16_t)(0x0800u | in[7])
-                                           : (uint16_t)((cls << 8) | in[5]);
+        uint16_t v;
+        if (cls == ML_CLASS_OTHER) {
+            v = (uint16_t)(0x0800u | in[7]);
+        } else {
+            v = (uint16_t)((cls << 8) | in[5]);
+        }
         char code[16];
         char text[160];
         snprintf(code, sizeof code, "0x%04X", v);

@@ -278,7 +278,7 @@ static int enable_low_latency(tty_port_t *p)
     if (ioctl(p->fd, TIOCGSERIAL, &ss) != 0) {
         return feature_missing(errno) ? 0 : -1;
     }
-    ss.flags |= ASYNC_LOW_LATENCY;
+    ss.flags |= (int)ASYNC_LOW_LATENCY; /* 1U << 13: fits the int field */
     if (ioctl(p->fd, TIOCSSERIAL, &ss) != 0) {
         return feature_missing(errno) ? 0 : -1;
     }
