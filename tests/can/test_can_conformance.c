@@ -596,7 +596,7 @@ static void test_socketcan_vm_errors(void)
     CHECK_EQ(socketcan_open(&s, "lo", NULL, NULL, err, sizeof err), -1);
     CHECK_STR(err, "cannot open CAN interface lo: not a CAN interface");
     if (sh("ip link add dev vcantest type vcan 2>/dev/null") != 0) {
-        CHECK(!"cannot create vcantest (not root?)");
+        CHECK(false && "cannot create vcantest (not root?)");
         return;
     }
     CHECK_EQ(socketcan_open(&s, "vcantest", NULL, NULL, err, sizeof err), -1);
