@@ -1,0 +1,17 @@
+# The STM32F405 firmware image (issue 6): cross build with reports, and the QEMU test.
+#   make firmware        .elf/.bin/.hex/.map of every image, size report by module, stack report
+#   make test-firmware   board driver unit tests (host) + the images under QEMU driven by dfp-sim
+APT_PACKAGES += qemu-system-arm gcc-arm-none-eabi libnewlib-arm-none-eabi
+EXTRA_TEST_TARGETS += test-firmware
+
+FIRMWARE_DIR := build/cortex-m4/firmware/board/stm32f405
+
+.PHONY: firmware test-firmware
+
+firmware: deps-apt
+	cmake --preset cortex-m4
+	cmake --build build/cortex-m4
+
+test-firmware: firmware build
+	ctest --test-dir build/host $(CTEST_FLAGS) -R '^board_drivers$$'
+	timeout 300 tests/firmware/qemu_card.sh $(FIRMWARE_DIR) build/host/sim_host/dfp_sim/dfp-sim
