@@ -15,3 +15,8 @@ firmware: deps-apt
 test-firmware: firmware build
 	ctest --test-dir build/host $(CTEST_FLAGS) -R '^board_drivers$$'
 	timeout 300 tests/firmware/qemu_card.sh $(FIRMWARE_DIR) build/host/sim_host/dfp_sim/dfp-sim
+
+# Instruction counts of the reply path on the target (docs/performance.md, "On the target").
+.PHONY: firmware-measure
+firmware-measure: firmware build
+	tests/firmware/measure_reply_path.sh $(FIRMWARE_DIR) build/host/sim_host/dfp_sim/dfp-sim build/measure

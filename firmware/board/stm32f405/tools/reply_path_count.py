@@ -1,0 +1,167 @@
+#!/usr/bin/env python3
+"""Instructions from the last request character to the first reply character, per telegram type,
+counted on the target under QEMU (netduinoplus2, Cortex-M4 TCG).
+
+Method: QEMU runs the image with `-singlestep -d exec,nochain -D TRACE`: one trace line per
+executed instruction, with its PC. For every reply, count the instructions from the entry of the
+USART1 interrupt that took the request's last character to the entry of rs485_uart_transmit
+(decode, FDL, DP service, DP-V1 SAP, encoding, FCB cache), leaving out SysTick (its own
+interrupt, at most one per reply), then add the transmit tail measured the same way without the
+min TSDR spin (a fresh not_before has already passed at 12 Mbit/s): transmit entry to its
+first clock read, one clock read, and from the spin's last clock read to the first DR write in
+tx_fill. Replies are matched in order to the pcap captures of the master runs (request -> reply).
+
+usage: reply_path_count.py ELF TRACE CAPTURE.pcap [CAPTURE.pcap ...]
+"""
+import re
+import struct
+import subprocess
+import sys
+from collections import defaultdict
+
+BAUDS = [12000000, 6000000, 3000000, 1500000, 500000, 187500, 93750, 45450, 19200, 9600]
+MHZ = 168
+
+
+def symbols(elf):
+    out = subprocess.run(["arm-none-eabi-nm", "-S", elf], capture_output=True, text=True).stdout
+    syms = {}
+    for l in out.splitlines():
+        p = l.split()
+        if len(p) == 4 and p[2] in "tT":
+            syms[p[3]] = (int(p[0], 16) & ~1, int(p[1], 16))
+    return syms
+
+
+def first_dr_store(elf, start, size):
+    """Address of the first store to DR (str/strb with offset #4) in tx_fill."""
+    out = subprocess.run(["arm-none-eabi-objdump", "-d", "--start-address=%d" % start,
+                          "--stop-address=%d" % (start + size), elf],
+                         capture_output=True, text=True).stdout
+    for l in out.splitlines():
+        m = re.match(r"\s*([0-9a-f]+):\s+\S+(?: \S+)?\s+(str\w*)\s+.*\[r\d+, #4\]", l)
+        if m:
+            return int(m.group(1), 16)
+    return None
+
+
+def classify(req):
+    sd = req[0]
+    if sd == 0x10:
+        return "FDL status (SD1)" if (req[3] & 0x0F) == 0x09 else "SD1 other"
+    if sd == 0xA2:
+        return "Data_Exchange SD3 8 B"
+    if sd != 0x68:
+        return "other"
+    da, sa = req[4], req[5]
+    data = req[7:-2]
+    if not (da & 0x80):
+        return "Data_Exchange %d B" % len(data)
+    dsap = data[0]
+    names = {60: "Slave_Diag", 61: "Set_Prm", 62: "Chk_Cfg", 59: "Get_Cfg", 58: "Global_Control",
+             56: "Rd_Inp", 57: "Rd_Outp", 51: "DP-V1 MSAC1", 49: "DP-V1 MSAC2 Initiate (RM)"}
+    if dsap in names:
+        return names[dsap]
+    return "DP-V1 MSAC2 connection"
+
+
+def pairs(paths):
+    out = []
+    for p in paths:
+        d = open(p, "rb").read()
+        o = 24
+        recs = []
+        while o + 16 <= len(d):
+            _, _, cl, _ = struct.unpack("<IIII", d[o:o + 16])
+            recs.append(d[o + 16:o + 16 + cl])
+            o += 16 + cl
+        for i, r in enumerate(recs):
+            is_req = (r[0] in (0x10, 0x68, 0xA2)) and (
+                (r[0] == 0x68 and (r[4] & 0x7F) == 4) or (r[0] != 0x68 and (r[1] & 0x7F) == 4))
+            if is_req and i + 1 < len(recs):
+                nxt = recs[i + 1]
+                nxt_is_req = nxt[0] != 0xE5 and (
+                    (nxt[0] == 0x68 and (nxt[4] & 0x7F) == 4) or
+                    (nxt[0] in (0x10, 0xA2) and (nxt[1] & 0x7F) == 4))
+                if not nxt_is_req:
+                    out.append((classify(r), r, nxt))
+    return out
+
+
+def main():
+    elf, trace, caps = sys.argv[1], sys.argv[2], sys.argv[3:]
+    s = symbols(elf)
+    isr = s["USART1_IRQHandler"][0]
+    tx = s["rs485_uart_transmit"][0]
+    fill_a, fill_n = s["tx_fill"]
+    now_a = s["now_us"][0] if "now_us" in s else s["timebase_now_us"][0]
+    dr_store = first_dr_store(elf, fill_a, fill_n)
+    excl = []
+    for n in ("SysTick_Handler", "timebase_tick", "board_leds_tick"):
+        if n in s:
+            excl.append((s[n][0], s[n][0] + s[n][1]))
+    line_re = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[[0-9a-f]+/([0-9a-f]+)/")
+    results = []
+    count = None
+    tail = None
+    tails = []
+    state = None
+    with open(trace, errors="replace") as f:
+        for l in f:
+            m = line_re.match(l)
+            if not m:
+                continue
+            pc = int(m.group(1), 16)
+            if any(a <= pc < b for a, b in excl):
+                continue
+            if pc == isr:
+                count = 0
+            if count is not None:
+                count += 1
+            if pc == tx and count is not None:
+                results.append(count - 1)
+                count = None
+                tail = {"n": 0, "nows": []}
+                continue
+            if tail is not None:
+                tail["n"] += 1
+                if pc == now_a:
+                    tail["nows"].append(tail["n"])
+                if dr_store is not None and pc == dr_store:
+                    nows = tail["nows"]
+                    if len(nows) >= 2:
+                        per_call = nows[1] - nows[0]
+                        t = nows[0] + per_call + (tail["n"] - nows[-1])
+                    else:
+                        t = tail["n"]
+                    tails.append(t)
+                    tail = None
+    tail_max = max(tails) if tails else 0
+    ps = pairs(caps)
+    if len(ps) != len(results):
+        print("warning: %d replies in the captures, %d transmits in the trace; matching the last %d"
+              % (len(ps), len(results), min(len(ps), len(results))), file=sys.stderr)
+    k = min(len(ps), len(results))
+    ps, res = ps[-k:], results[-k:]
+    by = defaultdict(list)
+    for (kind, _, _), n in zip(ps, res):
+        by[kind].append(n)
+    print("Reply path on the target (QEMU netduinoplus2, TCG single-step): instructions from the "
+          "USART1 interrupt of the last request character to the first reply character")
+    print("transmit tail (clock read, DE, RE off, first DR write) included: %d instructions" % tail_max)
+    hdr = "| telegram | n | instr. worst | instr. min | µs at %d MHz (1 instr./cycle) |" % MHZ
+    hdr += " bit times at " + " / ".join("%g" % (b / 1e6) if b >= 1e6 else "%gk" % (b / 1e3)
+                                          for b in BAUDS[:5]) + " |"
+    print(hdr)
+    print("|---|---:|---:|---:|---:|---:|")
+    for kind in sorted(by, key=lambda k: -max(by[k])):
+        w = max(by[kind]) + tail_max
+        us = w / MHZ
+        bits = " / ".join("%.1f" % (us * b / 1e6) for b in BAUDS[:5])
+        print("| %s | %d | %d | %d | %.2f | %s |" % (kind, len(by[kind]), w, min(by[kind]) + tail_max,
+                                                   us, bits))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Reply-path instruction counts on the target: the -qemu-sbus image single-stepped by QEMU with
+# an instruction trace, driven by dfp-sim (DP-V0 start-up + Data_Exchange, C1 and C2 reads).
+# usage: measure_reply_path.sh IMAGE_DIR DFP_SIM OUT_DIR
+set -eu
+img=$1/dfp21b-stm32f405-qemu-sbus.elf
+sim=$2
+out=$3
+mkdir -p "$out"
+rm -f "$out"/trace.log "$out"/*.pcap
+timeout 120 qemu-system-arm -M netduinoplus2 -nographic -monitor none \
+  -semihosting-config enable=on,target=native -serial pty -singlestep -d exec,nochain \
+  -D "$out/trace.log" -kernel "$img" > "$out/qemu.log" 2>&1 &
+qpid=$!
+for _ in $(seq 100); do pts=$(grep -o '/dev/pts/[0-9]*' "$out/qemu.log" || true); [ -n "$pts" ] && break; sleep 0.1; done
+exec 9<>"$pts"
+timeout 60 "$sim" master --port "$pts" --address 4 --config F3F2 --cycles 10 \
+  --outputs 00000000000000001234ABCD5678 --capture "$out/1.pcap" > /dev/null
+timeout 60 "$sim" param --port "$pts" --address 4 --via movilink --capture "$out/2.pcap" read 8300
+timeout 60 "$sim" param --port "$pts" --address 4 --via c2 --capture "$out/3.pcap" read 8300
+exec 9>&-
+wait $qpid || true
+python3 "$(dirname "$0")/../../firmware/board/stm32f405/tools/reply_path_count.py" "$img" \
+  "$out/trace.log" "$out/1.pcap" "$out/2.pcap" "$out/3.pcap"
