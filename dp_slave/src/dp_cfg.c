@@ -20,8 +20,12 @@ bool dp_cfg_io_lengths(const uint8_t *cfg, size_t len, uint16_t *out_len, uint16
         uint8_t dir = (uint8_t)(id & DP_CFG_DIR_MASK);
         if (dir != DP_CFG_DIR_SPECIAL) {
             uint16_t n = units_to_bytes(id, false);
-            if ((dir & DP_CFG_DIR_OUT) != 0u) out = (uint16_t)(out + n);
-            if ((dir & DP_CFG_DIR_IN) != 0u) in = (uint16_t)(in + n);
+            if ((dir & DP_CFG_DIR_OUT) != 0u) {
+                out = (uint16_t)(out + n);
+            }
+            if ((dir & DP_CFG_DIR_IN) != 0u) {
+                in = (uint16_t)(in + n);
+            }
             continue;
         }
         /* Special format: bits 7..6 say which length octets follow, bits 3..0 how many
@@ -29,15 +33,21 @@ bool dp_cfg_io_lengths(const uint8_t *cfg, size_t len, uint16_t *out_len, uint16
         uint8_t kind = (uint8_t)(id >> 6);
         uint8_t vendor = (uint8_t)(id & 0x0Fu);
         if (kind == 2u || kind == 3u) {
-            if (i >= len) return false;
+            if (i >= len) {
+                return false;
+            }
             out = (uint16_t)(out + units_to_bytes(cfg[i++], true));
         }
         if (kind == 1u || kind == 3u) {
-            if (i >= len) return false;
+            if (i >= len) {
+                return false;
+            }
             in = (uint16_t)(in + units_to_bytes(cfg[i++], true));
         }
         if (vendor != 15u) {
-            if (len - i < vendor) return false;
+            if (len - i < vendor) {
+                return false;
+            }
             i += vendor;
         }
     }

@@ -304,17 +304,37 @@ size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max)
         return 0;
     }
     uint8_t st1 = 0;
-    if (s->state != DP_STATE_DATA_EXCH) st1 |= DP_DIAG1_STATION_NOT_READY;
-    if (s->cfg_fault) st1 |= DP_DIAG1_CFG_FAULT;
-    if (s->ext_diag_len > 0u) st1 |= DP_DIAG1_EXT_DIAG;
-    if (s->not_supported) st1 |= DP_DIAG1_NOT_SUPPORTED;
-    if (s->prm_fault) st1 |= DP_DIAG1_PRM_FAULT;
+    if (s->state != DP_STATE_DATA_EXCH) {
+        st1 |= DP_DIAG1_STATION_NOT_READY;
+    }
+    if (s->cfg_fault) {
+        st1 |= DP_DIAG1_CFG_FAULT;
+    }
+    if (s->ext_diag_len > 0u) {
+        st1 |= DP_DIAG1_EXT_DIAG;
+    }
+    if (s->not_supported) {
+        st1 |= DP_DIAG1_NOT_SUPPORTED;
+    }
+    if (s->prm_fault) {
+        st1 |= DP_DIAG1_PRM_FAULT;
+    }
     uint8_t st2 = DP_DIAG2_ALWAYS_ONE;
-    if (s->state == DP_STATE_WAIT_PRM) st2 |= DP_DIAG2_PRM_REQ;
-    if (s->stat_diag) st2 |= DP_DIAG2_STAT_DIAG;
-    if (s->wd_on) st2 |= DP_DIAG2_WD_ON;
-    if (s->freeze_mode) st2 |= DP_DIAG2_FREEZE_MODE;
-    if (s->sync_mode) st2 |= DP_DIAG2_SYNC_MODE;
+    if (s->state == DP_STATE_WAIT_PRM) {
+        st2 |= DP_DIAG2_PRM_REQ;
+    }
+    if (s->stat_diag) {
+        st2 |= DP_DIAG2_STAT_DIAG;
+    }
+    if (s->wd_on) {
+        st2 |= DP_DIAG2_WD_ON;
+    }
+    if (s->freeze_mode) {
+        st2 |= DP_DIAG2_FREEZE_MODE;
+    }
+    if (s->sync_mode) {
+        st2 |= DP_DIAG2_SYNC_MODE;
+    }
     out[DP_DIAG_STATUS_1] = st1;
     out[DP_DIAG_STATUS_2] = st2;
     out[DP_DIAG_STATUS_3] = s->ext_diag_overflow ? DP_DIAG3_EXT_DIAG_OVERFLOW : 0u;
