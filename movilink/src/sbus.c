@@ -9,8 +9,9 @@ void sbus_pack_pd(hal_can_frame_t *f, uint16_t id, const uint16_t *words, uint8_
     f->id = id;
     f->len = SBUS_PD_LEN;
     for (uint8_t i = 0; i < SBUS_PD_WORDS && i < n; i++) {
-        f->data[2u * i] = (uint8_t)(words[i] >> 8);
-        f->data[2u * i + 1u] = (uint8_t)(words[i] & 0xFFu);
+        size_t at = 2u * (size_t)i;
+        f->data[at] = (uint8_t)(words[i] >> 8);
+        f->data[at + 1u] = (uint8_t)(words[i] & 0xFFu);
     }
 }
 
@@ -23,7 +24,8 @@ uint8_t sbus_unpack_pd(const hal_can_frame_t *f, uint16_t words[SBUS_PD_WORDS])
     for (uint8_t i = 0; i < SBUS_PD_WORDS; i++) {
         uint16_t w = 0u;
         if (i < n) {
-            w = (uint16_t)((f->data[2u * i] << 8) | f->data[2u * i + 1u]);
+            size_t at = 2u * (size_t)i;
+            w = (uint16_t)((f->data[at] << 8) | f->data[at + 1u]);
         }
         words[i] = w;
     }
