@@ -401,7 +401,8 @@ static void take_outputs(dfp21b_t *c, hal_time_us_t now)
     for (uint8_t i = 0; i < DFP21B_MAX_PD; i++) {
         uint16_t w = 0u;
         if (i < n) {
-            w = (uint16_t)((c->out_image[off + 2u * i] << 8) | c->out_image[off + 2u * i + 1u]);
+            size_t at = off + 2u * (size_t)i;
+            w = (uint16_t)((c->out_image[at] << 8) | c->out_image[at + 1u]);
         }
         c->po[i] = w;
     }
@@ -436,9 +437,9 @@ static void build_inputs(dfp21b_t *c)
                have_inverter(c) ? ml_channel_reply(&c->param) : c->param_rsp, DFP21B_PARAM_LEN);
     }
     for (uint8_t i = 0; i < n; i++) {
-        put_be16(&c->in_image[off + 2u * i], c->pi[i]);
+        put_be16(&c->in_image[off + 2u * (size_t)i], c->pi[i]);
     }
-    dp_slave_set_inputs(&c->dp, c->in_image, off + 2u * n);
+    dp_slave_set_inputs(&c->dp, c->in_image, off + 2u * (size_t)n);
     c->inputs_dirty = false;
 }
 
