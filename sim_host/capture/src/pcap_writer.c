@@ -37,7 +37,7 @@ int pcap_writer_open(pcap_writer_t *w, const char *path, uint32_t linktype, bool
     put32(&hdr[20], linktype);
     if (fwrite(hdr, 1, sizeof hdr, w->f) != sizeof hdr) {
         snprintf(err, errlen, "cannot write capture file %s: %s", path, strerror(errno));
-        fclose(w->f);
+        (void)fclose(w->f); /* the write error is the one reported */
         w->f = NULL;
         return -1;
     }
