@@ -493,9 +493,7 @@ static int write_all(int fd, const uint8_t *buf, size_t len)
             done += (size_t)n;
         } else if (n < 0 && errno == EINTR) {
             continue;
-        } else if (n < 0 && errno != EAGAIN) {
-            return -1;
-        } else if (wait_writable(fd) != 0) {
+        } else if ((n < 0 && errno != EAGAIN) || wait_writable(fd) != 0) {
             return -1;
         }
     }
@@ -633,7 +631,7 @@ void tty_runner_wake(tty_runner_t *r)
     }
 }
 
-int tty_runner_remove_timer(tty_runner_t *r, tty_timer_fn poll, void *ctx)
+int tty_runner_remove_timer(tty_runner_t *r, tty_timer_fn poll, const void *ctx)
 {
     for (uint8_t i = 0; i < r->num_timers; i++) {
         if (r->timers[i].poll == poll && r->timers[i].ctx == ctx) {

@@ -146,7 +146,7 @@ int tty_runner_add_timer(tty_runner_t *r, tty_timer_fn poll, void *ctx);
  * the next loop turn instead of at its last returned deadline. */
 void tty_runner_wake(tty_runner_t *r);
 /* Remove the timer added with this poll and ctx. Returns 0, or -1 if there is none. */
-int tty_runner_remove_timer(tty_runner_t *r, tty_timer_fn poll, void *ctx);
+int tty_runner_remove_timer(tty_runner_t *r, tty_timer_fn poll, const void *ctx);
 /* For fd users and timers: end the current run with -1 and this message (the first one set in a
  * run is kept). */
 void tty_runner_set_error(tty_runner_t *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
