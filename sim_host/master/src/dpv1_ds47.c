@@ -101,14 +101,14 @@ static bool parse_block(const uint8_t *d, size_t len, size_t *pos, dpm_ds47_resu
         return true;
     }
     if (fmt == DPM_DS47_FMT_ERROR) {
-        if (count < 1u || *pos + 2u * count > len) {
+        if (count < 1u || *pos + 2u * (size_t)count > len) {
             errf(err, errlen, "parameter %u: error block with %u values truncated", i + 1u,
                  count);
             return false;
         }
         res->ok = false;
         res->error = (uint16_t)((d[*pos] << 8) | d[*pos + 1u]);
-        *pos += 2u * count;
+        *pos += 2u * (size_t)count;
         return true;
     }
     size_t sz = format_size(fmt);

@@ -168,11 +168,11 @@ typedef struct dp_master {
 
 void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t now);
 /* Returns the slave index or -1 (table full, malformed configuration). */
-int dp_master_add_slave(dp_master_t *m, const dpm_slave_cfg_t *slave);
+int dp_master_add_slave(dp_master_t *m, const dpm_slave_cfg_t *sc);
 /* New parameters/configuration for a slave: its start-up is repeated with them. */
-int dp_master_reconfigure(dp_master_t *m, unsigned slave, const dpm_slave_cfg_t *cfg,
+int dp_master_reconfigure(dp_master_t *m, unsigned idx, const dpm_slave_cfg_t *sc,
                           hal_time_us_t now);
-void dp_master_set_outputs(dp_master_t *m, unsigned slave, const uint8_t *out, size_t len);
+void dp_master_set_outputs(dp_master_t *m, unsigned idx, const uint8_t *out, size_t len);
 /* Sent as SDN to address 127 at the next free moment. */
 void dp_master_global_control(dp_master_t *m, uint8_t command, uint8_t group_select);
 /* A stopped master sends nothing (to show what the slave's watchdog does). start() brings every
@@ -202,11 +202,11 @@ bool dpm_prm_is_dpv1(const uint8_t *prm, size_t len);
  * response), or with an error: C1 response timeout, RS (MSAC1 closed), no answer, the slave
  * restarted while the request was in the card. -1: not a DP-V1 slave (see dpm_prm_is_dpv1),
  * a request is already queued, or the PDU is empty or longer than 244 octets. */
-int dp_master_c1_submit(dp_master_t *m, unsigned slave, const uint8_t *pdu, size_t len,
+int dp_master_c1_submit(dp_master_t *m, unsigned idx, const uint8_t *pdu, size_t len,
                         dpm_acyc_done_t done, void *ctx);
 bool dp_master_c1_busy(const dp_master_t *m, unsigned slave);
 /* The slave as a path for dpv1_ds47.h jobs. */
-dpm_acyc_port_t dp_master_c1_port(dp_master_t *m, unsigned slave);
+dpm_acyc_port_t dp_master_c1_port(dp_master_t *m, unsigned idx);
 
 /* ---- DP-V1 class 2 ------------------------------------------------------------------------ */
 
