@@ -172,7 +172,7 @@ size_t movidrive_eeprom_size(void)
     for (size_t k = 0; k < md_params_count; k++) {
         n += (md_params[k].flags & MD_PF_NON_VOLATILE) ? 1u : 0u;
     }
-    return MD_EE_HEADER + n * MD_EE_RECORD + MD_IPOS_VARS * 4u;
+    return MD_EE_HEADER + n * MD_EE_RECORD + (size_t)MD_IPOS_VARS * 4u;
 }
 
 /* Largest image: header + every parameter + the IPOS variables. */
@@ -552,10 +552,7 @@ static void integrate_speed(movidrive_t *md, uint32_t dt_us)
         int32_t n = md->speed_actual_mrpm;
         bool up;
         int32_t seg_end;
-        if (n == 0) {
-            up = true;
-            seg_end = target;
-        } else if ((n > 0 && target > n) || (n < 0 && target < n)) {
+        if (n == 0 || (n > 0 && target > n) || (n < 0 && target < n)) {
             up = true;
             seg_end = target;
         } else {
