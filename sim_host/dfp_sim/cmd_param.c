@@ -338,7 +338,8 @@ static void step(void)
             }
             return;
         }
-        if (s->phase != DPM_PHASE_DATA_EXCH) {
+        /* Without class 2 the slave was added before the run started; s is never NULL here. */
+        if (s == NULL || s->phase != DPM_PHASE_DATA_EXCH) {
             return;
         }
         if (run.via == VIA_CHANNEL) {
@@ -353,7 +354,7 @@ static void step(void)
         return;
     case ST_RUNNING:
         if (run.via == VIA_CHANNEL) {
-            if (dpm_param_done(&run.pc, s->inputs)) {
+            if (s != NULL && dpm_param_done(&run.pc, s->inputs)) {
                 finish_channel(s->inputs);
                 run.stage = ST_DONE;
             }

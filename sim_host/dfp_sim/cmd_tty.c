@@ -30,7 +30,6 @@ static void install_signals(void)
 }
 
 typedef struct tty_clock {
-    hal_time_us_t start_us;
     uint64_t start_ns;
 } tty_clock_t;
 
