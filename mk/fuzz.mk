@@ -1,0 +1,62 @@
+# libFuzzer targets (tests/fuzz/README.md): clang 14 with -fsanitize=fuzzer,address,undefined,
+# a separate CMake build in build/fuzz that the gcc host build never sees.
+#
+#   make fuzz-smoke   what CI runs: every target over its regression corpus and the known-finding
+#                     reproducers, then FUZZ_SECONDS (30) of fuzzing each; any finding fails
+#   make fuzz-long    FUZZ_RUNS (10^8) executions per target, artifacts in build/fuzz/long/
+#   make fuzz-known   the reproducers of the known, unfixed findings (they must still fail with
+#                     their property switched on: FUZZ_KNOWN=name)
+#   make fuzz-seeds   seed corpora from `dfp-sim demo --capture` and profibus-dp.md §1.6
+
+APT_PACKAGES += clang-14 libclang-rt-14-dev
+EXTRA_TEST_TARGETS += fuzz-smoke
+
+FUZZ_BUILD := build/fuzz
+FUZZ_TARGETS := fdl_rx card movilink dpv1 ds47
+FUZZ_SECONDS ?= 30
+FUZZ_RUNS ?= 100000000
+FUZZ_MAX_LEN ?= 2048
+FUZZ_JOBS ?= 1
+
+.PHONY: fuzz-build fuzz-smoke fuzz-long fuzz-known fuzz-seeds
+
+fuzz-build: deps-apt
+	cmake -S tests/fuzz -B $(FUZZ_BUILD) -G Ninja -DCMAKE_C_COMPILER=clang-14
+	cmake --build $(FUZZ_BUILD)
+
+fuzz-smoke: fuzz-build
+	@set -e; for t in $(FUZZ_TARGETS); do \
+	  work=$(FUZZ_BUILD)/smoke/$$t; rm -rf $$work; mkdir -p $$work/corpus $$work/artifacts; \
+	  echo "== fuzz_$$t: regression corpus and known-finding reproducers"; \
+	  ./$(FUZZ_BUILD)/fuzz_$$t -runs=0 tests/fuzz/corpus/$$t 2>&1 | tail -n 2; \
+	  if [ -d tests/fuzz/known/$$t ]; then \
+	    ./$(FUZZ_BUILD)/fuzz_$$t tests/fuzz/known/$$t/* 2>&1 | tail -n 1; fi; \
+	  echo "== fuzz_$$t: $(FUZZ_SECONDS) s of fuzzing"; \
+	  ./$(FUZZ_BUILD)/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -max_len=$(FUZZ_MAX_LEN) \
+	    -timeout=10 -print_final_stats=1 -artifact_prefix=$$work/artifacts/ \
+	    $$work/corpus tests/fuzz/corpus/$$t 2>&1 | grep -E "^stat::(number_of_executed|average_exec)|ERROR|PROPERTY|SUMMARY" ; \
+	  if [ -n "$$(ls $$work/artifacts)" ]; then echo "fuzz_$$t: finding in $$work/artifacts"; exit 1; fi; \
+	done; echo "fuzz-smoke: $(words $(FUZZ_TARGETS)) targets, no finding"
+
+# One target: make fuzz-long FUZZ_TARGETS=card FUZZ_RUNS=1000000
+fuzz-long: fuzz-build
+	@set -e; for t in $(FUZZ_TARGETS); do \
+	  work=$(FUZZ_BUILD)/long/$$t; mkdir -p $$work/corpus $$work/artifacts; \
+	  echo "== fuzz_$$t: $(FUZZ_RUNS) executions, $$(date -u +%FT%TZ)"; \
+	  ./$(FUZZ_BUILD)/fuzz_$$t -runs=$(FUZZ_RUNS) -max_len=$(FUZZ_MAX_LEN) -timeout=10 \
+	    -print_final_stats=1 -artifact_prefix=$$work/artifacts/ \
+	    $$work/corpus tests/fuzz/corpus/$$t 2>&1 | tee $$work/log.txt | \
+	    grep -E "^stat::|ERROR|PROPERTY|SUMMARY|^Done"; \
+	done
+
+fuzz-known: fuzz-build
+	@set -e; for d in tests/fuzz/known/*/; do t=$$(basename $$d); \
+	  for f in $$d*; do name=$$(basename $$f | sed 's/-[^-]*$$//'); \
+	    if FUZZ_KNOWN=$$name ./$(FUZZ_BUILD)/fuzz_$$t $$f >$(FUZZ_BUILD)/known.log 2>&1; then \
+	      echo "$$t/$$(basename $$f): no longer fails (fixed?)"; \
+	    else echo "$$t/$$(basename $$f): $$(grep -A1 'PROPERTY VIOLATED' $(FUZZ_BUILD)/known.log | tail -n 1)"; fi; \
+	  done; done
+
+fuzz-seeds: build
+	./build/host/sim_host/dfp_sim/dfp-sim demo --capture $(FUZZ_BUILD)/demo.pcap >/dev/null
+	python3 tests/fuzz/pcap2corpus.py $(FUZZ_BUILD)/seeds $(FUZZ_BUILD)/demo.pcap
