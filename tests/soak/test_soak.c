@@ -1,0 +1,512 @@
+/* Soak test: the built-in master (cyclic Data_Exchange with the 8-byte parameter channel, a
+ * DP-V1 class-1 client and a class-2 connection) and the card with the emulated MOVIDRIVE on
+ * the in-memory bus, in simulated time, with injected faults:
+ *
+ *   - corrupted characters towards the card (framing error or a flipped bit),
+ *   - lost replies (the card's transmit is dropped) and corrupted replies (a flipped bit),
+ *   - master restarts (stop + start at once: Set_Prm while the card is in Data_Exch),
+ *   - watchdog expiries (the master stops for longer than the 50 ms watchdog),
+ *   - DP-V1 aborts (the class-2 connection is aborted and opened again),
+ *   - class-2 silence (the connection stays silent past its Send_Timeout; the card closes it).
+ *
+ * Parameter services run all the time on three paths, each a write-volatile of an IPOS
+ * variable with a value that is never reused: H0 through the cyclic channel, H1 through data
+ * set 47 on class 1, H2 through data set 47 on class 2. A shim on the card <-> inverter link
+ * counts every service the inverter executes. Asserted:
+ *
+ *   - no stuck state: after every fault the card is back in Data_Exch within 2.5 s;
+ *   - no lost or duplicated service: every value is executed at most once; every write the
+ *     master saw succeed was executed exactly once; every service completes within 3 s;
+ *   - the card's outputs are always either the data of the last Data_Exchange it received
+ *     intact from the master, or cleared.
+ *
+ * SOAK_CYCLES (default 1000000) Data_Exchange cycles; SOAK_SEED; SOAK_STRICT=1 also fails on the
+ * known finding "channel_reentry" (tests/fuzz/README.md): a cyclic service whose request is
+ * still in the outputs when the card re-enters Data_Exch is executed again (handshake 1) or
+ * never (handshake 0), because dfp21b re-initialises the channel on every entry. Those are
+ * counted and printed, and fail only with SOAK_STRICT=1. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "dp_master/dpv1_c2.h"
+#include "dp_master/dpv1_ds47.h"
+#include "dp_master/param_channel.h"
+#include "dp_slave/dp_wire.h"
+#include "dp_slave/fdl_frame.h"
+#include "sim_hal/membus.h"
+#include "sim_stations/stations.h"
+
+#define CARD 4u
+#define MASTER 2u
+#define C2_MASTER 1u
+#define WD_MS 50u
+#define MAXV 4000000u /* values per path */
+#define STUCK_US 2500000u
+#define SERVICE_US 3000000u
+
+typedef struct path {
+    const char *name;
+    uint16_t index;
+    uint32_t next_value;      /* last issued value */
+    uint8_t *executed;        /* per value: executions at the inverter */
+    uint8_t *outcome;         /* 0 issued, 1 succeeded, 2 failed, 3 given up */
+    bool running;
+    hal_time_us_t started;
+    bool left_dx;             /* the card left Data_Exch while this service was pending */
+    uint32_t issued, succeeded, failed, given_up;
+    uint32_t duplicates, lost, known;
+} path_t;
+
+typedef struct rig {
+    membus_t bus;
+    card_station_t card;
+    sim_station_t card_inner;
+    hal_uart_t bus_uart;
+    dp_master_t master;
+    membus_port_t *master_port;
+    dpm_c2_t c2;
+    dpm_call_t call1, call2;
+    dpm_ds47_req_t req1, req2;
+    dpm_param_t param;
+    uint8_t out[14];
+    ml_link_t md;  /* the emulated inverter's own link */
+    path_t p[3];
+    uint64_t rng;
+    /* what the card received */
+    fdl_rx_t obs;
+    uint8_t last_dx[14];
+    bool have_dx;
+    /* faults */
+    uint32_t corrupt_chars, lost_replies, corrupt_replies, restarts, wd_faults, c2_aborts,
+        c2_silences;
+    bool master_stopped;
+    hal_time_us_t master_resume;
+    hal_time_us_t c2_pause_until;
+    bool c2_silence_pending;
+    /* state */
+    bool in_dx;
+    hal_time_us_t left_dx_at;
+    uint32_t dx_entries;
+    uint32_t max_recovery_us;
+    uint32_t outputs_checks;
+    uint64_t wd_expiries;
+} rig_t;
+
+static rig_t rig;
+
+static uint32_t rnd(void)
+{
+    rig.rng ^= rig.rng << 13;
+    rig.rng ^= rig.rng >> 7;
+    rig.rng ^= rig.rng << 17;
+    return (uint32_t)(rig.rng >> 11);
+}
+
+static bool chance(uint32_t per_million) { return rnd() % 1000000u < per_million; }
+
+static hal_time_us_t now(void) { return membus_now_us(&rig.bus); }
+
+/* ---- the inverter link shim: counts what the inverter executes -------------------------- */
+
+static int shim_request(void *ctx, uint8_t channel, const uint8_t req[ML_TELEGRAM_LEN])
+{
+    (void)ctx;
+    int rc = rig.md.ops->param_request(rig.md.ctx, channel, req);
+    if (rc == 0 && (req[0] & ML_MGMT_SERVICE_MASK) == ML_SVC_WRITE_VOLATILE) {
+        uint16_t idx = ml_index(req);
+        for (int i = 0; i < 3; i++) {
+            path_t *p = &rig.p[i];
+            if (idx == p->index) {
+                uint32_t v = ml_data(req);
+                CHECK(v >= 1u && v <= p->next_value);
+                if (v >= 1u && v < MAXV && p->executed[v] < 255u) {
+                    p->executed[v]++;
+                }
+            }
+        }
+    }
+    return rc;
+}
+
+static void shim_outputs(void *ctx, const uint16_t *po, uint8_t n)
+{
+    (void)ctx;
+    rig.md.ops->process_outputs(rig.md.ctx, po, n);
+}
+
+static void shim_status(void *ctx, const ml_fieldbus_status_t *st)
+{
+    (void)ctx;
+    rig.md.ops->fieldbus_status(rig.md.ctx, st);
+}
+
+static const ml_link_ops_t shim_ops = {.param_request = shim_request,
+                                       .process_outputs = shim_outputs,
+                                       .fieldbus_status = shim_status};
+
+/* ---- the faulty station around the card ------------------------------------------------- */
+
+static void check_outputs(void)
+{
+    const dp_slave_t *s = &rig.card.card.dp;
+    if (s->out_len == 0u || s->sync_mode) {
+        return;
+    }
+    static const uint8_t zeros[sizeof rig.last_dx];
+    bool ok = memcmp(s->outputs, zeros, sizeof zeros) == 0 ||
+              (rig.have_dx && memcmp(s->outputs, rig.last_dx, sizeof rig.last_dx) == 0);
+    rig.outputs_checks++;
+    if (!ok) {
+        CHECK(ok);
+        fprintf(stderr, "    t=%u: the card's outputs are neither the last received nor cleared\n",
+                now());
+    }
+}
+
+static void card_rx(void *ctx, uint8_t byte, uint8_t flags, hal_time_us_t t)
+{
+    (void)ctx;
+    if (chance(150)) { /* 1.5e-4 per character */
+        rig.corrupt_chars++;
+        if (rnd() & 1u) {
+            flags |= HAL_UART_RX_FRAMING_ERR;
+        } else {
+            byte ^= (uint8_t)(1u << (rnd() % 8u));
+        }
+    }
+    bool frame = fdl_rx_char(&rig.obs, byte, flags, t) == FDL_RX_FRAME;
+    if (frame) {
+        fdl_msg_t m;
+        if (fdl_parse(rig.obs.buf, rig.obs.frame_len, &m) == FDL_PARSE_OK && m.da == CARD &&
+            m.sa == MASTER && !m.has_dsap && (m.fc & FDL_FC_REQUEST) != 0u &&
+            m.data_len == sizeof rig.last_dx) {
+            memcpy(rig.last_dx, m.data, sizeof rig.last_dx);
+            rig.have_dx = true;
+        }
+    }
+    rig.card_inner.rx_char(rig.card_inner.ctx, byte, flags, t);
+    if (frame) {
+        check_outputs();
+    }
+}
+
+static hal_time_us_t card_poll(void *ctx, hal_time_us_t t)
+{
+    (void)ctx;
+    hal_time_us_t next = rig.card_inner.poll(rig.card_inner.ctx, t);
+    check_outputs();
+    return next;
+}
+
+static int faulty_transmit(void *ctx, const uint8_t *frame, size_t len, hal_time_us_t nb)
+{
+    (void)ctx;
+    if (chance(2000)) {
+        rig.lost_replies++;
+        return 0;
+    }
+    uint8_t copy[FDL_FRAME_MAX];
+    memcpy(copy, frame, len);
+    if (chance(2000)) {
+        rig.corrupt_replies++;
+        copy[rnd() % len] ^= (uint8_t)(1u << (rnd() % 8u));
+    }
+    return rig.bus_uart.ops->transmit(rig.bus_uart.ctx, copy, len, nb);
+}
+
+static int faulty_set_baud(void *ctx, uint32_t baud)
+{
+    (void)ctx;
+    return rig.bus_uart.ops->set_baud(rig.bus_uart.ctx, baud);
+}
+
+static const hal_uart_ops_t faulty_uart_ops = {.set_baud = faulty_set_baud,
+                                               .transmit = faulty_transmit};
+
+static void on_card_event(void *ctx, const dp_event_t *ev)
+{
+    (void)ctx;
+    if (ev->type == DP_EV_WD_EXPIRED) {
+        rig.wd_expiries++;
+    }
+    if (ev->type != DP_EV_STATE) {
+        return;
+    }
+    if (ev->old_state == DP_STATE_DATA_EXCH) {
+        rig.in_dx = false;
+        rig.left_dx_at = ev->t;
+        for (int i = 0; i < 3; i++) {
+            if (rig.p[i].running) {
+                rig.p[i].left_dx = true;
+                rig.p[i].outcome[rig.p[i].next_value] |= 0x10u;
+            }
+        }
+    }
+    if (ev->new_state == DP_STATE_DATA_EXCH) {
+        uint32_t d = (uint32_t)hal_time_diff(ev->t, rig.left_dx_at);
+        if (rig.dx_entries > 0u && d > rig.max_recovery_us) rig.max_recovery_us = d;
+        rig.in_dx = true;
+        rig.dx_entries++;
+    }
+}
+
+/* ---- the three parameter paths ---------------------------------------------------------- */
+
+static void finish(path_t *p, bool ok)
+{
+    p->running = false;
+    uint8_t *o = &p->outcome[p->next_value];
+    if (ok) {
+        *o = (uint8_t)((*o & 0x10u) | 1u);
+        p->succeeded++;
+    } else {
+        *o = (uint8_t)((*o & 0x10u) | 2u);
+        p->failed++;
+    }
+}
+
+static void issue(path_t *p)
+{
+    p->next_value++;
+    p->issued++;
+    p->running = true;
+    p->left_dx = false;
+    p->started = now();
+}
+
+static void call_done(void *ctx, dpm_call_t *call, hal_time_us_t t)
+{
+    (void)t;
+    path_t *p = ctx;
+    bool ok = false;
+    if (call->ok) {
+        dpm_ds47_rsp_t rsp;
+        char err[160];
+        const dpm_ds47_req_t *req = p == &rig.p[1] ? &rig.req1 : &rig.req2;
+        ok = dpm_ds47_parse(req, call->data, call->len, &rsp, err, sizeof err) && rsp.p[0].ok;
+    }
+    finish(p, ok);
+}
+
+static void drive_cyclic(void)
+{
+    path_t *p = &rig.p[0];
+    const uint8_t *in = rig.master.slaves[0].inputs;
+    if (p->running && dpm_param_done(&rig.param, in)) {
+        finish(p, (in[0] & ML_MGMT_ERROR) == 0u);
+    }
+    if (p->running && hal_time_diff(now(), p->started) > (int32_t)SERVICE_US) {
+        p->outcome[p->next_value] = (uint8_t)((p->outcome[p->next_value] & 0x10u) | 3u);
+        p->given_up++;
+        p->running = false;
+    }
+    if (!p->running) {
+        issue(p);
+        dpm_param_start(&rig.param, ML_SVC_WRITE_VOLATILE, p->index, p->next_value, rig.out);
+        dp_master_set_outputs(&rig.master, 0, rig.out, sizeof rig.out);
+    }
+}
+
+static void drive_ds47(path_t *p, dpm_call_t *call, dpm_ds47_req_t *req, dpm_acyc_port_t port)
+{
+    if (p->running && hal_time_diff(now(), p->started) > (int32_t)(2u * SERVICE_US)) {
+        /* the call's own time limit (5 s) ends it first; this only guards against a hang */
+        CHECK(!"a data set 47 call did not end");
+        p->running = false;
+    }
+    if (p->running) {
+        return;
+    }
+    *req = (dpm_ds47_req_t){.ref = (uint8_t)p->next_value, .id = DPM_DS47_ID_MOVILINK, .n = 1};
+    req->p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_WRITE_VOLATILE,
+                                   .number = p->index, .value = p->next_value + 1u};
+    if (dpm_ds47_start(call, port, req, call_done, p, now()) == 0) {
+        issue(p);
+    }
+}
+
+static void drive_c2(void)
+{
+    hal_time_us_t t = now();
+    if (hal_time_diff(t, rig.c2_pause_until) < 0) {
+        return; /* silent */
+    }
+    dpm_c2_state_t st = dpm_c2_state(&rig.c2);
+    if (st == DPM_C2_CLOSED) {
+        (void)dpm_c2_open(&rig.c2, NULL, NULL, t);
+        return;
+    }
+    if (st != DPM_C2_OPEN) {
+        return;
+    }
+    if (chance(700)) { /* about every 1.4 s; a running call fails */
+        if (dpm_c2_abort(&rig.c2, 0, NULL, NULL, t) == 0) rig.c2_aborts++;
+        return;
+    }
+    if (chance(150)) { /* about every 7 s: silence past Send_Timeout once the call ended */
+        rig.c2_silence_pending = true;
+    }
+    if (rig.c2_silence_pending && !rig.p[2].running) {
+        rig.c2_silence_pending = false;
+        rig.c2_silences++;
+        rig.c2_pause_until = t + 300000u;
+        return;
+    }
+    drive_ds47(&rig.p[2], &rig.call2, &rig.req2, dpm_c2_port(&rig.c2));
+}
+
+static void faults(void)
+{
+    hal_time_us_t t = now();
+    if (rig.master_stopped) {
+        if (hal_time_diff(t, rig.master_resume) >= 0) {
+            dp_master_start(&rig.master, t);
+            membus_wake(rig.master_port);
+            rig.master_stopped = false;
+        }
+        return;
+    }
+    if (chance(500)) { /* about every 2 s: restart at once */
+        rig.restarts++;
+        dp_master_stop(&rig.master);
+        dp_master_start(&rig.master, t);
+        membus_wake(rig.master_port);
+    } else if (chance(200)) { /* about every 5 s: silent past the watchdog */
+        rig.wd_faults++;
+        dp_master_stop(&rig.master);
+        rig.master_stopped = true;
+        rig.master_resume = t + 2u * WD_MS * 1000u + rnd() % 100000u;
+    }
+}
+
+static void check_not_stuck(void)
+{
+    if (!rig.in_dx && !rig.master_stopped &&
+        hal_time_diff(now(), rig.left_dx_at) > (int32_t)STUCK_US) {
+        CHECK(!"the card is stuck outside Data_Exch");
+        fprintf(stderr, "    t=%u: state %s since %u\n", now(),
+                dp_state_name(dp_slave_state(&rig.card.card.dp)), rig.left_dx_at);
+        rig.left_dx_at = now(); /* report once per bound */
+    }
+}
+
+/* ---- set-up and the run ----------------------------------------------------------------- */
+
+static void setup(uint64_t seed)
+{
+    memset(&rig, 0, sizeof rig);
+    rig.rng = seed;
+    static const uint16_t idx[3] = {11000, 11001, 11002};
+    static const char *const names[3] = {"cyclic channel (H0)", "data set 47 class 1 (H1)",
+                                         "data set 47 class 2 (H2)"};
+    for (int i = 0; i < 3; i++) {
+        rig.p[i].name = names[i];
+        rig.p[i].index = idx[i];
+        rig.p[i].executed = calloc(MAXV, 1);
+        rig.p[i].outcome = calloc(MAXV, 1);
+    }
+    membus_init(&rig.bus);
+    sim_station_t cs = card_station(&rig.card);
+    rig.card_inner = cs;
+    sim_station_t wrapper = {.ctx = &rig, .rx_char = card_rx, .poll = card_poll};
+    membus_attach(&rig.bus, &wrapper, &rig.bus_uart);
+    hal_uart_t mu;
+    sim_station_t ms = master_station(&rig.master);
+    rig.master_port = membus_attach(&rig.bus, &ms, &mu);
+    card_options_t co = {.address = CARD, .fixed_baud = 1500000, .strict_timing = true,
+                         .inverter = CARD_INVERTER_SIM, .inverter_delay_us = 2000,
+                         .event = on_card_event};
+    char err[256];
+    hal_uart_t faulty = {.ops = &faulty_uart_ops, .ctx = &rig};
+    CHECK_EQ(card_station_init(&rig.card, &co, faulty, now(), err, sizeof err), 0);
+    /* put the counting shim between the card and the emulated inverter */
+    rig.md = rig.card.card.cfg.inverter;
+    ml_link_t shim = {.ops = &shim_ops, .ctx = NULL};
+    rig.card.card.cfg.inverter = shim;
+    rig.card.card.ml.link = shim;
+    fdl_rx_init(&rig.obs, 1500000, true);
+
+    dp_master_cfg_t mc = {.address = MASTER, .baud = 1500000, .strict_timing = true,
+                          .cycle_us = 1000, .uart = mu};
+    dp_master_init(&rig.master, &mc, now());
+    dpm_slave_cfg_t sc = {.address = CARD};
+    sc.prm_len = (uint8_t)dpm_build_prm_dpv1(sc.prm, DFP21B_IDENT, WD_MS, dfp21b_user_prm_default,
+                                            sizeof dfp21b_user_prm_default);
+    sc.cfg[0] = 0xF3;
+    sc.cfg[1] = 0xF2;
+    sc.cfg_len = 2;
+    CHECK_EQ(dp_master_add_slave(&rig.master, &sc), 0);
+    dpm_c2_cfg_t c2c = {.slave = CARD, .address = C2_MASTER, .send_timeout = 10 /* 100 ms */};
+    dpm_c2_init(&rig.c2, &c2c);
+    CHECK_EQ(dp_master_add_c2(&rig.master, &rig.c2), 0);
+    membus_run_for_us(&rig.bus, 30000);
+    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+}
+
+static void verify(path_t *p, bool strict)
+{
+    for (uint32_t v = 1; v <= p->next_value && v < MAXV; v++) {
+        uint8_t n = p->executed[v];
+        bool left_dx = (p->outcome[v] & 0x10u) != 0u;
+        uint8_t o = (uint8_t)(p->outcome[v] & 0x0Fu);
+        bool dup = n > 1u;
+        bool lost = (o == 1u && n == 0u) || o == 3u;
+        if (!dup && !lost) continue;
+        /* a cyclic service pending while the card left Data_Exch: known finding */
+        bool known = p == &rig.p[0] && left_dx;
+        if (dup) p->duplicates++;
+        if (lost) p->lost++;
+        if (known && !strict) {
+            p->known++;
+            continue;
+        }
+        CHECK(!dup && !lost);
+        fprintf(stderr, "    %s: value %u executed %u times, outcome %u\n", p->name, v, n, o);
+    }
+    printf("  %-26s issued %7u  succeeded %7u  failed %5u  given up %3u  duplicated %3u  "
+           "lost %3u%s\n", p->name, p->issued, p->succeeded, p->failed, p->given_up,
+           p->duplicates, p->lost, p->known ? "  (known finding channel_reentry)" : "");
+}
+
+int main(void)
+{
+    const char *e = getenv("SOAK_CYCLES");
+    uint32_t cycles = e != NULL ? (uint32_t)strtoul(e, NULL, 10) : 1000000u;
+    e = getenv("SOAK_SEED");
+    uint64_t seed = e != NULL ? strtoull(e, NULL, 10) : 0x5EED0001u;
+    e = getenv("SOAK_STRICT");
+    bool strict = e != NULL && e[0] == '1';
+    check_test_name_ = "soak";
+    setup(seed);
+    uint64_t t0 = rig.bus.now_ns;
+    while (rig.master.slaves[0].cycles < cycles) {
+        faults();
+        drive_cyclic();
+        drive_ds47(&rig.p[1], &rig.call1, &rig.req1, dp_master_c1_port(&rig.master, 0));
+        drive_c2();
+        membus_run_for_us(&rig.bus, 1000);
+        check_not_stuck();
+        if (check_failed_ > 20) break;
+    }
+    double sim_s = (double)(rig.bus.now_ns - t0) / 1e9;
+    printf("soak: %u Data_Exchange cycles in %.1f s of simulated time, %llu telegrams, seed %llu\n",
+           rig.master.slaves[0].cycles, sim_s, (unsigned long long)rig.bus.frames_sent,
+           (unsigned long long)seed);
+    printf("  faults: %u corrupted characters, %u lost and %u corrupted replies, %u master "
+           "restarts, %u master silences (%llu watchdog expiries), %u C2 aborts, %u C2 "
+           "silences\n", rig.corrupt_chars, rig.lost_replies, rig.corrupt_replies, rig.restarts,
+           rig.wd_faults, (unsigned long long)rig.wd_expiries, rig.c2_aborts, rig.c2_silences);
+    printf("  Data_Exch entered %u times, longest recovery %.1f ms, %u output checks\n",
+           rig.dx_entries, rig.max_recovery_us / 1000.0, rig.outputs_checks);
+    for (int i = 0; i < 3; i++) {
+        verify(&rig.p[i], strict);
+        CHECK(rig.p[i].succeeded > 0u);
+    }
+    CHECK(rig.restarts > 0u && rig.wd_faults > 0u && rig.c2_aborts > 0u && rig.lost_replies > 0u &&
+          rig.c2_silences > 0u);
+    printf("  wall-clock: see ctest; simulated %.0f cycles/s of bus time\n",
+           rig.master.slaves[0].cycles / sim_s);
+    return check_report();
+}
