@@ -25,12 +25,12 @@ fuzz-build: deps-apt
 	cmake --build $(FUZZ_BUILD)
 
 fuzz-smoke: fuzz-build
-	@set -e; for t in $(FUZZ_TARGETS); do \
+	@set -eo pipefail; for t in $(FUZZ_TARGETS); do \
 	  work=$(FUZZ_BUILD)/smoke/$$t; rm -rf $$work; mkdir -p $$work/corpus $$work/artifacts; \
 	  echo "== fuzz_$$t: regression corpus and known-finding reproducers"; \
-	  ./$(FUZZ_BUILD)/fuzz_$$t -runs=0 tests/fuzz/corpus/$$t 2>&1 | tail -n 2; \
+	  ./$(FUZZ_BUILD)/fuzz_$$t -runs=0 -artifact_prefix=$$work/artifacts/ tests/fuzz/corpus/$$t 2>&1 | tail -n 2; \
 	  if [ -d tests/fuzz/known/$$t ]; then \
-	    ./$(FUZZ_BUILD)/fuzz_$$t tests/fuzz/known/$$t/* 2>&1 | tail -n 1; fi; \
+	    ./$(FUZZ_BUILD)/fuzz_$$t -artifact_prefix=$$work/artifacts/ tests/fuzz/known/$$t/* 2>&1 | grep -c "^Executed"; fi; \
 	  echo "== fuzz_$$t: $(FUZZ_SECONDS) s of fuzzing"; \
 	  ./$(FUZZ_BUILD)/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -max_len=$(FUZZ_MAX_LEN) \
 	    -timeout=10 -print_final_stats=1 -artifact_prefix=$$work/artifacts/ \
@@ -40,7 +40,7 @@ fuzz-smoke: fuzz-build
 
 # One target: make fuzz-long FUZZ_TARGETS=card FUZZ_RUNS=1000000
 fuzz-long: fuzz-build
-	@set -e; for t in $(FUZZ_TARGETS); do \
+	@set -eo pipefail; for t in $(FUZZ_TARGETS); do \
 	  work=$(FUZZ_BUILD)/long/$$t; mkdir -p $$work/corpus $$work/artifacts; \
 	  echo "== fuzz_$$t: $(FUZZ_RUNS) executions, $$(date -u +%FT%TZ)"; \
 	  ./$(FUZZ_BUILD)/fuzz_$$t -runs=$(FUZZ_RUNS) -max_len=$(FUZZ_MAX_LEN) -timeout=10 \
@@ -52,7 +52,7 @@ fuzz-long: fuzz-build
 fuzz-known: fuzz-build
 	@set -e; for d in tests/fuzz/known/*/; do t=$$(basename $$d); \
 	  for f in $$d*; do name=$$(basename $$f | sed 's/-[^-]*$$//'); \
-	    if FUZZ_KNOWN=$$name ./$(FUZZ_BUILD)/fuzz_$$t $$f >$(FUZZ_BUILD)/known.log 2>&1; then \
+	    if FUZZ_KNOWN=$$name ./$(FUZZ_BUILD)/fuzz_$$t -artifact_prefix=$(FUZZ_BUILD)/ $$f >$(FUZZ_BUILD)/known.log 2>&1; then \
 	      echo "$$t/$$(basename $$f): no longer fails (fixed?)"; \
 	    else echo "$$t/$$(basename $$f): $$(grep -A1 'PROPERTY VIOLATED' $(FUZZ_BUILD)/known.log | tail -n 1)"; fi; \
 	  done; done
