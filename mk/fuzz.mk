@@ -6,7 +6,8 @@
 #   make fuzz-long    FUZZ_RUNS (10^8) executions per target, artifacts in build/fuzz/long/
 #   make fuzz-known   the reproducers of the known, unfixed findings (they must still fail with
 #                     their property switched on: FUZZ_KNOWN=name)
-#   make fuzz-seeds   seed corpora from `dfp-sim demo --capture` and profibus-dp.md §1.6
+#   make fuzz-seeds   seed corpora from `dfp-sim demo --capture`, tests/fuzz/captures/*.pcap and
+#                     profibus-dp.md §1.6
 
 APT_PACKAGES += clang-14 libclang-rt-14-dev
 EXTRA_TEST_TARGETS += fuzz-smoke
@@ -59,4 +60,5 @@ fuzz-known: fuzz-build
 
 fuzz-seeds: build
 	./build/host/sim_host/dfp_sim/dfp-sim demo --capture $(FUZZ_BUILD)/demo.pcap >/dev/null
-	python3 tests/fuzz/pcap2corpus.py $(FUZZ_BUILD)/seeds $(FUZZ_BUILD)/demo.pcap
+	python3 tests/fuzz/pcap2corpus.py $(FUZZ_BUILD)/seeds $(FUZZ_BUILD)/demo.pcap \
+	  tests/fuzz/captures/*.pcap
