@@ -510,7 +510,7 @@ static void dp_service(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
         }
         break;
     case DP_SAP_GLOBAL_CONTROL:
-        svc_global_control(s, m, t);
+        reply_rs(s, m); /* an SRD to the SDN-only Global_Control SAP: not activated */
         break;
     default:
         if (m->dsap < DP_SAP_SET_SLAVE_ADD && s->cfg.hooks.sap_request != NULL) {
@@ -589,7 +589,7 @@ static void handle_frame(dp_slave_t *s)
         return;
     }
     if (s->rx.strict && s->rx.idle_before_ns != UINT32_MAX &&
-        s->rx.idle_before_ns + FDL_RX_GAP_TOLERANCE_NS <
+        (uint64_t)s->rx.idle_before_ns + FDL_RX_GAP_TOLERANCE_NS <
             (uint64_t)FDL_TSYN_BITS * s->rx.char_ns / FDL_CHAR_BITS) {
         s->rx.error_count[FDL_RX_ERR_TSYN]++;
         emit(s, DP_EV_RX_ERROR, t, FDL_RX_ERR_TSYN, m.sa);
@@ -616,7 +616,12 @@ static void handle_frame(dp_slave_t *s)
         return;
     case FDL_REQ_SDN_LOW:
     case FDL_REQ_SDN_HIGH:
-        dp_service(s, &m, t); /* send-no-reply: whatever the service would answer is dropped */
+        /* Global_Control is the only DP service sent without reply (and the only one a master
+         * may broadcast). Set_Prm, Chk_Cfg, Data_Exchange ... as SDN are ignored, or a
+         * broadcast would reach every card on the segment. */
+        if (m.has_dsap && m.has_ssap && m.dsap == DP_SAP_GLOBAL_CONTROL) {
+            svc_global_control(s, &m, t);
+        }
         return;
     case FDL_REQ_SRD_LOW:
     case FDL_REQ_SRD_HIGH:

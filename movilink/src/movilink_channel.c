@@ -42,6 +42,9 @@ void ml_channel_request(ml_channel_t *ch, const uint8_t req[ML_TELEGRAM_LEN], ha
     if (ch->busy || hs == ch->handshake) {
         return; /* no edge, or the previous service still runs: keep the last reply */
     }
+    if (ml_client_busy(ch->client, ch->channel)) {
+        return; /* the link still drains a timed-out service: take the edge next cycle */
+    }
     ch->running_handshake = hs;
     ch->busy = true;
     ch->services++;

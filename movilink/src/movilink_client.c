@@ -11,7 +11,7 @@ void ml_client_init(ml_client_t *c, ml_link_t link, uint32_t timeout_us)
 
 bool ml_client_busy(const ml_client_t *c, uint8_t channel)
 {
-    return channel < ML_MAX_CHANNELS && c->ch[channel].busy;
+    return channel < ML_MAX_CHANNELS && (c->ch[channel].busy || c->ch[channel].quarantine);
 }
 
 /* The card's own answer when the inverter cannot be asked or does not answer. */
@@ -30,7 +30,7 @@ static void fail_hardware(ml_client_t *c, uint8_t channel)
 int ml_client_request(ml_client_t *c, uint8_t channel, const uint8_t req[ML_TELEGRAM_LEN],
                       ml_done_fn done, void *done_ctx, hal_time_us_t now)
 {
-    if (channel >= ML_MAX_CHANNELS || c->ch[channel].busy) {
+    if (channel >= ML_MAX_CHANNELS || ml_client_busy(c, channel)) {
         return -1;
     }
     ml_pending_t *p = &c->ch[channel];
@@ -49,11 +49,20 @@ int ml_client_request(ml_client_t *c, uint8_t channel, const uint8_t req[ML_TELE
 
 void ml_client_response(ml_client_t *c, uint8_t channel, const uint8_t rsp[ML_TELEGRAM_LEN])
 {
-    if (channel >= ML_MAX_CHANNELS || !c->ch[channel].busy) {
+    if (channel >= ML_MAX_CHANNELS) {
         c->stale_responses++;
         return;
     }
     ml_pending_t *p = &c->ch[channel];
+    if (p->quarantine) {
+        p->quarantine = false; /* the late answer of a timed-out request: the channel is free */
+        c->stale_responses++;
+        return;
+    }
+    if (!p->busy) {
+        c->stale_responses++;
+        return;
+    }
     uint8_t want_svc = (uint8_t)(p->req[ML_OFF_MANAGEMENT] & ML_MGMT_SERVICE_MASK);
     uint8_t got_svc = (uint8_t)(rsp[ML_OFF_MANAGEMENT] & ML_MGMT_SERVICE_MASK);
     if (got_svc != want_svc || ml_index(rsp) != ml_index(p->req)) {
@@ -71,12 +80,21 @@ hal_time_us_t ml_client_poll(ml_client_t *c, hal_time_us_t now)
     hal_time_us_t next = now + HAL_TIME_NO_DEADLINE_US;
     for (uint8_t i = 0; i < ML_MAX_CHANNELS; i++) {
         ml_pending_t *p = &c->ch[i];
-        if (!p->busy) {
+        if (!p->busy && !p->quarantine) {
             continue;
         }
         if (hal_time_reached(now, p->deadline)) {
+            if (p->quarantine) {
+                p->quarantine = false; /* no late answer came: the channel is free */
+                continue;
+            }
             c->timeouts++;
+            p->quarantine = true;
+            p->deadline = now + c->timeout_us;
             fail_hardware(c, i);
+            if (hal_time_diff(p->deadline, next) < 0) {
+                next = p->deadline;
+            }
         } else if (hal_time_diff(p->deadline, next) < 0) {
             next = p->deadline;
         }

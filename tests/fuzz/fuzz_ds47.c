@@ -83,7 +83,9 @@ static void deliver(void *ctx, uint8_t channel, const uint8_t rsp[ML_TELEGRAM_LE
     (void)ctx;
     /* Which service of the running request does this answer complete? Record the value the
      * inverter reported for a read (the first matching answer wins, as in the client). */
-    if (r.link.delivering && ml_client_busy(&r.ml, channel) &&
+    /* Only a request still in flight takes an answer; a quarantined channel (its request timed
+     * out) drops it. */
+    if (r.link.delivering && r.ml.ch[channel].busy &&
         ml_index(rsp) == ml_index(r.ml.ch[channel].req) &&
         (rsp[0] & ML_MGMT_SERVICE_MASK) == (r.ml.ch[channel].req[0] & ML_MGMT_SERVICE_MASK)) {
         /* The client takes this answer for its pending request (the last one sent). */

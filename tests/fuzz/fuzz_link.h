@@ -138,10 +138,21 @@ static inline bool fl_answer(fake_link_t *l, fz_t *f, uint8_t channel, uint8_t m
     return true;
 }
 
+/* The properties of the findings fixed in the core (docs/quality.md) are checked by default;
+ * FUZZ_KNOWN=none switches them off, e.g. to fuzz an older tree. */
 static inline bool fz_known(const char *name)
 {
     const char *k = getenv("FUZZ_KNOWN");
-    return k != NULL && (strstr(k, name) != NULL || strcmp(k, "all") == 0);
+    if (k == NULL) {
+        /* ml_late_answer in its strict form (an answer may come any time later) cannot hold
+         * without a tag in the 8-byte telegram: the core bounds it (quarantine of two timeouts,
+         * docs/quality.md), so it stays opt-in. */
+        return strcmp(name, "ml_late_answer") != 0;
+    }
+    if (strcmp(k, "all") == 0) {
+        return true;
+    }
+    return strcmp(k, "none") != 0 && strstr(k, name) != NULL;
 }
 
 #endif

@@ -263,8 +263,10 @@ static void hook_event(void *ctx, const dp_event_t *ev)
         break;
     case DP_EV_STATE:
         if (ev->new_state == DP_STATE_DATA_EXCH) {
-            c->fieldbus_timeout = false; /* telegrams are back: a P831 warning clears */
-            ml_channel_init(&c->param, &c->ml, DFP21B_CH_CYCLIC);
+            /* Telegrams are back: a P831 warning clears. The parameter channel keeps its
+             * handshake and reply across the interruption: the master's outputs still carry
+             * its last request, and re-initialising would run it again or never. */
+            c->fieldbus_timeout = false;
             c->inputs_dirty = true;
         }
         break;
@@ -407,7 +409,9 @@ static void take_outputs(dfp21b_t *c, hal_time_us_t now)
         c->po[i] = w;
     }
     if (have_inverter(c)) {
-        if (c->pd.param_channel) {
+        /* Only a master's telegram carries a parameter request; cleared or safe-state outputs
+         * are zeros, not a request with handshake 0. */
+        if (c->pd.param_channel && c->outputs_reason == DP_OUTPUTS_DATA) {
             ml_channel_request(&c->param, c->param_req, now);
         }
         /* Leaving Data_Exch is not a setpoint: the inverter reacts through P831 instead. */

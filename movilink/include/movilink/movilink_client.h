@@ -1,7 +1,9 @@
 /* Parameter services card -> inverter, asynchronous, one outstanding request per channel, each
  * with a deadline. A response that does not match the pending request (another index or
- * service, or one arriving after the deadline) is dropped, so a late answer can never complete
- * the wrong request. */
+ * service) is dropped. The 8-byte telegram has no room for a request tag, so after a timeout the
+ * channel stays quarantined until the late answer has come and been dropped, or a second
+ * timeout has passed: only then can a new request go out, and a late answer cannot complete a
+ * repetition of the same request. */
 #ifndef MOVILINK_MOVILINK_CLIENT_H
 #define MOVILINK_MOVILINK_CLIENT_H
 
@@ -21,6 +23,7 @@ typedef void (*ml_done_fn)(void *ctx, uint8_t channel, const uint8_t rsp[ML_TELE
 
 typedef struct ml_pending {
     bool busy;
+    bool quarantine; /* timed out: waiting for the late answer before the channel is reused */
     uint8_t req[ML_TELEGRAM_LEN];
     hal_time_us_t deadline;
     ml_done_fn done;
@@ -36,7 +39,8 @@ typedef struct ml_client {
 } ml_client_t;
 
 void ml_client_init(ml_client_t *c, ml_link_t link, uint32_t timeout_us);
-/* Starts a service. Returns 0; -1 if the channel is busy or out of range. done runs later, from
+/* Starts a service. Returns 0; -1 if the channel is busy (or quarantined) or out of range: the
+ * caller tries again later. done runs later, from
  * ml_client_response() or ml_client_poll() — or at once if the link refuses the request. The
  * handshake bit of req is cleared on the way out: towards the inverter it would mean SBus
  * synchronous mode. */
