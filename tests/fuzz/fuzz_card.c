@@ -35,8 +35,9 @@
  *  - every valid request for the card (SRD, FDL status) after TSYN idle gets a reply; known
  *    finding (FUZZ_KNOWN=tsyn_wrap): also after an idle line of 4.29 s or more; known finding
  *    (FUZZ_KNOWN=srd_gc): also an SRD to the Global_Control SAP;
- *  - known finding (FUZZ_KNOWN=channel_reentry): the cyclic channel starts at most one service
- *    per handshake edge the master makes in the Data_Exchange telegrams the card executes. */
+ *  - the cyclic channel starts at most one service per handshake edge the master makes in the
+ *    Data_Exchange telegrams the card executes, counted from the entry into Data_Exch (plus
+ *    one for the entry); known finding (FUZZ_KNOWN=channel_reentry): across entries too. */
 #include "dfp21b/dfp21b.h"
 #include "dp_slave/dp_wire.h"
 #include "dpv1/dpv1_wire.h"
@@ -82,6 +83,8 @@ typedef struct rig {
     uint32_t ch0_requests;
     uint8_t master_hs;
     uint32_t master_toggles;
+    uint32_t ch0_base;      /* ch0_requests and master_toggles when Data_Exch was entered */
+    uint32_t toggles_base;
     /* masters */
     uint8_t master;
     bool fcb[128];
@@ -213,6 +216,10 @@ static void on_event(void *ctx, const dp_event_t *ev)
                  "%s without a %s telegram", dp_state_name(n),
                  n == DP_STATE_WAIT_CFG ? "Set_Prm" : "Chk_Cfg");
     }
+    if (n == DP_STATE_DATA_EXCH) {
+        r.ch0_base = r.ch0_requests;
+        r.toggles_base = r.master_toggles;
+    }
     if (r.in_rx && known_sdn_services) {
         PROPERTY(r.req_addressed && r.req_srd, "%s -> %s by a telegram to station %u (FC %02X)",
                  dp_state_name(o), dp_state_name(n), r.req.da, r.req.fc);
@@ -231,6 +238,12 @@ static int shim_param_request(void *ctx, uint8_t channel, const uint8_t req[ML_T
         if (known_channel_reentry) {
             PROPERTY(r.ch0_requests <= r.master_toggles, "cyclic service %u for %u handshake "
                      "edges of the master", r.ch0_requests, r.master_toggles);
+        } else {
+            /* Within one stay in Data_Exch; the entry itself may count as one edge (the
+             * channel restarts from handshake 0: the known finding). */
+            PROPERTY(r.ch0_requests - r.ch0_base <= r.master_toggles - r.toggles_base + 1u,
+                     "%u cyclic services for %u handshake edges since entering Data_Exch",
+                     r.ch0_requests - r.ch0_base, r.master_toggles - r.toggles_base);
         }
     }
     if (r.use_md) {
