@@ -222,6 +222,14 @@ void dp_master_start(dp_master_t *m, hal_time_us_t now)
     m->running = true;
     m->waiting = false;
     m->next_send = now;
+    /* A class-2 telegram that was on the wire when the master stopped will never be answered:
+     * settle it now, or a later Abort waits for that answer for ever (soak finding
+     * c2_abort_stuck). */
+    for (unsigned k = 0; k < m->num_c2; k++) {
+        if (m->c2[k]->on_wire) {
+            dpm_c2_no_answer(m->c2[k], now);
+        }
+    }
     for (unsigned i = 0; i < m->num_slaves; i++) {
         m->slaves[i].fcb_first = true;
         m->slaves[i].due = now;
