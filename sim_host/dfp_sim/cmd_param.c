@@ -343,8 +343,16 @@ static void step(void)
             return;
         }
         if (run.via == VIA_CHANNEL) {
+            /* First see the card's reply catch up with what we send: our first outputs are
+             * zeros, "no service" with handshake 0, which the card acknowledges if its channel
+             * stood at 1 from an earlier master. Only then toggle relative to that reply. */
+            if (s->cycles == 0u || s->inputs_len < ML_TELEGRAM_LEN ||
+                ((s->inputs[0] ^ run.out[0]) & ML_MGMT_HANDSHAKE) != 0u) {
+                return;
+            }
             uint8_t svc = run.op == OP_READ ? ML_SVC_READ
                           : run.volatile_write ? ML_SVC_WRITE_VOLATILE : ML_SVC_WRITE;
+            dpm_param_sync(&run.pc, s->inputs);
             dpm_param_start(&run.pc, svc, run.index, run.value, run.out);
             dp_master_set_outputs(&run.master, 0, run.out, sizeof run.out);
             run.stage = ST_RUNNING;

@@ -50,6 +50,14 @@ expect_in "read back 2250" "read 8489 via channel: 2250" "$out"
 expect_exit 0 "write 8489 via channel" -- param write 8489 3000 --via channel
 expect_exit 0 "read back via movilink" -- param read 8489 --via movilink
 expect_in "read back 3000" "read 8489 via movilink: 3000" "$out"
+# Back-to-back masters on the cyclic channel: the card keeps its handshake across masters, each
+# new one must toggle relative to the reply it sees (dpm_param_sync), or nothing runs.
+expect_exit 0 "second write via channel" -- param write 8489 4000
+expect_exit 0 "read back via channel again" -- param read 8489
+expect_in "read back 4000" "read 8489 via channel: 4000" "$out"
+expect_exit 0 "third write via channel" -- param write 8489 3000
+expect_exit 0 "read back via channel once more" -- param read 8489
+expect_in "read back 3000 again" "read 8489 via channel: 3000" "$out"
 expect_exit 0 "write volatile H0 via movilink" -- param write 11000 -7 --via movilink --volatile
 expect_in "volatile write" "write volatile 11000 = -7 via movilink: ok" "$out"
 expect_exit 0 "read H0 via profidrive" -- param read 11000 --via profidrive --json

@@ -3,6 +3,12 @@
 #include <stdio.h>
 #include <string.h>
 
+void dpm_param_sync(dpm_param_t *p, const uint8_t in[ML_TELEGRAM_LEN])
+{
+    p->handshake = (uint8_t)(in[ML_OFF_MANAGEMENT] & ML_MGMT_HANDSHAKE);
+    p->busy = false;
+}
+
 void dpm_param_start(dpm_param_t *p, uint8_t service, uint16_t index, uint32_t value,
                      uint8_t out[ML_TELEGRAM_LEN])
 {

@@ -16,6 +16,12 @@ typedef struct dpm_param {
     bool busy;
 } dpm_param_t;
 
+/* Takes the handshake of the reply the card shows now (in = the first 8 input octets), so the
+ * next request toggles relative to it. A master that starts talking to a card which already ran
+ * services (another master, an earlier session) must do this after its first Data_Exchange: the
+ * card keeps its handshake across masters, and a request carrying the card's current handshake is
+ * not an edge. */
+void dpm_param_sync(dpm_param_t *p, const uint8_t in[ML_TELEGRAM_LEN]);
 /* Starts a service: writes the request into out[0..7] (the output image). */
 void dpm_param_start(dpm_param_t *p, uint8_t service, uint16_t index, uint32_t value,
                      uint8_t out[ML_TELEGRAM_LEN]);
