@@ -1,0 +1,82 @@
+/* Bus captures, read one record at a time so memory stays flat however long the file is.
+ *
+ * Formats (docs/captures.md):
+ *   pcap and pcapng, read with libpcap: LINKTYPE_PROFIBUS_DL (257) or LINKTYPE_USER0 (147, what
+ *     the Wireshark Lua dissector sees), µs or ns timestamps; pcapng's if_speed gives the baud
+ *     rate and its epb_flags the direction when present;
+ *   text: one telegram per line (capture/text_import.h has the accepted shapes);
+ *   LCM event logs (lcm-logger) holding dfp_lcm telegram messages.
+ *
+ * A record is what the file holds for one telegram. The reader checks whether its octets form
+ * exactly one valid FDL telegram and says why not in `problem`, but hands the octets over either
+ * way: a replay feeds them to the card as they were on the wire, damaged or not. What makes a
+ * file unreadable from some point on (a truncated record, an unknown link type, a record header
+ * that is garbage) ends the reading with an error that names the position. */
+#ifndef CAPTURE_CAPTURE_H
+#define CAPTURE_CAPTURE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "capture/record.h"
+#include "capture/text_import.h"
+
+typedef struct cap_reader {
+    cap_format_t format;
+    uint32_t linktype; /* pcap/pcapng: 257 or 147; 0 for text and LCM */
+    char path[512];
+    uint64_t records;
+    uint64_t file_size;  /* for progress; 0 when unknown (a pipe) */
+    uint64_t file_pos;   /* bytes consumed so far (approximately, for progress) */
+    char error[256];
+    /* Backend state. */
+    void *pcap;     /* pcap_t */
+    FILE *file;     /* text */
+    void *lcm_log;  /* lcm_eventlog_t */
+    uint64_t line;  /* text: current line number */
+    uint32_t if_baud; /* pcapng if_speed of the (single) interface, 0 when absent */
+    text_import_state_t text;
+} cap_reader_t;
+
+/* Opens path in the given format (AUTO: by content). Returns 0, or -1 with a one-line reason in
+ * err ("dump.pcap: link type 1 (ETHERNET) is not PROFIBUS: expected 257 or 147"). */
+int cap_reader_open(cap_reader_t *r, const char *path, cap_format_t format, char *err,
+                    size_t errlen);
+/* 1: rec holds the next record; 0: end of file; -1: the rest of the file cannot be read,
+ * r->error says why and at which position ("record 12 at byte 456: truncated: 9 of 20
+ * octets"). Records read before stay valid. */
+int cap_reader_next(cap_reader_t *r, cap_record_t *rec);
+void cap_reader_close(cap_reader_t *r);
+const char *cap_format_name(cap_format_t f);
+/* "pcap", "pcapng", "text", "lcm" (and "auto"); false for anything else. */
+bool cap_format_parse(const char *name, cap_format_t *out);
+
+/* ---- writing ------------------------------------------------------------------------------ */
+
+typedef struct cap_writer_options {
+    cap_format_t format;  /* PCAP (default when AUTO), PCAPNG or TEXT */
+    uint32_t linktype;    /* pcap/pcapng: 257 (default when 0) or 147 */
+    bool nanosecond;      /* pcap: ns magic; pcapng: if_tsresol 9 (else 6) */
+    uint32_t baud;        /* pcapng: if_speed; 0 = not written */
+} cap_writer_options_t;
+
+typedef struct cap_writer {
+    FILE *f;
+    cap_writer_options_t opt;
+    uint64_t base_ns; /* added to every record's time (e.g. the wall clock at start) */
+    uint64_t records;
+    char path[512];
+} cap_writer_t;
+
+/* Format AUTO picks by extension: .pcapng → pcapng, .txt → text, else pcap. Returns 0, or -1
+ * with a one-line reason in err. */
+int cap_writer_open(cap_writer_t *w, const char *path, const cap_writer_options_t *opt,
+                    uint64_t base_ns, char *err, size_t errlen);
+int cap_writer_frame(cap_writer_t *w, uint64_t t_ns, const uint8_t *frame, size_t len,
+                     cap_dir_t dir);
+/* Flushes and closes; -1 if anything could not be written. */
+int cap_writer_close(cap_writer_t *w);
+
+#endif
