@@ -38,8 +38,45 @@ void card_station_param_response(void *card_station, uint8_t channel,
                                  const uint8_t rsp[ML_TELEGRAM_LEN])
 {
     card_station_t *c = card_station;
+    if (c->param_observer != NULL && channel < ML_MAX_CHANNELS && c->request_seen[channel]) {
+        c->request_seen[channel] = false; /* a second answer to one request is not a service */
+        c->param_observer(c->param_observer_ctx, channel, c->last_request[channel], rsp);
+    }
     dfp21b_inverter_param_response(&c->card, channel, rsp);
 }
+
+/* The observed link: requests are remembered per channel on their way to the real link. */
+static int observed_param_request(void *ctx, uint8_t channel, const uint8_t req[ML_TELEGRAM_LEN])
+{
+    card_station_t *c = ctx;
+    if (channel < ML_MAX_CHANNELS) {
+        memcpy(c->last_request[channel], req, ML_TELEGRAM_LEN);
+        c->request_seen[channel] = true;
+    }
+    return c->inverter_link.ops->param_request(c->inverter_link.ctx, channel, req);
+}
+
+static void observed_process_outputs(void *ctx, const uint16_t *po, uint8_t n)
+{
+    card_station_t *c = ctx;
+    if (c->inverter_link.ops->process_outputs != NULL) {
+        c->inverter_link.ops->process_outputs(c->inverter_link.ctx, po, n);
+    }
+}
+
+static void observed_fieldbus_status(void *ctx, const ml_fieldbus_status_t *status)
+{
+    card_station_t *c = ctx;
+    if (c->inverter_link.ops->fieldbus_status != NULL) {
+        c->inverter_link.ops->fieldbus_status(c->inverter_link.ctx, status);
+    }
+}
+
+static const ml_link_ops_t observed_link_ops = {
+    .param_request = observed_param_request,
+    .process_outputs = observed_process_outputs,
+    .fieldbus_status = observed_fieldbus_status,
+};
 
 void card_station_process_inputs(void *card_station, const uint16_t *pi, uint8_t n)
 {
@@ -89,6 +126,13 @@ int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t u
         link = md_inproc_link(&c->md_link);
     } else if (opt->inverter == CARD_INVERTER_LINK) {
         link = opt->external_link;
+    }
+    c->param_observer = opt->param_observer;
+    c->param_observer_ctx = opt->param_observer_ctx;
+    memset(c->request_seen, 0, sizeof c->request_seen);
+    if (opt->param_observer != NULL && link.ops != NULL) {
+        c->inverter_link = link;
+        link = (ml_link_t){.ops = &observed_link_ops, .ctx = c};
     }
     hal_nvm_t card_nvm = {0};
     if (opt->card_nvm_path != NULL) {

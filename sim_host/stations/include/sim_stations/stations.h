@@ -24,6 +24,13 @@ typedef struct card_station {
     md_inproc_link_t md_link;
     file_nvm_t nvm;      /* the inverter's EEPROM */
     file_nvm_t card_nvm; /* the card's own storage: I&M1..I&M4 */
+    /* Parameter services seen on their way to the inverter and back (card_options_t). */
+    ml_link_t inverter_link; /* the link the card's requests are forwarded to */
+    uint8_t last_request[ML_MAX_CHANNELS][ML_TELEGRAM_LEN];
+    bool request_seen[ML_MAX_CHANNELS];
+    void (*param_observer)(void *ctx, uint8_t channel, const uint8_t req[ML_TELEGRAM_LEN],
+                           const uint8_t rsp[ML_TELEGRAM_LEN]);
+    void *param_observer_ctx;
 } card_station_t;
 
 typedef struct card_options {
@@ -40,6 +47,14 @@ typedef struct card_options {
     void (*event)(void *ctx, const dp_event_t *ev);
     void (*led_change)(void *ctx, hal_led_id_t led, hal_led_mode_t mode);
     void *ctx;
+    /* Optional: every parameter service the inverter (emulated or external) answered, with the
+     * request as the card sent it on that link channel (movilink_link.h), when the answer
+     * arrives. Outside the protocol core, so telemetry (LCM) sees services without the card
+     * knowing; services the card answers itself (a malformed request, no inverter, a timeout)
+     * never reach the link and are not reported. */
+    void (*param_observer)(void *ctx, uint8_t channel, const uint8_t req[ML_TELEGRAM_LEN],
+                           const uint8_t rsp[ML_TELEGRAM_LEN]);
+    void *param_observer_ctx;
 } card_options_t;
 
 sim_station_t card_station(card_station_t *c);
