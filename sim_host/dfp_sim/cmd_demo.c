@@ -9,6 +9,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "dp_master/param_channel.h"
+#include "lcm_cli.h"
 #include "report.h"
 #include "sim_hal/membus.h"
 #include "sim_stations/stations.h"
@@ -28,6 +29,7 @@ typedef struct demo {
     uint8_t out[14]; /* parameter channel + PO1..PO3 */
     dpm_param_t param;
     bool ok;
+    lcm_cli_t lcm; /* --lcm URL */
 } demo_t;
 
 static demo_t demo; /* several kB of telegram buffers: not on the stack */
@@ -50,6 +52,7 @@ static bool run_until(bool (*cond)(void), uint64_t limit_us)
             return true;
         }
         membus_run_for_us(&demo.bus, 500u);
+        lcm_cli_poll_state(&demo.lcm);
     }
     return cond != NULL && cond();
 }
@@ -190,7 +193,11 @@ static int open_capture(const char *capture)
 static void setup(void)
 {
     membus_init(&demo.bus);
-    membus_set_tap(&demo.bus, report_tap, &demo.rep);
+    if (demo.lcm.open) {
+        membus_set_tap(&demo.bus, lcm_cli_tap, &demo.lcm);
+    } else {
+        membus_set_tap(&demo.bus, report_tap, &demo.rep);
+    }
     hal_uart_t card_uart;
     hal_uart_t master_uart;
     sim_station_t cs = card_station(&demo.card);
@@ -202,6 +209,10 @@ static void setup(void)
                          .inverter_delay_us = DEMO_INVERTER_DELAY_US,
                          .event = report_card_event, .led_change = report_led,
                          .ctx = &demo.rep};
+    if (demo.lcm.open) {
+        card_uart = lcm_cli_card_uart(&demo.lcm, card_uart);
+        lcm_cli_observe_params(&demo.lcm, &co);
+    }
     char err[256];
     card_station_init(&demo.card, &co, card_uart, 0, err, sizeof err);
     dp_master_cfg_t mc = {.address = DEMO_MASTER, .baud = DEMO_BAUD, .strict_timing = true,
@@ -221,9 +232,12 @@ static void reconfigure(const uint8_t *cfg, size_t len)
 int cmd_demo(int argc, char **argv)
 {
     const char *capture = NULL;
+    const char *lcm_url = NULL;
     for (int i = 2; i < argc; i++) {
         if (strcmp(argv[i], "--capture") == 0) {
             if ((capture = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if (strcmp(argv[i], "--lcm") == 0) {
+            if ((lcm_url = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
         } else {
             cli_error("demo: unknown option '%s' (see dfp-sim --help)", argv[i]);
             return EXIT_USAGE;
@@ -236,6 +250,14 @@ int cmd_demo(int argc, char **argv)
     demo.rep.card = &demo.card.card;
     if (capture != NULL && open_capture(capture) != 0) {
         return 1;
+    }
+    if (lcm_url != NULL) {
+        /* Simulated time 0 is now: utime = wall clock at start + simulated time. */
+        int64_t start = dfp_lcm_wall_us();
+        if (lcm_cli_open(&demo.lcm, lcm_url, &demo.card.card, DEMO_ADDRESS, &demo.rep, start,
+                         start) != 0) {
+            return 1;
+        }
     }
     printf("dfp-sim demo: a DFP21B (DIP address %u, automatic baud rate) in an emulated MOVIDRIVE,\n"
            "and a DP master (address %u, %s, watchdog %u ms) on a simulated RS-485 segment.\n"
@@ -311,6 +333,9 @@ int cmd_demo(int argc, char **argv)
     run_until(NULL, 300000u);
     show_pi("running:");
 
+    if (demo.lcm.open) {
+        lcm_cli_close(&demo.lcm);
+    }
     printf("\n--- Summary\n");
     printf("    %llu telegrams on the bus, %u Data_Exchange cycles, %u master timeouts, "
            "simulated %.1f ms\n",

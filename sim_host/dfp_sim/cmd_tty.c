@@ -1,12 +1,16 @@
-/* dfp-sim slave / master: the card or the built-in master on a real tty or a PTY, in wall-clock
- * time. Timing on a PC is relaxed (see fdl_rx.h): the OS delivers bytes in chunks. */
+/* dfp-sim slave / master: the card or the built-in master on a real tty or a PTY, or on a
+ * virtual segment over LCM (--bus lcm:CHANNEL), in wall-clock time. Timing on a PC is relaxed
+ * (see fdl_rx.h): the OS delivers bytes in chunks. */
 #include <signal.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #include "cli.h"
 #include "commands.h"
+#include "dfp_lcm_bridge/lcm_segment.h"
+#include "lcm_cli.h"
 #include "report.h"
 #include "inverter_can.h"
 #include "sim_hal/tty_port.h"
@@ -76,22 +80,96 @@ static int close_capture(report_t *rep, const char *path)
     return 0;
 }
 
-/* ---- one station on one tty ------------------------------------------------------------ */
+/* ---- one station on one tty, or on an LCM segment ---------------------------------------- */
 
 static card_station_t card;
 static tty_port_t port;
+static dfp_lcm_segment_t segment;
+static bool on_segment;
 static tty_runner_t runner;
 static dp_master_t master;
 static report_t rep;
 static tty_clock_t clk;
+static lcm_cli_t telemetry; /* --lcm URL */
 
-/* Opens the port and the capture, and puts the station on the port. Returns false after
- * reporting the reason (nothing left open). */
-static bool session_open(const char *dev, uint32_t baud, const char *capture,
-                         const sim_station_t *st)
+/* Where the station is: a tty (--port DEV) or a virtual segment (--bus lcm:CHANNEL with
+ * --lcm-url URL). */
+typedef struct medium_opts {
+    const char *dev;
+    const char *bus;
+    const char *lcm_url;
+} medium_opts_t;
+
+/* --port / --bus / --lcm-url, shared by slave and master. Returns 1 when argv[*i] was one of
+ * them, 0 when not, -1 on a usage error (reported). */
+static int medium_option(medium_opts_t *m, int argc, char **argv, int *i)
 {
-    char err[256];
-    if (tty_port_open(&port, dev, baud, err, sizeof err) != 0) {
+    const char **slot = NULL;
+    if (strcmp(argv[*i], "--port") == 0) {
+        slot = &m->dev;
+    } else if (strcmp(argv[*i], "--bus") == 0) {
+        slot = &m->bus;
+    } else if (strcmp(argv[*i], "--lcm-url") == 0) {
+        slot = &m->lcm_url;
+    } else {
+        return 0;
+    }
+    return (*slot = cli_value(argc, argv, i)) != NULL ? 1 : -1;
+}
+
+/* Exactly one of --port and --bus; returns false after reporting. */
+static bool medium_check(const medium_opts_t *m, const char *cmd)
+{
+    if (m->dev != NULL && m->bus != NULL) {
+        cli_error("%s: --port and --bus exclude each other", cmd);
+        return false;
+    }
+    if (m->bus != NULL && dfp_lcm_segment_channel(m->bus) == NULL) {
+        cli_error("%s: --bus '%s': use lcm:CHANNEL (1..63 of A-Z a-z 0-9 _ . -)", cmd, m->bus);
+        return false;
+    }
+    if (m->lcm_url != NULL && m->bus == NULL) {
+        cli_error("%s: --lcm-url belongs to --bus lcm:CHANNEL", cmd);
+        return false;
+    }
+    return true;
+}
+
+static const char *medium_name(const medium_opts_t *m)
+{
+    static char name[sizeof segment.url + sizeof segment.channel + 20];
+    if (m->bus == NULL) {
+        return m->dev;
+    }
+    snprintf(name, sizeof name, "LCM segment %s (%s)", dfp_lcm_segment_channel(m->bus),
+             segment.url);
+    return name;
+}
+
+static void session_close(void)
+{
+    if (on_segment) {
+        dfp_lcm_segment_close(&segment);
+    } else {
+        tty_port_close(&port);
+    }
+}
+
+/* Opens the port or the segment and the capture, and puts the station on it. The tap goes to
+ * the capture, and through tap/tap_ctx (when not NULL) to --lcm telemetry. Returns false
+ * after reporting the reason (nothing left open). */
+static bool session_open(const medium_opts_t *m, int16_t station_address, uint32_t baud,
+                         const char *capture, const sim_station_t *st)
+{
+    char err[320];
+    on_segment = m->bus != NULL;
+    if (on_segment) {
+        if (dfp_lcm_segment_open(&segment, m->lcm_url, dfp_lcm_segment_channel(m->bus),
+                                 station_address, baud, err, sizeof err) != 0) {
+            cli_error("%s", err);
+            return false;
+        }
+    } else if (tty_port_open(&port, m->dev, baud, err, sizeof err) != 0) {
         cli_error("%s", err);
         return false;
     }
@@ -99,21 +177,48 @@ static bool session_open(const char *dev, uint32_t baud, const char *capture,
     rep.now_ns = tty_clock_now;
     rep.now_ctx = &clk;
     if (!open_capture(&rep, capture)) {
-        tty_port_close(&port);
+        session_close();
         return false;
     }
     install_signals();
     tty_runner_init(&runner);
-    tty_runner_set_tap(&runner, report_tap, &rep);
-    tty_runner_add(&runner, &port, st);
+    if (on_segment) {
+        dfp_lcm_segment_set_tap(&segment, report_tap, &rep);
+        if (dfp_lcm_segment_attach(&segment, &runner, st) != 0) {
+            cli_error("LCM segment: cannot wait on LCM's descriptor");
+            session_close();
+            return false;
+        }
+    } else {
+        tty_runner_set_tap(&runner, report_tap, &rep);
+        tty_runner_add(&runner, &port, st);
+    }
     return true;
+}
+
+/* --lcm URL: the tap also publishes, with the medium's own time origin. */
+static void session_tap_to(lcm_cli_t *l)
+{
+    if (on_segment) {
+        l->tap_wall_us = lcm_cli_wall_of_mono(segment.t0_ns);
+        dfp_lcm_segment_set_tap(&segment, lcm_cli_tap, l);
+    } else {
+        l->tap_wall_us = lcm_cli_wall_of_mono(runner.t0_ns);
+        tty_runner_set_tap(&runner, lcm_cli_tap, l);
+    }
+}
+
+static hal_uart_t session_uart(void)
+{
+    return on_segment ? dfp_lcm_segment_uart(&segment) : tty_port_uart(&port);
 }
 
 /* ---- slave ------------------------------------------------------------------------------ */
 
 int cmd_slave(int argc, char **argv)
 {
-    const char *dev = NULL;
+    medium_opts_t med = {0};
+    const char *lcm_url = NULL;
     const char *capture = NULL;
     uint32_t address = 4;
     uint32_t baud = 0;
@@ -124,8 +229,11 @@ int cmd_slave(int argc, char **argv)
     const char *card_nvm = NULL;
     for (int i = 2; i < argc; i++) {
         const char *v;
-        if (strcmp(argv[i], "--port") == 0) {
-            if ((dev = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        int mo = medium_option(&med, argc, argv, &i);
+        if (mo != 0) {
+            if (mo < 0) return EXIT_USAGE;
+        } else if (strcmp(argv[i], "--lcm") == 0) {
+            if ((lcm_url = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
         } else if (strcmp(argv[i], "--address") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL ||
                 !cli_u32("--address", v, 0, 127, &address)) return EXIT_USAGE;
@@ -150,8 +258,12 @@ int cmd_slave(int argc, char **argv)
             return EXIT_USAGE;
         }
     }
-    if (dev == NULL) {
-        cli_error("slave: --port DEV is required (a tty such as /dev/ttyUSB0, or a PTY)");
+    if (med.dev == NULL && med.bus == NULL) {
+        cli_error("slave: --port DEV is required (a tty such as /dev/ttyUSB0, or a PTY), or --bus "
+                  "lcm:CHANNEL");
+        return EXIT_USAGE;
+    }
+    if (!medium_check(&med, "slave")) {
         return EXIT_USAGE;
     }
     card_inverter_t kind;
@@ -171,11 +283,22 @@ int cmd_slave(int argc, char **argv)
         return EXIT_USAGE;
     }
     sim_station_t st = card_station(&card);
-    if (!session_open(dev, baud != 0u ? baud : hal_uart_bauds[0], capture, &st)) {
+    if (!session_open(&med, (int16_t)address, baud != 0u ? baud : hal_uart_bauds[0], capture,
+                      &st)) {
         return 1;
     }
     port.echo_suppress = echo;
     rep.card = &card.card;
+    if (lcm_url != NULL) {
+        int64_t wall = lcm_cli_wall_of_mono(clk.start_ns);
+        if (lcm_cli_open(&telemetry, lcm_url, &card.card, (uint8_t)address, &rep, wall, wall) !=
+            0) {
+            session_close();
+            close_capture(&rep, capture);
+            return 1;
+        }
+        session_tap_to(&telemetry);
+    }
     static inverter_can_t can_link;
     char err[256];
     ml_link_t external = {0};
@@ -184,16 +307,17 @@ int cmd_slave(int argc, char **argv)
                               card_station_process_inputs, &card, &runner, err,
                               sizeof err) != 0) {
             cli_error("%s", err);
-            tty_port_close(&port);
+            lcm_cli_close(&telemetry);
+            session_close();
             close_capture(&rep, capture);
             return 1;
         }
         external = inverter_can_link(&can_link);
     }
-    printf("dfp-sim slave: DFP21B on %s, DIP address %u, %s%s%s; inverter: %s%s%s\n", dev,
-           address, baud != 0u ? "fixed " : "automatic baud rate",
+    printf("dfp-sim slave: DFP21B on %s, DIP address %u, %s%s%s; inverter: %s%s%s\n",
+           medium_name(&med), address, baud != 0u ? "fixed " : "automatic baud rate",
            baud != 0u ? report_baud_text(baud) : "",
-           port.parity_ok ? "" : " (device has no parity: a PTY)",
+           on_segment || port.parity_ok ? "" : " (device has no parity: a PTY)",
            kind == CARD_INVERTER_SIM ? "emulated MOVIDRIVE" : inverter,
            eeprom != NULL ? ", EEPROM " : "", eeprom != NULL ? eeprom : "");
     fflush(stdout);
@@ -202,7 +326,11 @@ int cmd_slave(int argc, char **argv)
                          .external_link = external, .card_nvm_path = card_nvm,
                          .event = report_card_event,
                          .led_change = report_led, .ctx = &rep};
-    if (card_station_init(&card, &co, tty_port_uart(&port), tty_now_us(), err, sizeof err) != 0) {
+    if (telemetry.open) {
+        lcm_cli_observe_params(&telemetry, &co);
+        tty_runner_add_timer(&runner, lcm_cli_timer, &telemetry);
+    }
+    if (card_station_init(&card, &co, session_uart(), tty_now_us(), err, sizeof err) != 0) {
         report_line(&rep, "card", "non-volatile storage: %s", err);
     }
     if (address > DFP21B_MAX_ADDRESS) {
@@ -222,18 +350,141 @@ int cmd_slave(int argc, char **argv)
     if (kind == CARD_INVERTER_LINK) {
         inverter_can_close(&can_link);
     }
-    tty_port_close(&port);
+    lcm_cli_close(&telemetry);
+    session_close();
     return close_capture(&rep, capture) != 0 ? 1 : rc;
 }
 
 /* ---- master ----------------------------------------------------------------------------- */
 
+/* "4", "3-34", "3,5,7-9": distinct slave addresses 0..125, at most DPM_MAX_SLAVES. Returns
+ * false after reporting. */
+static bool parse_addresses(const char *text, uint8_t *out, size_t *n)
+{
+    bool seen[126] = {false};
+    *n = 0;
+    const char *p = text;
+    for (;;) {
+        char *end;
+        unsigned long lo = strtoul(p, &end, 10);
+        unsigned long hi = lo;
+        bool ok = end != p && *p >= '0' && *p <= '9';
+        if (ok && *end == '-') {
+            const char *q = end + 1;
+            hi = strtoul(q, &end, 10);
+            ok = end != q && *q >= '0' && *q <= '9';
+        }
+        if (!ok || (*end != ',' && *end != '\0') || lo > 125u || hi > 125u || hi < lo) {
+            cli_error("--address '%s': use addresses 0..125 as N, N-M or a comma list "
+                      "(3-34, 3,5,7-9)", text);
+            return false;
+        }
+        for (unsigned long a = lo; a <= hi; a++) {
+            if (seen[a]) {
+                cli_error("--address '%s': address %lu is given twice", text, a);
+                return false;
+            }
+            if (*n >= DPM_MAX_SLAVES) {
+                cli_error("--address '%s': more than %u slaves", text, DPM_MAX_SLAVES);
+                return false;
+            }
+            seen[a] = true;
+            out[(*n)++] = (uint8_t)a;
+        }
+        if (*end == '\0') {
+            return true;
+        }
+        p = end + 1;
+    }
+}
+
+static bool all_in_data_exchange(void)
+{
+    for (uint8_t i = 0; i < master.num_slaves; i++) {
+        if (master.slaves[i].phase != DPM_PHASE_DATA_EXCH) {
+            return false;
+        }
+    }
+    return true;
+}
+
+static bool all_cycled(uint32_t cycles)
+{
+    for (uint8_t i = 0; i < master.num_slaves; i++) {
+        if (master.slaves[i].cycles < cycles) {
+            return false;
+        }
+    }
+    return true;
+}
+
+static uint64_t total_cycles(void)
+{
+    uint64_t n = 0;
+    for (uint8_t i = 0; i < master.num_slaves; i++) {
+        n += master.slaves[i].cycles;
+    }
+    return n;
+}
+
+static void report_done(uint64_t t_start_ns, uint64_t t_all_ns, uint64_t cycles_at_all)
+{
+    if (master.num_slaves == 1u) {
+        dpm_slave_t *s = &master.slaves[0];
+        char in[3 * DPM_MAX_IO + 1];
+        size_t n = 0;
+        for (size_t i = 0; i < s->inputs_len; i++) {
+            n += (size_t)snprintf(in + n, sizeof in - n, "%02X", s->inputs[i]);
+        }
+        in[n] = '\0';
+        report_line(&rep, "master", "done: slave %u in data exchange, %u cycles, last inputs %s",
+                    s->cfg.address, s->cycles, n > 0 ? in : "(none)");
+        return;
+    }
+    uint64_t now = mono_ns();
+    double span = (double)(now - t_all_ns) / 1e9;
+    uint64_t dx = total_cycles() - cycles_at_all;
+    report_line(&rep, "master",
+                "done: %u slaves in data exchange, each at least the given cycles; all reached "
+                "data exchange %.3f s after start; since then %llu Data_Exchange telegrams in "
+                "%.3f s (%.0f/s, %.1f full bus cycles/s)",
+                master.num_slaves, (double)(t_all_ns - t_start_ns) / 1e9,
+                (unsigned long long)dx, span, span > 0 ? (double)dx / span : 0.0,
+                span > 0 ? (double)dx / span / master.num_slaves : 0.0);
+}
+
+static void report_missing(uint32_t cycles, const char *why)
+{
+    if (master.num_slaves == 1u) {
+        dpm_slave_t *s = &master.slaves[0];
+        cli_error("master: slave %u did not complete %u Data_Exchange cycles (%s; reached %u, "
+                  "phase %s)",
+                  s->cfg.address, cycles, why, s->cycles, dpm_phase_name(s->phase));
+        return;
+    }
+    char list[1024];
+    size_t n = 0;
+    unsigned missing = 0;
+    for (uint8_t i = 0; i < master.num_slaves; i++) {
+        dpm_slave_t *s = &master.slaves[i];
+        if (s->cycles >= cycles) {
+            continue;
+        }
+        missing++;
+        if (n + 48u < sizeof list) {
+            n += (size_t)snprintf(list + n, sizeof list - n, "%s%u (%u, %s)", n > 0 ? ", " : "",
+                                  s->cfg.address, s->cycles, dpm_phase_name(s->phase));
+        }
+    }
+    cli_error("master: %u of %u slaves did not complete %u Data_Exchange cycles (%s): %s",
+              missing, master.num_slaves, cycles, why, list);
+}
+
 int cmd_master(int argc, char **argv)
 {
-    const char *dev = NULL;
+    medium_opts_t med = {0};
     const char *capture = NULL;
-    uint32_t address = 0;
-    bool have_address = false;
+    const char *addresses = NULL;
     uint32_t own = 2;
     uint32_t baud = 19200;
     uint32_t cycles = 100;
@@ -251,12 +502,11 @@ int cmd_master(int argc, char **argv)
     for (int i = 2; i < argc; i++) {
         const char *v;
         const char *o = argv[i];
-        if (strcmp(o, "--port") == 0) {
-            if ((dev = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        int mo = medium_option(&med, argc, argv, &i);
+        if (mo != 0) {
+            if (mo < 0) return EXIT_USAGE;
         } else if (strcmp(o, "--address") == 0) {
-            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 0, 125, &address))
-                return EXIT_USAGE;
-            have_address = true;
+            if ((addresses = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
         } else if (strcmp(o, "--master-address") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 0, 126, &own))
                 return EXIT_USAGE;
@@ -296,8 +546,17 @@ int cmd_master(int argc, char **argv)
             return EXIT_USAGE;
         }
     }
-    if (dev == NULL || !have_address || cfg_len == 0u) {
-        cli_error("master: --port DEV, --address N and --config HEX are required");
+    if ((med.dev == NULL && med.bus == NULL) || addresses == NULL || cfg_len == 0u) {
+        cli_error("master: --port DEV (or --bus lcm:CHANNEL), --address N and --config HEX are "
+                  "required");
+        return EXIT_USAGE;
+    }
+    if (!medium_check(&med, "master")) {
+        return EXIT_USAGE;
+    }
+    uint8_t slave_addr[DPM_MAX_SLAVES];
+    size_t num_slaves = 0;
+    if (!parse_addresses(addresses, slave_addr, &num_slaves)) {
         return EXIT_USAGE;
     }
     if (user_len == SIZE_MAX) {
@@ -305,32 +564,39 @@ int cmd_master(int argc, char **argv)
         user_len = ident == DFP21B_IDENT ? sizeof dfp21b_user_prm_default : 0u;
         memcpy(user, dfp21b_user_prm_default, user_len);
     }
-    dpm_slave_cfg_t sc = {.address = (uint8_t)address};
+    dpm_slave_cfg_t sc = {0};
     sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, (uint16_t)ident, wd_ms, user, user_len);
     memcpy(sc.cfg, cfg, cfg_len);
     sc.cfg_len = (uint8_t)cfg_len;
 
     sim_station_t st = master_station(&master);
-    if (!session_open(dev, baud, capture, &st)) {
+    if (!session_open(&med, (int16_t)own, baud, capture, &st)) {
         return 1;
     }
     rep.show_inputs = verbose;
     dp_master_cfg_t mc = {.address = (uint8_t)own, .baud = baud, .strict_timing = false,
-                          .slot_time_us = slot_ms * 1000u, .uart = tty_port_uart(&port),
+                          .slot_time_us = slot_ms * 1000u, .uart = session_uart(),
                           .event = report_master_event, .event_ctx = &rep};
     dp_master_init(&master, &mc, tty_now_us());
-    if (dp_master_add_slave(&master, &sc) < 0) {
-        cli_error("master: configuration %s... cannot be decoded into I/O lengths", "--config");
-        tty_port_close(&port);
-        return EXIT_USAGE;
+    for (size_t i = 0; i < num_slaves; i++) {
+        sc.address = slave_addr[i];
+        if (dp_master_add_slave(&master, &sc) < 0) {
+            cli_error("master: configuration %s... cannot be decoded into I/O lengths",
+                      "--config");
+            session_close();
+            return EXIT_USAGE;
+        }
+        dp_master_set_outputs(&master, (unsigned)i, outputs, out_given);
     }
-    dp_master_set_outputs(&master, 0, outputs, out_given);
-    printf("dfp-sim master: address %u on %s at %s; slave %u, ident 0x%04X, %zu cfg octets, "
+    printf("dfp-sim master: address %u on %s at %s; %s %s, ident 0x%04X, %zu cfg octets, "
            "%u out / %u in octets\n",
-           own, dev, report_baud_text(baud), address, ident, cfg_len, master.slaves[0].out_len,
-           master.slaves[0].in_len);
+           own, medium_name(&med), report_baud_text(baud), num_slaves == 1u ? "slave" : "slaves",
+           addresses, ident, cfg_len, master.slaves[0].out_len, master.slaves[0].in_len);
     fflush(stdout);
-    uint64_t end_ns = mono_ns() + (uint64_t)timeout_s * 1000000000ull;
+    uint64_t t_start = mono_ns();
+    uint64_t end_ns = t_start + (uint64_t)timeout_s * 1000000000ull;
+    uint64_t t_all = 0;
+    uint64_t cycles_at_all = 0;
     int rc = 1;
     const char *why = "timeout";
     while (!stop_requested && mono_ns() < end_ns) {
@@ -338,27 +604,23 @@ int cmd_master(int argc, char **argv)
             why = tty_runner_error(&runner);
             break;
         }
-        if (master.slaves[0].cycles >= cycles) {
+        if (t_all == 0u && all_in_data_exchange()) {
+            t_all = mono_ns();
+            cycles_at_all = total_cycles();
+            if (num_slaves > 1u) {
+                report_line(&rep, "master", "all %zu slaves in data exchange", num_slaves);
+            }
+        }
+        if (all_cycled(cycles)) {
             rc = 0;
             break;
         }
     }
-    dpm_slave_t *s = &master.slaves[0];
     if (rc == 0) {
-        char in[3 * DPM_MAX_IO + 1];
-        size_t n = 0;
-        for (size_t i = 0; i < s->inputs_len; i++) {
-            n += (size_t)snprintf(in + n, sizeof in - n, "%02X", s->inputs[i]);
-        }
-        in[n] = '\0';
-        report_line(&rep, "master", "done: slave %u in data exchange, %u cycles, last inputs %s",
-                    address, s->cycles, n > 0 ? in : "(none)");
+        report_done(t_start, t_all != 0u ? t_all : mono_ns(), cycles_at_all);
     } else {
-        cli_error("master: slave %u did not complete %u Data_Exchange cycles (%s; reached %u, "
-                  "phase %s)",
-                  address, cycles, stop_requested ? "interrupted" : why, s->cycles,
-                  dpm_phase_name(s->phase));
+        report_missing(cycles, stop_requested ? "interrupted" : why);
     }
-    tty_port_close(&port);
+    session_close();
     return close_capture(&rep, capture) != 0 ? 1 : rc;
 }
