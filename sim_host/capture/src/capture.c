@@ -56,7 +56,7 @@ static uint32_t get32(const uint8_t *p, bool big)
 
 static uint16_t get16(const uint8_t *p, bool big)
 {
-    return big ? (uint16_t)(p[0] << 8 | p[1]) : (uint16_t)(p[1] << 8 | p[0]);
+    return (uint16_t)(big ? (p[0] << 8 | p[1]) : (p[1] << 8 | p[0]));
 }
 
 static cap_format_t sniff(const uint8_t *head, size_t n)
@@ -265,10 +265,15 @@ static int next_pcap(cap_reader_t *r, cap_record_t *rec)
     rec->t_ns = (uint64_t)h->ts.tv_sec * 1000000000ull + (uint64_t)h->ts.tv_usec;
     rec->baud = r->if_baud;
     fill_record(r, rec, data, h->caplen);
-    if (h->len != h->caplen) {
+    if (h->len > h->caplen) {
         snprintf(rec->problem, sizeof rec->problem, "cut when captured: %u of %u octets",
                  h->caplen, h->len);
         rec->orig_len = h->len;
+    } else if (h->len < h->caplen) {
+        /* libpcap lets this through; the record header itself is damaged. */
+        snprintf(rec->problem, sizeof rec->problem,
+                 "record header damaged: %u octets captured of %u on the wire", h->caplen,
+                 h->len);
     }
     r->file_pos = f != NULL && ftell(f) >= 0 ? (uint64_t)ftell(f) : r->file_pos;
     return 1;
