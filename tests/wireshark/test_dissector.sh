@@ -260,6 +260,9 @@ raw 10 04 02 49 4F 16                                   # 47 a good telegram aft
 sd2 05 02 7D 00 01                                      # 48 Data_Exchange to slave 5, FCB=1 FCV=1
 sd1 05 02 6D                                            # 49 restart FCV=0 FCB=1: no repetition
 sd1 05 02 5D                                            # 50 FCB toggled
+sd2 84 81 5D 00 32 48 00 00 00                          # 51 MSAC2 Idle.req on connection SAP 0
+sd2 81 84 08 32 00 48 00 00 00                          # 52 Idle.res
+sd2 81 84 08 32 00 58 01 13 00                          # 53 Abort: local, MSAC_C2, TO (connection timeout)
 EOF
 hand=$tmp/hand.pcap
 eq "hand-written capture has link type 147" "$(linktype_of "$hand")" 147
@@ -274,10 +277,10 @@ eq "SD2" "$(hand 4 2)" 0x68
 eq "SD3" "$(hand 5 2)" 0xa2
 eq "SC" "$(hand 7 2)" 0xe5
 good_fcs=0
-for n in 1 2 4 5 6 8 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 29 30 31 32 36 41 42 43 44 45 46 47 48 49 50; do
+for n in 1 2 4 5 6 8 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 29 30 31 32 36 41 42 43 44 45 46 47 48 49 50 51 52 53; do
   [ "$(hand "$n" 3)" = 1 ] && good_fcs=$((good_fcs + 1))
 done
-eq "FCS correct on the 39 intact SD1/SD2/SD3 telegrams (spec examples and mkpcap's FCS)" "$good_fcs" 39
+eq "FCS correct on the 42 intact SD1/SD2/SD3 telegrams (spec examples and mkpcap's FCS)" "$good_fcs" 42
 eq "tree text of a Data_Exchange" "$(hand 11 6)" \
   "SD2 DA=4 SA=2 SRD high FCB=0 FCV=1 Data_Exchange 14 octets ML read 8300 HS=1 PO 0006 05DC 0000"
 eq "tree text of an SC" "$(hand 7 6)" "SC ack to Set_Prm (frame 6)"
@@ -331,6 +334,12 @@ q "$hand" 'frame.number==31' profibus.ds47.id profibus.ds47.format profibus.ds47
 eq "MOVILINK negative DS47 response 0x0811" "$(first)" "0xc0${tab}0x44${tab}0x0811"
 q "$hand" 'frame.number==32' profibus.ds47.id profibus.ds47.axis profibus.ds47.pnu profibus.ds47.value
 eq "PROFIdrive change parameter 8489 = 1500" "$(first)" "0x02${tab}0${tab}8489${tab}0x000005dc"
+
+q "$hand" 'frame.number>=51' profibus.service profibus.dsap profibus.ssap profibus.dpv1.function \
+  profibus.dpv1.abort.subnet profibus.dpv1.abort.instance profibus.dpv1.abort.reason
+eq "MSAC2 Idle.req" "$(row 1)" "MSAC2${tab}0${tab}50${tab}0x48${tab}${tab}${tab}"
+eq "MSAC2 Idle.res" "$(row 2)" "MSAC2${tab}50${tab}0${tab}0x48${tab}${tab}${tab}"
+eq "MSAC2 Abort TO" "$(row 3)" "MSAC2${tab}50${tab}0${tab}0x58${tab}1${tab}1${tab}3"
 
 # ---- robustness: every truncation and random damage of the captures above, and random data
 # units in correct frames for every SAP; seeded, so a failure is reproducible.
