@@ -1,18 +1,18 @@
--- PROFIBUS FDL / DP-V0 / DP-V1 dissector for Wireshark and tshark (Lua, Wireshark 4.0 and later).
+-- PROFIBUS FDL / DP-V0 / DP-V1 dissector for Wireshark and tshark (Lua; tested with 4.0).
 --
 -- Wireshark has no PROFIBUS dissector and wiretap does not map LINKTYPE_PROFIBUS_DL (257), so
 -- this registers for LINKTYPE_USER0 (147): each record is one telegram, raw octets from the
 -- start delimiter to the end delimiter (SC: one octet, SD4: three), no pseudo-header.
--- Usage: tools/wireshark/README.md. Layouts: /work/shared/spec/profibus-dp.md §1, §3, §4, §5
--- and docs/dpv1.md.
+-- Usage: tools/wireshark/README.md. Layouts: the protocol notes profibus-dp.md §1, §3, §4, §5,
+-- dfp21b.md §6, §7 and docs/dpv1.md.
 --
 -- A telegram that is too short, inconsistent or carries an unknown code gets an expert info
 -- ("malformed") and decoding stops there; no record may raise a Lua error.
 
 local proto = Proto("profibus", "PROFIBUS (FDL, DP, DP-V1)")
 
--- Bit helpers in plain arithmetic: Lua 5.2 has bit32, Lua 5.4 (Wireshark >= 4.2) has operators,
--- and neither works in both.
+-- Bit helpers in plain arithmetic: Lua 5.2 (Wireshark 4.0) has bit32, Lua 5.3/5.4 (newer
+-- Wireshark builds) have operators instead, and neither works in both.
 local function bits(v, lo, width) return math.floor(v / 2 ^ lo) % math.floor(2 ^ width) end
 local function has(v, mask) return math.floor(v / mask) % 2 == 1 end
 
@@ -173,7 +173,6 @@ local profidrive_errors = {
 local function profidrive_error_text(v)
     if profidrive_errors[v] then return profidrive_errors[v] end
     if v >= 0x65 and v <= 0xFF then return "manufacturer specific" end
-    if v >= 0x80 and v <= 0xFF then return "manufacturer specific" end
     return "unknown"
 end
 local im_records = {
@@ -215,7 +214,7 @@ local F = {
     segment = ProtoField.uint8("profibus.segment", "Segment", base.DEC, nil, 0x3F),
     service = ProtoField.string("profibus.service", "Service"),
     du = ProtoField.bytes("profibus.du", "Data unit"),
-    du_len = ProtoField.uint8("profibus.du_len", "Data unit length (after SAPs)", base.DEC),
+    du_len = ProtoField.uint8("profibus.du_len", "Data length after the SAP octets", base.DEC),
     fcs = ProtoField.uint8("profibus.fcs", "FCS", base.HEX),
     fcs_ok = ProtoField.bool("profibus.fcs_ok", "FCS correct"),
     fcs_computed = ProtoField.uint8("profibus.fcs.computed", "FCS computed", base.HEX),
@@ -1123,9 +1122,8 @@ end
 ------------------------------------------------------------------------------------------------
 -- Service dispatch
 
-local function decode_service(st, tree, c, service, is_request, fc_response)
+local function decode_service(st, tree, c, service, is_request)
     if service == "Data_Exchange" then
-        -- FDL status and other SAP-less replies without data are no Data_Exchange.
         decode_data_exchange(st, tree, c, is_request, is_request and st.da or st.sa)
         return
     end
@@ -1165,7 +1163,7 @@ end
 ------------------------------------------------------------------------------------------------
 -- FDL
 
-local function add_address(st, tree, range, field, ext_field)
+local function add_address(tree, range, field, ext_field)
     local it = tree:add(field, range)
     it:add(ext_field, range)
     if range:uint() % 128 == 127 then it:append_text(" (broadcast)") end
@@ -1248,8 +1246,8 @@ local function dissect_fdl(st, tvb, root)
             malformed(st, root, string.format("token truncated: %d of 3 octets", len))
             return
         end
-        st.da = add_address(st, root, tvb(1, 1), F.da, F.da_ext)
-        st.sa = add_address(st, root, tvb(2, 1), F.sa, F.sa_ext)
+        st.da = add_address(root, tvb(1, 1), F.da, F.da_ext)
+        st.sa = add_address(root, tvb(2, 1), F.sa, F.sa_ext)
         root:add(F.service, tvb(0, 3), "Token"):set_generated()
         note(st, string.format("DA=%d SA=%d Token", st.da, st.sa))
         pinfo.cols.src:set(tostring(st.sa))
@@ -1299,8 +1297,8 @@ local function dissect_fdl(st, tvb, root)
     end
 
     -- DA SA FC as far as they are present, so a truncated telegram still shows who sent it.
-    if len > hdr then st.da, st.da_ext = add_address(st, root, tvb(hdr, 1), F.da, F.da_ext) end
-    if len > hdr + 1 then st.sa, st.sa_ext = add_address(st, root, tvb(hdr + 1, 1), F.sa, F.sa_ext) end
+    if len > hdr then st.da, st.da_ext = add_address(root, tvb(hdr, 1), F.da, F.da_ext) end
+    if len > hdr + 1 then st.sa, st.sa_ext = add_address(root, tvb(hdr + 1, 1), F.sa, F.sa_ext) end
     if st.da and st.sa then
         note(st, string.format("DA=%d SA=%d", st.da, st.sa))
         pinfo.cols.src:set(tostring(st.sa))
@@ -1417,8 +1415,7 @@ local function dissect_fdl(st, tvb, root)
             root:add(F.du_len, tvb(du_start, math.max(du_end - du_start, 0)), body:left()):set_generated()
         end
         if du_end > du_start then root:add(F.du, tvb(du_start, du_end - du_start)) end
-        local svc_tree = root
-        local dok, derr = pcall(decode_service, st, svc_tree, body, service, is_request, fn)
+        local dok, derr = pcall(decode_service, st, root, body, service, is_request)
         if not dok then
             if getmetatable(derr) ~= Truncated then error(derr, 0) end
             malformed(st, root, string.format("%s truncated in %s (needs %d, %d left)",
