@@ -43,6 +43,21 @@ static const char usage[] =
     "      channel). --master-address: default 2 (1 with c2). Exit 0 on a positive result, 1 on\n"
     "      a negative one or none within --timeout (default 10 s); --json: one JSON object\n"
     "      per result\n"
+    "  replay FILE [--address N] [--check] [--speed real|max] [--baud RATE]\n"
+    "         [--format pcap|pcapng|text|lcm] [--inverter sim|none] [--inverter-delay US]\n"
+    "         [--fixed-baud] [--verbose]\n"
+    "      a bus capture played against the emulated card at its recorded times (the card's\n"
+    "      own recorded answers are left out: it makes its own); --check compares every reply\n"
+    "      with the recorded one and reports the first difference and counts per service\n"
+    "      (exit 0: all match, 1: a difference or a damaged file, 2: bad command line or\n"
+    "      unreadable file). The address comes from the capture unless given; the rate from\n"
+    "      the capture, else --baud, else 1.5M. docs/replay.md\n"
+    "  record --capture FILE --cycles N [--baud RATE] [--address N] [--dpv1] [--faults]\n"
+    "         [--foreign] [--param-every N] [--inverter sim|none]\n"
+    "      the built-in master and the card on the simulated bus for N Data_Exchange cycles,\n"
+    "      parameter-channel services every N cycles (default 10, 0: none), every telegram\n"
+    "      into FILE: --dpv1 adds data set 47 (class 1) and a class-2 connection, --faults a\n"
+    "      watchdog expiry and a wrong configuration, --foreign a second slave and master\n"
     "  check-cfg HEX\n"
     "      would the card accept this Chk_Cfg configuration?\n"
     "\n"
@@ -98,7 +113,9 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "check-cfg") == 0) return cmd_check_cfg(argc, argv);
     if (strcmp(cmd, "inverter") == 0) return cmd_inverter(argc, argv);
     if (strcmp(cmd, "param") == 0) return cmd_param(argc, argv);
-    cli_error("unknown command '%s' (commands: demo, slave, master, inverter, param, check-cfg; "
-              "see --help)", cmd);
+    if (strcmp(cmd, "replay") == 0) return cmd_replay(argc, argv);
+    if (strcmp(cmd, "record") == 0) return cmd_record(argc, argv);
+    cli_error("unknown command '%s' (commands: demo, slave, master, inverter, param, replay, "
+              "record, check-cfg; see --help)", cmd);
     return EXIT_USAGE;
 }
