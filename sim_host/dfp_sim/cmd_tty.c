@@ -46,34 +46,13 @@ static uint64_t tty_clock_now(void *ctx)
     return mono_ns() - c->start_ns;
 }
 
-static bool open_capture(report_t *rep, const char *path)
+static bool open_capture(report_t *rep, const capture_opts_t *capture)
 {
-    if (path == NULL) {
-        return true;
-    }
-    char err[256];
     struct timespec ts;
     clock_gettime(CLOCK_REALTIME, &ts);
-    uint64_t base = (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-    if (pcap_writer_open(&rep->capture, path, PCAP_LINKTYPE_PROFIBUS_DL, false, base, err,
-                         sizeof err) != 0) {
-        cli_error("%s", err);
-        return false;
-    }
-    rep->capturing = true;
-    return true;
-}
-
-static int close_capture(report_t *rep, const char *path)
-{
-    if (!rep->capturing) {
-        return 0;
-    }
-    if (pcap_writer_close(&rep->capture) != 0 || rep->capture_failed) {
-        cli_error("could not write the whole capture to %s", path);
-        return 1;
-    }
-    return 0;
+    rep->capture_direction = true;
+    return report_open_capture(rep, capture,
+                               (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec);
 }
 
 /* ---- one station on one tty ------------------------------------------------------------ */
@@ -87,7 +66,7 @@ static tty_clock_t clk;
 
 /* Opens the port and the capture, and puts the station on the port. Returns false after
  * reporting the reason (nothing left open). */
-static bool session_open(const char *dev, uint32_t baud, const char *capture,
+static bool session_open(const char *dev, uint32_t baud, const capture_opts_t *capture,
                          const sim_station_t *st)
 {
     char err[256];
@@ -114,7 +93,7 @@ static bool session_open(const char *dev, uint32_t baud, const char *capture,
 int cmd_slave(int argc, char **argv)
 {
     const char *dev = NULL;
-    const char *capture = NULL;
+    capture_opts_t capture = {.path = NULL};
     uint32_t address = 4;
     uint32_t baud = 0;
     uint32_t duration_s = 0;
@@ -122,6 +101,7 @@ int cmd_slave(int argc, char **argv)
     const char *inverter = "sim";
     const char *eeprom = NULL;
     const char *card_nvm = NULL;
+    int copt;
     for (int i = 2; i < argc; i++) {
         const char *v;
         if (strcmp(argv[i], "--port") == 0) {
@@ -132,8 +112,8 @@ int cmd_slave(int argc, char **argv)
         } else if (strcmp(argv[i], "--baud") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL || !cli_baud("--baud", v, true, &baud))
                 return EXIT_USAGE;
-        } else if (strcmp(argv[i], "--capture") == 0) {
-            if ((capture = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if ((copt = capture_option(argc, argv, &i, &capture)) != 0) {
+            if (copt < 0) return EXIT_USAGE;
         } else if (strcmp(argv[i], "--duration") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL ||
                 !cli_u32("--duration", v, 1, 86400u * 365u, &duration_s)) return EXIT_USAGE;
@@ -171,7 +151,7 @@ int cmd_slave(int argc, char **argv)
         return EXIT_USAGE;
     }
     sim_station_t st = card_station(&card);
-    if (!session_open(dev, baud != 0u ? baud : hal_uart_bauds[0], capture, &st)) {
+    if (!session_open(dev, baud != 0u ? baud : hal_uart_bauds[0], &capture, &st)) {
         return 1;
     }
     port.echo_suppress = echo;
@@ -185,7 +165,7 @@ int cmd_slave(int argc, char **argv)
                               sizeof err) != 0) {
             cli_error("%s", err);
             tty_port_close(&port);
-            close_capture(&rep, capture);
+            report_close_capture(&rep);
             return 1;
         }
         external = inverter_can_link(&can_link);
@@ -223,7 +203,7 @@ int cmd_slave(int argc, char **argv)
         inverter_can_close(&can_link);
     }
     tty_port_close(&port);
-    return close_capture(&rep, capture) != 0 ? 1 : rc;
+    return report_close_capture(&rep) != 0 ? 1 : rc;
 }
 
 /* ---- master ----------------------------------------------------------------------------- */
@@ -231,7 +211,7 @@ int cmd_slave(int argc, char **argv)
 int cmd_master(int argc, char **argv)
 {
     const char *dev = NULL;
-    const char *capture = NULL;
+    capture_opts_t capture = {.path = NULL};
     uint32_t address = 0;
     bool have_address = false;
     uint32_t own = 2;
@@ -248,6 +228,7 @@ int cmd_master(int argc, char **argv)
     uint8_t outputs[DPM_MAX_IO] = {0};
     size_t out_given = 0;
     bool verbose = false;
+    int copt;
     for (int i = 2; i < argc; i++) {
         const char *v;
         const char *o = argv[i];
@@ -287,8 +268,8 @@ int cmd_master(int argc, char **argv)
         } else if (strcmp(o, "--slot-time") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 1, 10000u, &slot_ms))
                 return EXIT_USAGE;
-        } else if (strcmp(o, "--capture") == 0) {
-            if ((capture = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if ((copt = capture_option(argc, argv, &i, &capture)) != 0) {
+            if (copt < 0) return EXIT_USAGE;
         } else if (strcmp(o, "--verbose") == 0) {
             verbose = true;
         } else {
@@ -311,7 +292,7 @@ int cmd_master(int argc, char **argv)
     sc.cfg_len = (uint8_t)cfg_len;
 
     sim_station_t st = master_station(&master);
-    if (!session_open(dev, baud, capture, &st)) {
+    if (!session_open(dev, baud, &capture, &st)) {
         return 1;
     }
     rep.show_inputs = verbose;
@@ -360,5 +341,5 @@ int cmd_master(int argc, char **argv)
                   dpm_phase_name(s->phase));
     }
     tty_port_close(&port);
-    return close_capture(&rep, capture) != 0 ? 1 : rc;
+    return report_close_capture(&rep) != 0 ? 1 : rc;
 }

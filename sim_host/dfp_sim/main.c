@@ -43,6 +43,11 @@ static const char usage[] =
     "      channel). --master-address: default 2 (1 with c2). Exit 0 on a positive result, 1 on\n"
     "      a negative one or none within --timeout (default 10 s); --json: one JSON object\n"
     "      per result\n"
+    "  convert IN OUT [--format pcap|pcapng|text] [--linktype profibus|user0] [--ns]\n"
+    "          [--in-format pcap|pcapng|text|lcm] [--quiet]\n"
+    "      copies a capture into another format or link type (e.g. user0 for the Wireshark\n"
+    "      dissector in tools/wireshark/); the output format defaults to OUT's extension\n"
+    "      (.pcapng, .txt, else pcap); damaged records are copied and reported\n"
     "  replay FILE [--address N] [--check] [--speed real|max] [--baud RATE]\n"
     "         [--format pcap|pcapng|text|lcm] [--inverter sim|none] [--inverter-delay US]\n"
     "         [--fixed-baud] [--verbose]\n"
@@ -53,7 +58,7 @@ static const char usage[] =
     "      unreadable file). The address comes from the capture unless given; the rate from\n"
     "      the capture, else --baud, else 1.5M. docs/replay.md\n"
     "  record --capture FILE --cycles N [--baud RATE] [--address N] [--dpv1] [--faults]\n"
-    "         [--foreign] [--param-every N] [--inverter sim|none]\n"
+    "         [--foreign] [--param-every N] [--inverter sim|none] [--capture-format ...]\n"
     "      the built-in master and the card on the simulated bus for N Data_Exchange cycles,\n"
     "      parameter-channel services every N cycles (default 10, 0: none), every telegram\n"
     "      into FILE: --dpv1 adds data set 47 (class 1) and a class-2 connection, --faults a\n"
@@ -62,7 +67,10 @@ static const char usage[] =
     "      would the card accept this Chk_Cfg configuration?\n"
     "\n"
     "RATE: 9600 19200 45450 93750 187500 500000 1.5M 3M 6M 12M (also 19.2k ...).\n"
-    "--capture writes every telegram as pcap (LINKTYPE_PROFIBUS_DL, 257).\n";
+    "--capture FILE writes every telegram: pcap (default), pcapng (.pcapng) or text (.txt), or\n"
+    "  as --capture-format pcap|pcapng|text says; link type PROFIBUS_DL (257) unless\n"
+    "  --capture-linktype user0 (147, for Wireshark); --capture-ns: nanosecond timestamps.\n"
+    "  docs/captures.md describes the formats.\n";
 
 static int cmd_check_cfg(int argc, char **argv)
 {
@@ -113,9 +121,10 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "check-cfg") == 0) return cmd_check_cfg(argc, argv);
     if (strcmp(cmd, "inverter") == 0) return cmd_inverter(argc, argv);
     if (strcmp(cmd, "param") == 0) return cmd_param(argc, argv);
+    if (strcmp(cmd, "convert") == 0) return cmd_convert(argc, argv);
     if (strcmp(cmd, "replay") == 0) return cmd_replay(argc, argv);
     if (strcmp(cmd, "record") == 0) return cmd_record(argc, argv);
-    cli_error("unknown command '%s' (commands: demo, slave, master, inverter, param, replay, "
-              "record, check-cfg; see --help)", cmd);
+    cli_error("unknown command '%s' (commands: demo, slave, master, inverter, param, convert, "
+              "replay, record, check-cfg; see --help)", cmd);
     return EXIT_USAGE;
 }
