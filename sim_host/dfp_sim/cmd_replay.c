@@ -332,8 +332,14 @@ int cmd_record(int argc, char **argv)
     for (int i = 2; i < argc; i++) {
         const char *opt = argv[i];
         const char *v;
-        if (strcmp(opt, "--capture") == 0) {
-            if ((o.path = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        capture_opts_t co = {.path = o.path, .w = o.writer};
+        int c = capture_option(argc, argv, &i, &co);
+        if (c < 0) {
+            return EXIT_USAGE;
+        }
+        if (c > 0) {
+            o.path = co.path;
+            o.writer = co.w;
         } else if (strcmp(opt, "--cycles") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL ||
                 !cli_u32(opt, v, 1, 100000000u, &o.cycles)) return EXIT_USAGE;

@@ -3,7 +3,6 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "capture/pcap_writer.h"
 #include "dp_master/dpv1_c2.h"
 #include "dp_master/dpv1_ds47.h"
 #include "dp_master/param_channel.h"
@@ -163,7 +162,7 @@ typedef struct gen {
     membus_port_t *master_port;
     foreign_t foreign;
     membus_port_t *foreign_port;
-    pcap_writer_t w;
+    cap_writer_t w;
     bool write_failed;
     /* cyclic channel */
     dpm_param_t pc;
@@ -199,7 +198,7 @@ static void gen_tap(void *ctx, uint64_t t_start_ns, const uint8_t *frame, size_t
     (void)ctx;
     (void)local;
     (void)baud;
-    if (pcap_writer_frame(&g.w, t_start_ns, frame, len) != 0) {
+    if (cap_writer_frame(&g.w, t_start_ns, frame, len, CAP_DIR_UNKNOWN) != 0) {
         g.write_failed = true;
     }
     g.res->telegrams++;
@@ -511,8 +510,10 @@ int gen_run(const gen_options_t *opt, gen_result_t *res, char *err, size_t errle
                  g.opt.foreign ? " (and --foreign address + 1 and + 10 below 126)" : "");
         return -1;
     }
-    if (pcap_writer_open(&g.w, g.opt.path, PCAP_LINKTYPE_PROFIBUS_DL, true,
-                         (uint64_t)GEN_EPOCH_S * 1000000000ull, err, errlen) != 0) {
+    cap_writer_options_t wo = g.opt.writer;
+    wo.baud = g.opt.baud; /* pcapng records it (if_speed): a replay then knows the rate */
+    if (cap_writer_open(&g.w, g.opt.path, &wo, (uint64_t)GEN_EPOCH_S * 1000000000ull, err,
+                        errlen) != 0) {
         return -1;
     }
     membus_init(&g.bus);
@@ -587,7 +588,7 @@ int gen_run(const gen_options_t *opt, gen_result_t *res, char *err, size_t errle
         if (g.bus.now_ns > limit_ns) {
             snprintf(err, errlen, "the card did not complete %u Data_Exchange cycles (%u done, "
                      "master phase %s)", g.opt.cycles, s->cycles, dpm_phase_name(s->phase));
-            pcap_writer_close(&g.w);
+            cap_writer_close(&g.w);
             return -1;
         }
         /* Short steps while finishing, so the capture ends right after the last answer. */
@@ -610,7 +611,7 @@ int gen_run(const gen_options_t *opt, gen_result_t *res, char *err, size_t errle
     res->bus_ns = g.bus.now_ns;
     res->foreign_bursts = g.foreign.bursts;
     res->watchdog_expiries = g.wd_seen;
-    if (pcap_writer_close(&g.w) != 0 || g.write_failed) {
+    if (cap_writer_close(&g.w) != 0 || g.write_failed) {
         snprintf(err, errlen, "could not write the whole capture to %s", g.opt.path);
         return -1;
     }

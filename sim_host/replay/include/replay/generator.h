@@ -13,6 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "capture/capture.h"
 #include "sim_stations/stations.h"
 
 /* 2024-01-01 00:00:00 UTC: the first telegram's timestamp. */
@@ -22,6 +23,7 @@
 
 typedef struct gen_options {
     const char *path;
+    cap_writer_options_t writer; /* format AUTO: by the file's extension; baud: set by the run */
     uint32_t cycles;         /* Data_Exchange cycles of the card */
     uint32_t baud;           /* 0: 1.5 Mbit/s */
     uint8_t address;         /* the card; 0 is a valid address, so always give it */

@@ -255,7 +255,7 @@ typedef struct replay_file_status {
     uint64_t records;
     bool read_error;        /* the file could not be read to its end: error says where */
     bool interrupted;       /* *stop became non-zero */
-    char error[256];
+    char error[1024];
 } replay_file_status_t;
 
 /* "byte" for pcap/pcapng, "line" for text, "event" for LCM logs. */
