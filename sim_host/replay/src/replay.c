@@ -171,8 +171,9 @@ static void close_window(replay_t *r)
     m->actual = r->pend_actual_rec;
     m->fcb_repeat = r->pend_fcb_repeat;
     m->card_state = r->pend_card_state;
-    m->baud_state = r->pend_baud_state;
-    m->card_baud = r->pend_card_baud;
+    /* The rate as the request ended: still searching means the card did not take it. */
+    m->baud_state = dp_slave_baud_state(&r->card.card.dp);
+    m->card_baud = dp_slave_baud(&r->card.card.dp);
     m->set_prm_seen = r->set_prm_seen;
     const dfp21b_t *card = &r->card.card;
     m->layout.known = card->pd.valid;
@@ -322,8 +323,6 @@ void replay_feed(replay_t *r, const cap_record_t *rec)
         r->pend_expected = false;
         r->pend_actual = false;
         r->pend_card_state = dp_slave_state(&r->card.card.dp);
-        r->pend_baud_state = dp_slave_baud_state(&r->card.card.dp);
-        r->pend_card_baud = dp_slave_baud(&r->card.card.dp);
         uint8_t prev = r->last_fc[m.sa];
         r->pend_fcb_repeat = (m.fc & FDL_FC_FCV) != 0u && prev != 0xFFu &&
                              (prev & FDL_FC_FCB) == (m.fc & FDL_FC_FCB) &&

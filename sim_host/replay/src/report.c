@@ -64,6 +64,25 @@ static bool needs_data_exch(replay_service_t s)
     }
 }
 
+/* Does a recorded answer belong to the request: addressed to its sender, from its SAP? */
+static bool answer_fits(const replay_kept_t *req, const replay_kept_t *ans)
+{
+    replay_frame_t q;
+    replay_frame_t a;
+    replay_frame_parse(req->data, req->len, &q);
+    replay_frame_parse(ans->data, ans->len, &a);
+    if (a.kind == REPLAY_KIND_SC) {
+        return true;
+    }
+    if (a.kind != REPLAY_KIND_RESPONSE || !a.has_header || !q.has_header || a.da != q.sa) {
+        return false;
+    }
+    if (q.has_dsap != a.has_ssap) {
+        return false;
+    }
+    return !q.has_dsap || a.ssap == q.dsap;
+}
+
 /* The reasons a reader needs to make sense of the first difference. */
 static void explain(FILE *out, const replay_t *r, const replay_mismatch_t *m)
 {
@@ -86,20 +105,30 @@ static void explain(FILE *out, const replay_t *r, const replay_mismatch_t *m)
         WHY("the recorded answer is damaged (%s): the card's answer cannot equal it",
             m->expected_problem);
     }
+    /* Answers that do not depend on a parameterisation (class 2 needs none). */
+    bool state_free = m->service == REPLAY_SVC_FDL_STATUS || m->service == REPLAY_SVC_SET_PRM ||
+                      (m->service >= REPLAY_SVC_MSAC2_INITIATE &&
+                       m->service <= REPLAY_SVC_MSAC2_OTHER);
+    if (m->expected_present && !answer_fits(&m->request, &m->expected)) {
+        WHY("the recorded answer does not fit this request (other addresses or SAPs): a stray "
+            "telegram in the capture, e.g. a late answer to an earlier request");
+    }
     if (m->baud_state == DP_BAUD_SEARCH) {
-        WHY("the card had not found the bus rate yet (listening at %s): it hears the request "
-            "garbled. The card powers up at the first record; if the real card was on the bus "
-            "earlier, replay with --fixed-baud", baud_text(m->card_baud, b, sizeof b));
+        WHY("the card had not found the bus rate when the request ended (listening at %s): it "
+            "heard the request garbled. The card powers up at the first record and searches "
+            "from 12 Mbit/s down; if the real card was on the bus earlier, replay with "
+            "--fixed-baud", baud_text(m->card_baud, b, sizeof b));
+    } else if (m->card_state != DP_STATE_DATA_EXCH && !m->set_prm_seen && !state_free) {
+        WHY("the card is in %s and the capture has no Set_Prm to it before this request: the "
+            "capture starts after the real card was parameterised (by this or an earlier "
+            "master), perhaps in the middle of data exchange. The emulated card powers up at "
+            "the first record, so its answers differ until a master parameterises it in the "
+            "capture (Set_Prm, Chk_Cfg); Data_Exchange gets RS until then",
+            dp_state_name(m->card_state));
     } else if (needs_data_exch(m->service) && m->card_state != DP_STATE_DATA_EXCH) {
-        if (!m->set_prm_seen) {
-            WHY("the card is in %s: no Set_Prm to it earlier in the capture. The capture seems "
-                "to start in the middle of data exchange; the card answers RS until a master "
-                "parameterises it (Set_Prm, Chk_Cfg) again", dp_state_name(m->card_state));
-        } else {
-            WHY("the card is in %s: its parameterisation in the capture did not complete or it "
-                "left data exchange (watchdog, refused Set_Prm/Chk_Cfg)",
-                dp_state_name(m->card_state));
-        }
+        WHY("the card is in %s: its parameterisation in the capture did not complete or it "
+            "left data exchange (watchdog, refused Set_Prm/Chk_Cfg)",
+            dp_state_name(m->card_state));
     }
     if (m->fcb_repeat) {
         WHY("a repeated request (FCV=1, the same FCB as this master's previous request): the "
@@ -230,7 +259,8 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
         } else {
             fprintf(out, "  actual    no answer from the card\n");
         }
-        fprintf(out, "  card      %s, %s %s\n", dp_state_name(m->card_state),
+        fprintf(out, "  card      %s when the request began; %s %s when it ended\n",
+                dp_state_name(m->card_state),
                 m->baud_state == DP_BAUD_SEARCH ? "searching the rate, listening at"
                                                 : "rate",
                 baud_text(m->card_baud, b, sizeof b));

@@ -102,7 +102,7 @@ typedef struct replay_mismatch {
     bool actual_present;
     replay_kept_t actual;
     bool fcb_repeat;           /* same FCB as the master's previous request (FCV=1) */
-    /* The card at the moment of the request. */
+    /* The card: its DP state when the request began, its rate when the request had ended. */
     dp_state_t card_state;
     dp_baud_state_t baud_state;
     uint32_t card_baud;
@@ -149,8 +149,6 @@ typedef struct replay {
     bool pend_actual;
     replay_kept_t pend_actual_rec;
     dp_state_t pend_card_state;
-    dp_baud_state_t pend_baud_state;
-    uint32_t pend_card_baud;
     /* FCB of the last request from each master to the card (bit 0x20 of FC; 0xFF: none) */
     uint8_t last_fc[128];
     bool set_prm_seen;
