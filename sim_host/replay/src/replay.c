@@ -292,14 +292,14 @@ void replay_feed(replay_t *r, const cap_record_t *rec)
     if (is_card_answer(r, &m)) {
         /* The card produces its own answers; the recorded one is what to expect. */
         r->own_answers++;
-        if (r->pending && r->prev_request_to_card && !r->pend_expected) {
+        if (!r->prev_request_to_card) {
+            r->stray_answers++;
+        } else if (r->pending && !r->pend_expected) {
             r->pend_expected = true;
             keep(&r->pend_expected_rec, REPLAY_FROM_CAPTURE, 0, rec->index, rec->position,
                  rec->data, rec->len);
             snprintf(r->pend_expected_problem, sizeof r->pend_expected_problem, "%s",
                      rec->problem);
-        } else {
-            r->stray_answers++;
         }
         r->prev_request_to_card = false;
         return;
