@@ -214,13 +214,18 @@ int cmd_replay(int argc, char **argv)
     progress_t prog;
     replay_file_status_t st;
     char address_source[160];
+    char baud_source[320];
     if (have_address) {
         snprintf(address_source, sizeof address_source, "given with --address");
-    } else {
-        /* First pass: which station answers in this capture? */
+    }
+    if (baud != 0u) {
+        snprintf(baud_source, sizeof baud_source, "given with --baud");
+    }
+    if (!have_address || baud == 0u) {
+        /* First pass: which station answers, and what rate the recorded timing needs. */
         static replay_scan_t scan;
         replay_scan_init(&scan);
-        progress_begin(&prog, "looking for the card's address");
+        progress_begin(&prog, "looking at the capture");
         int rc = replay_scan_file(&scan, file, format, &stop_requested, progress_show, &prog,
                                   &st);
         progress_end(&prog);
@@ -232,31 +237,49 @@ int cmd_replay(int argc, char **argv)
             cli_error("replay: interrupted");
             return 1;
         }
-        uint8_t found[REPLAY_SCAN_MAX];
-        unsigned n = replay_scan_result(&scan, found, REPLAY_SCAN_MAX);
-        if (n == 0u) {
-            cli_error("replay: no slave answers in %s (%llu records%s%s): nothing tells which "
-                      "station is the card; give --address N", file,
-                      (unsigned long long)st.records, st.read_error ? "; " : "",
-                      st.read_error ? st.error : "");
-            return EXIT_USAGE;
-        }
-        if (n > 1u) {
-            char list[1024];
-            size_t k = 0;
-            for (unsigned i = 0; i < n && k + 40u < sizeof list; i++) {
-                k += (size_t)snprintf(list + k, sizeof list - k, "%s%u (%llu answers)",
-                                      i > 0u ? ", " : "", found[i],
-                                      (unsigned long long)scan.answers[found[i]]);
+        if (!have_address) {
+            uint8_t found[REPLAY_SCAN_MAX];
+            unsigned n = replay_scan_result(&scan, found, REPLAY_SCAN_MAX);
+            if (n == 0u) {
+                cli_error("replay: no slave answers in %s (%llu records%s%s): nothing tells "
+                          "which station is the card; give --address N", file,
+                          (unsigned long long)st.records, st.read_error ? "; " : "",
+                          st.read_error ? st.error : "");
+                return EXIT_USAGE;
             }
-            cli_error("replay: %u slaves answer in %s: %s; say which one is the card with "
-                      "--address N", n, file, list);
-            return EXIT_USAGE;
+            if (n > 1u) {
+                char list[1024];
+                size_t k = 0;
+                for (unsigned i = 0; i < n && k + 40u < sizeof list; i++) {
+                    k += (size_t)snprintf(list + k, sizeof list - k, "%s%u (%llu answers)",
+                                          i > 0u ? ", " : "", found[i],
+                                          (unsigned long long)scan.answers[found[i]]);
+                }
+                cli_error("replay: %u slaves answer in %s: %s; say which one is the card with "
+                          "--address N", n, file, list);
+                return EXIT_USAGE;
+            }
+            address = found[0];
+            snprintf(address_source, sizeof address_source,
+                     "from the capture: the only slave that answers, %llu answers",
+                     (unsigned long long)scan.answers[address]);
         }
-        address = found[0];
-        snprintf(address_source, sizeof address_source,
-                 "from the capture: the only slave that answers, %llu answers",
-                 (unsigned long long)scan.answers[address]);
+        if (baud == 0u && scan.recorded_baud == 0u) {
+            uint32_t inferred = replay_scan_rate(&scan);
+            if (inferred != 0u) {
+                baud = inferred;
+                snprintf(baud_source, sizeof baud_source,
+                         "the capture records no rate; the lowest rate its timing allows: "
+                         "record %llu begins %.1f us after record %llu, which needs %u bit "
+                         "times in that gap; --baud to override",
+                         (unsigned long long)scan.need_record, (double)scan.need_gap_ns / 1e3,
+                         (unsigned long long)scan.need_prev_record, scan.need_bits);
+            } else {
+                snprintf(baud_source, sizeof baud_source,
+                         "the capture records no rate and no timed request with its answer: "
+                         "the default, the rate of dfp-sim demo and record; --baud to change");
+            }
+        }
     }
 
     rc_state.rep.now_ns = replay_now_ns;
@@ -282,11 +305,6 @@ int cmd_replay(int argc, char **argv)
         cli_error("%s", st.error);
         return EXIT_USAGE;
     }
-    char baud_source[160];
-    snprintf(baud_source, sizeof baud_source, "%s",
-             baud != 0u ? "given with --baud; the capture records no rate"
-                        : "the capture records no rate: the default, as in dfp-sim demo and "
-                          "record; give --baud RATE");
     replay_report_info_t info = {
         .file = file,
         .format = cap_format_name(st.format),

@@ -32,7 +32,7 @@ expect_rows startup.pcap "$out" "FDL_Status 23 23 0 22 22" "Data_Exchange 5 5 0 
   "Set_Prm 1 1 0 0 0" "Chk_Cfg 1 1 0 0 0" "Slave_Diag 2 2 0 0 0" "total 32 32 0 22 22"
 expect_in "startup.pcap result" "result: MATCH: all 32 replies match" "$out"
 expect_in "address found" "DFP21B at address 4 (from the capture: the only slave that answers" "$out"
-expect_in "default rate" "1.5 Mbit/s (the capture records no rate: the default" "$out"
+expect_in "rate from the timing" "1.5 Mbit/s (the capture records no rate; the lowest rate its timing allows: record 28 begins 205.0 us after record 27" "$out"
 
 expect_exit 0 "data_exchange.pcap" -- "$sim" replay "$golden/data_exchange.pcap" --check
 expect_rows data_exchange.pcap "$out" "FDL_Status 23 23 0 22 22" "Data_Exchange 100 100 0 0 0" \
@@ -145,26 +145,29 @@ open(sys.argv[2], 'wb').write(d)
 PY
 expect_exit 2 "unknown link type" -- "$sim" replay "$tmp/linktype.pcap" --check --address 4
 expect_in "link type named" "link type 1" "$out"
-# A garbage record between two telegrams (200 us after record 30): replayed as it was on the
-# wire, listed with its position, and the card's answers still match.
+# A garbage record in the first pause of at least 1 ms after record 30 (300 us into it):
+# replayed as it was on the wire, listed with its position, and the card's answers still match.
 python3 - "$golden/startup.pcap" "$tmp/between.pcap" >"$tmp/between.txt" <<'PY'
 import struct, sys
 d = open(sys.argv[1], 'rb').read()
-out, o, n = bytearray(d[:24]), 24, 0
+recs, o = [], 24
 while o < len(d):
     s, us, incl, orig = struct.unpack_from('<IIII', d, o)
-    out += d[o:o + 16 + incl]
-    n += 1
-    if n == 30:
-        print(len(out))
-        junk = bytes([0x00, 0xFF, 0x42])
-        out += struct.pack('<IIII', s, us + 200, len(junk), len(junk)) + junk
+    recs.append((s * 1000000 + us, d[o:o + 16 + incl]))
     o += 16 + incl
+out, done = bytearray(d[:24]), False
+for i, (t, raw) in enumerate(recs):
+    out += raw
+    if not done and i + 1 >= 30 and i + 1 < len(recs) and recs[i + 1][0] - t >= 1000:
+        print(i + 2, len(out))
+        junk, tj = bytes([0x00, 0xFF, 0x42]), t + 300
+        out += struct.pack('<IIII', tj // 1000000, tj % 1000000, len(junk), len(junk)) + junk
+        done = True
 open(sys.argv[2], 'wb').write(out)
 PY
-read -r junk_pos <"$tmp/between.txt"
+read -r junk_rec junk_pos <"$tmp/between.txt"
 expect_exit 0 "garbage between telegrams" -- "$sim" replay "$tmp/between.pcap" --check
-expect_in "damaged record listed" "record 31 (byte $junk_pos):" "$out"
+expect_in "damaged record listed" "record $junk_rec (byte $junk_pos):" "$out"
 expect_in "damaged count" "damaged records: 1" "$out"
 expect_exit 2 "missing file" -- "$sim" replay "$tmp/none.pcap" --check --address 4
 expect_in "missing file named" "none.pcap" "$out"
@@ -200,7 +203,13 @@ expect_exit 0 "replay it" -- "$sim" replay "$tmp/all.pcapng" --check --address 9
 expect_in "rate from pcapng" "12 Mbit/s (recorded in the capture)" "$out"
 expect_in "all match" "result: MATCH" "$out"
 expect_exit 0 "record with nanosecond pcap" -- "$sim" record --capture "$tmp/ns.pcap" --cycles 50 --capture-ns --baud 12M
-expect_exit 0 "replay ns at 12M" -- "$sim" replay "$tmp/ns.pcap" --check --baud 12M
+expect_exit 0 "replay ns, rate from the timing" -- "$sim" replay "$tmp/ns.pcap" --check
+expect_in "12M from the timing" "12 Mbit/s (the capture records no rate; the lowest rate its timing allows" "$out"
+expect_in "ns pcap matches" "result: MATCH" "$out"
+# Over a PTY the timing is not a line's: the lowest rate it allows is 500 kbit/s, and a card
+# already on the line (--fixed-baud) answers as recorded.
+expect_exit 0 "PTY capture, inferred rate, --fixed-baud" -- "$sim" replay "$golden/dpv1_pty_movilink.pcap" --check --fixed-baud
+expect_in "500k inferred" "500 kbit/s (the capture records no rate; the lowest rate its timing allows" "$out"
 
 # ---- bad command lines: exit 2, one line on stderr, nothing on stdout -----------------------
 usage_error() { # DESCRIPTION args...

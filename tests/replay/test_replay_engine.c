@@ -406,6 +406,44 @@ static void test_scan(void)
     CHECK_EQ(s.answers[7], 1);
     CHECK(s.master[2]);
     CHECK(s.master[3]);
+    CHECK_EQ(replay_scan_rate(&s), 0); /* no times: nothing to go by */
+}
+
+static void scan_timed(replay_scan_t *s, uint64_t t_us, const uint8_t *f, size_t len)
+{
+    static cap_record_t rec;
+    memset(&rec, 0, sizeof rec);
+    rec.index = ++next_index;
+    rec.has_time = true;
+    rec.t_ns = t_us * 1000u;
+    rec.len = len;
+    memcpy(rec.data, f, len);
+    (void)cap_check_telegram(rec.data, rec.len, rec.problem, sizeof rec.problem);
+    replay_scan_feed(s, &rec);
+}
+
+/* The lowest rate the recorded timing allows: an answer 6 us after a 6-octet request needs
+ * (66 + 11) bits in 7 us (one added for rounding): 11 Mbit/s, so 12M; 52 us: 1.5M. */
+static void test_scan_rate(void)
+{
+    replay_scan_t s;
+    replay_scan_init(&s);
+    next_index = 0;
+    scan_timed(&s, 100, fdl_status_req, sizeof fdl_status_req);
+    scan_timed(&s, 106, fdl_status_rsp, sizeof fdl_status_rsp);
+    CHECK_EQ(replay_scan_rate(&s), 12000000u);
+    CHECK_EQ(s.need_record, 2);
+    CHECK_EQ(s.need_bits, 77);
+    replay_scan_init(&s);
+    scan_timed(&s, 100, fdl_status_req, sizeof fdl_status_req);
+    scan_timed(&s, 151, fdl_status_rsp, sizeof fdl_status_rsp);
+    scan_timed(&s, 400, fdl_status_req, sizeof fdl_status_req);
+    CHECK_EQ(replay_scan_rate(&s), 1500000u);
+    /* Telegrams that overlap at any rate: 12M, the highest there is. */
+    replay_scan_init(&s);
+    scan_timed(&s, 100, fdl_status_req, sizeof fdl_status_req);
+    scan_timed(&s, 100, fdl_status_rsp, sizeof fdl_status_rsp);
+    CHECK_EQ(replay_scan_rate(&s), 12000000u);
 }
 
 static void test_describe(void)
@@ -464,6 +502,7 @@ int main(void)
     RUN_TEST(test_rate_that_does_not_fit);
     RUN_TEST(test_without_check);
     RUN_TEST(test_scan);
+    RUN_TEST(test_scan_rate);
     RUN_TEST(test_describe);
     return check_report();
 }

@@ -232,10 +232,11 @@ static uint64_t schedule(replay_t *r, const cap_record_t *rec, const replay_fram
         r->have_origin = true;
     }
     uint64_t want = rec->t_ns - r->origin_ns;
-    if ((int64_t)(want - r->last_inject_ns) < 0 && r->injected > 0u) {
-        r->backwards++;
-        want = r->last_inject_ns;
+    if (r->have_last_want && (int64_t)(want - r->last_want_ns) < 0) {
+        r->backwards++; /* the line-busy rule below keeps the order */
     }
+    r->have_last_want = true;
+    r->last_want_ns = want;
     uint64_t idle = starts_cycle ? bits_ns(baud, FDL_TSYN_BITS)
                     : (m->kind == REPLAY_KIND_RESPONSE || m->kind == REPLAY_KIND_SC)
                         ? bits_ns(baud, FDL_MIN_TSDR_DEFAULT_BITS)
@@ -377,6 +378,56 @@ void replay_scan_init(replay_scan_t *s)
     memset(s, 0, sizeof *s);
 }
 
+/* The recorded timing bounds the rate from below: a telegram cannot begin before the one before
+ * it ended, nor an answer before min TSDR (11 bit times) after its request. Timestamps may be
+ * rounded to microseconds: one is added to every gap. */
+static void scan_timing(replay_scan_t *s, const cap_record_t *rec, const replay_frame_t *m,
+                        bool answers_prev)
+{
+    if (rec->baud != 0u) {
+        s->recorded_baud = rec->baud;
+    }
+    if (!rec->has_time || rec->problem[0] != '\0') {
+        /* Damaged records may be a recorder's artefacts: their timing proves nothing. */
+        s->have_prev_time = false;
+        return;
+    }
+    if (s->have_prev_time) {
+        uint64_t bits = 11u * (uint64_t)s->prev_len + (answers_prev ? 11u : 0u);
+        uint64_t gap_ns = rec->t_ns >= s->prev_t_ns ? rec->t_ns - s->prev_t_ns + 1000u : 1000u;
+        uint64_t need = bits * 1000000000ull / gap_ns;
+        if (need > s->need_baud) {
+            s->need_baud = need;
+            s->need_record = rec->index;
+            s->need_prev_record = s->prev_index;
+            s->need_gap_ns = rec->t_ns >= s->prev_t_ns ? rec->t_ns - s->prev_t_ns : 0u;
+            s->need_bits = (uint32_t)bits;
+        }
+        if (answers_prev) {
+            s->timed_answers++;
+        }
+    }
+    (void)m;
+    s->have_prev_time = true;
+    s->prev_t_ns = rec->t_ns;
+    s->prev_len = rec->len;
+    s->prev_index = rec->index;
+}
+
+uint32_t replay_scan_rate(const replay_scan_t *s)
+{
+    if (s->timed_answers == 0u) {
+        return 0; /* nothing to go by */
+    }
+    uint32_t best = hal_uart_bauds[0]; /* 12 Mbit/s: also when even that does not fit */
+    for (unsigned i = 0; i < HAL_UART_NUM_BAUDS; i++) {
+        if (hal_uart_bauds[i] >= s->need_baud && hal_uart_bauds[i] < best) {
+            best = hal_uart_bauds[i];
+        }
+    }
+    return best;
+}
+
 void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec)
 {
     s->records++;
@@ -385,6 +436,10 @@ void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec)
     bool was_request = s->prev_request;
     uint8_t da = s->prev_da;
     s->prev_request = false;
+    bool answers_prev = was_request && rec->problem[0] == '\0' &&
+                        (m.kind == REPLAY_KIND_SC ||
+                         (m.kind == REPLAY_KIND_RESPONSE && m.has_header && m.sa == da));
+    scan_timing(s, rec, &m, answers_prev);
     if (rec->problem[0] != '\0') {
         return; /* a damaged record says nothing reliable about who is who */
     }

@@ -182,6 +182,8 @@ typedef struct replay {
     uint32_t min_baud_seen;  /* rates taken from the records (0: none) */
     uint32_t max_baud_seen;
     uint64_t last_record_ns; /* bus time of the last record */
+    bool have_last_want;
+    uint64_t last_want_ns;   /* recorded time of the last timed record, as bus time */
     uint64_t last_index;     /* index of the last record fed */
     /* The file ends right after a request to the card: its answer is not in the capture, so
      * the request is not compared (a recorder stopped mid-exchange). */
@@ -233,6 +235,18 @@ typedef struct replay_scan {
     bool prev_request;
     uint8_t prev_da;
     uint64_t records;
+    /* The rate: recorded (pcapng, LCM) or what the timing needs (replay_scan_rate). */
+    uint32_t recorded_baud;
+    bool have_prev_time;
+    uint64_t prev_t_ns;
+    size_t prev_len;
+    uint64_t prev_index;
+    uint64_t timed_answers;   /* requests followed by their answer, both with times */
+    uint64_t need_baud;       /* the highest rate any pair of records needs */
+    uint64_t need_record;     /* ... the pair: this record */
+    uint64_t need_prev_record; /* ... and the one before */
+    uint64_t need_gap_ns;
+    uint32_t need_bits;       /* bit times that had to fit into the gap */
 } replay_scan_t;
 
 void replay_scan_init(replay_scan_t *s);
@@ -240,6 +254,10 @@ void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec);
 /* Addresses (0..125) that answered and never acted as a master, ascending. Returns how many
  * (at most max are written). */
 unsigned replay_scan_result(const replay_scan_t *s, uint8_t *out, unsigned max);
+/* The lowest PROFIBUS rate at which no recorded telegram begins before the one before it ended
+ * and no answer before min TSDR after its request (12 Mbit/s when even that does not fit); 0
+ * when the file has no request followed by its answer with times. */
+uint32_t replay_scan_rate(const replay_scan_t *s);
 
 /* ---- files ------------------------------------------------------------------------------- */
 
