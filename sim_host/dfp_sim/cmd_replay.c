@@ -45,8 +45,8 @@ static void progress_show(void *ctx, uint64_t records, uint64_t pos, uint64_t si
         return;
     }
     uint64_t now = mono_ns();
-    if (now - p->last < 200000000u) {
-        return;
+    if (p->shown && now - p->last < 200000000u) {
+        return; /* the first call shows at once, then five times a second */
     }
     p->last = now;
     double s = (double)(now - p->t0) / 1e9;
@@ -288,6 +288,7 @@ int cmd_replay(int argc, char **argv)
     replay_options_t ro = {.address = (uint8_t)address, .check = check, .baud = baud,
                            .fixed_card_baud = fixed, .inverter = inverter,
                            .inverter_delay_us = delay_us, .speed = speed,
+                           .stop = &stop_requested,
                            .on_telegram = on_telegram, .on_card_event = on_card_event,
                            .ctx = &rc_state};
     char err[256];

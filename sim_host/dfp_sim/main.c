@@ -56,7 +56,7 @@ static const char usage[] =
     "      with the recorded one and reports the first difference and counts per service\n"
     "      (exit 0: all match, 1: a difference or a damaged file, 2: bad command line or\n"
     "      unreadable file). The address comes from the capture unless given; the rate from\n"
-    "      the capture, else --baud, else 1.5M. docs/replay.md\n"
+    "      the capture, else --baud, else the lowest its timing allows. docs/replay.md\n"
     "  record --capture FILE --cycles N [--baud RATE] [--address N] [--dpv1] [--faults]\n"
     "         [--foreign] [--param-every N] [--inverter sim|none] [--capture-format ...]\n"
     "      the built-in master and the card on the simulated bus for N Data_Exchange cycles,\n"

@@ -75,6 +75,11 @@ expect_rows dpv1_pty_c2.pcap "$out" "MSAC2 initiate 1 1 0 0 0" "MSAC2 abort 1 1 
 expect_exit 1 "dpv1_pty_movilink.pcap at 19200" -- "$sim" replay "$golden/dpv1_pty_movilink.pcap" --check --baud 19200
 expect_in "timing conflict reported" "would have overlapped the one before at 19.2 kbit/s" "$out"
 
+# On a terminal a progress line on stderr (the first after 4096 records), then cleared.
+"$sim" record --capture "$tmp/p.pcap" --cycles 3000 --param-every 0 >/dev/null
+script -qec "$sim replay $tmp/p.pcap --check --address 4 >/dev/null" /dev/null >"$tmp/tty.txt" 2>&1
+expect_in "progress on a terminal" "replay: 4096 records (" "$(cat "$tmp/tty.txt")"
+expect_in "progress rate" "telegrams/s" "$(cat "$tmp/tty.txt")"
 # Not a terminal: no progress display.
 "$sim" replay "$golden/param_channel.pcap" --check >/dev/null 2>"$tmp/err"
 if [ ! -s "$tmp/err" ]; then ok; else bad "stderr not empty without a terminal: $(cat "$tmp/err")"; fi
@@ -181,6 +186,29 @@ span_ms=$(sed -n 's/.* records, \([0-9.]*\) s of bus time/\1/p' <<<"$out" | awk 
 took_ms=$(( (t1 - t0) / 1000000 ))
 if [ -n "$span_ms" ] && [ "$span_ms" -gt 50 ] && [ "$took_ms" -ge "$span_ms" ]; then ok
 else bad "--speed real took $took_ms ms for $span_ms ms of capture"; fi
+
+# SIGINT during an hour-long pause of a --speed real replay: it stops at once, reports what was
+# replayed, exit 1.
+python3 - "$golden/startup.pcap" "$tmp/pause.pcap" <<'PY'
+import struct, sys
+d = open(sys.argv[1], 'rb').read()
+out, o, n = bytearray(d[:24]), 24, 0
+while o < len(d):
+    s, us, incl, orig = struct.unpack_from('<IIII', d, o)
+    n += 1
+    out += struct.pack('<IIII', s + (3600 if n > 30 else 0), us, incl, orig) + d[o + 16:o + 16 + incl]
+    o += 16 + incl
+open(sys.argv[2], 'wb').write(out)
+PY
+"$sim" replay "$tmp/pause.pcap" --check --speed real >"$tmp/pause.out" 2>&1 &
+pid=$!
+sleep 1
+kill -INT $pid
+for _ in $(seq 50); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
+if kill -0 $pid 2>/dev/null; then bad "SIGINT did not stop --speed real"; kill -9 $pid; fi
+wait $pid; rc=$?
+[ $rc = 1 ] && ok || bad "interrupted replay: exit $rc"
+expect_in "interrupted reported" "interrupted after" "$(cat "$tmp/pause.out")"
 
 # ---- the goldens made again now ------------------------------------------------------------
 # Same telegrams at the same times, or the first one that changed is named; and what dfp-sim

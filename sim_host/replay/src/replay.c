@@ -122,13 +122,17 @@ static void run_to(replay_t *r, uint64_t t)
     if (t <= r->bus.now_ns) {
         return;
     }
-    if (r->opt.speed == REPLAY_SPEED_REAL) {
+    if (r->opt.speed == REPLAY_SPEED_REAL && (r->opt.stop == NULL || *r->opt.stop == 0)) {
         uint64_t due = r->wall_start_ns + t;
         uint64_t now = mono_ns();
         if (due > now) {
             struct timespec ts = {.tv_sec = (time_t)(due / 1000000000u),
                                   .tv_nsec = (long)(due % 1000000000u)};
+            /* A signal ends the wait (EINTR) so a stop request is seen during long gaps. */
             while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) != 0) {
+                if (r->opt.stop != NULL && *r->opt.stop != 0) {
+                    break;
+                }
             }
         }
     }

@@ -67,6 +67,8 @@ typedef struct replay_options {
     card_inverter_t inverter; /* CARD_INVERTER_SIM or CARD_INVERTER_NONE */
     uint32_t inverter_delay_us;
     replay_speed_t speed;
+    /* Non-zero when the user asked to stop (SIGINT): --speed real stops waiting. Optional. */
+    volatile const int *stop;
     /* Optional observers. */
     void (*on_telegram)(void *ctx, const replay_telegram_t *t);
     void (*on_card_event)(void *ctx, uint64_t t_ns, const dp_event_t *ev);
