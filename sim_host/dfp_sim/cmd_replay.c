@@ -264,7 +264,10 @@ int cmd_replay(int argc, char **argv)
                      "from the capture: the only slave that answers, %llu answers",
                      (unsigned long long)scan.answers[address]);
         }
-        if (baud == 0u && scan.recorded_baud == 0u) {
+        if (baud == 0u && scan.recorded_baud != 0u) {
+            baud = scan.recorded_baud; /* also the rate a --fixed-baud card starts at */
+            snprintf(baud_source, sizeof baud_source, "recorded in the capture");
+        } else if (baud == 0u) {
             uint32_t inferred = replay_scan_rate(&scan);
             if (inferred != 0u) {
                 baud = inferred;

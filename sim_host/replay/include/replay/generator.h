@@ -57,7 +57,7 @@ typedef struct gen_result {
 } gen_result_t;
 
 /* Returns 0, or -1 with the reason in err (file not writable, the card never reached data
- * exchange). */
+ * exchange). One run at a time: the bus and its stations are static (they are large). */
 int gen_run(const gen_options_t *opt, gen_result_t *res, char *err, size_t errlen);
 
 #endif
