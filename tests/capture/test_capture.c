@@ -80,6 +80,7 @@ static void read_sample(const char *path, cap_format_t expect_fmt, uint32_t link
         CHECK_EQ(rec.len, lens[i]);
         CHECK_EQ(rec.orig_len, lens[i]);
         CHECK(memcmp(rec.data, frames[i], lens[i]) == 0);
+        CHECK_STR(rec.problem, "");
         if (positions != NULL) {
             CHECK_EQ(rec.position, positions[i]);
         }
@@ -296,6 +297,67 @@ static void test_writer_refusals(void)
     CHECK(strstr(err, "/nonexistent-dir/x.pcap") != NULL);
 }
 
+static void test_text_round_trip_and_bad_lines(void)
+{
+    char p[600];
+    path_of(p, sizeof p, "sample.txt");
+    write_sample(p, CAP_FORMAT_AUTO, 0, false, 0);
+    cap_reader_t r;
+    char err[256];
+    CHECK_EQ(cap_reader_open(&r, p, CAP_FORMAT_AUTO, err, sizeof err), 0);
+    CHECK_EQ(r.format, CAP_FORMAT_TEXT);
+    static cap_record_t rec;
+    const cap_dir_t dirs[] = {CAP_DIR_TX, CAP_DIR_RX, CAP_DIR_UNKNOWN, CAP_DIR_TX};
+    for (uint64_t i = 1; i <= 4; i++) {
+        CHECK_EQ(cap_reader_next(&r, &rec), 1);
+        CHECK_EQ(rec.position, i); /* line number */
+        CHECK_EQ(rec.dir, dirs[i - 1]);
+        CHECK_STR(rec.problem, "");
+    }
+    CHECK_EQ(rec.t_ns, 1700000000ull * 1000000000ull + 2000100000ull);
+    CHECK_EQ(cap_reader_next(&r, &rec), 0);
+    cap_reader_close(&r);
+
+    /* Comments and blank lines skipped; a bad line, an overlong line and a bad FCS are records
+     * with a problem and their line number; the line after the long one is read whole. */
+    path_of(p, sizeof p, "bad.txt");
+    FILE *f = fopen(p, "w");
+    CHECK(f != NULL);
+    if (f == NULL) {
+        return;
+    }
+    fputs("# a dump\n\n10 04 02 49 4F 16\nhello world\n", f);
+    for (int i = 0; i < 5000; i++) {
+        fputc('A', f);
+    }
+    fputs("\r\n0.5 RX E5\n10 04 02 49 4E 16\n", f);
+    fclose(f);
+    CHECK_EQ(cap_reader_open(&r, p, CAP_FORMAT_AUTO, err, sizeof err), 0);
+    CHECK_EQ(cap_reader_next(&r, &rec), 1);
+    CHECK_EQ(rec.position, 3);
+    CHECK_EQ(rec.len, 6);
+    CHECK_STR(rec.problem, "");
+    CHECK_EQ(cap_reader_next(&r, &rec), 1);
+    CHECK_EQ(rec.position, 4);
+    CHECK_EQ(rec.len, 0);
+    CHECK(rec.problem[0] != '\0');
+    CHECK_EQ(cap_reader_next(&r, &rec), 1);
+    CHECK_EQ(rec.position, 5);
+    CHECK_EQ(rec.len, 0);
+    CHECK(strstr(rec.problem, "longer than 4096") != NULL);
+    CHECK_EQ(cap_reader_next(&r, &rec), 1);
+    CHECK_EQ(rec.position, 6);
+    CHECK_EQ(rec.t_ns, 500000000ull);
+    CHECK_EQ(rec.dir, CAP_DIR_RX);
+    CHECK_EQ(rec.data[0], 0xE5);
+    CHECK_EQ(cap_reader_next(&r, &rec), 1);
+    CHECK_EQ(rec.position, 7);
+    CHECK_STR(rec.problem, "bad FCS (0x4E, computed 0x4F)");
+    CHECK_EQ(cap_reader_next(&r, &rec), 0);
+    CHECK_EQ(r.records, 5);
+    cap_reader_close(&r);
+}
+
 static void test_format_names(void)
 {
     cap_format_t f = CAP_FORMAT_AUTO;
@@ -318,6 +380,7 @@ int main(int argc, char **argv)
     RUN_TEST(test_damaged_pcap_reports_position);
     RUN_TEST(test_long_record_is_cut_and_marked);
     RUN_TEST(test_writer_refusals);
+    RUN_TEST(test_text_round_trip_and_bad_lines);
     RUN_TEST(test_format_names);
     return check_report();
 }
