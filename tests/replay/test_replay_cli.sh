@@ -80,6 +80,14 @@ expect_in "timing conflict reported" "would have overlapped the one before at 19
 script -qec "$sim replay $tmp/p.pcap --check --address 4 >/dev/null" /dev/null >"$tmp/tty.txt" 2>&1
 expect_in "progress on a terminal" "replay: 4096 records (" "$(cat "$tmp/tty.txt")"
 expect_in "progress rate" "telegrams/s" "$(cat "$tmp/tty.txt")"
+# The same telegrams as a text capture (dfp-sim convert): positions are lines; a line that is
+# not a telegram is listed with its line number and changes nothing else.
+"$sim" convert "$golden/param_channel.pcap" "$tmp/pc.txt" >/dev/null
+sed -i '151a this line is no telegram' "$tmp/pc.txt"
+expect_exit 0 "text capture" -- "$sim" replay "$tmp/pc.txt" --check
+expect_in "text format" "replay of $tmp/pc.txt (text)" "$out"
+expect_rows "text capture" "$out" "Data_Exchange 200 200 0 0 0" "total 227 227 0 22 22"
+expect_in "bad line listed" "record 152 (line 152):" "$out"
 # Not a terminal: no progress display.
 "$sim" replay "$golden/param_channel.pcap" --check >/dev/null 2>"$tmp/err"
 if [ ! -s "$tmp/err" ]; then ok; else bad "stderr not empty without a terminal: $(cat "$tmp/err")"; fi

@@ -309,6 +309,29 @@ static void test_damaged_request(void)
     CHECK_EQ(rp.svc[REPLAY_SVC_FDL_STATUS].matched, 1);
 }
 
+/* An unreadable text line (no octets, a problem) between a request and its answer is listed
+ * as damaged and changes nothing else. */
+static void test_unreadable_line_between(void)
+{
+    start(true, true);
+    feed(0, fdl_status_req, sizeof fdl_status_req);
+    static cap_record_t bad;
+    memset(&bad, 0, sizeof bad);
+    bad.index = ++next_index;
+    bad.position = 7;
+    snprintf(bad.problem, sizeof bad.problem, "not hex: 'zz'");
+    replay_feed(&rp, &bad);
+    feed(51, fdl_status_rsp, sizeof fdl_status_rsp);
+    replay_finish(&rp);
+    CHECK_EQ(rp.mismatches, 0);
+    CHECK_EQ(rp.svc[REPLAY_SVC_FDL_STATUS].matched, 1);
+    CHECK_EQ(rp.damaged_count, 1);
+    CHECK_EQ(rp.damaged[0].record, 2);
+    CHECK_EQ(rp.damaged[0].position, 7);
+    CHECK_STR(rp.damaged[0].problem, "not hex: 'zz'");
+    CHECK_EQ(rp.injected, 1);
+}
+
 /* Text captures without times: synthetic times keep the card's answers apart. */
 static void test_untimed_records(void)
 {
@@ -497,6 +520,7 @@ int main(void)
     RUN_TEST(test_fcb_repeat);
     RUN_TEST(test_tokens_and_two_masters);
     RUN_TEST(test_damaged_request);
+    RUN_TEST(test_unreadable_line_between);
     RUN_TEST(test_untimed_records);
     RUN_TEST(test_capture_ending_after_a_request);
     RUN_TEST(test_rate_that_does_not_fit);

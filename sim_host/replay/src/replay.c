@@ -292,6 +292,11 @@ void replay_feed(replay_t *r, const cap_record_t *rec)
         if (r->min_baud_seen == 0u || rec->baud < r->min_baud_seen) r->min_baud_seen = rec->baud;
         if (rec->baud > r->max_baud_seen) r->max_baud_seen = rec->baud;
     }
+    if (rec->len == 0u) {
+        /* A line a text importer could not read: nothing went on the wire. It is listed as
+         * damaged and leaves the order of the telegrams around it alone. */
+        return;
+    }
     replay_frame_t m;
     replay_frame_parse(rec->data, rec->len, &m);
     if (is_card_answer(r, &m)) {
@@ -435,6 +440,9 @@ uint32_t replay_scan_rate(const replay_scan_t *s)
 void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec)
 {
     s->records++;
+    if (rec->len == 0u) {
+        return; /* an unreadable text line: nothing was on the wire */
+    }
     replay_frame_t m;
     replay_frame_parse(rec->data, rec->len, &m);
     bool was_request = s->prev_request;
