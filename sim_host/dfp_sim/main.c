@@ -48,6 +48,21 @@ static const char usage[] =
     "      copies a capture into another format or link type (e.g. user0 for the Wireshark\n"
     "      dissector in tools/wireshark/); the output format defaults to OUT's extension\n"
     "      (.pcapng, .txt, else pcap); damaged records are copied and reported\n"
+    "  replay FILE [--address N] [--check] [--speed real|max] [--baud RATE]\n"
+    "         [--format pcap|pcapng|text|lcm] [--inverter sim|none] [--inverter-delay US]\n"
+    "         [--fixed-baud] [--verbose]\n"
+    "      a bus capture played against the emulated card at its recorded times (the card's\n"
+    "      own recorded answers are left out: it makes its own); --check compares every reply\n"
+    "      with the recorded one and reports the first difference and counts per service\n"
+    "      (exit 0: all match, 1: a difference or a damaged file, 2: bad command line or\n"
+    "      unreadable file). The address comes from the capture unless given; the rate from\n"
+    "      the capture, else --baud, else the lowest its timing allows. docs/replay.md\n"
+    "  record --capture FILE --cycles N [--baud RATE] [--address N] [--dpv1] [--faults]\n"
+    "         [--foreign] [--param-every N] [--inverter sim|none] [--capture-format ...]\n"
+    "      the built-in master and the card on the simulated bus for N Data_Exchange cycles,\n"
+    "      parameter-channel services every N cycles (default 10, 0: none), every telegram\n"
+    "      into FILE: --dpv1 adds data set 47 (class 1) and a class-2 connection, --faults a\n"
+    "      watchdog expiry and a wrong configuration, --foreign a second slave and master\n"
     "  check-cfg HEX\n"
     "      would the card accept this Chk_Cfg configuration?\n"
     "\n"
@@ -107,7 +122,9 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "inverter") == 0) return cmd_inverter(argc, argv);
     if (strcmp(cmd, "param") == 0) return cmd_param(argc, argv);
     if (strcmp(cmd, "convert") == 0) return cmd_convert(argc, argv);
-    cli_error("unknown command '%s' (commands: demo, slave, master, inverter, param, convert, check-cfg; "
-              "see --help)", cmd);
+    if (strcmp(cmd, "replay") == 0) return cmd_replay(argc, argv);
+    if (strcmp(cmd, "record") == 0) return cmd_record(argc, argv);
+    cli_error("unknown command '%s' (commands: demo, slave, master, inverter, param, convert, "
+              "replay, record, check-cfg; see --help)", cmd);
     return EXIT_USAGE;
 }
