@@ -16,9 +16,7 @@ mkdir -p "$tmp/home"
 
 # dfp-sim writes LINKTYPE_PROFIBUS_DL (257), which Wireshark does not know; the dissector is
 # registered for LINKTYPE_USER0 (147). The link type is the 4 octets at offset 20 of a pcap header.
-# SWITCH(dfp-sim convert): when `dfp-sim convert IN OUT --linktype user0` is in main, replace the
-# next line by:  to_user0() { "$sim" convert "$1" "$2" --linktype user0 >/dev/null; }
-to_user0() { cp "$1" "$2" && printf '\223\000\000\000' | dd of="$2" bs=1 seek=20 conv=notrunc status=none; }
+to_user0() { "$sim" convert "$1" "$2" --linktype user0 --quiet; }
 linktype_of() { od -An -tu4 -j20 -N4 "$1" | tr -d ' '; }
 
 # ts OUT ARGS...: tshark with the dissector, isolated from the user's own plugins and
