@@ -60,5 +60,5 @@ fuzz-known: fuzz-build
 
 fuzz-seeds: build
 	./build/host/sim_host/dfp_sim/dfp-sim demo --capture $(FUZZ_BUILD)/demo.pcap >/dev/null
-	python3 tests/fuzz/pcap2corpus.py $(FUZZ_BUILD)/seeds $(FUZZ_BUILD)/demo.pcap \
+	python3 tests/fuzz/pcap2corpus.py $(FUZZ_BUILD)/seeds $(FUZZ_BUILD)/demo.pcap tests/replay/golden/*.pcap \
 	  tests/fuzz/captures/*.pcap
