@@ -46,7 +46,7 @@ $(PYTHON):
 deps-python: $(PYTHON)
 
 build: deps
-	cmake --preset host -DDFP_PYTHON=$(abspath $(PYTHON)) -DDFP_REQUIRE_INTEROP=ON
+	cmake --preset host -DDFP_PYTHON=$(abspath $(PYTHON)) -DDFP_REQUIRE_INTEROP=ON -DDFP_REQUIRE_TSHARK=ON
 	cmake --build build/host
 
 demo: build
@@ -56,7 +56,7 @@ test-host: build
 	ctest --test-dir build/host $(CTEST_FLAGS)
 
 test-asan: deps
-	cmake --preset asan -DDFP_PYTHON=$(abspath $(PYTHON)) -DDFP_REQUIRE_INTEROP=ON
+	cmake --preset asan -DDFP_PYTHON=$(abspath $(PYTHON)) -DDFP_REQUIRE_INTEROP=ON -DDFP_REQUIRE_TSHARK=ON
 	cmake --build build/asan
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --test-dir build/asan $(CTEST_FLAGS)

@@ -9,11 +9,11 @@
 #   make fuzz-seeds   seed corpora from `dfp-sim demo --capture`, tests/fuzz/captures/*.pcap and
 #                     profibus-dp.md §1.6
 
-APT_PACKAGES += clang-14 libclang-rt-14-dev
+APT_PACKAGES += clang-14 libclang-rt-14-dev libpcap-dev
 EXTRA_TEST_TARGETS += fuzz-smoke
 
 FUZZ_BUILD := build/fuzz
-FUZZ_TARGETS := fdl_rx card movilink dpv1 ds47
+FUZZ_TARGETS := fdl_rx card movilink dpv1 ds47 capture
 FUZZ_SECONDS ?= 30
 FUZZ_RUNS ?= 100000000
 FUZZ_MAX_LEN ?= 2048
@@ -60,5 +60,5 @@ fuzz-known: fuzz-build
 
 fuzz-seeds: build
 	./build/host/sim_host/dfp_sim/dfp-sim demo --capture $(FUZZ_BUILD)/demo.pcap >/dev/null
-	python3 tests/fuzz/pcap2corpus.py $(FUZZ_BUILD)/seeds $(FUZZ_BUILD)/demo.pcap \
+	python3 tests/fuzz/pcap2corpus.py $(FUZZ_BUILD)/seeds $(FUZZ_BUILD)/demo.pcap tests/replay/golden/*.pcap \
 	  tests/fuzz/captures/*.pcap

@@ -175,21 +175,6 @@ static void print_monitor(void)
     printf("      P819 fieldbus timeout  %u ms\n", dfp21b_p819_timeout_ms(c));
 }
 
-static int open_capture(const char *capture)
-{
-    char err[256];
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    uint64_t base = (uint64_t)ts.tv_sec * 1000000000ull;
-    if (pcap_writer_open(&demo.rep.capture, capture, PCAP_LINKTYPE_PROFIBUS_DL, false, base, err,
-                         sizeof err) != 0) {
-        cli_error("%s", err);
-        return -1;
-    }
-    demo.rep.capturing = true;
-    return 0;
-}
-
 static void setup(void)
 {
     membus_init(&demo.bus);
@@ -231,14 +216,18 @@ static void reconfigure(const uint8_t *cfg, size_t len)
 
 int cmd_demo(int argc, char **argv)
 {
-    const char *capture = NULL;
+    capture_opts_t capture = {.path = NULL};
     const char *lcm_url = NULL;
     for (int i = 2; i < argc; i++) {
-        if (strcmp(argv[i], "--capture") == 0) {
-            if ((capture = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
-        } else if (strcmp(argv[i], "--lcm") == 0) {
+        if (strcmp(argv[i], "--lcm") == 0) {
             if ((lcm_url = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
-        } else {
+            continue;
+        }
+        int copt = capture_option(argc, argv, &i, &capture);
+        if (copt < 0) {
+            return EXIT_USAGE;
+        }
+        if (copt == 0) {
             cli_error("demo: unknown option '%s' (see dfp-sim --help)", argv[i]);
             return EXIT_USAGE;
         }
@@ -248,7 +237,10 @@ int cmd_demo(int argc, char **argv)
     demo.rep.now_ns = demo_now_ns;
     demo.rep.now_ctx = &demo;
     demo.rep.card = &demo.card.card;
-    if (capture != NULL && open_capture(capture) != 0) {
+    capture.w.baud = DEMO_BAUD;
+    struct timespec wall;
+    clock_gettime(CLOCK_REALTIME, &wall);
+    if (!report_open_capture(&demo.rep, &capture, (uint64_t)wall.tv_sec * 1000000000ull)) {
         return 1;
     }
     if (lcm_url != NULL) {
@@ -342,12 +334,13 @@ int cmd_demo(int argc, char **argv)
            (unsigned long long)demo.bus.frames_sent, demo.master.slaves[0].cycles,
            demo.master.timeouts, (double)demo.bus.now_ns / 1e6);
     if (demo.rep.capturing) {
-        if (pcap_writer_close(&demo.rep.capture) != 0 || demo.rep.capture_failed) {
-            cli_error("could not write the whole capture to %s", capture);
+        cap_writer_options_t w = demo.rep.capture.opt;
+        if (report_close_capture(&demo.rep) != 0) {
             return 1;
         }
-        printf("    capture: %llu telegrams written to %s (pcap, LINKTYPE_PROFIBUS_DL)\n",
-               (unsigned long long)demo.rep.frames_captured, capture);
+        printf("    capture: %llu telegrams written to %s (%s, link type %u)\n",
+               (unsigned long long)demo.rep.frames_captured, capture.path,
+               cap_format_name(w.format), w.linktype);
     }
     printf("    result: %s\n", demo.ok ? "every scene behaved as the manual describes"
                                        : "UNEXPECTED: a scene did not reach its expected state");

@@ -450,7 +450,8 @@ static uint64_t clock_now(void *ctx)
 int cmd_param(int argc, char **argv)
 {
     const char *dev = NULL;
-    const char *capture = NULL;
+    capture_opts_t capture = {.path = NULL};
+    int copt;
     uint32_t address = 0;
     bool have_address = false;
     uint32_t own = 0;
@@ -497,8 +498,8 @@ int cmd_param(int argc, char **argv)
             run.json = true;
         } else if (strcmp(o, "--verbose") == 0) {
             verbose = true;
-        } else if (strcmp(o, "--capture") == 0) {
-            if ((capture = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if ((copt = capture_option(argc, argv, &i, &capture)) != 0) {
+            if (copt < 0) return EXIT_USAGE;
         } else if (o[0] == '-' && o[1] == '-') {
             cli_error("param: unknown option '%s' (see dfp-sim --help)", o);
             return EXIT_USAGE;
@@ -576,17 +577,15 @@ int cmd_param(int argc, char **argv)
     t0 = mono_ns();
     rep.now_ns = clock_now;
     rep.now_ctx = &t0;
-    if (capture != NULL) {
+    {
         struct timespec ts;
         clock_gettime(CLOCK_REALTIME, &ts);
-        uint64_t base = (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-        if (pcap_writer_open(&rep.capture, capture, PCAP_LINKTYPE_PROFIBUS_DL, false, base, err,
-                             sizeof err) != 0) {
-            cli_error("%s", err);
+        rep.capture_direction = true;
+        if (!report_open_capture(&rep, &capture,
+                                 (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec)) {
             tty_port_close(&port);
             return 1;
         }
-        rep.capturing = true;
     }
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
@@ -645,8 +644,8 @@ int cmd_param(int argc, char **argv)
     }
     print_result();
     tty_port_close(&port);
-    if (rep.capturing && (pcap_writer_close(&rep.capture) != 0 || rep.capture_failed)) {
-        cli_error("could not write the whole capture to %s", capture);
+    if (report_close_capture(&rep) != 0) {
+        return 1;
     }
     return run.ok ? 0 : 1;
 }

@@ -50,34 +50,13 @@ static uint64_t tty_clock_now(void *ctx)
     return mono_ns() - c->start_ns;
 }
 
-static bool open_capture(report_t *rep, const char *path)
+static bool open_capture(report_t *rep, const capture_opts_t *capture)
 {
-    if (path == NULL) {
-        return true;
-    }
-    char err[256];
     struct timespec ts;
     clock_gettime(CLOCK_REALTIME, &ts);
-    uint64_t base = (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-    if (pcap_writer_open(&rep->capture, path, PCAP_LINKTYPE_PROFIBUS_DL, false, base, err,
-                         sizeof err) != 0) {
-        cli_error("%s", err);
-        return false;
-    }
-    rep->capturing = true;
-    return true;
-}
-
-static int close_capture(report_t *rep, const char *path)
-{
-    if (!rep->capturing) {
-        return 0;
-    }
-    if (pcap_writer_close(&rep->capture) != 0 || rep->capture_failed) {
-        cli_error("could not write the whole capture to %s", path);
-        return 1;
-    }
-    return 0;
+    rep->capture_direction = true;
+    return report_open_capture(rep, capture,
+                               (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec);
 }
 
 /* ---- one station on one tty, or on an LCM segment ---------------------------------------- */
@@ -155,11 +134,11 @@ static void session_close(void)
     }
 }
 
-/* Opens the port or the segment and the capture, and puts the station on it. The tap goes to
- * the capture, and through tap/tap_ctx (when not NULL) to --lcm telemetry. Returns false
- * after reporting the reason (nothing left open). */
+/* Opens the port or the segment and the capture, and puts the station on it; the medium's tap
+ * feeds the capture (session_tap_to adds --lcm telemetry). Returns false after reporting the
+ * reason (nothing left open). */
 static bool session_open(const medium_opts_t *m, int16_t station_address, uint32_t baud,
-                         const char *capture, const sim_station_t *st)
+                         const capture_opts_t *capture, const sim_station_t *st)
 {
     char err[320];
     on_segment = m->bus != NULL;
@@ -219,7 +198,8 @@ int cmd_slave(int argc, char **argv)
 {
     medium_opts_t med = {0};
     const char *lcm_url = NULL;
-    const char *capture = NULL;
+    capture_opts_t capture = {.path = NULL};
+    int copt;
     uint32_t address = 4;
     uint32_t baud = 0;
     uint32_t duration_s = 0;
@@ -240,8 +220,8 @@ int cmd_slave(int argc, char **argv)
         } else if (strcmp(argv[i], "--baud") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL || !cli_baud("--baud", v, true, &baud))
                 return EXIT_USAGE;
-        } else if (strcmp(argv[i], "--capture") == 0) {
-            if ((capture = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if ((copt = capture_option(argc, argv, &i, &capture)) != 0) {
+            if (copt < 0) return EXIT_USAGE;
         } else if (strcmp(argv[i], "--duration") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL ||
                 !cli_u32("--duration", v, 1, 86400u * 365u, &duration_s)) return EXIT_USAGE;
@@ -283,7 +263,7 @@ int cmd_slave(int argc, char **argv)
         return EXIT_USAGE;
     }
     sim_station_t st = card_station(&card);
-    if (!session_open(&med, (int16_t)address, baud != 0u ? baud : hal_uart_bauds[0], capture,
+    if (!session_open(&med, (int16_t)address, baud != 0u ? baud : hal_uart_bauds[0], &capture,
                       &st)) {
         return 1;
     }
@@ -294,7 +274,7 @@ int cmd_slave(int argc, char **argv)
         if (lcm_cli_open(&telemetry, lcm_url, &card.card, (uint8_t)address, &rep, wall, wall) !=
             0) {
             session_close();
-            close_capture(&rep, capture);
+            report_close_capture(&rep);
             return 1;
         }
         session_tap_to(&telemetry);
@@ -309,7 +289,7 @@ int cmd_slave(int argc, char **argv)
             cli_error("%s", err);
             lcm_cli_close(&telemetry);
             session_close();
-            close_capture(&rep, capture);
+            report_close_capture(&rep);
             return 1;
         }
         external = inverter_can_link(&can_link);
@@ -352,7 +332,7 @@ int cmd_slave(int argc, char **argv)
     }
     lcm_cli_close(&telemetry);
     session_close();
-    return close_capture(&rep, capture) != 0 ? 1 : rc;
+    return report_close_capture(&rep) != 0 ? 1 : rc;
 }
 
 /* ---- master ----------------------------------------------------------------------------- */
@@ -483,7 +463,8 @@ static void report_missing(uint32_t cycles, const char *why)
 int cmd_master(int argc, char **argv)
 {
     medium_opts_t med = {0};
-    const char *capture = NULL;
+    capture_opts_t capture = {.path = NULL};
+    int copt;
     const char *addresses = NULL;
     uint32_t own = 2;
     uint32_t baud = 19200;
@@ -537,8 +518,8 @@ int cmd_master(int argc, char **argv)
         } else if (strcmp(o, "--slot-time") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 1, 10000u, &slot_ms))
                 return EXIT_USAGE;
-        } else if (strcmp(o, "--capture") == 0) {
-            if ((capture = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if ((copt = capture_option(argc, argv, &i, &capture)) != 0) {
+            if (copt < 0) return EXIT_USAGE;
         } else if (strcmp(o, "--verbose") == 0) {
             verbose = true;
         } else {
@@ -570,7 +551,7 @@ int cmd_master(int argc, char **argv)
     sc.cfg_len = (uint8_t)cfg_len;
 
     sim_station_t st = master_station(&master);
-    if (!session_open(&med, (int16_t)own, baud, capture, &st)) {
+    if (!session_open(&med, (int16_t)own, baud, &capture, &st)) {
         return 1;
     }
     rep.show_inputs = verbose;
@@ -622,5 +603,5 @@ int cmd_master(int argc, char **argv)
         report_missing(cycles, stop_requested ? "interrupted" : why);
     }
     session_close();
-    return close_capture(&rep, capture) != 0 ? 1 : rc;
+    return report_close_capture(&rep) != 0 ? 1 : rc;
 }

@@ -48,11 +48,34 @@ static const char usage[] =
     "      channel). --master-address: default 2 (1 with c2). Exit 0 on a positive result, 1 on\n"
     "      a negative one or none within --timeout (default 10 s); --json: one JSON object\n"
     "      per result\n"
+    "  convert IN OUT [--format pcap|pcapng|text] [--linktype profibus|user0] [--ns]\n"
+    "          [--in-format pcap|pcapng|text|lcm] [--quiet]\n"
+    "      copies a capture into another format or link type (e.g. user0 for the Wireshark\n"
+    "      dissector in tools/wireshark/); the output format defaults to OUT's extension\n"
+    "      (.pcapng, .txt, else pcap); damaged records are copied and reported\n"
+    "  replay FILE [--address N] [--check] [--speed real|max] [--baud RATE]\n"
+    "         [--format pcap|pcapng|text|lcm] [--inverter sim|none] [--inverter-delay US]\n"
+    "         [--fixed-baud] [--verbose]\n"
+    "      a bus capture played against the emulated card at its recorded times (the card's\n"
+    "      own recorded answers are left out: it makes its own); --check compares every reply\n"
+    "      with the recorded one and reports the first difference and counts per service\n"
+    "      (exit 0: all match, 1: a difference or a damaged file, 2: bad command line or\n"
+    "      unreadable file). The address comes from the capture unless given; the rate from\n"
+    "      the capture, else --baud, else the lowest its timing allows. docs/replay.md\n"
+    "  record --capture FILE --cycles N [--baud RATE] [--address N] [--dpv1] [--faults]\n"
+    "         [--foreign] [--param-every N] [--inverter sim|none] [--capture-format ...]\n"
+    "      the built-in master and the card on the simulated bus for N Data_Exchange cycles,\n"
+    "      parameter-channel services every N cycles (default 10, 0: none), every telegram\n"
+    "      into FILE: --dpv1 adds data set 47 (class 1) and a class-2 connection, --faults a\n"
+    "      watchdog expiry and a wrong configuration, --foreign a second slave and master\n"
     "  check-cfg HEX\n"
     "      would the card accept this Chk_Cfg configuration?\n"
     "\n"
     "RATE: 9600 19200 45450 93750 187500 500000 1.5M 3M 6M 12M (also 19.2k ...).\n"
-    "--capture writes every telegram as pcap (LINKTYPE_PROFIBUS_DL, 257).\n"
+    "--capture FILE writes every telegram: pcap (default), pcapng (.pcapng) or text (.txt), or\n"
+    "  as --capture-format pcap|pcapng|text says; link type PROFIBUS_DL (257) unless\n"
+    "  --capture-linktype user0 (147, for Wireshark); --capture-ns: nanosecond timestamps.\n"
+    "  docs/captures.md describes the formats.\n"
     "--lcm URL publishes the card's telegrams, state and parameter services to LCM (channels\n"
     "DFP_TELEGRAM, DFP_CARD_STATE, DFP_PARAM; sim_host/lcm/README.md).\n";
 
@@ -105,7 +128,10 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "check-cfg") == 0) return cmd_check_cfg(argc, argv);
     if (strcmp(cmd, "inverter") == 0) return cmd_inverter(argc, argv);
     if (strcmp(cmd, "param") == 0) return cmd_param(argc, argv);
-    cli_error("unknown command '%s' (commands: demo, slave, master, inverter, param, check-cfg; "
-              "see --help)", cmd);
+    if (strcmp(cmd, "convert") == 0) return cmd_convert(argc, argv);
+    if (strcmp(cmd, "replay") == 0) return cmd_replay(argc, argv);
+    if (strcmp(cmd, "record") == 0) return cmd_record(argc, argv);
+    cli_error("unknown command '%s' (commands: demo, slave, master, inverter, param, convert, "
+              "replay, record, check-cfg; see --help)", cmd);
     return EXIT_USAGE;
 }

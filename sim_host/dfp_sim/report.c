@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "cli.h"
 #include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_rx.h"
 #include "sim_hal/sim_board.h"
@@ -213,14 +214,81 @@ void report_master_event(void *ctx, const dpm_event_t *ev)
 void report_tap(void *ctx, uint64_t t_start_ns, const uint8_t *frame, size_t len, bool local,
                 uint32_t baud)
 {
-    (void)local;
     (void)baud;
     report_t *r = ctx;
     if (!r->capturing) {
         return;
     }
-    if (pcap_writer_frame(&r->capture, t_start_ns, frame, len) != 0) {
+    cap_dir_t dir = !r->capture_direction ? CAP_DIR_UNKNOWN : local ? CAP_DIR_TX : CAP_DIR_RX;
+    if (cap_writer_frame(&r->capture, t_start_ns, frame, len, dir) != 0) {
         r->capture_failed = true;
     }
     r->frames_captured++;
+}
+
+int capture_option(int argc, char **argv, int *i, capture_opts_t *o)
+{
+    const char *opt = argv[*i];
+    if (strcmp(opt, "--capture") == 0) {
+        return (o->path = cli_value(argc, argv, i)) != NULL ? 1 : -1;
+    }
+    if (strcmp(opt, "--capture-ns") == 0) {
+        o->w.nanosecond = true;
+        return 1;
+    }
+    if (strcmp(opt, "--capture-format") == 0) {
+        const char *v = cli_value(argc, argv, i);
+        if (v == NULL) {
+            return -1;
+        }
+        if (!cap_format_parse(v, &o->w.format) || o->w.format == CAP_FORMAT_LCM ||
+            o->w.format == CAP_FORMAT_AUTO) {
+            cli_error("--capture-format: '%s' is not one of pcap, pcapng, text", v);
+            return -1;
+        }
+        return 1;
+    }
+    if (strcmp(opt, "--capture-linktype") == 0) {
+        const char *v = cli_value(argc, argv, i);
+        if (v == NULL) {
+            return -1;
+        }
+        if (strcmp(v, "profibus") == 0 || strcmp(v, "257") == 0) {
+            o->w.linktype = PCAP_LINKTYPE_PROFIBUS_DL;
+        } else if (strcmp(v, "user0") == 0 || strcmp(v, "147") == 0) {
+            o->w.linktype = PCAP_LINKTYPE_USER0;
+        } else {
+            cli_error("--capture-linktype: '%s' is not profibus (257) or user0 (147)", v);
+            return -1;
+        }
+        return 1;
+    }
+    return 0;
+}
+
+bool report_open_capture(report_t *r, const capture_opts_t *o, uint64_t base_ns)
+{
+    if (o->path == NULL) {
+        return true;
+    }
+    char err[700];
+    if (cap_writer_open(&r->capture, o->path, &o->w, base_ns, err, sizeof err) != 0) {
+        cli_error("%s", err);
+        return false;
+    }
+    r->capturing = true;
+    return true;
+}
+
+int report_close_capture(report_t *r)
+{
+    if (!r->capturing) {
+        return 0;
+    }
+    r->capturing = false;
+    if (cap_writer_close(&r->capture) != 0 || r->capture_failed) {
+        cli_error("could not write the whole capture to %s", r->capture.path);
+        return 1;
+    }
+    return 0;
 }

@@ -6,7 +6,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "capture/pcap_writer.h"
+#include "capture/capture.h"
 #include "dfp21b/dfp21b.h"
 #include "dp_master/dp_master.h"
 #include "hal/hal_led.h"
@@ -19,8 +19,9 @@ typedef struct report {
     bool show_inputs;
     bool show_addressed;
     bool slave_silent; /* unanswered polls of a silent address are reported once */
-    pcap_writer_t capture;
+    cap_writer_t capture;
     bool capturing;
+    bool capture_direction; /* mark frames of the local station TX, others RX (tty sessions) */
     bool capture_failed;
     uint64_t frames_captured;
 } report_t;
@@ -33,6 +34,21 @@ void report_master_event(void *ctx, const dpm_event_t *ev);
 /* Formats the standard diagnosis bits, e.g. "Station_Not_Ready Prm_Req | Master_Add 2". */
 void report_diag_text(const uint8_t *d, size_t len, char *out, size_t max);
 const char *report_baud_text(uint32_t baud);
+/* The --capture options every command that writes captures shares. */
+typedef struct capture_opts {
+    const char *path;
+    cap_writer_options_t w;
+} capture_opts_t;
+
+/* --capture FILE, --capture-format pcap|pcapng|text, --capture-linktype profibus|user0,
+ * --capture-ns. Returns 1 when argv[*i] was one of them (consumed with its value), 0 when it is
+ * not, -1 after reporting a bad value. */
+int capture_option(int argc, char **argv, int *i, capture_opts_t *o);
+/* Opens o->path (if set) with times counted from base_ns (wall clock at start); false after
+ * reporting why. */
+bool report_open_capture(report_t *r, const capture_opts_t *o, uint64_t base_ns);
+/* 0, or 1 after reporting that the capture is incomplete. */
+int report_close_capture(report_t *r);
 /* sim_frame_tap_t for --capture. */
 void report_tap(void *ctx, uint64_t t_start_ns, const uint8_t *frame, size_t len, bool local,
                 uint32_t baud);

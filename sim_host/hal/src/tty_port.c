@@ -717,11 +717,13 @@ static void deliver_chunk(tty_runner_t *r, tty_runner_slot_t *s, const uint8_t *
             continue;
         }
         p->chars_received++;
-        if (s->station.rx_char != NULL) {
-            s->station.rx_char(s->station.ctx, bytes[i], flags[i], t);
-        }
+        /* The tap first: the station may answer from inside rx_char, and a capture must show
+         * the request before its answer. */
         if (r->tap != NULL) {
             tap_rx(r, s, bytes[i], flags[i], t, t_ns);
+        }
+        if (s->station.rx_char != NULL) {
+            s->station.rx_char(s->station.ctx, bytes[i], flags[i], t);
         }
     }
     poll_slot(s); /* let the station answer without waiting for its next deadline */

@@ -20,6 +20,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "capture/pcap_writer.h" /* PCAP_LINKTYPE_PROFIBUS_DL, PCAP_LINKTYPE_USER0 */
 #include "capture/record.h"
 #include "capture/text_import.h"
 
@@ -30,7 +31,7 @@ typedef struct cap_reader {
     uint64_t records;
     uint64_t file_size;  /* for progress; 0 when unknown (a pipe) */
     uint64_t file_pos;   /* bytes consumed so far (approximately, for progress) */
-    char error[256];
+    char error[1024];
     /* Backend state. */
     void *pcap;     /* pcap_t */
     FILE *file;     /* text */
@@ -38,6 +39,7 @@ typedef struct cap_reader {
     uint64_t line;  /* text: current line number */
     uint32_t if_baud; /* pcapng if_speed of the (single) interface, 0 when absent */
     text_import_state_t text;
+    char line_buf[TEXT_IMPORT_MAX_LINE + 2];
 } cap_reader_t;
 
 /* Opens path in the given format (AUTO: by content). Returns 0, or -1 with a one-line reason in

@@ -8,15 +8,17 @@
  *                        markers TX/RX, >/<, ->/<-, M>/S< (master sends / slave answers)
  *   dfp-sim's own export "<seconds>.<9 digits> TX|RX|-- <hex>" (text_export_line below)
  *   pyprofibus PHY debug "PHY-serial: TX   10 02 01 49 4C 16", "PHY-serial: RX   E5"
- *                        ("RX (fragment)" lines are skipped: the complete RX line follows)
+ *                        ("RX (fragment)" lines are skipped: they are octets pyprofibus threw
+ *                        away as no telegram, and may be only part of what was on the wire)
  *   pyprofibus profisniff "FdlTelegram(sd=SD2, haveLE=True, da=0x02, sa=0x01, fc=0x5D,
  *                        dae=Empty, sae=Empty, du=00 00, haveFCS=True, ed=0x16)": the frame is
  *                        rebuilt with its FCS
  *   ProSoft AN-X-PBCAPT  "46: a 3.040,029 g 0,027 ...  |........SD2 120<0 SRDH 8a 8a": rebuilt
  *                        where the line has what a frame needs (docs/captures.md says what is
  *                        lost, e.g. FCB/FCV)
- * Blank lines and comments ('#', '//', ';') are skipped silently. Anything else is a bad line:
- * reported with its number, never fatal.
+ * Any of these may follow a time and direction ("10:00:00.5 PHY-serial: RX   E5"). Blank lines
+ * and comments ('#', '//', ';' first on the line; '#', '//' after hex octets) are skipped
+ * silently. Anything else is a bad line: reported with its number, never fatal.
  *
  * Pure functions over one line at a time: no I/O, no allocation, bounded work per line. */
 #ifndef CAPTURE_TEXT_IMPORT_H
@@ -33,13 +35,26 @@
 
 typedef struct text_import_state {
     uint64_t line;        /* number of the line last given (1-based), for messages */
-    uint64_t last_t_ns;   /* time of the last timed line, to keep times monotonic per file */
+    uint64_t last_t_ns;   /* time of the last timed record; a later line may be earlier (kept as
+                             written: replay deals with it) */
     bool seen_time;
-    uint32_t shape_seen;  /* bit mask of shapes met so far (for the summary) */
+    uint32_t shape_seen;  /* TEXT_SHAPE_* of the records read so far (for the summary) */
 } text_import_state_t;
 
+/* Bits of shape_seen. */
+#define TEXT_SHAPE_HEX 0x01u        /* hex octets, with or without time and direction */
+#define TEXT_SHAPE_EXPORT 0x02u     /* dfp-sim's own export (text_export_line) */
+#define TEXT_SHAPE_PHY 0x04u        /* pyprofibus PHY debug lines */
+#define TEXT_SHAPE_PROFISNIFF 0x08u /* pyprofibus profisniff FdlTelegram(...) */
+#define TEXT_SHAPE_PROSOFT 0x10u    /* ProSoft AN-X-PBCAPT */
+
+/* "hex", "dfp-sim export", "pyprofibus PHY", "pyprofibus profisniff", "ProSoft AN-X-PBCAPT";
+ * "?" for anything that is not exactly one TEXT_SHAPE_* bit. */
+const char *text_shape_name(uint32_t shape);
+
 typedef enum text_line_result {
-    TEXT_LINE_SKIP = 0, /* blank, comment, a header line, a pyprofibus fragment */
+    TEXT_LINE_SKIP = 0, /* blank, comment (a header written as a comment), a pyprofibus
+                           "RX (fragment)" line */
     TEXT_LINE_RECORD,   /* rec filled: data, len, orig_len, has_time/t_ns, dir, problem ("" or
                            what is wrong with the telegram, e.g. a bad FCS as written) */
     TEXT_LINE_BAD,      /* not a telegram: rec->problem says why, e.g. "not hex: 'zz'"; rec->len

@@ -1,0 +1,431 @@
+/* dfp-sim replay: a bus capture played against the emulated card, optionally checking every
+ * reply (docs/replay.md); dfp-sim record: a capture made on the simulated bus. */
+#include <signal.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "capture/capture.h"
+#include "cli.h"
+#include "commands.h"
+#include "replay/generator.h"
+#include "replay/replay.h"
+#include "report.h"
+
+static volatile int stop_requested;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop_requested = 1;
+}
+
+static uint64_t mono_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
+}
+
+/* ---- progress on a terminal ---------------------------------------------------------------- */
+
+typedef struct progress {
+    bool on; /* stderr is a terminal */
+    const char *what;
+    uint64_t t0;
+    uint64_t last;
+    bool shown;
+} progress_t;
+
+static void progress_show(void *ctx, uint64_t records, uint64_t pos, uint64_t size)
+{
+    progress_t *p = ctx;
+    if (!p->on) {
+        return;
+    }
+    uint64_t now = mono_ns();
+    if (p->shown && now - p->last < 200000000u) {
+        return; /* the first call shows at once, then five times a second */
+    }
+    p->last = now;
+    double s = (double)(now - p->t0) / 1e9;
+    if (size > 0u) {
+        fprintf(stderr, "\r%s: %llu records (%.0f %%), %.0f telegrams/s\033[K", p->what,
+                (unsigned long long)records, 100.0 * (double)pos / (double)size,
+                s > 0 ? (double)records / s : 0.0);
+    } else {
+        fprintf(stderr, "\r%s: %llu records, %.0f telegrams/s\033[K", p->what,
+                (unsigned long long)records, s > 0 ? (double)records / s : 0.0);
+    }
+    p->shown = true;
+}
+
+static void progress_end(progress_t *p)
+{
+    if (p->shown) {
+        fputs("\r\033[K", stderr);
+        p->shown = false;
+    }
+}
+
+static void progress_begin(progress_t *p, const char *what)
+{
+    p->on = isatty(STDERR_FILENO) != 0;
+    p->what = what;
+    p->t0 = mono_ns();
+    p->last = p->t0;
+    p->shown = false;
+}
+
+/* ---- replay -------------------------------------------------------------------------------- */
+
+static replay_t replay; /* the bus, the card and the inverter: not on the stack */
+
+typedef struct replay_cli {
+    bool verbose;
+    report_t rep; /* card events in --verbose, as dfp-sim demo prints them */
+} replay_cli_t;
+
+static replay_cli_t rc_state;
+
+static uint64_t replay_now_ns(void *ctx)
+{
+    return ((replay_t *)ctx)->bus.now_ns;
+}
+
+/* Every telegram on the replay bus. This is where `--lcm URL` will publish them. */
+static void on_telegram(void *ctx, const replay_telegram_t *t)
+{
+    replay_cli_t *c = ctx;
+    if (!c->verbose) {
+        return;
+    }
+    char hex[3u * CAP_MAX_RECORD + 8u];
+    char text[512];
+    replay_hex(t->data, t->len, hex, sizeof hex);
+    const dfp21b_pd_cfg_t *pd = &replay.card.card.pd;
+    replay_dx_layout_t lay = {.known = pd->valid, .param_channel = pd->param_channel};
+    replay_describe(t->data, t->len, &lay, text, sizeof text);
+    if (t->source == REPLAY_FROM_CARD) {
+        printf("%10.3f ms  card    > %s  | %s\n", (double)t->t_ns / 1e6, hex, text);
+    } else {
+        printf("%10.3f ms  #%-6llu < %s  | %s%s%s\n", (double)t->t_ns / 1e6,
+               (unsigned long long)t->record, hex, text, t->problem[0] != '\0' ? "  DAMAGED: " : "",
+               t->problem);
+    }
+}
+
+static void on_card_event(void *ctx, uint64_t t_ns, const dp_event_t *ev)
+{
+    (void)t_ns;
+    replay_cli_t *c = ctx;
+    if (c->verbose) {
+        report_card_event(&c->rep, ev);
+    }
+}
+
+static const char replay_usage_hint[] = "(see dfp-sim --help)";
+
+int cmd_replay(int argc, char **argv)
+{
+    const char *file = NULL;
+    uint32_t address = 0;
+    bool have_address = false;
+    bool check = false;
+    bool fixed = false;
+    uint32_t baud = 0;
+    uint32_t delay_us = REPLAY_INVERTER_DELAY_US_DEFAULT;
+    cap_format_t format = CAP_FORMAT_AUTO;
+    card_inverter_t inverter = CARD_INVERTER_SIM;
+    replay_speed_t speed = REPLAY_SPEED_MAX;
+    memset(&rc_state, 0, sizeof rc_state);
+    for (int i = 2; i < argc; i++) {
+        const char *o = argv[i];
+        const char *v;
+        if (strcmp(o, "--address") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 0, 125, &address))
+                return EXIT_USAGE;
+            have_address = true;
+        } else if (strcmp(o, "--check") == 0) {
+            check = true;
+        } else if (strcmp(o, "--verbose") == 0) {
+            rc_state.verbose = true;
+        } else if (strcmp(o, "--fixed-baud") == 0) {
+            fixed = true;
+        } else if (strcmp(o, "--speed") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+            if (strcmp(v, "real") == 0) {
+                speed = REPLAY_SPEED_REAL;
+            } else if (strcmp(v, "max") == 0) {
+                speed = REPLAY_SPEED_MAX;
+            } else {
+                cli_error("replay: --speed '%s': use real (the capture's pace) or max", v);
+                return EXIT_USAGE;
+            }
+        } else if (strcmp(o, "--baud") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_baud(o, v, false, &baud))
+                return EXIT_USAGE;
+        } else if (strcmp(o, "--format") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+            if (!cap_format_parse(v, &format)) {
+                cli_error("replay: --format '%s': use pcap, pcapng, text or lcm", v);
+                return EXIT_USAGE;
+            }
+        } else if (strcmp(o, "--inverter") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+            if (strcmp(v, "sim") == 0) {
+                inverter = CARD_INVERTER_SIM;
+            } else if (strcmp(v, "none") == 0) {
+                inverter = CARD_INVERTER_NONE;
+            } else {
+                cli_error("replay: --inverter '%s': use sim (emulated MOVIDRIVE) or none (PI "
+                          "echoes PO)", v);
+                return EXIT_USAGE;
+            }
+        } else if (strcmp(o, "--inverter-delay") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 0, 10000000u, &delay_us))
+                return EXIT_USAGE;
+        } else if (o[0] == '-' && o[1] != '\0') {
+            cli_error("replay: unknown option '%s' %s", o, replay_usage_hint);
+            return EXIT_USAGE;
+        } else if (file == NULL) {
+            file = o;
+        } else {
+            cli_error("replay: one capture file only ('%s' and '%s')", file, o);
+            return EXIT_USAGE;
+        }
+    }
+    if (file == NULL) {
+        cli_error("replay: which capture? dfp-sim replay FILE [--check] ... %s",
+                  replay_usage_hint);
+        return EXIT_USAGE;
+    }
+    if (inverter != CARD_INVERTER_SIM && delay_us != REPLAY_INVERTER_DELAY_US_DEFAULT) {
+        cli_error("replay: --inverter-delay belongs to the emulated inverter (--inverter sim)");
+        return EXIT_USAGE;
+    }
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+
+    progress_t prog;
+    replay_file_status_t st;
+    char address_source[160];
+    char baud_source[320];
+    if (have_address) {
+        snprintf(address_source, sizeof address_source, "given with --address");
+    }
+    if (baud != 0u) {
+        snprintf(baud_source, sizeof baud_source, "given with --baud");
+    }
+    if (!have_address || baud == 0u) {
+        /* First pass: which station answers, and what rate the recorded timing needs. */
+        static replay_scan_t scan;
+        replay_scan_init(&scan);
+        progress_begin(&prog, "looking at the capture");
+        int rc = replay_scan_file(&scan, file, format, &stop_requested, progress_show, &prog,
+                                  &st);
+        progress_end(&prog);
+        if (rc != 0) {
+            cli_error("%s", st.error);
+            return EXIT_USAGE;
+        }
+        if (st.interrupted) {
+            cli_error("replay: interrupted");
+            return 1;
+        }
+        if (!have_address) {
+            uint8_t found[REPLAY_SCAN_MAX];
+            unsigned n = replay_scan_result(&scan, found, REPLAY_SCAN_MAX);
+            if (n == 0u) {
+                cli_error("replay: no slave answers in %s (%llu records%s%s): nothing tells "
+                          "which station is the card; give --address N", file,
+                          (unsigned long long)st.records, st.read_error ? "; " : "",
+                          st.read_error ? st.error : "");
+                return EXIT_USAGE;
+            }
+            if (n > 1u) {
+                char list[1024];
+                size_t k = 0;
+                for (unsigned i = 0; i < n && k + 40u < sizeof list; i++) {
+                    k += (size_t)snprintf(list + k, sizeof list - k, "%s%u (%llu answers)",
+                                          i > 0u ? ", " : "", found[i],
+                                          (unsigned long long)scan.answers[found[i]]);
+                }
+                cli_error("replay: %u slaves answer in %s: %s; say which one is the card with "
+                          "--address N", n, file, list);
+                return EXIT_USAGE;
+            }
+            address = found[0];
+            snprintf(address_source, sizeof address_source,
+                     "from the capture: the only slave that answers, %llu answers",
+                     (unsigned long long)scan.answers[address]);
+        }
+        if (baud == 0u && scan.recorded_baud != 0u) {
+            baud = scan.recorded_baud; /* also the rate a --fixed-baud card starts at */
+            snprintf(baud_source, sizeof baud_source, "recorded in the capture");
+        } else if (baud == 0u) {
+            uint32_t inferred = replay_scan_rate(&scan);
+            if (inferred != 0u) {
+                baud = inferred;
+                snprintf(baud_source, sizeof baud_source,
+                         "the capture records no rate; the lowest rate its timing allows: "
+                         "record %llu begins %.1f us after record %llu, which needs %u bit "
+                         "times in that gap; --baud to override",
+                         (unsigned long long)scan.need_record, (double)scan.need_gap_ns / 1e3,
+                         (unsigned long long)scan.need_prev_record, scan.need_bits);
+            } else {
+                snprintf(baud_source, sizeof baud_source,
+                         "the capture records no rate and no timed request with its answer: "
+                         "the default, the rate of dfp-sim demo and record; --baud to change");
+            }
+        }
+    }
+
+    rc_state.rep.now_ns = replay_now_ns;
+    rc_state.rep.now_ctx = &replay;
+    rc_state.rep.card = &replay.card.card;
+    replay_options_t ro = {.address = (uint8_t)address, .check = check, .baud = baud,
+                           .fixed_card_baud = fixed, .inverter = inverter,
+                           .inverter_delay_us = delay_us, .speed = speed,
+                           .stop = &stop_requested,
+                           .on_telegram = on_telegram, .on_card_event = on_card_event,
+                           .ctx = &rc_state};
+    char err[256];
+    if (replay_init(&replay, &ro, err, sizeof err) != 0) {
+        cli_error("replay: %s", err);
+        return 1;
+    }
+    progress_begin(&prog, "replay");
+    if (rc_state.verbose) {
+        prog.on = false; /* the trace is on stdout; keep the terminal readable */
+    }
+    int rc = replay_run_file(&replay, file, format, &stop_requested, progress_show, &prog, &st);
+    progress_end(&prog);
+    if (rc != 0) {
+        cli_error("%s", st.error);
+        return EXIT_USAGE;
+    }
+    replay_report_info_t info = {
+        .file = file,
+        .format = cap_format_name(st.format),
+        .position_unit = replay_position_unit(st.format),
+        .address_source = address_source,
+        .baud_source = baud_source,
+        .file_error = st.read_error ? st.error : NULL,
+        .interrupted = st.interrupted,
+    };
+    if (baud != 0u && replay.min_baud_seen != 0u) {
+        printf("note: the capture records its rate; --baud applies only to records without "
+               "one\n");
+    }
+    int status = replay_report(&replay, &info, stdout);
+    fflush(stdout);
+    return status;
+}
+
+/* ---- record -------------------------------------------------------------------------------- */
+
+static void record_progress(void *ctx, uint32_t cycles, uint64_t telegrams)
+{
+    progress_t *p = ctx;
+    if (!p->on) {
+        return;
+    }
+    uint64_t now = mono_ns();
+    if (now - p->last < 200000000u) {
+        return;
+    }
+    p->last = now;
+    fprintf(stderr, "\rrecord: %u cycles, %llu telegrams\033[K", cycles,
+            (unsigned long long)telegrams);
+    p->shown = true;
+}
+
+int cmd_record(int argc, char **argv)
+{
+    gen_options_t o = {.address = 4, .param_every = 10, .inverter = CARD_INVERTER_SIM,
+                       .inverter_delay_us = REPLAY_INVERTER_DELAY_US_DEFAULT};
+    uint32_t address = 4;
+    bool have_cycles = false;
+    for (int i = 2; i < argc; i++) {
+        const char *opt = argv[i];
+        const char *v;
+        capture_opts_t co = {.path = o.path, .w = o.writer};
+        int c = capture_option(argc, argv, &i, &co);
+        if (c < 0) {
+            return EXIT_USAGE;
+        }
+        if (c > 0) {
+            o.path = co.path;
+            o.writer = co.w;
+        } else if (strcmp(opt, "--cycles") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL ||
+                !cli_u32(opt, v, 1, 100000000u, &o.cycles)) return EXIT_USAGE;
+            have_cycles = true;
+        } else if (strcmp(opt, "--baud") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_baud(opt, v, false, &o.baud))
+                return EXIT_USAGE;
+        } else if (strcmp(opt, "--address") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(opt, v, 0, 125, &address))
+                return EXIT_USAGE;
+        } else if (strcmp(opt, "--param-every") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL ||
+                !cli_u32(opt, v, 0, 100000000u, &o.param_every)) return EXIT_USAGE;
+        } else if (strcmp(opt, "--dpv1") == 0) {
+            o.dpv1 = true;
+        } else if (strcmp(opt, "--faults") == 0) {
+            o.faults = true;
+        } else if (strcmp(opt, "--foreign") == 0) {
+            o.foreign = true;
+        } else if (strcmp(opt, "--inverter") == 0) {
+            if ((v = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+            if (strcmp(v, "sim") == 0) {
+                o.inverter = CARD_INVERTER_SIM;
+            } else if (strcmp(v, "none") == 0) {
+                o.inverter = CARD_INVERTER_NONE;
+            } else {
+                cli_error("record: --inverter '%s': use sim or none", v);
+                return EXIT_USAGE;
+            }
+        } else {
+            cli_error("record: unknown option '%s' (see dfp-sim --help)", opt);
+            return EXIT_USAGE;
+        }
+    }
+    if (o.path == NULL || !have_cycles) {
+        cli_error("record: --capture FILE and --cycles N are required");
+        return EXIT_USAGE;
+    }
+    if (o.foreign && address > 114u) {
+        cli_error("record: --foreign puts stations at --address + 1 and + 10: the address must "
+                  "be 114 or lower");
+        return EXIT_USAGE;
+    }
+    o.address = (uint8_t)address;
+    progress_t prog;
+    progress_begin(&prog, "record");
+    o.progress = record_progress;
+    o.ctx = &prog;
+    gen_result_t res;
+    char err[256];
+    int rc = gen_run(&o, &res, err, sizeof err);
+    progress_end(&prog);
+    if (rc != 0) {
+        cli_error("record: %s", err);
+        return 1;
+    }
+    printf("record: %llu telegrams (%llu octets) in %.3f s of bus time at %s -> %s\n"
+           "  %u Data_Exchange cycles of the card at address %u, %u parameter-channel services "
+           "(%u answered with an error), %u data set 47 calls, %u class-2 connections, "
+           "%u turns of master %u, %u watchdog expiries\n",
+           (unsigned long long)res.telegrams, (unsigned long long)res.octets,
+           (double)res.bus_ns / 1e9, report_baud_text(o.baud != 0u ? o.baud : 1500000u), o.path,
+           res.cycles, address, res.param_services, res.param_errors, res.ds47_calls,
+           res.c2_connections, res.foreign_bursts, GEN_FOREIGN_MASTER_ADDRESS,
+           res.watchdog_expiries);
+    return 0;
+}

@@ -1,0 +1,292 @@
+/* Replaying a bus capture against the emulated DFP21B (docs/replay.md).
+ *
+ * The card (sim_host/stations card_station, with the emulated MOVIDRIVE or none) sits on the
+ * in-memory bus (membus, simulated time) next to an injector port. Records are fed one at a time
+ * (replay_feed): every telegram of the capture goes onto the bus at its recorded time, except
+ * the card's own recorded answers: the card produces its own. Time starts at the first record,
+ * where the card powers up (automatic baud search unless fixed_card_baud).
+ *
+ * With check on, every request addressed to the card (DA == address, not broadcast) is matched
+ * with the record that follows it when that is the card's answer (SC, or a response with SA ==
+ * address), else "no answer", and with what the card transmitted before the next injected
+ * telegram (seen through the bus tap). Octets are compared exactly.
+ *
+ * Memory is fixed: a few telegrams of context, the first mismatch, counters, the first damaged
+ * records. Nothing grows with the capture. */
+#ifndef REPLAY_REPLAY_H
+#define REPLAY_REPLAY_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "capture/record.h"
+#include "replay/decode.h"
+#include "sim_hal/membus.h"
+#include "sim_stations/stations.h"
+
+#define REPLAY_DEFAULT_BAUD 1500000u
+/* Context kept for the first mismatch: the telegrams before its request. */
+#define REPLAY_CONTEXT 6u
+/* Damaged records listed in the report with their positions (all are counted). */
+#define REPLAY_DAMAGED_LISTED 20u
+/* The emulated MOVIDRIVE's time per parameter service; the same as dfp-sim demo and record. */
+#define REPLAY_INVERTER_DELAY_US_DEFAULT 3000u
+/* Gaps before a record without a time (text captures), in bit times at the bus rate. */
+#define REPLAY_SYNTH_GAP_ANSWER_BITS 11u   /* min TSDR before an answer */
+#define REPLAY_SYNTH_GAP_REQUEST_BITS 66u  /* twice TSYN before a request or token */
+
+typedef enum replay_speed {
+    REPLAY_SPEED_MAX = 0, /* simulated time only */
+    REPLAY_SPEED_REAL,    /* the wall clock follows the capture's time */
+} replay_speed_t;
+
+typedef enum replay_source {
+    REPLAY_FROM_CAPTURE = 0, /* a record put on the bus */
+    REPLAY_FROM_CARD,        /* what the emulated card transmitted */
+} replay_source_t;
+
+/* Every telegram on the replay bus, for --verbose and LCM publishing. */
+typedef struct replay_telegram {
+    replay_source_t source;
+    uint64_t t_ns;     /* bus time from the first record: start of the first character */
+    uint64_t record;   /* capture record index (0 for the card's telegrams) */
+    uint64_t position; /* its position in the file */
+    uint32_t baud;
+    const uint8_t *data;
+    size_t len;
+    const char *problem; /* the record's damage ("" if none) */
+} replay_telegram_t;
+
+typedef struct replay_options {
+    uint8_t address;        /* the card's DIP address */
+    bool check;
+    uint32_t baud;          /* for records without a rate; 0: REPLAY_DEFAULT_BAUD */
+    bool fixed_card_baud;   /* the card starts at the bus rate instead of searching */
+    card_inverter_t inverter; /* CARD_INVERTER_SIM or CARD_INVERTER_NONE */
+    uint32_t inverter_delay_us;
+    replay_speed_t speed;
+    /* Non-zero when the user asked to stop (SIGINT): --speed real stops waiting. Optional. */
+    volatile const int *stop;
+    /* Optional observers. */
+    void (*on_telegram)(void *ctx, const replay_telegram_t *t);
+    void (*on_card_event)(void *ctx, uint64_t t_ns, const dp_event_t *ev);
+    void *ctx;
+} replay_options_t;
+
+typedef struct replay_counts {
+    uint64_t requests;
+    uint64_t matched;
+    uint64_t differ;
+    uint64_t capture_silent; /* the capture shows no answer */
+    uint64_t card_silent;    /* the card gave none */
+} replay_counts_t;
+
+/* A telegram kept for the report (copied: the record is gone by then). */
+typedef struct replay_kept {
+    replay_source_t source;
+    uint64_t t_ns;
+    uint64_t record;
+    uint64_t position;
+    size_t len;
+    uint8_t data[CAP_MAX_RECORD];
+} replay_kept_t;
+
+typedef struct replay_mismatch {
+    bool valid;
+    replay_service_t service;
+    replay_kept_t request;
+    bool expected_present;
+    replay_kept_t expected;
+    char expected_problem[96]; /* the recorded answer was damaged */
+    char request_problem[96];  /* the request record was damaged */
+    bool actual_present;
+    replay_kept_t actual;
+    bool fcb_repeat;           /* same FCB as the master's previous request (FCV=1) */
+    /* The card: its DP state when the request began, its rate when the request had ended. */
+    dp_state_t card_state;
+    dp_baud_state_t baud_state;
+    uint32_t card_baud;
+    bool set_prm_seen;         /* a Set_Prm to the card occurred earlier in the capture */
+    replay_dx_layout_t layout;
+    replay_kept_t before[REPLAY_CONTEXT];
+    unsigned n_before;
+} replay_mismatch_t;
+
+typedef struct replay_damaged {
+    uint64_t record;
+    uint64_t position;
+    char problem[96];
+} replay_damaged_t;
+
+typedef struct replay {
+    replay_options_t opt;
+    membus_t bus;
+    card_station_t card;
+    membus_port_t *card_port;
+    membus_port_t *inj_port;
+    hal_uart_t inj_uart;
+    uint32_t inj_baud;
+    bool started;
+    bool finished;
+    /* time */
+    bool have_origin;
+    uint64_t origin_ns;   /* capture time that maps to bus time 0 */
+    uint64_t last_inject_ns; /* bus time the last injected telegram started */
+    uint64_t last_end_ns;    /* ... and ended */
+    uint64_t wall_start_ns;
+    bool time_resolution_us; /* every timed record so far on a whole microsecond */
+    /* the record before this one */
+    bool prev_request_to_card;   /* a request to the card that asks for an answer */
+    /* the request waiting for its answer window to close */
+    bool pending;
+    replay_service_t pend_service;
+    replay_kept_t pend_request;
+    char pend_request_problem[96];
+    bool pend_fcb_repeat;
+    bool pend_expected;
+    replay_kept_t pend_expected_rec;
+    char pend_expected_problem[96];
+    bool pend_actual;
+    replay_kept_t pend_actual_rec;
+    dp_state_t pend_card_state;
+    /* FCB of the last request from each master to the card (bit 0x20 of FC; 0xFF: none) */
+    uint8_t last_fc[128];
+    bool set_prm_seen;
+    /* what is being injected right now (the tap sees it) */
+    bool injecting;
+    const cap_record_t *inj_rec;
+    /* results */
+    replay_counts_t svc[REPLAY_SVC_COUNT];
+    uint64_t mismatches;
+    replay_mismatch_t first;
+    replay_kept_t ring[REPLAY_CONTEXT + 2u]; /* + the request and its answer */
+    unsigned ring_next;
+    unsigned ring_len;
+    replay_damaged_t damaged[REPLAY_DAMAGED_LISTED];
+    uint64_t damaged_count;
+    /* statistics */
+    uint64_t records;
+    uint64_t octets;         /* octets of all records */
+    uint64_t injected;
+    uint64_t own_answers;    /* the card's recorded answers (not injected) */
+    uint64_t stray_answers;  /* card answers in the capture that follow no request to it */
+    uint64_t card_tx;
+    uint64_t unsolicited;    /* card transmissions with no request waiting */
+    uint64_t untimed;        /* records given synthetic times */
+    uint64_t backwards;      /* records whose time went back */
+    uint64_t deferred;       /* injected later than recorded: the line was busy */
+    uint64_t deferred_beyond_resolution;
+    uint64_t max_defer_ns;
+    uint64_t first_conflict_record;
+    uint64_t first_conflict_position;
+    uint32_t min_baud_seen;  /* rates taken from the records (0: none) */
+    uint32_t max_baud_seen;
+    uint64_t last_record_ns; /* bus time of the last record */
+    bool have_last_want;
+    uint64_t last_want_ns;   /* recorded time of the last timed record, as bus time */
+    uint64_t last_index;     /* index of the last record fed */
+    /* The file ends right after a request to the card: its answer is not in the capture, so
+     * the request is not compared (a recorder stopped mid-exchange). */
+    bool tail_unchecked;
+    replay_service_t tail_service;
+    uint64_t tail_record;
+    uint64_t tail_position;
+} replay_t;
+
+/* r is large (the bus, the card, the inverter): give it static or heap storage. Returns 0, or -1
+ * with the reason in err (the inverter's storage could not be set up). */
+int replay_init(replay_t *r, const replay_options_t *opt, char *err, size_t errlen);
+/* One record, in file order. */
+void replay_feed(replay_t *r, const cap_record_t *rec);
+/* After the last record: lets the card answer the last request and closes the check. */
+void replay_finish(replay_t *r);
+
+/* The bus rate used for a record (the record's own, else the options'). */
+uint32_t replay_bus_baud(const replay_t *r, const cap_record_t *rec);
+static inline uint64_t replay_total_requests(const replay_t *r)
+{
+    uint64_t n = 0;
+    for (unsigned i = 0; i < REPLAY_SVC_COUNT; i++) n += r->svc[i].requests;
+    return n;
+}
+
+/* How positions are named in the report: "byte" (pcap, pcapng), "line" (text), "event" (LCM). */
+typedef struct replay_report_info {
+    const char *file;
+    const char *format;        /* "pcap" ... */
+    const char *position_unit; /* "byte", "line", "event" */
+    const char *address_source; /* "given with --address", "from the capture: ..." */
+    const char *baud_source;    /* why this rate */
+    const char *file_error;     /* the reader's error, NULL if the file was read to its end */
+    bool interrupted;
+} replay_report_info_t;
+
+/* The report of docs/replay.md. Returns the exit status it stands for: 0 every reply matched
+ * (and the file was read to its end), 1 otherwise. */
+int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out);
+
+/* ---- which station answers: the first pass over a file ----------------------------------- */
+
+#define REPLAY_SCAN_MAX 128u
+
+typedef struct replay_scan {
+    uint64_t answers[REPLAY_SCAN_MAX]; /* answers seen from each address (slaves only) */
+    bool master[REPLAY_SCAN_MAX];      /* sent a request or a token: a master */
+    bool prev_request;
+    uint8_t prev_da;
+    uint64_t records;
+    /* The rate: recorded (pcapng, LCM) or what the timing needs (replay_scan_rate). */
+    uint32_t recorded_baud;
+    bool have_prev_time;
+    uint64_t prev_t_ns;
+    size_t prev_len;
+    uint64_t prev_index;
+    uint64_t timed_answers;   /* requests followed by their answer, both with times */
+    uint64_t need_baud;       /* the highest rate any pair of records needs */
+    uint64_t need_record;     /* ... the pair: this record */
+    uint64_t need_prev_record; /* ... and the one before */
+    uint64_t need_gap_ns;
+    uint32_t need_bits;       /* bit times that had to fit into the gap */
+} replay_scan_t;
+
+void replay_scan_init(replay_scan_t *s);
+void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec);
+/* Addresses (0..125) that answered and never acted as a master, ascending. Returns how many
+ * (at most max are written). */
+unsigned replay_scan_result(const replay_scan_t *s, uint8_t *out, unsigned max);
+/* The lowest PROFIBUS rate at which no recorded telegram begins before the one before it ended
+ * and no answer before min TSDR after its request (12 Mbit/s when even that does not fit); 0
+ * when the file has no request followed by its answer with times. */
+uint32_t replay_scan_rate(const replay_scan_t *s);
+
+/* ---- files ------------------------------------------------------------------------------- */
+
+/* Called every few thousand records: how far the reader got. */
+typedef void (*replay_progress_t)(void *ctx, uint64_t records, uint64_t file_pos,
+                                  uint64_t file_size);
+
+typedef struct replay_file_status {
+    cap_format_t format;    /* what the file turned out to be */
+    uint32_t linktype;
+    uint64_t records;
+    bool read_error;        /* the file could not be read to its end: error says where */
+    bool interrupted;       /* *stop became non-zero */
+    char error[1024];
+} replay_file_status_t;
+
+/* "byte" for pcap/pcapng, "line" for text, "event" for LCM logs. */
+const char *replay_position_unit(cap_format_t f);
+
+/* Streams the file through replay_feed (then replay_finish). Returns -1 when it cannot be
+ * opened (st->error says why), else 0; a read error after some records is in st. stop may be
+ * NULL. */
+int replay_run_file(replay_t *r, const char *path, cap_format_t format, volatile const int *stop,
+                    replay_progress_t progress, void *ctx, replay_file_status_t *st);
+/* The same through replay_scan_feed. */
+int replay_scan_file(replay_scan_t *s, const char *path, cap_format_t format,
+                     volatile const int *stop, replay_progress_t progress, void *ctx,
+                     replay_file_status_t *st);
+
+#endif

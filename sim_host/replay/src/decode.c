@@ -1,0 +1,548 @@
+#include "replay/decode.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "dp_master/dpv1_xfer.h"
+#include "dp_master/param_channel.h"
+#include "dp_slave/dp_wire.h"
+#include "dp_slave/fdl_wire.h"
+
+/* ---- parsing ------------------------------------------------------------------------------ */
+
+void replay_frame_parse(const uint8_t *f, size_t len, replay_frame_t *out)
+{
+    memset(out, 0, sizeof *out);
+    if (len == 0u) {
+        return;
+    }
+    out->sd = f[0];
+    size_t hdr;  /* index of DA */
+    size_t end;  /* one past the last DU octet */
+    switch (f[0]) {
+    case FDL_SC:
+        out->kind = REPLAY_KIND_SC;
+        return;
+    case FDL_SD4:
+        out->kind = REPLAY_KIND_TOKEN;
+        if (len >= 3u) {
+            out->has_header = true;
+            out->da = f[1] & FDL_ADDR_MASK;
+            out->sa = f[2] & FDL_ADDR_MASK;
+        }
+        return;
+    case FDL_SD1:
+    case FDL_SD3:
+        if (len < 4u) {
+            return;
+        }
+        hdr = 1;
+        end = len >= 6u ? len - 2u : len;
+        if (f[0] == FDL_SD1) {
+            end = 4; /* SD1 has no DU, whatever follows */
+        } else if (end > 12u) {
+            end = 12; /* SD3: exactly 8 DU octets */
+        }
+        break;
+    case FDL_SD2:
+        if (len < 7u) {
+            return;
+        }
+        hdr = 4;
+        end = len >= 9u ? len - 2u : len;
+        if ((size_t)f[1] + 4u < end) {
+            end = (size_t)f[1] + 4u; /* LE counts DA..DU */
+        }
+        break;
+    default:
+        return;
+    }
+    out->has_header = true;
+    out->da = f[hdr] & FDL_ADDR_MASK;
+    out->sa = f[hdr + 1u] & FDL_ADDR_MASK;
+    out->fc = f[hdr + 2u];
+    out->kind = (out->fc & FDL_FC_REQUEST) != 0u ? REPLAY_KIND_REQUEST : REPLAY_KIND_RESPONSE;
+    size_t p = hdr + 3u;
+    /* Address extensions: DAE octets first, then SAE (profibus-dp.md §1.3); only the first of
+     * each is a SAP, further ones (bit 7 set) are skipped. */
+    if ((f[hdr] & FDL_ADDR_EXT) != 0u && p < end) {
+        out->has_dsap = true;
+        out->dsap = f[p] & FDL_AE_SAP_MASK;
+        while (p < end && (f[p] & FDL_AE_MORE) != 0u) p++;
+        p++;
+    }
+    if ((f[hdr + 1u] & FDL_ADDR_EXT) != 0u && p < end) {
+        out->has_ssap = true;
+        out->ssap = f[p] & FDL_AE_SAP_MASK;
+        while (p < end && (f[p] & FDL_AE_MORE) != 0u) p++;
+        p++;
+    }
+    if (p < end) {
+        out->du = f + p;
+        out->du_len = end - p;
+    } else {
+        out->du = f + (end < len ? end : len);
+        out->du_len = 0;
+    }
+}
+
+/* ---- services ----------------------------------------------------------------------------- */
+
+static const char *const service_names[REPLAY_SVC_COUNT] = {
+    "FDL_Status", "Data_Exchange", "Set_Prm", "Chk_Cfg", "Slave_Diag", "Get_Cfg",
+    "Global_Control", "Rd_Inp", "Rd_Outp", "Set_Slave_Add", "Set_Ext_Prm", "MSAC1 read",
+    "MSAC1 write", "MSAC1 poll", "MSAC1 alarm ack", "MSAC1 other", "MSAC2 initiate",
+    "MSAC2 poll", "MSAC2 read", "MSAC2 write", "MSAC2 data transport", "MSAC2 idle",
+    "MSAC2 abort", "MSAC2 other", "alarm SAP 50", "other SAP", "other FDL function",
+};
+
+const char *replay_service_name(replay_service_t s)
+{
+    return (unsigned)s < REPLAY_SVC_COUNT ? service_names[s] : "?";
+}
+
+bool replay_expects_answer(const replay_frame_t *req)
+{
+    uint8_t code = req->fc & FDL_FC_CODE_MASK;
+    return code != FDL_REQ_SDN_LOW && code != FDL_REQ_SDN_HIGH;
+}
+
+static replay_service_t acyclic_service(bool c1, const replay_frame_t *q)
+{
+    if (q->du_len == 0u) {
+        return c1 ? REPLAY_SVC_MSAC1_POLL : REPLAY_SVC_MSAC2_POLL;
+    }
+    switch (q->du[0]) {
+    case DPMV1_FN_READ: return c1 ? REPLAY_SVC_MSAC1_READ : REPLAY_SVC_MSAC2_READ;
+    case DPMV1_FN_WRITE: return c1 ? REPLAY_SVC_MSAC1_WRITE : REPLAY_SVC_MSAC2_WRITE;
+    case DPMV1_FN_ALARM_ACK: return c1 ? REPLAY_SVC_MSAC1_ALARM_ACK : REPLAY_SVC_MSAC2_OTHER;
+    case DPMV1_FN_INITIATE: return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_INITIATE;
+    case DPMV1_FN_ABORT: return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_ABORT;
+    case DPMV1_FN_IDLE: return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_IDLE;
+    case DPMV1_FN_DATA_TRANSPORT:
+        return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_TRANSPORT;
+    default: return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_OTHER;
+    }
+}
+
+replay_service_t replay_service_of(const replay_frame_t *q)
+{
+    uint8_t code = q->fc & FDL_FC_CODE_MASK;
+    if (code == FDL_REQ_FDL_STATUS) {
+        return REPLAY_SVC_FDL_STATUS;
+    }
+    if (code != FDL_REQ_SRD_LOW && code != FDL_REQ_SRD_HIGH && code != FDL_REQ_SDN_LOW &&
+        code != FDL_REQ_SDN_HIGH) {
+        return REPLAY_SVC_OTHER_FUNCTION;
+    }
+    if (!q->has_dsap) {
+        return REPLAY_SVC_DATA_EXCHANGE;
+    }
+    switch (q->dsap) {
+    case DP_SAP_SET_SLAVE_ADD: return REPLAY_SVC_SET_SLAVE_ADD;
+    case DP_SAP_RD_INP: return REPLAY_SVC_RD_INP;
+    case DP_SAP_RD_OUTP: return REPLAY_SVC_RD_OUTP;
+    case DP_SAP_GLOBAL_CONTROL: return REPLAY_SVC_GLOBAL_CONTROL;
+    case DP_SAP_GET_CFG: return REPLAY_SVC_GET_CFG;
+    case DP_SAP_SLAVE_DIAG: return REPLAY_SVC_SLAVE_DIAG;
+    case DP_SAP_SET_PRM: return REPLAY_SVC_SET_PRM;
+    case DP_SAP_CHK_CFG: return REPLAY_SVC_CHK_CFG;
+    case 53u: return REPLAY_SVC_SET_EXT_PRM;
+    case DPMV1_SAP_C1: return acyclic_service(true, q);
+    case 50u: return REPLAY_SVC_ALARM_SAP;
+    case DPMV1_SAP_C2_RM:
+        return q->du_len > 0u && q->du[0] == DPMV1_FN_INITIATE ? REPLAY_SVC_MSAC2_INITIATE
+                                                               : REPLAY_SVC_MSAC2_OTHER;
+    default:
+        return q->dsap <= 48u ? acyclic_service(false, q) : REPLAY_SVC_OTHER_SAP;
+    }
+}
+
+/* ---- text --------------------------------------------------------------------------------- */
+
+typedef struct sbuf {
+    char *p;
+    size_t max;
+    size_t n;
+} sbuf_t;
+
+static void put(sbuf_t *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void put(sbuf_t *b, const char *fmt, ...)
+{
+    if (b->max == 0u || b->n >= b->max - 1u) {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    int k = vsnprintf(b->p + b->n, b->max - b->n, fmt, ap);
+    va_end(ap);
+    if (k > 0) {
+        b->n += (size_t)k;
+        if (b->n >= b->max) {
+            b->n = b->max - 1u;
+        }
+    }
+}
+
+size_t replay_hex(const uint8_t *p, size_t len, char *out, size_t max)
+{
+    if (max == 0u) {
+        return 0;
+    }
+    size_t n = 0;
+    out[0] = '\0';
+    for (size_t i = 0; i < len; i++) {
+        if (n + (i > 0u ? 4u : 3u) + 4u > max) {
+            if (n + 4u < max) {
+                memcpy(out + n, " ...", 5);
+                n += 4;
+            }
+            return n;
+        }
+        n += (size_t)snprintf(out + n, max - n, i > 0u ? " %02X" : "%02X", p[i]);
+    }
+    return n;
+}
+
+static void put_hex(sbuf_t *b, const uint8_t *p, size_t len)
+{
+    if (b->max > b->n) {
+        b->n += replay_hex(p, len, b->p + b->n, b->max - b->n);
+    }
+}
+
+static const char *const req_names[16] = {
+    "time event", "?1", "?2", "SDA low", "SDN low", "SDA high", "SDN high", "MSRD", "?8",
+    "FDL status request", "time event (TE)", "counter event (CE)", "SRD low", "SRD high",
+    "Request Ident", "Request LSAP status",
+};
+static const char *const rsp_names[16] = {
+    "OK", "UE (user error)", "RR (no resource)", "RS (service not activated)", "?4", "?5",
+    "?6", "?7", "DL", "NR (no response data)", "DH (diagnosis pending)", "?B",
+    "RDL (no resource for receive)", "RDH (no resource, diagnosis)", "?E", "?F",
+};
+
+size_t replay_fc_text(uint8_t fc, char *out, size_t max)
+{
+    sbuf_t b = {out, max, 0};
+    if (max > 0u) out[0] = '\0';
+    if ((fc & FDL_FC_REQUEST) != 0u) {
+        put(&b, "%s", req_names[fc & FDL_FC_CODE_MASK]);
+        if ((fc & FDL_FC_FCV) != 0u) {
+            put(&b, " FCV=1 FCB=%u", (fc & FDL_FC_FCB) != 0u ? 1u : 0u);
+        } else if ((fc & FDL_FC_FCB) != 0u) {
+            put(&b, " FCV=0 FCB=1 (first)");
+        }
+    } else {
+        put(&b, "%s", rsp_names[fc & FDL_FC_CODE_MASK]);
+        static const char *const types[4] = {"", " (master not ready)", " (master ready)",
+                                             " (master in ring)"};
+        put(&b, "%s", types[(fc & FDL_FC_STATION_MASK) >> 4]);
+    }
+    return b.n;
+}
+
+static void diag_text(sbuf_t *b, const uint8_t *d, size_t len)
+{
+    static const char *const st1[8] = {"Station_Non_Existent", "Station_Not_Ready", "Cfg_Fault",
+                                       "Ext_Diag", "Not_Supported", "Invalid_Slave_Response",
+                                       "Prm_Fault", "Master_Lock"};
+    static const char *const st2[8] = {"Prm_Req", "Stat_Diag", NULL, "WD_On", "Freeze_Mode",
+                                       "Sync_Mode", NULL, "Deactivated"};
+    if (len < DP_DIAG_STD_LEN) {
+        put(b, "short diagnosis (%zu octets)", len);
+        return;
+    }
+    for (unsigned i = 0; i < 8u; i++) {
+        if (((d[0] >> i) & 1u) != 0u) put(b, "%s ", st1[i]);
+    }
+    for (unsigned i = 0; i < 8u; i++) {
+        if (((d[1] >> i) & 1u) != 0u && st2[i] != NULL) put(b, "%s ", st2[i]);
+    }
+    if (d[DP_DIAG_MASTER_ADD] == DP_MASTER_ADD_NONE) {
+        put(b, "| no master");
+    } else {
+        put(b, "| Master_Add %u", d[DP_DIAG_MASTER_ADD]);
+    }
+    put(b, ", ident 0x%02X%02X", d[4], d[5]);
+    if (len > DP_DIAG_STD_LEN) {
+        put(b, ", ext ");
+        put_hex(b, d + DP_DIAG_STD_LEN, len - DP_DIAG_STD_LEN);
+    }
+}
+
+static void movilink_text(sbuf_t *b, const uint8_t *m, bool reply)
+{
+    uint8_t mg = m[ML_OFF_MANAGEMENT];
+    put(b, "param channel [");
+    put_hex(b, m, ML_TELEGRAM_LEN);
+    put(b, "] handshake %u, %s", (mg & ML_MGMT_HANDSHAKE) != 0u ? 1u : 0u,
+        ml_service_name(mg & ML_MGMT_SERVICE_MASK));
+    if ((mg & ML_MGMT_SERVICE_MASK) != ML_SVC_NONE) {
+        put(b, " index %u", (unsigned)m[ML_OFF_INDEX_HIGH] << 8 | m[ML_OFF_INDEX_LOW]);
+    }
+    if (reply && (mg & ML_MGMT_ERROR) != 0u) {
+        char t[96];
+        ml_error_text(m, t, sizeof t);
+        put(b, ", error: %s", t);
+    } else if ((mg & ML_MGMT_SERVICE_MASK) != ML_SVC_NONE) {
+        uint32_t v = (uint32_t)m[4] << 24 | (uint32_t)m[5] << 16 | (uint32_t)m[6] << 8 | m[7];
+        put(b, " data 0x%08X", v);
+    }
+}
+
+static void io_text(sbuf_t *b, const uint8_t *d, size_t len, const replay_dx_layout_t *lay,
+                    bool reply, const char *what)
+{
+    if (len == 0u) {
+        put(b, "no %s", what);
+        return;
+    }
+    if (lay != NULL && lay->known && lay->param_channel && len >= ML_TELEGRAM_LEN) {
+        movilink_text(b, d, reply);
+        d += ML_TELEGRAM_LEN;
+        len -= ML_TELEGRAM_LEN;
+        if (len == 0u) return;
+        put(b, "; ");
+    }
+    put(b, "%s", reply ? "PI" : "PO");
+    for (size_t i = 0; i + 1u < len; i += 2u) {
+        put(b, " %02X%02X", d[i], d[i + 1u]);
+    }
+    if ((len & 1u) != 0u) {
+        put(b, " %02X", d[len - 1u]);
+    }
+}
+
+static void prm_text(sbuf_t *b, const uint8_t *d, size_t len)
+{
+    if (len < DP_PRM_LEN_STANDARD) {
+        put(b, "%zu octets (too short): ", len);
+        put_hex(b, d, len);
+        return;
+    }
+    uint8_t st = d[DP_PRM_STATION_STATUS];
+    put(b, "%s%s%s%s%s", (st & DP_PRM_LOCK_REQ) ? "Lock " : "",
+        (st & DP_PRM_UNLOCK_REQ) ? "Unlock " : "", (st & DP_PRM_SYNC_REQ) ? "Sync " : "",
+        (st & DP_PRM_FREEZE_REQ) ? "Freeze " : "", (st & DP_PRM_WD_ON) ? "WD_On " : "");
+    bool base_1ms = len > DP_PRM_DPV1_STATUS_1 &&
+                    (d[DP_PRM_DPV1_STATUS_1] & DP_DPV1_1_WD_BASE_1MS) != 0u;
+    put(b, "WD %u x %u x %s, min TSDR %u, ident 0x%02X%02X, group 0x%02X", d[1], d[2],
+        base_1ms ? "1 ms" : "10 ms", d[3], d[4], d[5], d[6]);
+    if (len > DP_PRM_LEN_STANDARD) {
+        put(b, ", then ");
+        put_hex(b, d + DP_PRM_LEN_STANDARD, len - DP_PRM_LEN_STANDARD);
+    }
+}
+
+static void gc_text(sbuf_t *b, const uint8_t *d, size_t len)
+{
+    if (len < DP_GC_LEN) {
+        put(b, "%zu octets (too short)", len);
+        return;
+    }
+    uint8_t c = d[0];
+    if ((c & ~(unsigned)DP_GC_RESERVED) == 0u) put(b, "Operate ");
+    if (c & DP_GC_CLEAR_DATA) put(b, "Clear_Data ");
+    if (c & DP_GC_UNFREEZE) put(b, "Unfreeze ");
+    if (c & DP_GC_FREEZE) put(b, "Freeze ");
+    if (c & DP_GC_UNSYNC) put(b, "Unsync ");
+    if (c & DP_GC_SYNC) put(b, "Sync ");
+    if (c & DP_GC_RESERVED) put(b, "reserved bits 0x%02X ", c & DP_GC_RESERVED);
+    put(b, "(0x%02X), group 0x%02X", c, d[1]);
+}
+
+static const char *fn_name(uint8_t fn)
+{
+    switch (fn & 0x7Fu) {
+    case DPMV1_FN_IDLE: return "Idle";
+    case DPMV1_FN_DATA_TRANSPORT: return "Data_Transport";
+    case DPMV1_FN_RM: return "RM";
+    case DPMV1_FN_INITIATE: return "Initiate";
+    case DPMV1_FN_ABORT: return "Abort";
+    case DPMV1_FN_ALARM_ACK: return "Alarm_Ack";
+    case DPMV1_FN_READ: return "Read";
+    case DPMV1_FN_WRITE: return "Write";
+    default: return NULL;
+    }
+}
+
+/* A DP-V1 PDU (request or response). */
+static void dpv1_text(sbuf_t *b, const uint8_t *d, size_t len, bool reply)
+{
+    if (len == 0u) {
+        put(b, reply ? "empty" : "poll (no data)");
+        return;
+    }
+    const char *name = fn_name(d[0]);
+    if (name == NULL) {
+        put(b, "function 0x%02X: ", d[0]);
+        put_hex(b, d, len);
+        return;
+    }
+    const char *dir = reply ? ".res" : ".req";
+    if ((d[0] & DPMV1_FN_ERROR) != 0u && d[0] != DPMV1_FN_ERROR) {
+        put(b, "%s negative", name);
+        if (len >= 4u) {
+            put(b, ": decode 0x%02X, code 0x%02X (%s), 0x%02X", d[1], d[2],
+                dpm_v1_error_text(d[2]), d[3]);
+        }
+        return;
+    }
+    switch (d[0]) {
+    case DPMV1_FN_READ:
+    case DPMV1_FN_WRITE:
+        put(b, "%s%s", name, dir);
+        if (len >= 4u) {
+            put(b, " slot %u index %u length %u", d[1], d[2], d[3]);
+            if (len > 4u) {
+                put(b, ": ");
+                put_hex(b, d + 4, len - 4u);
+            }
+        }
+        return;
+    case DPMV1_FN_RM:
+        put(b, "resource manager: connection SAP %u", len > 1u ? d[1] : 0u);
+        return;
+    case DPMV1_FN_INITIATE:
+        put(b, "Initiate%s", dir);
+        if (!reply && len >= 6u) {
+            put(b, " Send_Timeout %u", (unsigned)d[4] << 8 | d[5]);
+        } else if (reply && len >= 2u) {
+            put(b, " Max_Len_Data_Unit %u", d[1]);
+        }
+        return;
+    case DPMV1_FN_ABORT:
+        put(b, "Abort");
+        if (len >= 3u) {
+            put(b, " subnet %u, instance 0x%02X, reason %u", d[1], d[2] & 0xF0u, d[2] & 0x0Fu);
+        }
+        return;
+    default:
+        put(b, "%s%s: ", name, dir);
+        put_hex(b, d + 1, len - 1u);
+        return;
+    }
+}
+
+size_t replay_describe(const uint8_t *f, size_t len, const replay_dx_layout_t *lay, char *out,
+                       size_t max)
+{
+    sbuf_t b = {out, max, 0};
+    if (max > 0u) out[0] = '\0';
+    replay_frame_t m;
+    replay_frame_parse(f, len, &m);
+    char fc[64];
+    switch (m.kind) {
+    case REPLAY_KIND_SC:
+        put(&b, len == 1u ? "SC (short acknowledgement)" : "SC followed by %zu octets",
+            len - 1u);
+        return b.n;
+    case REPLAY_KIND_TOKEN:
+        if (m.has_header) {
+            put(&b, "token %u -> %u", m.sa, m.da);
+        } else {
+            put(&b, "token (cut: %zu octets)", len);
+        }
+        return b.n;
+    case REPLAY_KIND_GARBAGE:
+        put(&b, "not a telegram (%zu octets)", len);
+        return b.n;
+    case REPLAY_KIND_REQUEST: {
+        replay_service_t s = replay_service_of(&m);
+        replay_fc_text(m.fc, fc, sizeof fc);
+        put(&b, "%s %u -> %u (%s", replay_service_name(s), m.sa, m.da, fc);
+        if (m.has_dsap || m.has_ssap) {
+            put(&b, ", SAPs %u/%u", m.has_dsap ? m.dsap : 0u, m.has_ssap ? m.ssap : 0u);
+        }
+        put(&b, ")");
+        switch (s) {
+        case REPLAY_SVC_DATA_EXCHANGE:
+            put(&b, ": ");
+            io_text(&b, m.du, m.du_len, lay, false, "outputs");
+            break;
+        case REPLAY_SVC_SET_PRM:
+            put(&b, ": ");
+            prm_text(&b, m.du, m.du_len);
+            break;
+        case REPLAY_SVC_CHK_CFG:
+        case REPLAY_SVC_SET_SLAVE_ADD:
+        case REPLAY_SVC_SET_EXT_PRM:
+        case REPLAY_SVC_OTHER_SAP:
+        case REPLAY_SVC_OTHER_FUNCTION:
+            if (m.du_len > 0u) {
+                put(&b, ": ");
+                put_hex(&b, m.du, m.du_len);
+            }
+            break;
+        case REPLAY_SVC_GLOBAL_CONTROL:
+            put(&b, ": ");
+            gc_text(&b, m.du, m.du_len);
+            break;
+        case REPLAY_SVC_FDL_STATUS:
+        case REPLAY_SVC_SLAVE_DIAG:
+        case REPLAY_SVC_GET_CFG:
+        case REPLAY_SVC_RD_INP:
+        case REPLAY_SVC_RD_OUTP:
+            break;
+        default: /* DP-V1 */
+            put(&b, ": ");
+            dpv1_text(&b, m.du, m.du_len, false);
+            break;
+        }
+        break;
+    }
+    case REPLAY_KIND_RESPONSE:
+        replay_fc_text(m.fc, fc, sizeof fc);
+        if (!m.has_ssap) {
+            uint8_t code = m.fc & FDL_FC_CODE_MASK;
+            if (m.sd == FDL_SD1 && code == FDL_RSP_OK) {
+                put(&b, "FDL status reply %u -> %u: %s", m.sa, m.da, fc);
+            } else if (code == FDL_RSP_DL || code == FDL_RSP_DH) {
+                put(&b, "reply %u -> %u %s: ", m.sa, m.da, fc);
+                io_text(&b, m.du, m.du_len, lay, true, "inputs");
+            } else {
+                put(&b, "reply %u -> %u: %s", m.sa, m.da, fc);
+                if (m.du_len > 0u) {
+                    put(&b, ": ");
+                    put_hex(&b, m.du, m.du_len);
+                }
+            }
+            break;
+        }
+        switch (m.ssap) {
+        case DP_SAP_SLAVE_DIAG:
+            put(&b, "Slave_Diag reply %u -> %u (%s): ", m.sa, m.da, fc);
+            diag_text(&b, m.du, m.du_len);
+            break;
+        case DP_SAP_GET_CFG:
+            put(&b, "Get_Cfg reply %u -> %u (%s): ", m.sa, m.da, fc);
+            put_hex(&b, m.du, m.du_len);
+            break;
+        case DP_SAP_RD_INP:
+        case DP_SAP_RD_OUTP:
+            put(&b, "%s reply %u -> %u (%s): ", m.ssap == DP_SAP_RD_INP ? "Rd_Inp" : "Rd_Outp",
+                m.sa, m.da, fc);
+            put_hex(&b, m.du, m.du_len);
+            break;
+        default:
+            if (m.ssap == DPMV1_SAP_C1 || m.ssap <= DPMV1_SAP_C2_RM) {
+                put(&b, "%s reply %u -> %u (%s, SAPs %u/%u): ",
+                    m.ssap == DPMV1_SAP_C1 ? "MSAC1" : "MSAC2", m.sa, m.da, fc,
+                    m.has_dsap ? m.dsap : 0u, m.ssap);
+                dpv1_text(&b, m.du, m.du_len, true);
+            } else {
+                put(&b, "reply %u -> %u (%s, SAPs %u/%u)", m.sa, m.da, fc,
+                    m.has_dsap ? m.dsap : 0u, m.ssap);
+                if (m.du_len > 0u) {
+                    put(&b, ": ");
+                    put_hex(&b, m.du, m.du_len);
+                }
+            }
+            break;
+        }
+        break;
+    }
+    return b.n;
+}

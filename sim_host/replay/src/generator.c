@@ -1,0 +1,619 @@
+#include "replay/generator.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#include "dp_master/dpv1_c2.h"
+#include "dp_master/dpv1_ds47.h"
+#include "dp_master/param_channel.h"
+#include "dp_slave/dp_wire.h"
+#include "dp_slave/fdl_frame.h"
+#include "sim_hal/membus.h"
+
+#define GEN_DEFAULT_BAUD 1500000u
+#define GEN_WATCHDOG_MS 100u
+#define GEN_CYCLE_US 2000u
+#define GEN_FOREIGN_CYCLE_US 4000u /* room for the second master's turn between cycles */
+#define GEN_STEP_US 500u
+#define GEN_FOREIGN_EVERY 10u      /* cycles between the second master's turns */
+#define GEN_DS47_EVERY 20u         /* cycles between class-1 data set 47 calls */
+#define GEN_PARAM_GIVE_UP 500u     /* cycles after which a channel service counts as lost */
+#define GEN_FOREIGN_STEPS 5u
+
+/* ---- the second master (--foreign) ------------------------------------------------------- */
+
+/* A scripted master: when the class-1 master has the line quiet for long enough, it plays one
+ * "token turn": takes the token from master 2, asks a free address for its FDL status (nobody
+ * answers), asks the card for its FDL status and its diagnosis (the card answers), and hands the
+ * token back. It watches the class-1 master's next poll time on the bus, so it never collides. */
+typedef struct foreign {
+    hal_uart_t uart;
+    membus_t *bus;
+    dp_master_t *master;
+    membus_port_t *master_port;
+    uint32_t baud;
+    uint8_t card;
+    uint8_t free_address;
+    bool wanted;
+    int step; /* -1: not playing */
+    hal_time_us_t next; /* when the next step is due */
+    bool diag_first;
+    bool diag_fcb;
+    uint32_t bursts;
+} foreign_t;
+
+typedef struct foreign_step {
+    uint8_t frame[32];
+    size_t len;
+    uint32_t wait_bits; /* after the telegram: the answer, if any, and the idle before the next */
+} foreign_step_t;
+
+static foreign_step_t foreign_build(foreign_t *f, unsigned step)
+{
+    foreign_step_t s = {.len = 0};
+    const uint8_t me = GEN_FOREIGN_MASTER_ADDRESS;
+    switch (step) {
+    case 0: /* master 2 passes the token to master 3 */
+        s.frame[0] = 0xDC;
+        s.frame[1] = me;
+        s.frame[2] = GEN_MASTER_ADDRESS;
+        s.len = 3;
+        s.wait_bits = 50;
+        break;
+    case 1: /* a GAP update: is anybody at the free address? */
+        s.len = fdl_encode(s.frame, f->free_address, me, FDL_FC_REQUEST | FDL_REQ_FDL_STATUS,
+                           false, 0, 0, NULL, 0);
+        s.wait_bits = 150;
+        break;
+    case 2:
+        s.len = fdl_encode(s.frame, f->card, me, FDL_FC_REQUEST | FDL_REQ_FDL_STATUS, false, 0,
+                           0, NULL, 0);
+        s.wait_bits = 300;
+        break;
+    case 3: { /* a class-2 style diagnosis read, with its own FCB sequence */
+        uint8_t fc = FDL_FC_REQUEST | FDL_REQ_SRD_HIGH;
+        if (f->diag_first) {
+            fc |= FDL_FC_FCB;
+            f->diag_first = false;
+            f->diag_fcb = true;
+        } else {
+            f->diag_fcb = !f->diag_fcb;
+            fc |= (uint8_t)(FDL_FC_FCV | (f->diag_fcb ? FDL_FC_FCB : 0u));
+        }
+        s.len = fdl_encode(s.frame, f->card, me, fc, true, DP_SAP_SLAVE_DIAG, DP_SAP_MASTER, NULL,
+                           0);
+        s.wait_bits = 400;
+        break;
+    }
+    default: /* the token back to master 2 */
+        s.frame[0] = 0xDC;
+        s.frame[1] = GEN_MASTER_ADDRESS;
+        s.frame[2] = me;
+        s.len = 3;
+        s.wait_bits = 50;
+        break;
+    }
+    return s;
+}
+
+static uint64_t foreign_turn_ns(foreign_t *f)
+{
+    uint64_t bits = 0;
+    foreign_t copy = *f; /* building step 3 moves the FCB: work on a copy */
+    for (unsigned i = 0; i < GEN_FOREIGN_STEPS; i++) {
+        foreign_step_t s = foreign_build(&copy, i);
+        bits += s.len * 11u + s.wait_bits;
+    }
+    return bits * 1000000000ull / f->baud;
+}
+
+static void foreign_rx(void *ctx, uint8_t byte, uint8_t flags, hal_time_us_t t)
+{
+    (void)ctx;
+    (void)byte;
+    (void)flags;
+    (void)t;
+}
+
+static hal_time_us_t foreign_poll(void *ctx, hal_time_us_t now)
+{
+    foreign_t *f = ctx;
+    if (f->step < 0) {
+        if (!f->wanted) {
+            return now + HAL_TIME_NO_DEADLINE_US; /* polled again after the next telegram */
+        }
+        /* The master was polled before us in this round: its deadline is when it acts next
+         * (right after a reply that is its idle time, then the next slave's turn). Look
+         * again shortly until the gap is long enough. */
+        uint64_t quiet_until = f->master_port->deadline_ns;
+        if (f->master->waiting || f->master->gc_pending ||
+            quiet_until < f->bus->now_ns + foreign_turn_ns(f) + 100000u) {
+            return now + 20u;
+        }
+        f->step = 0;
+        f->next = now;
+    }
+    /* Polled after every telegram on the bus, including the answers it waits for. */
+    if (!hal_time_reached(now, f->next)) {
+        return f->next;
+    }
+    foreign_step_t s = foreign_build(f, (unsigned)f->step);
+    (void)f->uart.ops->transmit(f->uart.ctx, s.frame, s.len, now);
+    uint64_t bits = s.len * 11u + s.wait_bits;
+    f->step++;
+    if (f->step >= (int)GEN_FOREIGN_STEPS) {
+        f->step = -1;
+        f->wanted = false;
+        f->bursts++;
+    }
+    f->next = now + hal_uart_bits_us(f->baud, (uint32_t)bits);
+    return f->next;
+}
+
+/* ---- the run ------------------------------------------------------------------------------ */
+
+typedef struct gen {
+    gen_options_t opt;
+    gen_result_t *res;
+    membus_t bus;
+    card_station_t card;
+    card_station_t card2;
+    dp_master_t master;
+    membus_port_t *master_port;
+    foreign_t foreign;
+    membus_port_t *foreign_port;
+    cap_writer_t w;
+    bool write_failed;
+    /* cyclic channel */
+    dpm_param_t pc;
+    bool pc_synced;
+    uint32_t pc_next_cycle;
+    uint32_t pc_started_cycle;
+    unsigned pc_step;
+    uint8_t out[14];
+    /* DP-V1 */
+    dpm_call_t call;
+    bool call_running;
+    dpm_ds47_req_t req;
+    unsigned ds47_step;
+    uint32_t ds47_next_cycle;
+    dpm_c2_t c2;
+    int c2_stage; /* 0 not yet, 1 opening, 2 call running, 3 aborting, 4 done */
+    dpm_call_t c2_call;
+    bool c2_open_done;
+    bool c2_open_ok;
+    bool c2_abort_done;
+    /* faults */
+    int fault_stage;
+    uint64_t fault_until_ns;
+    uint32_t wd_seen;
+    uint32_t foreign_cycle; /* the cycle of the last turn asked for */
+} gen_t;
+
+static gen_t g;
+
+static void gen_tap(void *ctx, uint64_t t_start_ns, const uint8_t *frame, size_t len, bool local,
+                    uint32_t baud)
+{
+    (void)ctx;
+    (void)local;
+    (void)baud;
+    if (cap_writer_frame(&g.w, t_start_ns, frame, len, CAP_DIR_UNKNOWN) != 0) {
+        g.write_failed = true;
+    }
+    g.res->telegrams++;
+    g.res->octets += len;
+}
+
+static void card_event(void *ctx, const dp_event_t *ev)
+{
+    (void)ctx;
+    if (ev->type == DP_EV_WD_EXPIRED) {
+        g.wd_seen++;
+    }
+}
+
+static hal_time_us_t now_us(void)
+{
+    return membus_now_us(&g.bus);
+}
+
+static dpm_slave_t *card_slave(void)
+{
+    return &g.master.slaves[0];
+}
+
+static void slave_cfg(dpm_slave_cfg_t *sc, uint8_t address, const uint8_t *cfg, size_t len)
+{
+    memset(sc, 0, sizeof *sc);
+    sc->address = address;
+    if (g.opt.dpv1) {
+        sc->prm_len = (uint8_t)dpm_build_prm_dpv1(sc->prm, DFP21B_IDENT, GEN_WATCHDOG_MS,
+                                                  dfp21b_user_prm_default,
+                                                  sizeof dfp21b_user_prm_default);
+    } else {
+        sc->prm_len = (uint8_t)dpm_build_prm(sc->prm, DFP21B_IDENT, GEN_WATCHDOG_MS,
+                                             dfp21b_user_prm_default,
+                                             sizeof dfp21b_user_prm_default);
+    }
+    memcpy(sc->cfg, cfg, len);
+    sc->cfg_len = (uint8_t)len;
+}
+
+static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
+static const uint8_t cfg_wrong[] = {0xF3, 0xE2, 0xD1}; /* 3 PD out, 2 PD in: refused */
+
+/* The cyclic channel: a fixed round of services, commissioning first (P100/P101 to FIELDBUS so
+ * the drive follows PO2), then reads, writes, a volatile write and one the inverter refuses. */
+static void param_channel(void)
+{
+    dpm_slave_t *s = card_slave();
+    if (g.opt.param_every == 0u || s->phase != DPM_PHASE_DATA_EXCH || s->inputs_len < 8u) {
+        g.pc_synced = false;
+        return;
+    }
+    if (!g.pc_synced) {
+        /* The card keeps its handshake across start-ups: continue from what it shows. */
+        if (((s->inputs[0] ^ g.out[0]) & ML_MGMT_HANDSHAKE) != 0u && g.pc.busy) {
+            return;
+        }
+        dpm_param_sync(&g.pc, s->inputs);
+        g.pc_synced = true;
+        g.pc_next_cycle = s->cycles + g.opt.param_every;
+    }
+    if (g.pc.busy) {
+        if (dpm_param_done(&g.pc, s->inputs)) {
+            g.res->param_services++;
+            if ((s->inputs[0] & ML_MGMT_ERROR) != 0u) {
+                g.res->param_errors++;
+            }
+            g.pc_next_cycle = s->cycles + g.opt.param_every;
+        } else if (s->cycles - g.pc_started_cycle > GEN_PARAM_GIVE_UP) {
+            g.pc.busy = false;
+            g.pc_synced = false;
+        }
+        return;
+    }
+    if (s->cycles < g.pc_next_cycle) {
+        return;
+    }
+    uint32_t k = g.pc_step / 10u;
+    uint8_t svc = ML_SVC_READ;
+    uint16_t index = 8300;
+    uint32_t value = 0;
+    switch (g.pc_step % 10u) {
+    case 0: svc = ML_SVC_READ; index = 8300; break;                       /* firmware */
+    case 1: svc = ML_SVC_WRITE; index = 8461; value = 3; break;           /* P100 FIELDBUS */
+    case 2: svc = ML_SVC_WRITE; index = 8462; value = 2; break;           /* P101 FIELDBUS */
+    case 3: svc = ML_SVC_READ; index = 8318; break;                       /* speed */
+    case 4: svc = ML_SVC_WRITE; index = 8489; value = 1000u + k; break;   /* P160 */
+    case 5: svc = ML_SVC_READ; index = 8489; break;
+    case 6: svc = ML_SVC_WRITE_VOLATILE; index = 11000; value = k; break; /* IPOS H0 */
+    case 7: svc = ML_SVC_READ; index = 11000; break;
+    case 8: svc = ML_SVC_WRITE_VOLATILE; index = 8517; value = 99000000u; break; /* too high */
+    default: svc = ML_SVC_READ_MIN; index = 8489; break;
+    }
+    g.pc_step++;
+    dpm_param_start(&g.pc, svc, index, value, g.out);
+    dp_master_set_outputs(&g.master, 0, g.out, sizeof g.out);
+    g.pc_started_cycle = s->cycles;
+}
+
+static void ds47_done(void *ctx, dpm_call_t *call, hal_time_us_t now)
+{
+    (void)ctx;
+    (void)call;
+    (void)now;
+    g.call_running = false;
+    g.res->ds47_calls++;
+}
+
+static void dpv1_class1(void)
+{
+    dpm_slave_t *s = card_slave();
+    if (!g.opt.dpv1 || g.call_running || s->phase != DPM_PHASE_DATA_EXCH ||
+        s->cycles < g.ds47_next_cycle || dp_master_c1_busy(&g.master, 0)) {
+        return;
+    }
+    g.ds47_next_cycle = s->cycles + GEN_DS47_EVERY;
+    uint32_t k = g.ds47_step / 6u;
+    memset(&g.call, 0, sizeof g.call);
+    memset(&g.req, 0, sizeof g.req);
+    g.req.ref = (uint8_t)(1u + g.ds47_step % 255u);
+    g.req.n = 1;
+    int rc;
+    switch (g.ds47_step % 6u) {
+    case 0:
+        g.req.id = DPM_DS47_ID_MOVILINK;
+        g.req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_READ, .number = 8300};
+        break;
+    case 1:
+        g.req.id = DPM_DS47_ID_READ;
+        g.req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_VALUE, .number = 8489};
+        break;
+    case 2:
+        g.req.id = DPM_DS47_ID_MOVILINK;
+        g.req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_WRITE_VOLATILE,
+                                        .number = 11000, .value = 500u + k};
+        break;
+    case 3:
+        g.req.id = DPM_DS47_ID_CHANGE;
+        g.req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_VALUE, .number = 8489,
+                                        .value = 2000u + k};
+        break;
+    case 4: /* a parameter that does not exist: a negative data set 47 response */
+        g.req.id = DPM_DS47_ID_MOVILINK;
+        g.req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_READ, .number = 1};
+        break;
+    default:
+        break;
+    }
+    if (g.ds47_step % 6u == 5u) {
+        rc = dpm_im0_start(&g.call, dp_master_c1_port(&g.master, 0), ds47_done, NULL, now_us());
+    } else {
+        rc = dpm_ds47_start(&g.call, dp_master_c1_port(&g.master, 0), &g.req, ds47_done, NULL,
+                            now_us());
+    }
+    g.ds47_step++;
+    if (rc == 0) {
+        g.call_running = true;
+        membus_wake(g.master_port);
+    }
+}
+
+static void c2_opened(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+{
+    (void)ctx;
+    (void)now;
+    g.c2_open_done = true;
+    g.c2_open_ok = r->ok;
+}
+
+static void c2_aborted(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+{
+    (void)ctx;
+    (void)r;
+    (void)now;
+    g.c2_abort_done = true;
+}
+
+/* One class-2 connection in the middle of the run: Initiate, a data set 47 read, Abort. */
+static void dpv1_class2(void)
+{
+    dpm_slave_t *s = card_slave();
+    switch (g.c2_stage) {
+    case 0:
+        if (g.opt.dpv1 && s->cycles >= g.opt.cycles / 3u && s->phase == DPM_PHASE_DATA_EXCH &&
+            dpm_c2_open(&g.c2, c2_opened, NULL, now_us()) == 0) {
+            g.c2_stage = 1;
+            membus_wake(g.master_port);
+        }
+        return;
+    case 1:
+        if (!g.c2_open_done) return;
+        if (!g.c2_open_ok) {
+            g.c2_stage = 4;
+            return;
+        }
+        g.res->c2_connections++;
+        memset(&g.c2_call, 0, sizeof g.c2_call);
+        {
+            dpm_ds47_req_t q = {.ref = 0x42, .id = DPM_DS47_ID_MOVILINK, .n = 1};
+            q.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_READ, .number = 8300};
+            if (dpm_ds47_start(&g.c2_call, dpm_c2_port(&g.c2), &q, NULL, NULL, now_us()) != 0) {
+                g.c2_stage = 4;
+                return;
+            }
+        }
+        g.c2_stage = 2;
+        membus_wake(g.master_port);
+        return;
+    case 2:
+        if (!dpm_call_done(&g.c2_call)) return;
+        g.res->ds47_calls++;
+        if (dpm_c2_abort(&g.c2, 0, c2_aborted, NULL, now_us()) != 0) {
+            g.c2_stage = 4;
+            return;
+        }
+        g.c2_stage = 3;
+        membus_wake(g.master_port);
+        return;
+    case 3:
+        if (g.c2_abort_done || dpm_c2_state(&g.c2) == DPM_C2_CLOSED) g.c2_stage = 4;
+        return;
+    default:
+        return;
+    }
+}
+
+static void reconfigure(const uint8_t *cfg, size_t len)
+{
+    dpm_slave_cfg_t sc;
+    slave_cfg(&sc, g.opt.address, cfg, len);
+    dp_master_reconfigure(&g.master, 0, &sc, now_us());
+    membus_wake(g.master_port);
+}
+
+/* --faults: at a third of the run the master falls silent until the card's watchdog expired, at
+ * half Global_Control Clear_Data then Operate, at two thirds a configuration the card refuses,
+ * then the right one again. */
+static void faults(void)
+{
+    if (!g.opt.faults) return;
+    dpm_slave_t *s = card_slave();
+    uint32_t n = g.opt.cycles;
+    switch (g.fault_stage) {
+    case 0:
+        if (s->cycles >= n / 3u && !g.master.waiting && !g.call_running && g.c2_stage != 1 &&
+            g.c2_stage != 2 && g.c2_stage != 3 && g.foreign.step < 0) {
+            dp_master_stop(&g.master);
+            g.fault_until_ns = g.bus.now_ns + 3ull * GEN_WATCHDOG_MS * 1000000ull;
+            g.fault_stage = 1;
+        }
+        return;
+    case 1:
+        if (g.bus.now_ns >= g.fault_until_ns) {
+            dp_master_start(&g.master, now_us());
+            membus_wake(g.master_port);
+            g.res->restarts++;
+            g.fault_stage = 2;
+        }
+        return;
+    case 2:
+        if (s->cycles >= n / 2u && s->phase == DPM_PHASE_DATA_EXCH) {
+            dp_master_global_control(&g.master, DP_GC_CLEAR_DATA, 0);
+            membus_wake(g.master_port);
+            g.fault_stage = 3;
+            g.fault_until_ns = g.bus.now_ns + 20000000ull;
+        }
+        return;
+    case 3:
+        if (g.bus.now_ns >= g.fault_until_ns) {
+            dp_master_global_control(&g.master, 0x00, 0);
+            membus_wake(g.master_port);
+            g.fault_stage = 4;
+        }
+        return;
+    case 4:
+        if (s->cycles >= 2u * n / 3u && !g.master.waiting && !g.call_running) {
+            reconfigure(cfg_wrong, sizeof cfg_wrong);
+            g.fault_until_ns = g.bus.now_ns + 100000000ull;
+            g.fault_stage = 5;
+        }
+        return;
+    case 5:
+        if (g.bus.now_ns >= g.fault_until_ns && !g.master.waiting) {
+            reconfigure(cfg_param_3pd, sizeof cfg_param_3pd);
+            g.res->restarts += 2u;
+            g.fault_stage = 6;
+        }
+        return;
+    default:
+        return;
+    }
+}
+
+static bool quiet(void)
+{
+    return !g.master.waiting && !g.master.gc_pending && g.foreign.step < 0;
+}
+
+int gen_run(const gen_options_t *opt, gen_result_t *res, char *err, size_t errlen)
+{
+    memset(&g, 0, sizeof g);
+    memset(res, 0, sizeof *res);
+    g.opt = *opt;
+    g.res = res;
+    if (g.opt.baud == 0u) g.opt.baud = GEN_DEFAULT_BAUD;
+    if (g.opt.address > DFP21B_MAX_ADDRESS || (g.opt.foreign && g.opt.address >= 114u)) {
+        snprintf(err, errlen, "address %u: the card needs 0..125%s", g.opt.address,
+                 g.opt.foreign ? " (and --foreign address + 1 and + 10 below 126)" : "");
+        return -1;
+    }
+    cap_writer_options_t wo = g.opt.writer;
+    wo.baud = g.opt.baud; /* pcapng records it (if_speed): a replay then knows the rate */
+    if (cap_writer_open(&g.w, g.opt.path, &wo, (uint64_t)GEN_EPOCH_S * 1000000000ull, err,
+                        errlen) != 0) {
+        return -1;
+    }
+    membus_init(&g.bus);
+    membus_set_tap(&g.bus, gen_tap, NULL);
+    hal_uart_t card_uart;
+    hal_uart_t card2_uart;
+    hal_uart_t master_uart;
+    sim_station_t cs = card_station(&g.card);
+    membus_attach(&g.bus, &cs, &card_uart);
+    if (g.opt.foreign) {
+        sim_station_t cs2 = card_station(&g.card2);
+        membus_attach(&g.bus, &cs2, &card2_uart);
+    }
+    sim_station_t ms = master_station(&g.master);
+    g.master_port = membus_attach(&g.bus, &ms, &master_uart);
+    g.foreign.step = -1;
+    if (g.opt.foreign) {
+        /* After the master: in each round the master is polled first, so its deadline is
+         * current when the second master looks at it. */
+        sim_station_t fs = {.ctx = &g.foreign, .rx_char = foreign_rx, .poll = foreign_poll};
+        g.foreign_port = membus_attach(&g.bus, &fs, &g.foreign.uart);
+        g.foreign.uart.ops->set_baud(g.foreign.uart.ctx, g.opt.baud);
+        g.foreign.bus = &g.bus;
+        g.foreign.master = &g.master;
+        g.foreign.master_port = g.master_port;
+        g.foreign.baud = g.opt.baud;
+        g.foreign.card = g.opt.address;
+        g.foreign.free_address = (uint8_t)(g.opt.address + 10u);
+        g.foreign.diag_first = true;
+    }
+    card_options_t co = {.address = g.opt.address, .strict_timing = true,
+                         .inverter = g.opt.inverter,
+                         .inverter_delay_us = g.opt.inverter_delay_us, .event = card_event};
+    char cerr[256];
+    (void)card_station_init(&g.card, &co, card_uart, 0, cerr, sizeof cerr);
+    if (g.opt.foreign) {
+        card_options_t co2 = {.address = (uint8_t)(g.opt.address + 1u), .strict_timing = true,
+                              .inverter = CARD_INVERTER_NONE};
+        (void)card_station_init(&g.card2, &co2, card2_uart, 0, cerr, sizeof cerr);
+    }
+    dp_master_cfg_t mc = {.address = GEN_MASTER_ADDRESS, .baud = g.opt.baud,
+                          .strict_timing = true,
+                          .cycle_us = g.opt.foreign ? GEN_FOREIGN_CYCLE_US : GEN_CYCLE_US,
+                          .uart = master_uart};
+    dp_master_init(&g.master, &mc, 0);
+    dpm_slave_cfg_t sc;
+    slave_cfg(&sc, g.opt.address, cfg_param_3pd, sizeof cfg_param_3pd);
+    dp_master_add_slave(&g.master, &sc);
+    if (g.opt.foreign) {
+        slave_cfg(&sc, (uint8_t)(g.opt.address + 1u), (const uint8_t[]){0xF2}, 1);
+        dp_master_add_slave(&g.master, &sc);
+    }
+    if (g.opt.dpv1) {
+        dpm_c2_cfg_t cc = {.slave = g.opt.address, .address = 1};
+        dpm_c2_init(&g.c2, &cc);
+        dp_master_add_c2(&g.master, &g.c2);
+    }
+    /* Enable and 300 rpm: the drive follows once P100/P101 say FIELDBUS. */
+    g.out[8] = 0x00;
+    g.out[9] = 0x06;
+    g.out[10] = 0x05;
+    g.out[11] = 0xDC;
+    dp_master_set_outputs(&g.master, 0, g.out, sizeof g.out);
+
+    /* Start-up may take a baud search and back-offs; each cycle at most a few ms (more with
+     * the faults' pauses). */
+    uint64_t limit_ns = 10000000000ull + (uint64_t)g.opt.cycles * 50000000ull;
+    uint32_t last_progress = 0;
+    dpm_slave_t *s = card_slave();
+    while (s->cycles < g.opt.cycles || g.fault_stage == 1 || !quiet() ||
+           (g.opt.dpv1 && (g.call_running || g.c2_stage == 2 || g.c2_stage == 3))) {
+        if (g.bus.now_ns > limit_ns) {
+            snprintf(err, errlen, "the card did not complete %u Data_Exchange cycles (%u done, "
+                     "master phase %s)", g.opt.cycles, s->cycles, dpm_phase_name(s->phase));
+            cap_writer_close(&g.w);
+            return -1;
+        }
+        /* Short steps while finishing, so the capture ends right after the last answer. */
+        membus_run_for_us(&g.bus, s->cycles >= g.opt.cycles ? 20u : GEN_STEP_US);
+        param_channel();
+        dpv1_class1();
+        dpv1_class2();
+        faults();
+        if (g.opt.foreign && s->phase == DPM_PHASE_DATA_EXCH &&
+            s->cycles >= g.foreign_cycle + GEN_FOREIGN_EVERY && s->cycles < g.opt.cycles) {
+            g.foreign_cycle = s->cycles;
+            g.foreign.wanted = true;
+        }
+        if (g.opt.progress != NULL && s->cycles - last_progress >= 10000u) {
+            last_progress = s->cycles;
+            g.opt.progress(g.opt.ctx, s->cycles, res->telegrams);
+        }
+    }
+    res->cycles = s->cycles;
+    res->bus_ns = g.bus.now_ns;
+    res->foreign_bursts = g.foreign.bursts;
+    res->watchdog_expiries = g.wd_seen;
+    if (cap_writer_close(&g.w) != 0 || g.write_failed) {
+        snprintf(err, errlen, "could not write the whole capture to %s", g.opt.path);
+        return -1;
+    }
+    return 0;
+}

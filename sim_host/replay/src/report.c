@@ -1,0 +1,338 @@
+/* The replay report (format in docs/replay.md). */
+#include <string.h>
+
+#include "replay/replay.h"
+
+static const char *baud_text(uint32_t baud, char *buf, size_t max)
+{
+    if (baud >= 1000000u) {
+        snprintf(buf, max, "%g Mbit/s", (double)baud / 1e6);
+    } else {
+        snprintf(buf, max, "%g kbit/s", (double)baud / 1e3);
+    }
+    return buf;
+}
+
+static void where(const replay_report_info_t *info, uint64_t record, uint64_t position,
+                  char *out, size_t max)
+{
+    snprintf(out, max, "record %llu (%s %llu)", (unsigned long long)record,
+             info->position_unit != NULL ? info->position_unit : "position",
+             (unsigned long long)position);
+}
+
+static void print_kept(FILE *out, const replay_report_info_t *info, const replay_kept_t *k,
+                       const replay_dx_layout_t *lay, const char *indent)
+{
+    char hex[3u * CAP_MAX_RECORD + 8u];
+    char text[512];
+    char at[96];
+    replay_hex(k->data, k->len, hex, sizeof hex);
+    replay_describe(k->data, k->len, lay, text, sizeof text);
+    if (k->source == REPLAY_FROM_CARD) {
+        snprintf(at, sizeof at, "card");
+    } else {
+        where(info, k->record, k->position, at, sizeof at);
+    }
+    fprintf(out, "%s%12.6f s  %-26s %s\n%s%16s %s\n", indent, (double)k->t_ns / 1e9, at, hex,
+            indent, "", text);
+}
+
+static void print_octets(FILE *out, const char *label, const replay_kept_t *k,
+                         const replay_dx_layout_t *lay)
+{
+    char hex[3u * CAP_MAX_RECORD + 8u];
+    char text[512];
+    replay_hex(k->data, k->len, hex, sizeof hex);
+    replay_describe(k->data, k->len, lay, text, sizeof text);
+    fprintf(out, "  %-9s %s\n  %-9s %s\n", label, hex, "", text);
+}
+
+static bool needs_data_exch(replay_service_t s)
+{
+    switch (s) {
+    case REPLAY_SVC_DATA_EXCHANGE:
+    case REPLAY_SVC_MSAC1_READ:
+    case REPLAY_SVC_MSAC1_WRITE:
+    case REPLAY_SVC_MSAC1_POLL:
+    case REPLAY_SVC_MSAC1_ALARM_ACK:
+    case REPLAY_SVC_MSAC1_OTHER:
+    case REPLAY_SVC_RD_OUTP:
+        return true;
+    default:
+        return false;
+    }
+}
+
+/* Does a recorded answer belong to the request: addressed to its sender, from its SAP? */
+static bool answer_fits(const replay_kept_t *req, const replay_kept_t *ans)
+{
+    replay_frame_t q;
+    replay_frame_t a;
+    replay_frame_parse(req->data, req->len, &q);
+    replay_frame_parse(ans->data, ans->len, &a);
+    if (a.kind == REPLAY_KIND_SC) {
+        return true;
+    }
+    if (a.kind != REPLAY_KIND_RESPONSE || !a.has_header || !q.has_header || a.da != q.sa) {
+        return false;
+    }
+    if (q.has_dsap != a.has_ssap) {
+        return false;
+    }
+    return !q.has_dsap || a.ssap == q.dsap;
+}
+
+/* The reasons a reader needs to make sense of the first difference. */
+static void explain(FILE *out, const replay_t *r, const replay_mismatch_t *m)
+{
+    char b[32];
+    const char *lead = "  why       ";
+    const char *more = "            ";
+    const char *p = lead;
+#define WHY(...)                                                                              \
+    do {                                                                                      \
+        fputs(p, out);                                                                        \
+        fprintf(out, __VA_ARGS__);                                                            \
+        fputc('\n', out);                                                                     \
+        p = more;                                                                             \
+    } while (0)
+    if (m->request_problem[0] != '\0') {
+        WHY("the request record is damaged (%s); it went onto the bus as recorded, and the "
+            "card hears it so", m->request_problem);
+    }
+    if (m->expected_problem[0] != '\0') {
+        WHY("the recorded answer is damaged (%s): the card's answer cannot equal it",
+            m->expected_problem);
+    }
+    /* Answers that do not depend on a parameterisation (class 2 needs none). */
+    bool state_free = m->service == REPLAY_SVC_FDL_STATUS || m->service == REPLAY_SVC_SET_PRM ||
+                      (m->service >= REPLAY_SVC_MSAC2_INITIATE &&
+                       m->service <= REPLAY_SVC_MSAC2_OTHER);
+    if (m->expected_present && !answer_fits(&m->request, &m->expected)) {
+        WHY("the recorded answer does not fit this request (other addresses or SAPs): a stray "
+            "telegram in the capture, e.g. a late answer to an earlier request");
+    }
+    if (m->baud_state == DP_BAUD_SEARCH) {
+        WHY("the card had not found the bus rate when the request ended (listening at %s): it "
+            "heard the request garbled. The card powers up at the first record and searches "
+            "from 12 Mbit/s down; if the real card was on the bus earlier, replay with "
+            "--fixed-baud", baud_text(m->card_baud, b, sizeof b));
+    } else if (m->card_state != DP_STATE_DATA_EXCH && !m->set_prm_seen && !state_free) {
+        WHY("the card is in %s and the capture has no Set_Prm to it before this request: the "
+            "capture starts after the real card was parameterised (by this or an earlier "
+            "master), perhaps in the middle of data exchange. The emulated card powers up at "
+            "the first record, so its answers differ until a master parameterises it in the "
+            "capture (Set_Prm, Chk_Cfg); Data_Exchange gets RS until then",
+            dp_state_name(m->card_state));
+    } else if (needs_data_exch(m->service) && m->card_state != DP_STATE_DATA_EXCH) {
+        WHY("the card is in %s: its parameterisation in the capture did not complete or it "
+            "left data exchange (watchdog, refused Set_Prm/Chk_Cfg)",
+            dp_state_name(m->card_state));
+    }
+    if (m->fcb_repeat) {
+        WHY("a repeated request (FCV=1, the same FCB as this master's previous request): the "
+            "card answers it from its reply cache without executing it again");
+    }
+    if (!m->expected_present && m->actual_present) {
+        WHY("the capture shows no answer to this request, the card answered");
+    } else if (m->expected_present && !m->actual_present) {
+        WHY("the card did not answer");
+    } else if (m->expected_present && m->actual_present) {
+        size_t n = m->expected.len < m->actual.len ? m->expected.len : m->actual.len;
+        size_t i = 0;
+        while (i < n && m->expected.data[i] == m->actual.data[i]) i++;
+        if (i < n) {
+            WHY("first difference at octet %zu: expected %02X, the card sent %02X", i,
+                m->expected.data[i], m->actual.data[i]);
+        } else {
+            WHY("the card's answer has %zu octets, the recorded one %zu", m->actual.len,
+                m->expected.len);
+        }
+    }
+    (void)r;
+#undef WHY
+}
+
+int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out)
+{
+    char b[32];
+    char at[96];
+    uint64_t span = r->last_record_ns;
+    fprintf(out, "replay of %s (%s): %llu records, %.6f s of bus time\n",
+            info->file != NULL ? info->file : "(records)",
+            info->format != NULL ? info->format : "?", (unsigned long long)r->records,
+            (double)span / 1e9);
+    fprintf(out, "  card      DFP21B at address %u (%s), %s; inverter: %s\n", r->opt.address,
+            info->address_source != NULL ? info->address_source : "given",
+            r->opt.fixed_card_baud ? "fixed at the bus rate"
+                                   : "automatic baud search from the first record",
+            r->opt.inverter == CARD_INVERTER_SIM ? "emulated MOVIDRIVE" : "none (PI echoes PO)");
+    if (r->min_baud_seen != 0u && r->min_baud_seen == r->max_baud_seen) {
+        fprintf(out, "  bus       %s (recorded in the capture)\n",
+                baud_text(r->min_baud_seen, b, sizeof b));
+    } else if (r->min_baud_seen != 0u) {
+        char b2[32];
+        fprintf(out, "  bus       %s .. %s (recorded per telegram)\n",
+                baud_text(r->min_baud_seen, b, sizeof b), baud_text(r->max_baud_seen, b2,
+                                                                     sizeof b2));
+    } else {
+        fprintf(out, "  bus       %s (%s)\n", baud_text(r->opt.baud, b, sizeof b),
+                info->baud_source != NULL ? info->baud_source : "given");
+    }
+    fprintf(out, "  records   %llu put on the bus, %llu the card's recorded answers (the card "
+                 "makes its own), %llu damaged\n",
+            (unsigned long long)r->injected, (unsigned long long)r->own_answers,
+            (unsigned long long)r->damaged_count);
+    if (r->untimed > 0u) {
+        fprintf(out, "  time      %llu records without a time: synthetic times (end of the "
+                     "previous telegram + %u bit times before an answer, %u before a request "
+                     "or token)\n",
+                (unsigned long long)r->untimed, REPLAY_SYNTH_GAP_ANSWER_BITS,
+                REPLAY_SYNTH_GAP_REQUEST_BITS);
+    }
+    fprintf(out, "  card sent %llu telegrams; state at the end: %s, %s %s\n",
+            (unsigned long long)r->card_tx, dp_state_name(dp_slave_state(&r->card.card.dp)),
+            dp_baud_state_name(dp_slave_baud_state(&r->card.card.dp)),
+            baud_text(dp_slave_baud(&r->card.card.dp), b, sizeof b));
+    if (r->stray_answers > 0u) {
+        fprintf(out, "  note      %llu answers from station %u in the capture follow no request "
+                     "to it (not compared)\n",
+                (unsigned long long)r->stray_answers, r->opt.address);
+    }
+    if (r->tail_unchecked) {
+        where(info, r->tail_record, r->tail_position, at, sizeof at);
+        fprintf(out, "  note      the capture ends with a request to the card (%s, %s): its "
+                     "answer is not in the file, so it is not compared\n", at,
+                replay_service_name(r->tail_service));
+    }
+    if (r->deferred_beyond_resolution > 0u) {
+        where(info, r->first_conflict_record, r->first_conflict_position, at, sizeof at);
+        fprintf(out, "  timing    %llu telegrams would have overlapped the one before at %s "
+                     "and went onto the bus later (at most %.1f us; first: %s): does the rate "
+                     "fit the capture? (--baud)\n",
+                (unsigned long long)r->deferred_beyond_resolution,
+                baud_text(r->opt.baud, b, sizeof b), (double)r->max_defer_ns / 1e3, at);
+    }
+    if (r->backwards > 0u) {
+        fprintf(out, "  timing    %llu records have an earlier time than the one before: taken "
+                     "as simultaneous\n", (unsigned long long)r->backwards);
+    }
+
+    bool file_ok = info->file_error == NULL && !info->interrupted;
+    if (!r->opt.check) {
+        if (info->file_error != NULL) {
+            fprintf(out, "file error: %s\n", info->file_error);
+        }
+        if (info->interrupted) {
+            fprintf(out, "interrupted after %llu records\n", (unsigned long long)r->records);
+        }
+        if (r->damaged_count > 0u) {
+            fprintf(out, "damaged records: %llu\n", (unsigned long long)r->damaged_count);
+            for (uint64_t i = 0; i < r->damaged_count && i < REPLAY_DAMAGED_LISTED; i++) {
+                where(info, r->damaged[i].record, r->damaged[i].position, at, sizeof at);
+                fprintf(out, "  %s: %s\n", at, r->damaged[i].problem);
+            }
+        }
+        fprintf(out, "result: %s\n", file_ok ? "replayed" : "replay incomplete");
+        return file_ok ? 0 : 1;
+    }
+
+    uint64_t total = replay_total_requests(r);
+    if (r->first.valid) {
+        const replay_mismatch_t *m = &r->first;
+        where(info, m->request.record, m->request.position, at, sizeof at);
+        fprintf(out, "\nfirst mismatch: %s, t = %.6f s, %s\n", at, (double)m->request.t_ns / 1e9,
+                replay_service_name(m->service));
+        print_octets(out, "request", &m->request, &m->layout);
+        if (m->expected_present) {
+            where(info, m->expected.record, m->expected.position, at, sizeof at);
+            fprintf(out, "  expected  %s:\n", at);
+            print_octets(out, "", &m->expected, &m->layout);
+        } else {
+            fprintf(out, "  expected  no answer (the next record is not from station %u)\n",
+                    r->opt.address);
+        }
+        if (m->actual_present) {
+            fprintf(out, "  actual    the card's answer:\n");
+            print_octets(out, "", &m->actual, &m->layout);
+        } else {
+            fprintf(out, "  actual    no answer from the card\n");
+        }
+        fprintf(out, "  card      %s when the request began; %s %s when it ended\n",
+                dp_state_name(m->card_state),
+                m->baud_state == DP_BAUD_SEARCH ? "searching the rate, listening at"
+                                                : "rate",
+                baud_text(m->card_baud, b, sizeof b));
+        explain(out, r, m);
+        if (m->n_before > 0u) {
+            fprintf(out, "  before it:\n");
+            for (unsigned i = 0; i < m->n_before; i++) {
+                print_kept(out, info, &m->before[i], &m->layout, "    ");
+            }
+        }
+    }
+
+    fprintf(out, "\n%-22s %10s %10s %10s %12s %12s\n", "service", "requests", "match", "differ",
+            "capture:", "card:");
+    fprintf(out, "%-22s %10s %10s %10s %12s %12s\n", "", "", "", "", "no answer", "no answer");
+    replay_counts_t sum = {0};
+    for (unsigned i = 0; i < REPLAY_SVC_COUNT; i++) {
+        const replay_counts_t *c = &r->svc[i];
+        if (c->requests == 0u) {
+            continue;
+        }
+        fprintf(out, "%-22s %10llu %10llu %10llu %12llu %12llu\n",
+                replay_service_name((replay_service_t)i), (unsigned long long)c->requests,
+                (unsigned long long)c->matched, (unsigned long long)c->differ,
+                (unsigned long long)c->capture_silent, (unsigned long long)c->card_silent);
+        sum.requests += c->requests;
+        sum.matched += c->matched;
+        sum.differ += c->differ;
+        sum.capture_silent += c->capture_silent;
+        sum.card_silent += c->card_silent;
+    }
+    fprintf(out, "%-22s %10llu %10llu %10llu %12llu %12llu\n", "total",
+            (unsigned long long)sum.requests, (unsigned long long)sum.matched,
+            (unsigned long long)sum.differ, (unsigned long long)sum.capture_silent,
+            (unsigned long long)sum.card_silent);
+    fprintf(out, "mismatches: %llu\n", (unsigned long long)r->mismatches);
+    if (r->unsolicited > 0u) {
+        fprintf(out, "card telegrams outside any request's window: %llu\n",
+                (unsigned long long)r->unsolicited);
+    }
+    fprintf(out, "damaged records: %llu\n", (unsigned long long)r->damaged_count);
+    for (uint64_t i = 0; i < r->damaged_count && i < REPLAY_DAMAGED_LISTED; i++) {
+        where(info, r->damaged[i].record, r->damaged[i].position, at, sizeof at);
+        fprintf(out, "  %s: %s\n", at, r->damaged[i].problem);
+    }
+    if (r->damaged_count > REPLAY_DAMAGED_LISTED) {
+        fprintf(out, "  ... and %llu more\n",
+                (unsigned long long)(r->damaged_count - REPLAY_DAMAGED_LISTED));
+    }
+    if (info->file_error != NULL) {
+        fprintf(out, "file error: %s\n", info->file_error);
+    }
+    if (info->interrupted) {
+        fprintf(out, "interrupted after %llu records\n", (unsigned long long)r->records);
+    }
+    int rc;
+    if (total == 0u) {
+        fprintf(out, "result: NOTHING CHECKED: no request to station %u in the capture\n",
+                r->opt.address);
+        rc = 1;
+    } else if (r->mismatches > 0u) {
+        fprintf(out, "result: DIFFERENT: %llu of %llu replies differ%s\n",
+                (unsigned long long)r->mismatches, (unsigned long long)total,
+                file_ok ? "" : " (and the file was not read to its end)");
+        rc = 1;
+    } else if (!file_ok) {
+        fprintf(out, "result: INCOMPLETE: the %llu replies checked match, but the file was not "
+                     "read to its end\n", (unsigned long long)total);
+        rc = 1;
+    } else {
+        fprintf(out, "result: MATCH: all %llu replies match\n", (unsigned long long)total);
+        rc = 0;
+    }
+    return rc;
+}

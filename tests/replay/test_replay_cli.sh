@@ -1,0 +1,274 @@
+#!/usr/bin/env bash
+# dfp-sim replay and record on the golden captures (golden/README.md): every golden replays with
+# --check to exit 0 and its exact counts per service; a copy with one reply octet altered, a
+# wrong --address, a two-slave capture without --address, damaged files (truncated record,
+# garbage, a garbage record between telegrams, unknown link type), --speed real, the goldens
+# made again now (same telegrams, or the test names the first one that changed) and bad command
+# lines.
+sim=$1
+diff_tool=$2
+here=$(dirname "$0")
+golden=$here/golden
+. "$here/../cli/lib.sh"
+. "$golden/recipes.sh"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+# expect_rows DESCRIPTION OUTPUT ROW...: each row ("Data_Exchange 100 100 0 0 0", blanks
+# squeezed) is a line of the per-service table.
+expect_rows() {
+  local what=$1 text=$2; shift 2
+  local table; table=$(tr -s ' ' <<<"$text")
+  for row in "$@"; do
+    if grep -qxF -- "$row" <<<"$table"; then ok; else bad "$what: no row '$row' in:"$'\n'"$text"; fi
+  done
+}
+
+# ---- every golden: exit 0 and the exact counts ---------------------------------------------
+# Start-up rows shared by the recorded goldens: 22 FDL status polls while the card searches its
+# rate (unanswered in the capture and by the card), then the one it answers.
+expect_exit 0 "startup.pcap" -- "$sim" replay "$golden/startup.pcap" --check
+expect_rows startup.pcap "$out" "FDL_Status 23 23 0 22 22" "Data_Exchange 5 5 0 0 0" \
+  "Set_Prm 1 1 0 0 0" "Chk_Cfg 1 1 0 0 0" "Slave_Diag 2 2 0 0 0" "total 32 32 0 22 22"
+expect_in "startup.pcap result" "result: MATCH: all 32 replies match" "$out"
+expect_in "address found" "DFP21B at address 4 (from the capture: the only slave that answers" "$out"
+expect_in "rate from the timing" "1.5 Mbit/s (the capture records no rate; the lowest rate its timing allows: record 28 begins 205.0 us after record 27" "$out"
+
+expect_exit 0 "data_exchange.pcap" -- "$sim" replay "$golden/data_exchange.pcap" --check
+expect_rows data_exchange.pcap "$out" "FDL_Status 23 23 0 22 22" "Data_Exchange 100 100 0 0 0" \
+  "total 127 127 0 22 22"
+
+expect_exit 0 "param_channel.pcap" -- "$sim" replay "$golden/param_channel.pcap" --check
+expect_rows param_channel.pcap "$out" "Data_Exchange 200 200 0 0 0" "total 227 227 0 22 22"
+
+expect_exit 0 "dpv1.pcapng" -- "$sim" replay "$golden/dpv1.pcapng" --check
+expect_rows dpv1.pcapng "$out" "Data_Exchange 203 203 0 0 0" "MSAC1 read 11 11 0 0 0" \
+  "MSAC1 write 11 11 0 0 0" "MSAC1 poll 22 22 0 0 0" "MSAC2 initiate 1 1 0 0 0" \
+  "MSAC2 poll 9 9 0 0 0" "MSAC2 read 7 7 0 0 0" "MSAC2 write 1 1 0 0 0" \
+  "MSAC2 abort 1 1 0 0 0" "total 293 293 0 22 22"
+expect_in "pcapng carries the rate" "1.5 Mbit/s (recorded in the capture)" "$out"
+
+expect_exit 0 "faults.pcap" -- "$sim" replay "$golden/faults.pcap" --check
+expect_rows faults.pcap "$out" "FDL_Status 29 29 0 22 22" "Data_Exchange 150 150 0 0 0" \
+  "Set_Prm 7 7 0 0 0" "Chk_Cfg 7 7 0 0 0" "Slave_Diag 14 14 0 0 0" "total 207 207 0 22 22"
+
+expect_exit 0 "multimaster.pcap --address 4" -- "$sim" replay "$golden/multimaster.pcap" --check --address 4
+expect_rows multimaster.pcap "$out" "FDL_Status 32 32 0 22 22" "Data_Exchange 100 100 0 0 0" \
+  "Slave_Diag 11 11 0 0 0" "total 145 145 0 22 22"
+expect_exit 0 "multimaster.pcap, the other DFP21B" -- "$sim" replay "$golden/multimaster.pcap" \
+  --check --address 5 --inverter none
+expect_rows "multimaster.pcap --address 5" "$out" "Data_Exchange 99 99 0 0 0" "total 126 126 0 22 22"
+
+expect_exit 0 "demo.pcap" -- "$sim" replay "$golden/demo.pcap" --check
+expect_rows demo.pcap "$out" "FDL_Status 28 28 0 22 22" "Data_Exchange 609 609 0 0 0" \
+  "Set_Prm 7 7 0 0 0" "Chk_Cfg 7 7 0 0 0" "Slave_Diag 15 15 0 0 0" "total 666 666 0 22 22"
+expect_in "demo ends after a request" "the capture ends with a request to the card (record 1311 (byte 49885), Data_Exchange)" "$out"
+
+# Over a PTY the line has no rate: 12M keeps the recorded spacing possible.
+expect_exit 0 "dpv1_pty_movilink.pcap" -- "$sim" replay "$golden/dpv1_pty_movilink.pcap" --check --baud 12M
+expect_rows dpv1_pty_movilink.pcap "$out" "MSAC1 read 1 1 0 0 0" "MSAC1 write 1 1 0 0 0" \
+  "MSAC1 poll 2 2 0 0 0" "total 13 13 0 0 0"
+expect_exit 0 "dpv1_pty_c2.pcap" -- "$sim" replay "$golden/dpv1_pty_c2.pcap" --check --baud 12M
+expect_rows dpv1_pty_c2.pcap "$out" "MSAC2 initiate 1 1 0 0 0" "MSAC2 abort 1 1 0 0 0" \
+  "total 7 7 0 0 0"
+# At the nominal 19200 bit/s the PTY's spacing does not fit: the report says so.
+expect_exit 1 "dpv1_pty_movilink.pcap at 19200" -- "$sim" replay "$golden/dpv1_pty_movilink.pcap" --check --baud 19200
+expect_in "timing conflict reported" "would have overlapped the one before at 19.2 kbit/s" "$out"
+
+# On a terminal a progress line on stderr (the first after 4096 records), then cleared.
+"$sim" record --capture "$tmp/p.pcap" --cycles 3000 --param-every 0 >/dev/null
+script -qec "$sim replay $tmp/p.pcap --check --address 4 >/dev/null" /dev/null >"$tmp/tty.txt" 2>&1
+expect_in "progress on a terminal" "replay: 4096 records (" "$(cat "$tmp/tty.txt")"
+expect_in "progress rate" "telegrams/s" "$(cat "$tmp/tty.txt")"
+# The same telegrams as a text capture (dfp-sim convert): positions are lines; a line that is
+# not a telegram is listed with its line number and changes nothing else.
+"$sim" convert "$golden/param_channel.pcap" "$tmp/pc.txt" >/dev/null
+sed -i '151a this line is no telegram' "$tmp/pc.txt"
+expect_exit 0 "text capture" -- "$sim" replay "$tmp/pc.txt" --check
+expect_in "text format" "replay of $tmp/pc.txt (text)" "$out"
+expect_rows "text capture" "$out" "Data_Exchange 200 200 0 0 0" "total 227 227 0 22 22"
+expect_in "bad line listed" "record 152 (line 152):" "$out"
+# Not a terminal: no progress display.
+"$sim" replay "$golden/param_channel.pcap" --check >/dev/null 2>"$tmp/err"
+if [ ! -s "$tmp/err" ]; then ok; else bad "stderr not empty without a terminal: $(cat "$tmp/err")"; fi
+
+# ---- one reply octet altered ---------------------------------------------------------------
+# The 60th Data_Exchange answer of the card: PI1's low octet + 1, FCS fixed so the telegram is
+# valid and only its content differs.
+python3 - "$golden/data_exchange.pcap" "$tmp/altered.pcap" >"$tmp/altered.txt" <<'PY'
+import struct, sys
+d = bytearray(open(sys.argv[1], 'rb').read())
+o, n, seen = 24, 0, 0
+while o < len(d):
+    incl = struct.unpack_from('<I', d, o + 8)[0]
+    n += 1
+    f = d[o + 16:o + 16 + incl]
+    if f[0] == 0x68 and f[5] == 0x04 and f[6] == 0x08:
+        seen += 1
+        if seen == 60:
+            old = ' '.join('%02X' % b for b in f)
+            p = o + 16 + 7 + 8 + 1  # PI1 low octet after the 8-octet parameter channel
+            d[p] = (d[p] + 1) & 0xFF
+            d[o + 16 + incl - 2] = sum(d[o + 16 + 4:o + 16 + incl - 2]) & 0xFF
+            new = ' '.join('%02X' % b for b in d[o + 16:o + 16 + incl])
+            print(n, o, old, new, sep='\n')
+            break
+    o += 16 + incl
+open(sys.argv[2], 'wb').write(d)
+PY
+{ read -r rec; read -r pos; read -r original; read -r altered; } <"$tmp/altered.txt"
+expect_exit 1 "altered reply" -- "$sim" replay "$tmp/altered.pcap" --check
+expect_in "names the request" "first mismatch: record $((rec - 1)) (byte" "$out"
+expect_in "names the altered record" "expected  record $rec (byte $pos):" "$out"
+expect_in "shows the recorded octets" "$altered" "$out"
+expect_in "shows the card's octets" "$original" "$out"
+expect_rows "altered reply" "$out" "Data_Exchange 100 99 1 0 0" "total 127 126 1 22 22"
+expect_in "result" "result: DIFFERENT: 1 of 127 replies differ" "$out"
+
+# ---- addresses -----------------------------------------------------------------------------
+expect_exit 2 "two slaves, no --address" -- "$sim" replay "$golden/multimaster.pcap" --check
+expect_in "lists both" "2 slaves answer in" "$out"
+expect_in "lists 4" "4 (" "$out"
+expect_in "lists 5" "5 (" "$out"
+expect_in "asks for --address" "--address N" "$out"
+# Address 14 is where master 3 looks for new stations: nobody answers there in the capture, the
+# emulated card does.
+expect_exit 1 "--address 14" -- "$sim" replay "$golden/multimaster.pcap" --check --address 14
+expect_rows "--address 14" "$out" "FDL_Status 9 0 9 9 0" "total 9 0 9 9 0"
+expect_in "the card answered" "the capture shows no answer to this request, the card answered" "$out"
+expect_exit 1 "--address 9: nothing addressed to it" -- "$sim" replay "$golden/startup.pcap" --check --address 9
+expect_in "nothing checked" "result: NOTHING CHECKED: no request to station 9 in the capture" "$out"
+printf '\xd4\xc3\xb2\xa1\x02\x00\x04\x00\0\0\0\0\0\0\0\0\xff\xff\0\0\x01\x01\0\0' >"$tmp/empty.pcap"
+expect_exit 2 "no slave answers" -- "$sim" replay "$tmp/empty.pcap" --check
+expect_in "says why" "no slave answers in" "$out"
+
+# ---- damaged files -------------------------------------------------------------------------
+size=$(stat -c %s "$golden/startup.pcap")
+head -c $((size - 10)) "$golden/startup.pcap" >"$tmp/truncated.pcap"
+expect_exit 1 "truncated record" -- "$sim" replay "$tmp/truncated.pcap" --check
+expect_in "position of the truncated record" "file error: $tmp/truncated.pcap: record 42 at byte" "$out"
+expect_in "truncated: incomplete" "result: INCOMPLETE" "$out"
+python3 -c 'import random; random.seed(5); open("'"$tmp"'/garbage.pcap","wb").write(bytes(random.randrange(256) for _ in range(300)))'
+expect_exit 2 "garbage file" -- "$sim" replay "$tmp/garbage.pcap" --check
+expect_in "garbage named" "garbage.pcap" "$out"
+python3 - "$golden/startup.pcap" "$tmp/linktype.pcap" <<'PY'
+import sys
+d = bytearray(open(sys.argv[1], 'rb').read()); d[20:24] = (1).to_bytes(4, 'little')
+open(sys.argv[2], 'wb').write(d)
+PY
+expect_exit 2 "unknown link type" -- "$sim" replay "$tmp/linktype.pcap" --check --address 4
+expect_in "link type named" "link type 1" "$out"
+# A garbage record in the first pause of at least 1 ms after record 30 (300 us into it):
+# replayed as it was on the wire, listed with its position, and the card's answers still match.
+python3 - "$golden/startup.pcap" "$tmp/between.pcap" >"$tmp/between.txt" <<'PY'
+import struct, sys
+d = open(sys.argv[1], 'rb').read()
+recs, o = [], 24
+while o < len(d):
+    s, us, incl, orig = struct.unpack_from('<IIII', d, o)
+    recs.append((s * 1000000 + us, d[o:o + 16 + incl]))
+    o += 16 + incl
+out, done = bytearray(d[:24]), False
+for i, (t, raw) in enumerate(recs):
+    out += raw
+    if not done and i + 1 >= 30 and i + 1 < len(recs) and recs[i + 1][0] - t >= 1000:
+        print(i + 2, len(out))
+        junk, tj = bytes([0x00, 0xFF, 0x42]), t + 300
+        out += struct.pack('<IIII', tj // 1000000, tj % 1000000, len(junk), len(junk)) + junk
+        done = True
+open(sys.argv[2], 'wb').write(out)
+PY
+read -r junk_rec junk_pos <"$tmp/between.txt"
+expect_exit 0 "garbage between telegrams" -- "$sim" replay "$tmp/between.pcap" --check
+expect_in "damaged record listed" "record $junk_rec (byte $junk_pos):" "$out"
+expect_in "damaged count" "damaged records: 1" "$out"
+expect_exit 2 "missing file" -- "$sim" replay "$tmp/none.pcap" --check --address 4
+expect_in "missing file named" "none.pcap" "$out"
+
+# ---- --speed real --------------------------------------------------------------------------
+# Never faster than the capture: a lower bound only (a loaded machine may take longer).
+t0=$(date +%s%N)
+expect_exit 0 "--speed real" -- "$sim" replay "$golden/startup.pcap" --check --speed real
+t1=$(date +%s%N)
+span_ms=$(sed -n 's/.* records, \([0-9.]*\) s of bus time/\1/p' <<<"$out" | awk '{printf "%d", $1 * 1000}')
+took_ms=$(( (t1 - t0) / 1000000 ))
+if [ -n "$span_ms" ] && [ "$span_ms" -gt 50 ] && [ "$took_ms" -ge "$span_ms" ]; then ok
+else bad "--speed real took $took_ms ms for $span_ms ms of capture"; fi
+
+# SIGINT during an hour-long pause of a --speed real replay: it stops at once, reports what was
+# replayed, exit 1.
+python3 - "$golden/startup.pcap" "$tmp/pause.pcap" <<'PY'
+import struct, sys
+d = open(sys.argv[1], 'rb').read()
+out, o, n = bytearray(d[:24]), 24, 0
+while o < len(d):
+    s, us, incl, orig = struct.unpack_from('<IIII', d, o)
+    n += 1
+    out += struct.pack('<IIII', s + (3600 if n > 30 else 0), us, incl, orig) + d[o + 16:o + 16 + incl]
+    o += 16 + incl
+open(sys.argv[2], 'wb').write(out)
+PY
+"$sim" replay "$tmp/pause.pcap" --check --speed real >"$tmp/pause.out" 2>&1 &
+pid=$!
+sleep 1
+kill -INT $pid
+for _ in $(seq 50); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
+if kill -0 $pid 2>/dev/null; then bad "SIGINT did not stop --speed real"; kill -9 $pid; fi
+wait $pid; rc=$?
+[ $rc = 1 ] && ok || bad "interrupted replay: exit $rc"
+expect_in "interrupted reported" "interrupted after" "$(cat "$tmp/pause.out")"
+
+# ---- the goldens made again now ------------------------------------------------------------
+# Same telegrams at the same times, or the first one that changed is named; and what dfp-sim
+# records now replays clean.
+while read -r name args; do
+  # shellcheck disable=SC2086
+  if ! "$sim" $args --capture "$tmp/$name" >/dev/null; then bad "making $name failed"; continue; fi
+  if d=$("$diff_tool" "$golden/$name" "$tmp/$name"); then ok
+  else bad "$name made now differs from the committed golden (make it again: golden/README.md):"$'\n'"$d"; fi
+  o=""; [ "$name" = multimaster.pcap ] && o="--address 4"
+  # shellcheck disable=SC2086
+  expect_exit 0 "$name made now replays clean" -- "$sim" replay "$tmp/$name" --check $o
+done < <(golden_recipes)
+
+# ---- record: a larger run in other formats --------------------------------------------------
+expect_exit 0 "record everything at 12M" -- "$sim" record --capture "$tmp/all.pcapng" --cycles 400 \
+  --baud 12M --dpv1 --faults --foreign --address 9
+expect_in "record summary" "400 Data_Exchange cycles of the card at address 9" "$out"
+expect_exit 0 "replay it" -- "$sim" replay "$tmp/all.pcapng" --check --address 9
+expect_in "rate from pcapng" "12 Mbit/s (recorded in the capture)" "$out"
+expect_in "all match" "result: MATCH" "$out"
+expect_exit 0 "record with nanosecond pcap" -- "$sim" record --capture "$tmp/ns.pcap" --cycles 50 --capture-ns --baud 12M
+expect_exit 0 "replay ns, rate from the timing" -- "$sim" replay "$tmp/ns.pcap" --check
+expect_in "12M from the timing" "12 Mbit/s (the capture records no rate; the lowest rate its timing allows" "$out"
+expect_in "ns pcap matches" "result: MATCH" "$out"
+# Over a PTY the timing is not a line's: the lowest rate it allows is 500 kbit/s, and a card
+# already on the line (--fixed-baud) answers as recorded.
+expect_exit 0 "PTY capture, inferred rate, --fixed-baud" -- "$sim" replay "$golden/dpv1_pty_movilink.pcap" --check --fixed-baud
+expect_in "500k inferred" "500 kbit/s (the capture records no rate; the lowest rate its timing allows" "$out"
+
+# ---- bad command lines: exit 2, one line on stderr, nothing on stdout -----------------------
+usage_error() { # DESCRIPTION args...
+  local what=$1; shift
+  "$sim" "$@" >"$tmp/o" 2>"$tmp/e"; local rc=$?
+  if [ $rc = 2 ] && [ ! -s "$tmp/o" ] && [ "$(wc -l <"$tmp/e")" = 1 ]; then ok
+  else bad "$what: exit $rc, stdout '$(cat "$tmp/o")', stderr '$(cat "$tmp/e")'"; fi
+}
+usage_error "replay without a file" replay
+usage_error "replay two files" replay a.pcap b.pcap
+usage_error "replay unknown option" replay "$golden/startup.pcap" --fast
+usage_error "replay --speed" replay "$golden/startup.pcap" --speed quick
+usage_error "replay --format" replay "$golden/startup.pcap" --format csv
+usage_error "replay --baud" replay "$golden/startup.pcap" --baud 123
+usage_error "replay --address 126" replay "$golden/startup.pcap" --address 126
+usage_error "replay --address without value" replay "$golden/startup.pcap" --address
+usage_error "replay --inverter" replay "$golden/startup.pcap" --inverter can:vcan0
+usage_error "replay --inverter-delay with none" replay "$golden/startup.pcap" --inverter none --inverter-delay 5
+usage_error "record without --cycles" record --capture "$tmp/x.pcap"
+usage_error "record without --capture" record --cycles 5
+usage_error "record --cycles 0" record --capture "$tmp/x.pcap" --cycles 0
+usage_error "record --foreign at 120" record --capture "$tmp/x.pcap" --cycles 5 --foreign --address 120
+usage_error "record unknown option" record --capture "$tmp/x.pcap" --cycles 5 --fast
+usage_error "record --capture-format" record --capture "$tmp/x.pcap" --cycles 5 --capture-format csv
+
+finish
