@@ -10,6 +10,7 @@
 
 #include "dfp_lcm/dfp_lcm_telegram_t.h"
 #include "dfp_lcm_bridge/lcm_bridge.h"
+#include "dfp_lcm_types/telegram_decode.h"
 
 /* One readable() call handles at most this many messages, so a flood cannot starve the
  * station's timers; the descriptor stays readable and the runner comes back. */
@@ -46,12 +47,8 @@ const char *dfp_lcm_segment_channel(const char *text)
     return ch;
 }
 
-static void on_telegram(const lcm_recv_buf_t *rbuf, const char *channel,
-                        const dfp_lcm_telegram_t *msg, void *user)
+static void on_telegram(dfp_lcm_segment_t *s, const dfp_lcm_telegram_t *msg)
 {
-    (void)rbuf;
-    (void)channel;
-    dfp_lcm_segment_t *s = user;
     if (msg->source_id == s->source_id) {
         s->own_ignored++;
         return;
@@ -77,6 +74,23 @@ static void on_telegram(const lcm_recv_buf_t *rbuf, const char *channel,
     if (s->tap != NULL && flags == 0u) {
         s->tap(s->tap_ctx, t_ns - s->t0_ns, msg->data, len, false, s->baud);
     }
+}
+
+/* Raw, so that a message that is not a well-formed telegram_t (another program on the same
+ * channel, garbage) is counted and dropped instead of reaching lcm-gen's trusting decoder. */
+static void on_message(const lcm_recv_buf_t *rbuf, const char *channel, void *user)
+{
+    (void)channel;
+    dfp_lcm_segment_t *s = user;
+    dfp_lcm_telegram_t msg;
+    char why[96];
+    if (rbuf->data_size == 0u ||
+        dfp_lcm_telegram_decode_checked(rbuf->data, rbuf->data_size, &msg, why, sizeof why) != 0) {
+        s->malformed++;
+        return;
+    }
+    on_telegram(s, &msg);
+    dfp_lcm_telegram_t_decode_cleanup(&msg);
 }
 
 /* LCM's descriptor is readable: hand over what arrived; the runner polls the station next. */
@@ -197,15 +211,14 @@ int dfp_lcm_segment_open(dfp_lcm_segment_t *s, const char *url, const char *chan
                      : "");
         return -1;
     }
-    dfp_lcm_telegram_t_subscription_t *sub =
-        dfp_lcm_telegram_t_subscribe(s->lcm, s->channel, on_telegram, s);
+    lcm_subscription_t *sub = lcm_subscribe(s->lcm, s->channel, on_message, s);
     if (sub == NULL) {
         snprintf(err, errlen, "LCM %s: cannot subscribe to %s", s->url, s->channel);
         lcm_destroy(s->lcm);
         s->lcm = NULL;
         return -1;
     }
-    dfp_lcm_telegram_t_subscription_set_queue_capacity(sub, DFP_LCM_SEGMENT_QUEUE);
+    lcm_subscription_set_queue_capacity(sub, DFP_LCM_SEGMENT_QUEUE);
     s->subscription = sub;
     s->source_id = dfp_lcm_new_source_id();
     s->process_id = (int32_t)getpid();
@@ -252,7 +265,7 @@ void dfp_lcm_segment_close(dfp_lcm_segment_t *s)
     s->station_attached = false;
     if (s->lcm != NULL) {
         if (s->subscription != NULL) {
-            dfp_lcm_telegram_t_unsubscribe(s->lcm, s->subscription);
+            lcm_unsubscribe(s->lcm, s->subscription);
             s->subscription = NULL;
         }
         lcm_destroy(s->lcm);

@@ -51,6 +51,7 @@ typedef struct dfp_lcm_segment {
     uint64_t frames_received;    /* from other processes */
     uint64_t frames_other_baud;  /* of those, at a rate other than ours (framing errors) */
     uint64_t own_ignored;        /* our own frames coming back */
+    uint64_t malformed;          /* messages on the channel that are no telegram_t */
     uint64_t send_failures;
 } dfp_lcm_segment_t;
 
