@@ -53,6 +53,7 @@ static bool run_until(bool (*cond)(void), uint64_t limit_us)
         }
         membus_run_for_us(&demo.bus, 500u);
         lcm_cli_poll_state(&demo.lcm);
+        lcm_cli_pace(&demo.lcm, demo.bus.now_ns);
     }
     return cond != NULL && cond();
 }

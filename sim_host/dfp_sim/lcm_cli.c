@@ -97,6 +97,19 @@ void lcm_cli_poll_state(lcm_cli_t *l)
     report_failure(l);
 }
 
+void lcm_cli_pace(lcm_cli_t *l, uint64_t sim_ns)
+{
+    if (!l->open) {
+        return;
+    }
+    int64_t ahead = l->clock_wall_us + (int64_t)(sim_ns / 1000u) - dfp_lcm_wall_us();
+    if (ahead > 0) {
+        struct timespec ts = {.tv_sec = (time_t)(ahead / 1000000),
+                              .tv_nsec = (long)(ahead % 1000000) * 1000L};
+        (void)nanosleep(&ts, NULL);
+    }
+}
+
 hal_time_us_t lcm_cli_timer(void *ctx, hal_time_us_t now)
 {
     lcm_cli_poll_state(ctx);

@@ -40,6 +40,11 @@ void lcm_cli_tap(void *ctx, uint64_t t_start_ns, const uint8_t *frame, size_t le
 hal_uart_t lcm_cli_card_uart(lcm_cli_t *l, hal_uart_t inner);
 /* Publishes the card state when it changed (and the bridge's interval allows). */
 void lcm_cli_poll_state(lcm_cli_t *l);
+/* For simulated time (the demo): waits until the wall clock reaches the utime of simulated
+ * instant sim_ns, so the telemetry flows at the pace it describes. Without it the demo would
+ * publish 1300 messages within milliseconds and a udpm subscriber (lcm-logger, lcm-spy) would
+ * lose most of them in its socket buffer. */
+void lcm_cli_pace(lcm_cli_t *l, uint64_t sim_ns);
 /* tty_timer_fn doing lcm_cli_poll_state every LCM_CLI_STATE_CHECK_US. */
 hal_time_us_t lcm_cli_timer(void *ctx, hal_time_us_t now);
 /* The card options' param_observer / ctx for this context. */
