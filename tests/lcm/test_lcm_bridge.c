@@ -101,6 +101,9 @@ static void on_param(const lcm_recv_buf_t *rbuf, const char *channel,
 }
 
 static dfp_lcm_bridge_t bridge;
+static dfp_lcm_telegram_t_subscription_t *sub_telegram;
+static dfp_lcm_card_state_t_subscription_t *sub_state;
+static dfp_lcm_param_service_t_subscription_t *sub_param;
 
 static void open_bridge(int16_t station)
 {
@@ -109,9 +112,19 @@ static void open_bridge(int16_t station)
     CHECK_EQ(dfp_lcm_bridge_open(&bridge, "memq://", station, err, sizeof err), 0);
     CHECK(bridge.lcm != NULL);
     CHECK(bridge.source_id > 0);
-    dfp_lcm_telegram_t_subscribe(bridge.lcm, DFP_LCM_CH_TELEGRAM, on_telegram, NULL);
-    dfp_lcm_card_state_t_subscribe(bridge.lcm, DFP_LCM_CH_CARD_STATE, on_state, NULL);
-    dfp_lcm_param_service_t_subscribe(bridge.lcm, DFP_LCM_CH_PARAM, on_param, NULL);
+    sub_telegram = dfp_lcm_telegram_t_subscribe(bridge.lcm, DFP_LCM_CH_TELEGRAM, on_telegram,
+                                                NULL);
+    sub_state = dfp_lcm_card_state_t_subscribe(bridge.lcm, DFP_LCM_CH_CARD_STATE, on_state, NULL);
+    sub_param = dfp_lcm_param_service_t_subscribe(bridge.lcm, DFP_LCM_CH_PARAM, on_param, NULL);
+}
+
+static void close_bridge(void)
+{
+    dfp_lcm_telegram_t_unsubscribe(bridge.lcm, sub_telegram);
+    dfp_lcm_card_state_t_unsubscribe(bridge.lcm, sub_state);
+    dfp_lcm_param_service_t_unsubscribe(bridge.lcm, sub_param);
+    dfp_lcm_bridge_close(&bridge);
+    CHECK(bridge.lcm == NULL);
 }
 
 static void deliver(void)
@@ -150,7 +163,7 @@ static void test_telegram_fields(void)
     CHECK_BYTES(got.telegram.data, got.telegram.length, 0xE5);
     CHECK_EQ(bridge.messages, 2);
     CHECK_EQ(bridge.failures, 0);
-    dfp_lcm_bridge_close(&bridge);
+    close_bridge();
 }
 
 /* The encoded layout the log reader relies on (DFP_LCM_TELEGRAM_FIXED), and the checked
@@ -301,7 +314,7 @@ static void test_card_state_fields_and_throttle(void)
     CHECK_EQ(got.states, 2);
     CHECK_EQ(got.state.p094_po1, 0x0007);
     CHECK_EQ(got.state.p097_pi1, 0x0007);
-    dfp_lcm_bridge_close(&bridge);
+    close_bridge();
 }
 
 static uint32_t run_service(uint8_t service, uint16_t index, uint32_t value)
@@ -374,7 +387,7 @@ static void test_param_observer_one_message_per_service(void)
     deliver();
     CHECK_EQ(got.params, 3);
     CHECK_EQ(bridge.failures, 0);
-    dfp_lcm_bridge_close(&bridge);
+    close_bridge();
 }
 
 static void test_paths_and_bad_url(void)
