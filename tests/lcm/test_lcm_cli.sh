@@ -88,6 +88,9 @@ expect_exit 2 "master: address twice" -- "$sim" master --bus lcm:X --address 3,4
 expect_in "names it" "address 3 is given twice" "$out"
 expect_exit 2 "master: 33 slaves" -- "$sim" master --bus lcm:X --address 1-33 --config F3F2
 expect_in "limit named" "more than 32 slaves" "$out"
+# A namespace without the multicast route: LCM cannot open udpm, the command says why.
+expect_exit 1 "udpm without a multicast route" -- unshare -n "$sim" slave --bus lcm:X --duration 1
+expect_in "names the route" "udpm needs a multicast route, e.g. ip route add 239.0.0.0/8 dev lo" "$out"
 expect_exit 1 "an LCM URL that does not open" -- "$sim" demo --lcm "nosuch://x"
 expect_in "reason" "cannot open LCM URL 'nosuch://x'" "$out"
 
