@@ -97,7 +97,7 @@ expect_in "reason" "cannot open LCM URL 'nosuch://x'" "$out"
 # ---- slave --lcm on a segment: card state and telemetry next to the bus ----
 # A fixed rate, so that the card hears every frame on the segment without errors.
 "$sim" slave --bus lcm:SEG1 --lcm-url "$url" --address 5 --baud 19200 --inverter none --lcm "$url" \
-  >"$tmp/slave.out" 2>&1 &
+  --capture "$tmp/slave.pcap" >"$tmp/slave.out" 2>&1 &
 slave=$!; pids+=($slave)
 lcm-logger --lcm-url="$url" -f "$tmp/slave.lcm" >"$tmp/logger2.out" 2>&1 &
 logger=$!; pids+=($logger)
@@ -118,4 +118,7 @@ tel=$(awk '$1 == "DFP_TELEGRAM" {print $2}' "$tmp/slave.channels")
 st=$(awk '$1 == "DFP_CARD_STATE" {print $2}' "$tmp/slave.channels")
 if [ "${seg:-0}" -ge 40 ] && [ "$tel" = "$seg" ] && [ "${st:-0}" -ge 2 ]; then ok; else
   bad "segment frames $seg, telemetry telegrams $tel, card states $st"; fi
+# --capture on the segment has the same telegrams as the telemetry.
+expect_exit 0 "the slave's capture on the segment" -- "$sim" convert "$tmp/slave.pcap" "$tmp/sp.txt"
+expect_in "as many as published" "(text): $tel records" "$out"
 finish
