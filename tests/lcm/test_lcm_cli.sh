@@ -27,10 +27,15 @@ trap 'exit 1' INT TERM
 url="udpm://239.255.76.72:7672?ttl=0"
 
 # ---- demo --lcm, recorded by lcm-logger ----
-lcm-logger --lcm-url="$url" -f "$tmp/demo.lcm" >"$tmp/logger.out" 2>&1 &
-logger=$!; pids+=($logger)
-for _ in $(seq 50); do grep -q "Opening log file" "$tmp/logger.out" 2>/dev/null && break; sleep 0.1; done
-sleep 0.2
+# lcm-logger says "Opening log file" before it subscribes; the exact counts below need every
+# message, so give it a generous moment on a loaded machine.
+start_logger() { # start_logger LOG OUT
+  lcm-logger --lcm-url="$url" -f "$1" >"$2" 2>&1 &
+  logger=$!; pids+=($logger)
+  for _ in $(seq 100); do grep -q "Opening log file" "$2" 2>/dev/null && break; sleep 0.1; done
+  sleep 1
+}
+start_logger "$tmp/demo.lcm" "$tmp/logger.out"
 expect_exit 0 "demo --lcm" -- "$sim" demo --lcm "$url" --capture "$tmp/demo.pcap"
 expect_in "demo reports what it published" "1351 messages published to $url" "$out"
 sleep 0.3
@@ -99,9 +104,7 @@ expect_in "reason" "cannot open LCM URL 'nosuch://x'" "$out"
 "$sim" slave --bus lcm:SEG1 --lcm-url "$url" --address 5 --baud 19200 --inverter none --lcm "$url" \
   --capture "$tmp/slave.pcap" >"$tmp/slave.out" 2>&1 &
 slave=$!; pids+=($slave)
-lcm-logger --lcm-url="$url" -f "$tmp/slave.lcm" >"$tmp/logger2.out" 2>&1 &
-logger=$!; pids+=($logger)
-sleep 0.5
+start_logger "$tmp/slave.lcm" "$tmp/logger2.out"
 expect_exit 0 "master on the segment" -- timeout 30 "$sim" master --bus lcm:SEG1 --lcm-url "$url" \
   --address 5 --config F3F2 --cycles 20 --outputs 0000000000000000000605DC0000
 expect_in "echoed inputs" "last inputs 0000000000000000000605DC0000" "$out"
