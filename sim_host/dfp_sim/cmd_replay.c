@@ -8,6 +8,7 @@
 
 #include "capture/capture.h"
 #include "cli.h"
+#include "dfp_lcm_bridge/lcm_bridge.h"
 #include "commands.h"
 #include "replay/generator.h"
 #include "replay/replay.h"
@@ -85,6 +86,8 @@ static replay_t replay; /* the bus, the card and the inverter: not on the stack 
 typedef struct replay_cli {
     bool verbose;
     report_t rep; /* card events in --verbose, as dfp-sim demo prints them */
+    bool lcm_open;
+    dfp_lcm_bridge_t lcm; /* --lcm URL */
 } replay_cli_t;
 
 static replay_cli_t rc_state;
@@ -94,10 +97,30 @@ static uint64_t replay_now_ns(void *ctx)
     return ((replay_t *)ctx)->bus.now_ns;
 }
 
-/* Every telegram on the replay bus. This is where `--lcm URL` will publish them. */
+/* LCM's utime of a bus instant: the capture's own clock (the first record maps to bus time 0),
+ * so the telemetry of a replay carries the times of the plant, not of the replay. */
+static int64_t capture_utime(uint64_t bus_ns)
+{
+    return (int64_t)((replay.origin_ns + bus_ns) / 1000u);
+}
+
+static int64_t replay_lcm_clock(void *ctx)
+{
+    (void)ctx;
+    return capture_utime(replay.bus.now_ns);
+}
+
+/* Every telegram on the replay bus: --lcm publishes it (the card's own as TX, the capture's as
+ * RX, as the card saw them) and the card's state with it; --verbose prints it. */
 static void on_telegram(void *ctx, const replay_telegram_t *t)
 {
     replay_cli_t *c = ctx;
+    if (c->lcm_open) {
+        int64_t utime = capture_utime(t->t_ns);
+        (void)dfp_lcm_bridge_telegram(&c->lcm, utime, t->data, t->len,
+                                      t->source == REPLAY_FROM_CARD, t->baud, 0);
+        (void)dfp_lcm_bridge_card_state(&c->lcm, utime, &replay.card.card);
+    }
     if (!c->verbose) {
         return;
     }
@@ -139,6 +162,7 @@ int cmd_replay(int argc, char **argv)
     cap_format_t format = CAP_FORMAT_AUTO;
     card_inverter_t inverter = CARD_INVERTER_SIM;
     replay_speed_t speed = REPLAY_SPEED_MAX;
+    const char *lcm_url = NULL;
     memset(&rc_state, 0, sizeof rc_state);
     for (int i = 2; i < argc; i++) {
         const char *o = argv[i];
@@ -183,6 +207,8 @@ int cmd_replay(int argc, char **argv)
                           "echoes PO)", v);
                 return EXIT_USAGE;
             }
+        } else if (strcmp(o, "--lcm") == 0) {
+            if ((lcm_url = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
         } else if (strcmp(o, "--inverter-delay") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 0, 10000000u, &delay_us))
                 return EXIT_USAGE;
@@ -294,9 +320,22 @@ int cmd_replay(int argc, char **argv)
                            .stop = &stop_requested,
                            .on_telegram = on_telegram, .on_card_event = on_card_event,
                            .ctx = &rc_state};
-    char err[256];
+    char err[400];
+    if (lcm_url != NULL) {
+        if (dfp_lcm_bridge_open(&rc_state.lcm, lcm_url, (int16_t)address, err, sizeof err) != 0) {
+            cli_error("replay: --lcm: %s", err);
+            return 1;
+        }
+        rc_state.lcm_open = true;
+        rc_state.lcm.clock = replay_lcm_clock;
+        ro.param_observer = dfp_lcm_bridge_param_observer;
+        ro.param_observer_ctx = &rc_state.lcm;
+    }
     if (replay_init(&replay, &ro, err, sizeof err) != 0) {
         cli_error("replay: %s", err);
+        if (rc_state.lcm_open) {
+            dfp_lcm_bridge_close(&rc_state.lcm);
+        }
         return 1;
     }
     progress_begin(&prog, "replay");
@@ -307,6 +346,9 @@ int cmd_replay(int argc, char **argv)
     progress_end(&prog);
     if (rc != 0) {
         cli_error("%s", st.error);
+        if (rc_state.lcm_open) {
+            dfp_lcm_bridge_close(&rc_state.lcm);
+        }
         return EXIT_USAGE;
     }
     replay_report_info_t info = {
@@ -323,6 +365,19 @@ int cmd_replay(int argc, char **argv)
                "one\n");
     }
     int status = replay_report(&replay, &info, stdout);
+    if (rc_state.lcm_open) {
+        /* Telemetry never changes the verdict: failures are reported, not counted against it. */
+        (void)dfp_lcm_bridge_card_state(&rc_state.lcm, capture_utime(replay.bus.now_ns),
+                                        &replay.card.card);
+        printf("lcm: %llu messages published to %s", (unsigned long long)rc_state.lcm.messages,
+               lcm_url);
+        if (rc_state.lcm.failures > 0u) {
+            printf(", %llu failed (first: %s)", (unsigned long long)rc_state.lcm.failures,
+                   rc_state.lcm.error);
+        }
+        printf("\n");
+        dfp_lcm_bridge_close(&rc_state.lcm);
+    }
     fflush(stdout);
     return status;
 }

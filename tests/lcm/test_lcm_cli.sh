@@ -124,4 +124,27 @@ if [ "${seg:-0}" -ge 40 ] && [ "$tel" = "$seg" ] && [ "${st:-0}" -ge 2 ]; then o
 # --capture on the segment has the same telegrams as the telemetry.
 expect_exit 0 "the slave's capture on the segment" -- "$sim" convert "$tmp/slave.pcap" "$tmp/sp.txt"
 expect_in "as many as published" "(text): $tel records" "$out"
+# ---- replay --lcm: the replay's telemetry carries the capture's times ----
+golden="$(dirname "$0")/../replay/golden/param_channel.pcap"
+expect_exit 0 "replay --check --lcm into an LCM log" -- "$sim" replay "$golden" --check \
+  --lcm "file://$tmp/replay.lcm?mode=w"
+expect_in "replay still matches" "MATCH: all 227 replies match" "$out"
+expect_in "replay reports what it published" "lcm: 452 messages published" "$out"
+"$channels" "$tmp/replay.lcm" >"$tmp/replay.channels"
+# 227 records put on the bus + 205 telegrams of the card; the services that reached the
+# emulated inverter (the refusals the card answers itself are not services); states <= 100 ms.
+expect_in "every telegram on the replay bus" "DFP_TELEGRAM 432" "$(cat "$tmp/replay.channels")"
+expect_in "the parameter services" "DFP_PARAM 15" "$(cat "$tmp/replay.channels")"
+expect_in "card states" "DFP_CARD_STATE 5" "$(cat "$tmp/replay.channels")"
+"$sim" convert "$tmp/replay.lcm" "$tmp/replay.txt" --quiet
+"$sim" convert "$golden" "$tmp/golden.txt" --quiet
+# Same times and octets as the capture (the card's answers are its own, identical here), with
+# the card's telegrams TX and the capture's RX.
+if diff <(awk '{$2 = ""; print}' "$tmp/replay.txt") <(awk '{$2 = ""; print}' "$tmp/golden.txt") \
+   >"$tmp/rdiff"; then ok; else bad "replay telemetry differs from the capture: $(head -3 "$tmp/rdiff")"; fi
+expect_in "the card's first answer is TX, at its capture time" \
+  "1704067200.060419000 TX 10 02 04 00 06 16" "$(grep -m1 ' TX ' "$tmp/replay.txt")"
+expect_exit 0 "the replay's LCM log replays itself" -- "$sim" replay "$tmp/replay.lcm" --check
+expect_in "and matches" "MATCH: all 227 replies match" "$out"
+expect_exit 1 "replay --lcm to a bad URL" -- "$sim" replay "$golden" --lcm "nosuch://x"
 finish

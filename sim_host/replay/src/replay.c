@@ -107,7 +107,9 @@ int replay_init(replay_t *r, const replay_options_t *opt, char *err, size_t errl
                          .inverter = opt->inverter,
                          .inverter_delay_us = opt->inverter_delay_us,
                          .event = card_event,
-                         .ctx = r};
+                         .ctx = r,
+                         .param_observer = opt->param_observer,
+                         .param_observer_ctx = opt->param_observer_ctx};
     return card_station_init(&r->card, &co, card_uart, 0, err, errlen);
 }
 

@@ -73,6 +73,10 @@ typedef struct replay_options {
     void (*on_telegram)(void *ctx, const replay_telegram_t *t);
     void (*on_card_event)(void *ctx, uint64_t t_ns, const dp_event_t *ev);
     void *ctx;
+    /* Every parameter service the card ran with its inverter (card_options_t.param_observer). */
+    void (*param_observer)(void *ctx, uint8_t channel, const uint8_t req[ML_TELEGRAM_LEN],
+                           const uint8_t rsp[ML_TELEGRAM_LEN]);
+    void *param_observer_ctx;
 } replay_options_t;
 
 typedef struct replay_counts {
