@@ -16,8 +16,11 @@ done
 # cross-only and not in the host database.
 read -r -a dirs <<<"${LINT_DIRS:-dp_slave dpv1 movilink firmware/dfp21b hal sim_host}"
 
-# Configure only (no build): the database follows the current CMakeLists.
+# Configure only (no build): the database follows the current CMakeLists. The LCM message
+# types are generated (lcm-gen) so that the sources including them parse; generated code is
+# not ours and stays out of the file list (it lives under the build directory).
 cmake --preset host -B "$build" >/dev/null
+cmake --build "$build" --target dfp_lcm_generate >/dev/null
 db="$build/compile_commands.json"
 
 # Sources of those directories that the host build compiles (a file compiled into two targets

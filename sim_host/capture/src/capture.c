@@ -143,7 +143,7 @@ static int open_pcap(cap_reader_t *r, char *err, size_t errlen)
         FILE *f = fopen(r->path, "rb");
         if (f != NULL) {
             r->if_baud = pcapng_if_speed(f);
-            fclose(f);
+            (void)fclose(f); /* opened for reading: nothing to lose */
         }
     }
     char perr[PCAP_ERRBUF_SIZE] = "";
@@ -184,10 +184,10 @@ int cap_reader_open(cap_reader_t *r, const char *path, cap_format_t format, char
     struct stat st;
     if (fstat(fileno(f), &st) == 0 && S_ISREG(st.st_mode)) {
         r->file_size = (uint64_t)st.st_size;
-    } else if (format == CAP_FORMAT_AUTO || format != CAP_FORMAT_TEXT) {
+    } else if (format != CAP_FORMAT_TEXT) {
         /* libpcap and the format sniffing reopen or seek; a pipe can only be read as text. */
         snprintf(err, errlen, "%s: not a regular file (only --format text reads a pipe)", path);
-        fclose(f);
+        (void)fclose(f); /* opened for reading: nothing to lose */
         return -1;
     }
     if (format == CAP_FORMAT_AUTO) {
@@ -195,7 +195,7 @@ int cap_reader_open(cap_reader_t *r, const char *path, cap_format_t format, char
         size_t n = fread(head, 1, sizeof head, f);
         if (n == 0) {
             snprintf(err, errlen, "%s: empty file", path);
-            fclose(f);
+            (void)fclose(f); /* opened for reading: nothing to lose */
             return -1;
         }
         format = sniff(head, n);
@@ -203,7 +203,7 @@ int cap_reader_open(cap_reader_t *r, const char *path, cap_format_t format, char
             snprintf(err, errlen, "%s: unknown format (starts %02X %02X %02X %02X): not pcap, "
                      "pcapng, an LCM log or text", path, head[0], n > 1 ? head[1] : 0,
                      n > 2 ? head[2] : 0, n > 3 ? head[3] : 0);
-            fclose(f);
+            (void)fclose(f); /* opened for reading: nothing to lose */
             return -1;
         }
         rewind(f);
@@ -212,19 +212,19 @@ int cap_reader_open(cap_reader_t *r, const char *path, cap_format_t format, char
     switch (format) {
     case CAP_FORMAT_PCAP:
     case CAP_FORMAT_PCAPNG:
-        fclose(f);
+        (void)fclose(f); /* opened for reading: nothing to lose */
         return open_pcap(r, err, errlen);
     case CAP_FORMAT_TEXT:
         r->file = f;
         text_import_init(&r->text);
         return 0;
     case CAP_FORMAT_LCM:
-        fclose(f);
+        (void)fclose(f); /* opened for reading: nothing to lose */
         return cap_lcm_open(r, err, errlen);
     case CAP_FORMAT_AUTO:
         break;
     }
-    fclose(f);
+    (void)fclose(f); /* opened for reading: nothing to lose */
     snprintf(err, errlen, "%s: no format", path);
     return -1;
 }
@@ -348,7 +348,7 @@ void cap_reader_close(cap_reader_t *r)
         r->pcap = NULL;
     }
     if (r->file != NULL) {
-        fclose(r->file);
+        (void)fclose(r->file); /* read only */
         r->file = NULL;
     }
     if (r->format == CAP_FORMAT_LCM) {

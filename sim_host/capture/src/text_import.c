@@ -62,7 +62,10 @@ static int hex_value(char c)
 
 static char to_upper(char c)
 {
-    return (c >= 'a' && c <= 'z') ? (char)(c - 'a' + 'A') : c;
+    if (c >= 'a' && c <= 'z') {
+        return (char)(unsigned char)((unsigned char)c - ('a' - 'A'));
+    }
+    return c;
 }
 
 static bool span_is(span_t t, const char *lit)
@@ -139,7 +142,11 @@ static quoted_t quote(span_t t)
     size_t n = t.n < QUOTE_MAX ? t.n : QUOTE_MAX;
     for (size_t i = 0; i < n; i++) {
         char c = t.p[i];
-        q.s[i] = (c >= 0x20 && c < 0x7F) ? c : '?';
+        if (c >= 0x20 && c < 0x7F) {
+            q.s[i] = c;
+        } else {
+            q.s[i] = '?';
+        }
     }
     if (t.n > QUOTE_MAX) {
         memcpy(&q.s[n], "...", 3);
@@ -841,7 +848,8 @@ static bool prosoft_line(span_t line)
         }
         return false;
     }
-    span_t da, sa;
+    span_t da;
+    span_t sa;
     span_t f = (first.n > 0u && first.p[0] == '*') ? span_from(first, 1u) : first;
     if (prosoft_addresses(f, &da, &sa)) {
         return true;
@@ -1081,7 +1089,8 @@ static text_line_result_t import_prosoft(text_import_state_t *st, span_t line,
                 f.sd = sd;
                 continue;
             }
-            span_t da, sa;
+            span_t da;
+    span_t sa;
             if (prosoft_addresses(t, &da, &sa)) {
                 if (da.n > 0u) {
                     if (!small_decimal(da, ADDR_MASK, &f.da)) {

@@ -187,6 +187,23 @@ static int publish_state(dfp_lcm_bridge_t *b, int64_t utime, const dfp21b_t *c,
     return 1;
 }
 
+/* Member by member: the struct has padding, which memcmp would compare too. */
+static bool snapshot_equal(const dfp_lcm_state_snapshot_t *a, const dfp_lcm_state_snapshot_t *b)
+{
+    if (a->dp_state != b->dp_state || a->led_run != b->led_run ||
+        a->led_bus_fault != b->led_bus_fault || a->address != b->address || a->baud != b->baud ||
+        a->pd_valid != b->pd_valid || a->param_channel != b->param_channel ||
+        a->pd_words != b->pd_words || a->p819_ms != b->p819_ms) {
+        return false;
+    }
+    for (size_t i = 0; i < DFP21B_MAX_PD; i++) {
+        if (a->po[i] != b->po[i] || a->pi[i] != b->pi[i]) {
+            return false;
+        }
+    }
+    return true;
+}
+
 int dfp_lcm_bridge_card_state(dfp_lcm_bridge_t *b, int64_t utime, const dfp21b_t *card)
 {
     if (b->lcm == NULL) {
@@ -194,7 +211,7 @@ int dfp_lcm_bridge_card_state(dfp_lcm_bridge_t *b, int64_t utime, const dfp21b_t
     }
     dfp_lcm_state_snapshot_t s;
     snapshot(card, &s);
-    if (b->state_published && memcmp(&s, &b->last, sizeof s) == 0) {
+    if (b->state_published && snapshot_equal(&s, &b->last)) {
         b->state_pending = false;
         return 0;
     }

@@ -519,7 +519,7 @@ int gen_run(const gen_options_t *opt, gen_result_t *res, char *err, size_t errle
     membus_init(&g.bus);
     membus_set_tap(&g.bus, gen_tap, NULL);
     hal_uart_t card_uart;
-    hal_uart_t card2_uart;
+    hal_uart_t card2_uart = {.ops = NULL, .ctx = NULL};
     hal_uart_t master_uart;
     sim_station_t cs = card_station(&g.card);
     membus_attach(&g.bus, &cs, &card_uart);

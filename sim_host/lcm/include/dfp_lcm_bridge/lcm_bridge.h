@@ -27,7 +27,7 @@
 #include "dfp21b/dfp21b.h"
 #include "movilink/movilink_wire.h"
 
-typedef struct _lcm_t lcm_t; /* <lcm/lcm.h> */
+#include <lcm/lcm.h>
 
 #define DFP_LCM_CH_TELEGRAM "DFP_TELEGRAM"
 #define DFP_LCM_CH_CARD_STATE "DFP_CARD_STATE"

@@ -25,7 +25,7 @@
 #include "sim_hal/sim_station.h"
 #include "sim_hal/tty_port.h"
 
-typedef struct _lcm_t lcm_t; /* <lcm/lcm.h> */
+#include <lcm/lcm.h>
 
 /* Messages waiting in LCM for this process before the oldest are dropped (LCM's default, 30,
  * loses frames when 33 processes share two cores). */
