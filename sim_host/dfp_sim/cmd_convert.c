@@ -5,6 +5,7 @@
 #include <inttypes.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "capture/capture.h"
 #include "cli.h"
@@ -12,6 +13,26 @@
 
 /* Enough to locate the trouble without flooding a terminal for a badly damaged file. */
 #define CONVERT_MAX_REPORTED 10u
+
+static bool written_text(const cap_writer_t *w)
+{
+    return w->opt.format == CAP_FORMAT_TEXT;
+}
+
+/* A record without a time, as a bare hex line (text_import reads it back untimed). */
+static int write_untimed_text(cap_writer_t *w, const cap_record_t *rec)
+{
+    for (size_t i = 0; i < rec->len; i++) {
+        if (fprintf(w->f, i == 0 ? "%02X" : " %02X", rec->data[i]) < 0) {
+            return -1;
+        }
+    }
+    if (fputc('\n', w->f) == EOF) {
+        return -1;
+    }
+    w->records++;
+    return 0;
+}
 
 int cmd_convert(int argc, char **argv)
 {
@@ -65,8 +86,13 @@ int cmd_convert(int argc, char **argv)
         cli_error("convert needs an input and an output file: dfp-sim convert IN OUT");
         return EXIT_USAGE;
     }
-    if (strcmp(in, out) == 0) {
-        cli_error("convert: IN and OUT are the same file (%s)", in);
+    /* By identity, not by name: "a.pcap" and "./a.pcap" are one file, and opening OUT for
+     * writing would truncate the input under the reader. */
+    struct stat in_st;
+    struct stat out_st;
+    if (strcmp(in, out) == 0 || (stat(in, &in_st) == 0 && stat(out, &out_st) == 0 &&
+                                 in_st.st_dev == out_st.st_dev && in_st.st_ino == out_st.st_ino)) {
+        cli_error("convert: IN and OUT are the same file (%s, %s)", in, out);
         return EXIT_USAGE;
     }
 
@@ -93,18 +119,42 @@ int cmd_convert(int argc, char **argv)
         return 1;
     }
     uint64_t damaged = 0;
+    uint64_t untimed = 0;
+    uint64_t skipped_empty = 0;
     bool write_failed = false;
+    bool untimed_refused = false;
     for (; rc == 1; rc = cap_reader_next(&reader, &rec)) {
         if (rec.problem[0] != '\0') {
             damaged++;
             if (damaged <= CONVERT_MAX_REPORTED && !quiet) {
                 fprintf(stderr, "dfp-sim: %s: record %" PRIu64 " (%s %" PRIu64 "): %s\n", in,
-                        rec.index, reader.format == CAP_FORMAT_TEXT ? "line" : "byte",
-                        rec.position, rec.problem);
+                        rec.index, cap_position_unit(reader.format), rec.position,
+                        rec.problem);
             }
-            if (rec.len == 0) {
-                continue; /* a text line that is no telegram: nothing to write */
+        }
+        if (rec.len == 0 && (reader.format == CAP_FORMAT_TEXT || written_text(&writer))) {
+            /* A text line that is no telegram, or an empty record text cannot show. */
+            skipped_empty++;
+            continue;
+        }
+        if (!rec.has_time) {
+            /* A text dump without times: text keeps it untimed (a bare hex line reads back
+             * untimed); pcap and pcapng need a time, and an invented one would be taken for
+             * the bus's timing by every later reader (replay infers the rate from it). */
+            untimed++;
+            if (!written_text(&writer)) {
+                untimed_refused = true;
+                cli_error("%s: record %" PRIu64 " (line %" PRIu64 ") has no time; %s needs "
+                          "one: give every line a time, or convert to text (dfp-sim replay "
+                          "reads untimed text directly)", in, rec.index, rec.position,
+                          cap_format_name(writer.opt.format));
+                break;
             }
+            if (write_untimed_text(&writer, &rec) != 0) {
+                write_failed = true;
+                break;
+            }
+            continue;
         }
         if (cap_writer_frame(&writer, rec.t_ns, rec.data, rec.len, rec.dir) != 0) {
             write_failed = true;
@@ -122,6 +172,10 @@ int cmd_convert(int argc, char **argv)
         cli_error("could not write the whole capture to %s", out);
         return 1;
     }
+    if (untimed_refused) {
+        (void)remove(out); /* nothing usable: no half-converted file is left behind */
+        return 1;
+    }
     if (records == 0 && damaged > 0) {
         cli_error("%s: none of its %" PRIu64 " records is a telegram", in, damaged);
         return 1;
@@ -134,6 +188,12 @@ int cmd_convert(int argc, char **argv)
                    written.nanosecond ? "ns" : "µs");
         }
         printf("): %" PRIu64 " records", records);
+        if (untimed > 0) {
+            printf(", %" PRIu64 " without a time (kept untimed)", untimed);
+        }
+        if (skipped_empty > 0) {
+            printf(", %" PRIu64 " without octets left out", skipped_empty);
+        }
         if (damaged > 0) {
             printf(", %" PRIu64 " damaged (reported above%s)", damaged,
                    damaged > CONVERT_MAX_REPORTED ? ", the first 10" : "");

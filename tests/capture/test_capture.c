@@ -133,6 +133,16 @@ static void test_pcapng_bytes_and_round_trip(void)
     path_of(p, sizeof p, "us.pcapng");
     write_sample(p, CAP_FORMAT_PCAPNG, 147, false, 0);
     read_sample(p, CAP_FORMAT_PCAPNG, 147, true, 0, NULL);
+
+    /* An if_speed that is no PROFIBUS rate (another tool's interface speed, damage) says
+     * nothing about the bus: baud 0, as if absent. */
+    path_of(p, sizeof p, "serial-speed.pcapng");
+    write_sample(p, CAP_FORMAT_PCAPNG, 257, false, 115200);
+    read_sample(p, CAP_FORMAT_PCAPNG, 257, true, 0, NULL);
+    CHECK_EQ(cap_profibus_rate(12000000u), 12000000u);
+    CHECK_EQ(cap_profibus_rate(45450u), 45450u);
+    CHECK_EQ(cap_profibus_rate(1u), 0u);
+    CHECK_EQ(cap_profibus_rate(0x100000000ull + 1500000u), 0u);
 }
 
 /* A big-endian microsecond pcap as another tool on another machine would write it. */

@@ -14,6 +14,7 @@
 
 #include "capture/pcap_writer.h"
 #include "cap_lcm.h"
+#include "hal/hal_uart.h"
 
 #define PCAPNG_SHB 0x0A0D0D0Au
 #define PCAPNG_IDB 0x00000001u
@@ -33,6 +34,22 @@ const char *cap_format_name(cap_format_t f)
     case CAP_FORMAT_LCM: return "lcm";
     }
     return "?";
+}
+
+uint32_t cap_profibus_rate(uint64_t v)
+{
+    /* Anything else (another tool's idea of the interface speed, or damage) says nothing. */
+    for (size_t k = 0; k < HAL_UART_NUM_BAUDS; k++) {
+        if (v == hal_uart_bauds[k]) {
+            return hal_uart_bauds[k];
+        }
+    }
+    return 0;
+}
+
+const char *cap_position_unit(cap_format_t f)
+{
+    return f == CAP_FORMAT_TEXT ? "line" : f == CAP_FORMAT_LCM ? "event" : "byte";
 }
 
 bool cap_format_parse(const char *name, cap_format_t *out)
@@ -123,7 +140,7 @@ static uint32_t pcapng_if_speed(FILE *f)
                     uint64_t lo = get32(&body[o + 4], big);
                     uint64_t hi = get32(&body[o + 8], big);
                     uint64_t v = big ? (lo << 32 | hi) : (hi << 32 | lo);
-                    return v <= UINT32_MAX ? (uint32_t)v : 0;
+                    return cap_profibus_rate(v);
                 }
                 o += 4u + ((olen + 3u) & ~3u);
             }

@@ -52,6 +52,11 @@ int cap_reader_open(cap_reader_t *r, const char *path, cap_format_t format, char
 int cap_reader_next(cap_reader_t *r, cap_record_t *rec);
 void cap_reader_close(cap_reader_t *r);
 const char *cap_format_name(cap_format_t f);
+/* v when it is one of the ten PROFIBUS rates (hal_uart_bauds), else 0: a rate read from a file
+ * is only believed when the bus can have run at it. */
+uint32_t cap_profibus_rate(uint64_t v);
+/* What cap_record_t.position counts in this format: "byte", "line" or "event". */
+const char *cap_position_unit(cap_format_t f);
 /* "pcap", "pcapng", "text", "lcm" (and "auto"); false for anything else. */
 bool cap_format_parse(const char *name, cap_format_t *out);
 
