@@ -561,16 +561,8 @@ int cap_writer_frame(cap_writer_t *w, uint64_t t_ns, const uint8_t *frame, size_
 
 int cap_writer_close(cap_writer_t *w)
 {
-    if (w->f == NULL) {
-        return 0;
-    }
-    int rc = 0;
-    if (fflush(w->f) != 0 || ferror(w->f)) {
-        rc = -1;
-    }
-    if (fclose(w->f) != 0) {
-        rc = -1;
-    }
+    /* The same flush-and-close for every format: pcap_writer's. */
+    pcap_writer_t pw = {.f = w->f};
     w->f = NULL;
-    return rc;
+    return pcap_writer_close(&pw);
 }

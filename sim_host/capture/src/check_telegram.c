@@ -7,12 +7,7 @@
 
 #include "capture/record.h"
 
-#define SD1 0x10u
-#define SD2 0x68u
-#define SD3 0xA2u
-#define SD4 0xDCu
-#define SC 0xE5u
-#define ED 0x16u
+#include "fdl_octets.h"
 
 #define SD1_LEN 6u
 #define SD3_LEN 14u

@@ -17,13 +17,7 @@
 #define SECONDS_PER_DAY 86400ull
 #define QUOTE_MAX 20u
 
-#define SD1 0x10u
-#define SD2 0x68u
-#define SD3 0xA2u
-#define SD4 0xDCu
-#define SC 0xE5u
-#define ED 0x16u
-#define ADDR_EXT 0x80u
+#include "fdl_octets.h"
 #define ADDR_MASK 0x7Fu
 #define FC_FCB_FCV_OR_TYPE 0x30u /* FCB/FCV of a request, station type of a reply */
 #define SD3_DU_LEN 8u
