@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -97,11 +98,12 @@ static uint64_t replay_now_ns(void *ctx)
     return ((replay_t *)ctx)->bus.now_ns;
 }
 
-/* LCM's utime of a bus instant: the capture's own clock (the first record maps to bus time 0),
- * so the telemetry of a replay carries the times of the plant, not of the replay. */
+/* LCM's utime of a bus instant: the capture's own clock (the first record's time, shortened
+ * gaps counted in full), so the telemetry of a replay carries the times of the plant, not of the
+ * replay. It never runs backwards (the bridge's state rate limit relies on that). */
 static int64_t capture_utime(uint64_t bus_ns)
 {
-    return (int64_t)((replay.origin_ns + bus_ns) / 1000u);
+    return (int64_t)(replay_capture_ns(&replay, bus_ns) / 1000u);
 }
 
 static int64_t replay_lcm_clock(void *ctx)
@@ -240,12 +242,20 @@ int cmd_replay(int argc, char **argv)
     progress_t prog;
     replay_file_status_t st;
     char address_source[160];
-    char baud_source[320];
+    char baud_source[640];
     if (have_address) {
         snprintf(address_source, sizeof address_source, "given with --address");
     }
-    if (baud != 0u) {
+    bool baud_given = baud != 0u;
+    if (baud_given) {
         snprintf(baud_source, sizeof baud_source, "given with --baud");
+    }
+    struct stat fst;
+    if ((!have_address || baud == 0u) && stat(file, &fst) == 0 && !S_ISREG(fst.st_mode)) {
+        /* The first pass would consume a pipe, leaving nothing to replay. */
+        cli_error("replay: %s is not a regular file (a pipe?) and can be read only once: give "
+                  "--address and --baud, or save it to a file first", file);
+        return EXIT_USAGE;
     }
     if (!have_address || baud == 0u) {
         /* First pass: which station answers, and what rate the recorded timing needs. */
@@ -294,15 +304,35 @@ int cmd_replay(int argc, char **argv)
             baud = scan.recorded_baud; /* also the rate a --fixed-baud card starts at */
             snprintf(baud_source, sizeof baud_source, "recorded in the capture");
         } else if (baud == 0u) {
-            uint32_t inferred = replay_scan_rate(&scan);
+            replay_scan_rate_t why;
+            uint32_t inferred = replay_scan_rate(&scan, &why);
             if (inferred != 0u) {
                 baud = inferred;
-                snprintf(baud_source, sizeof baud_source,
-                         "the capture records no rate; the lowest rate its timing allows: "
-                         "record %llu begins %.1f us after record %llu, which needs %u bit "
-                         "times in that gap; --baud to override",
-                         (unsigned long long)scan.need_record, (double)scan.need_gap_ns / 1e3,
-                         (unsigned long long)scan.need_prev_record, scan.need_bits);
+                int k = snprintf(baud_source, sizeof baud_source,
+                                 "the capture records no rate; the lowest rate its timing "
+                                 "allows: record %llu begins %.1f us after record %llu, which "
+                                 "needs %u bit times in that gap",
+                                 (unsigned long long)why.decided.record,
+                                 (double)why.decided.gap_ns / 1e3,
+                                 (unsigned long long)why.decided.prev_record, why.decided.bits);
+                size_t used = k > 0 && (size_t)k < sizeof baud_source ? (size_t)k : 0u;
+                if (why.outlier) {
+                    k = snprintf(baud_source + used, sizeof baud_source - used,
+                                 "; left out: record %llu, %.1f us after record %llu, alone "
+                                 "needs a rate four times higher (a bad timestamp?)",
+                                 (unsigned long long)why.ignored.record,
+                                 (double)why.ignored.gap_ns / 1e3,
+                                 (unsigned long long)why.ignored.prev_record);
+                    used += k > 0 && (size_t)k < sizeof baud_source - used ? (size_t)k : 0u;
+                }
+                if (scan.backward_pairs > 0u) {
+                    k = snprintf(baud_source + used, sizeof baud_source - used,
+                                 "; %llu records earlier than the one before left out",
+                                 (unsigned long long)scan.backward_pairs);
+                    used += k > 0 && (size_t)k < sizeof baud_source - used ? (size_t)k : 0u;
+                }
+                (void)snprintf(baud_source + used, sizeof baud_source - used,
+                               "; --baud to override");
             } else {
                 snprintf(baud_source, sizeof baud_source,
                          "the capture records no rate and no timed request with its answer: "
@@ -315,7 +345,7 @@ int cmd_replay(int argc, char **argv)
     rc_state.rep.now_ctx = &replay;
     rc_state.rep.card = &replay.card.card;
     replay_options_t ro = {.address = (uint8_t)address, .check = check, .baud = baud,
-                           .fixed_card_baud = fixed, .inverter = inverter,
+                           .baud_override = baud_given, .fixed_card_baud = fixed, .inverter = inverter,
                            .inverter_delay_us = delay_us, .speed = speed,
                            .stop = &stop_requested,
                            .on_telegram = on_telegram, .on_card_event = on_card_event,
@@ -360,10 +390,6 @@ int cmd_replay(int argc, char **argv)
         .file_error = st.read_error ? st.error : NULL,
         .interrupted = st.interrupted,
     };
-    if (baud != 0u && replay.min_baud_seen != 0u) {
-        printf("note: the capture records its rate; --baud applies only to records without "
-               "one\n");
-    }
     int status = replay_report(&replay, &info, stdout);
     if (rc_state.lcm_open) {
         /* Telemetry never changes the verdict: failures are reported, not counted against it. */

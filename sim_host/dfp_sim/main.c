@@ -61,7 +61,7 @@ static const char usage[] =
     "      with the recorded one and reports the first difference and counts per service\n"
     "      (exit 0: all match, 1: a difference or a damaged file, 2: bad command line or\n"
     "      unreadable file). The address comes from the capture unless given; the rate from\n"
-    "      the capture, else --baud, else the lowest its timing allows. --lcm publishes the\n"
+    "      --baud, else the capture, else the lowest its timing allows. --lcm publishes the\n"
     "      replay's telegrams, card state and parameter services with the capture's times\n"
     "      (file://OUT.lcm?mode=w writes an LCM log at any speed). docs/replay.md\n"
     "  record --capture FILE --cycles N [--baud RATE] [--address N] [--dpv1] [--faults]\n"

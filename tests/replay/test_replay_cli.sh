@@ -2,9 +2,10 @@
 # dfp-sim replay and record on the golden captures (golden/README.md): every golden replays with
 # --check to exit 0 and its exact counts per service; a copy with one reply octet altered, a
 # wrong --address, a two-slave capture without --address, damaged files (truncated record,
-# garbage, a garbage record between telegrams, unknown link type), --speed real, the goldens
-# made again now (same telegrams, or the test names the first one that changed) and bad command
-# lines.
+# garbage, a garbage record between telegrams, unknown link type), --speed real, times going
+# back and long gaps (re-anchored, shortened, SIGINT), pipes, --baud over a recorded rate, the
+# goldens made again now (same telegrams, or the test names the first one that changed) and bad
+# command lines.
 sim=$1
 diff_tool=$2
 here=$(dirname "$0")
@@ -217,6 +218,119 @@ if kill -0 $pid 2>/dev/null; then bad "SIGINT did not stop --speed real"; kill -
 wait $pid; rc=$?
 [ $rc = 1 ] && ok || bad "interrupted replay: exit $rc"
 expect_in "interrupted reported" "interrupted after" "$(cat "$tmp/pause.out")"
+
+# ---- times going back, long gaps -------------------------------------------------------------
+# pcap_edit SRC DST PYTHON-EXPR: every record's time (us) replaced by EXPR of n (1-based) and t.
+pcap_edit() {
+  python3 - "$1" "$2" "$3" <<'PY'
+import struct, sys
+d = open(sys.argv[1], 'rb').read()
+recs, o = [], 24
+while o < len(d):
+    s, us, incl, orig = struct.unpack_from('<IIII', d, o)
+    recs.append([s * 1000000 + us, d[o + 8:o + 16 + incl]])
+    o += 16 + incl
+times = [r[0] for r in recs]
+out = bytearray(d[:24])
+for n, (t, rest) in enumerate(recs, 1):
+    t = eval(sys.argv[3], {'n': n, 't': t, 'times': times})
+    out += struct.pack('<II', t // 1000000, t % 1000000) + rest
+open(sys.argv[2], 'wb').write(out)
+PY
+}
+# A text capture over midnight: the second record is a day "earlier". Its time was taken as
+# 2^64 ns after the first and the replay ran for ~584 years of bus time.
+printf '23:59:59.999 10 04 02 49 4F 16\n00:00:00.001 10 04 02 49 4F 16\n' >"$tmp/midnight.txt"
+expect_exit 0 "time going back a day" -- timeout -k 2 20 "$sim" replay "$tmp/midnight.txt" --address 4 --baud 1.5M
+expect_in "re-anchored at the step" "1 records stamped earlier than the record before (first: record 2 (line 2); at most 86399.998000 s back): 1 clock steps, re-anchored" "$out"
+expect_in "no bus time lost" "2 records, 0.000066 s of bus time" "$out"
+# A pcap whose record 2 is 1 us before record 1.
+pcap_edit "$golden/startup.pcap" "$tmp/back1us.pcap" "times[0] - 1 if n == 2 else t"
+expect_exit 0 "record 2 1 us before record 1" -- timeout -k 2 20 "$sim" replay "$tmp/back1us.pcap" --address 4 --baud 1.5M
+expect_in "1 us back" "(first: record 2 (byte 46); at most 0.000001 s back)" "$out"
+# One record 3 ms before the one before it: the first pass inferred 12 Mbit/s from that pair
+# (DIFFERENT 22 of 127), and the replay packed it. Now the pair is left out and the capture
+# replays clean.
+pcap_edit "$golden/data_exchange.pcap" "$tmp/back3ms.pcap" "times[39] - 3000 if n == 41 else t"
+expect_exit 0 "one record 3 ms back" -- "$sim" replay "$tmp/back3ms.pcap" --check
+expect_in "rate still 1.5M" "1.5 Mbit/s (the capture records no rate; the lowest rate its timing allows: record 28 begins 205.0 us after record 27, which needs 308 bit times in that gap; 1 records earlier than the one before left out" "$out"
+expect_in "one record 3 ms back: match" "result: MATCH: all 127 replies match" "$out"
+# A clock stepping back 150 ms in the middle (records 301 on): every later record was late and
+# packed behind the one before (DIFFERENT 48 of 227). Re-anchored at the step, the cycle kept.
+pcap_edit "$golden/param_channel.pcap" "$tmp/step.pcap" "t - 150000 if n >= 301 else t"
+expect_exit 0 "clock step back" -- "$sim" replay "$tmp/step.pcap" --check --baud 1.5M
+expect_in "clock step named" "(first: record 301 (byte 11224); at most 0.148000 s back): 1 clock steps, re-anchored" "$out"
+expect_in "clock step: match" "result: MATCH: all 227 replies match" "$out"
+# A 30-day pause: the card woke at every step of its baud search through it (4.5 s). Shortened
+# by whole search cycles once the card has settled; the figures are bus time.
+printf '0.0 10 04 02 49 4F 16\n2592000.0 10 04 02 49 4F 16\n' >"$tmp/month.txt"
+expect_exit 0 "30-day gap" -- timeout -k 2 20 "$sim" replay "$tmp/month.txt" --address 4 --baud 1.5M
+expect_in "30 days: bus time" "2 records, 1301.146968 s of bus time" "$out"
+expect_in "30 days: shortened" "1 idle gaps shortened, by 2590698.853032 s of bus time in all (first: before record 2 (line 2)): after at least 1300.5 s" "$out"
+# 285 years, and a pcap whose first record is at the epoch and the rest in 2024: the first ran
+# for hours, the second for most of an hour.
+printf '0.0 10 04 02 49 4F 16\n9000000000.0 10 04 02 49 4F 16\n' >"$tmp/centuries.txt"
+expect_exit 0 "285-year gap" -- timeout -k 2 20 "$sim" replay "$tmp/centuries.txt" --address 4 --baud 1.5M
+expect_in "285 years: shortened" "1 idle gaps shortened, by 8999998699.289307 s" "$out"
+pcap_edit "$golden/startup.pcap" "$tmp/epoch.pcap" "0 if n == 1 else t"
+expect_exit 1 "record 1 at the epoch" -- timeout -k 2 20 "$sim" replay "$tmp/epoch.pcap" --check --address 4 --baud 1.5M
+expect_in "epoch: shortened" "1 idle gaps shortened, by " "$out"
+expect_in "epoch: the rest replayed" "records   32 put on the bus" "$out"
+# The same 30 days inside data exchange: the card's watchdog expires, the drive stops, the
+# card loses the rate and searches when the master comes back. The counts are those of
+# replaying the whole gap (12 s before the gaps were shortened).
+pcap_edit "$golden/param_channel.pcap" "$tmp/pause30d.pcap" "t + 2592000000000 if n >= 151 else t"
+expect_exit 1 "30 days in data exchange" -- timeout -k 2 20 "$sim" replay "$tmp/pause30d.pcap" --check --address 4 --baud 1.5M
+expect_rows "30 days in data exchange" "$out" "Data_Exchange 200 59 141 0 141" "total 227 86 141 22 163"
+expect_in "30 days in data exchange: shortened" "1 idle gaps shortened, by 2590698.853032 s" "$out"
+# Without a watchdog the drive turns through a gap: its position changes, nothing is cut. And
+# SIGINT there ends the run at once (the bus ran a whole gap before looking at it).
+python3 - "$golden/param_channel.pcap" "$tmp/nowd.pcap" <<'PY'
+import struct, sys
+d = bytearray(open(sys.argv[1], 'rb').read())
+out, o, n = bytearray(d[:24]), 24, 0
+while o < len(d):
+    s, us, incl, orig = struct.unpack_from('<IIII', d, o)
+    n += 1
+    f = bytearray(d[o + 16:o + 16 + incl])
+    if len(f) > 10 and f[0] == 0x68 and f[4] & 0x7F == 4 and f[7] == 0x3D:
+        f[9] &= 0xF7                             # Set_Prm: WD_On off
+        f[-2] = sum(f[4:-2]) & 0xFF
+    if n >= 301:
+        s += 10800                               # three hours
+    out += struct.pack('<IIII', s, us, incl, orig) + f
+    o += 16 + incl
+open(sys.argv[2], 'wb').write(out)
+PY
+expect_exit 1 "drive turning through 3 h" -- timeout -k 2 20 "$sim" replay "$tmp/nowd.pcap" --check
+expect_in "not shortened" "1 idle gaps longer than 1300.5 s simulated whole: the emulated drive was still turning" "$out"
+expect_rows "drive turning through 3 h" "$out" "Data_Exchange 200 134 66 0 66"
+pcap_edit "$tmp/nowd.pcap" "$tmp/nowd80y.pcap" "t + 2500000000000000 if n >= 301 else t"
+"$sim" replay "$tmp/nowd80y.pcap" --check >"$tmp/nowd80y.out" 2>&1 &
+pid=$!
+sleep 1
+kill -INT $pid
+for _ in $(seq 50); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
+if kill -0 $pid 2>/dev/null; then bad "SIGINT did not stop a replay inside a long gap"; kill -9 $pid; fi
+wait $pid; rc=$?
+[ $rc = 1 ] && ok || bad "replay interrupted in a gap: exit $rc"
+expect_in "interrupted in a gap" "interrupted after 300 records" "$(cat "$tmp/nowd80y.out")"
+
+# ---- pipes and rates -----------------------------------------------------------------------
+# A pipe cannot be read twice: the first pass (address, rate) would leave nothing to replay.
+"$sim" convert "$golden/startup.pcap" "$tmp/startup.txt" >/dev/null
+out=$(cat "$tmp/startup.txt" | "$sim" replay /dev/stdin --format text --check 2>&1); rc=$?
+[ $rc = 2 ] && ok || bad "pipe without --address/--baud: exit $rc: $out"
+expect_in "pipe: says what to do" "replay: /dev/stdin is not a regular file (a pipe?) and can be read only once: give --address and --baud" "$out"
+out=$(cat "$tmp/startup.txt" | "$sim" replay /dev/stdin --format text --check --address 4 --baud 1.5M 2>&1); rc=$?
+[ $rc = 0 ] && ok || bad "pipe with --address and --baud: exit $rc: $out"
+expect_in "pipe replayed" "result: MATCH: all 32 replies match" "$out"
+# --baud overrides the rate a pcapng records (if_speed): the card then finds 12 Mbit/s at once.
+expect_exit 1 "--baud over a recorded rate" -- "$sim" replay "$golden/dpv1.pcapng" --check --baud 12M
+expect_in "override named" "12 Mbit/s (given with --baud; it overrides the capture's own rate, 1.5 Mbit/s, for every record)" "$out"
+expect_rows "--baud 12M over 1.5M" "$out" "FDL_Status 23 1 22 22 0"
+expect_exit 0 "--baud equal to the recorded rate" -- "$sim" replay "$golden/dpv1.pcapng" --check --baud 1.5M
+expect_in "equal rate named" "1.5 Mbit/s (given with --baud, the rate the capture records too)" "$out"
 
 # ---- the goldens made again now ------------------------------------------------------------
 # Same telegrams at the same times, or the first one that changed is named; and what dfp-sim

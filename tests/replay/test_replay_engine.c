@@ -4,7 +4,9 @@
  * docs/replay.md: the card answering an unanswered request and the other way round, a capture
  * starting in data exchange, SAP extensions, SDN, FCB repeats, tokens and a second master,
  * damaged records, records without times, a capture that ends after a request, the address
- * scan and timing conflicts. */
+ * scan and timing conflicts; times going back (clock steps, records out of order), long idle
+ * gaps (shortened without changing what the card does), rates outside the ten, a stop request
+ * in a gap. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -21,17 +23,38 @@
 static replay_t rp;
 static uint64_t next_index;
 
+/* Bus times at which the capture's records went onto the bus (on_telegram), in order. */
+#define MAX_SEEN 64u
+static uint64_t seen_ns[MAX_SEEN];
+static unsigned seen;
+
+static void on_telegram(void *ctx, const replay_telegram_t *t)
+{
+    (void)ctx;
+    if (t->source == REPLAY_FROM_CAPTURE && seen < MAX_SEEN) {
+        seen_ns[seen++] = t->t_ns;
+    }
+}
+
+static void start_with(const replay_options_t *o)
+{
+    char err[128];
+    CHECK_EQ(replay_init(&rp, o, err, sizeof err), 0);
+    next_index = 0;
+    seen = 0;
+}
+
 static void start(bool check, bool fixed_baud)
 {
     replay_options_t o = {.address = CARD, .check = check, .baud = BAUD,
-                          .fixed_card_baud = fixed_baud, .inverter = CARD_INVERTER_NONE};
-    char err[128];
-    CHECK_EQ(replay_init(&rp, &o, err, sizeof err), 0);
-    next_index = 0;
+                          .fixed_card_baud = fixed_baud, .inverter = CARD_INVERTER_NONE,
+                          .on_telegram = on_telegram};
+    start_with(&o);
 }
 
-/* One record at t_us (has_time false when t_us is UINT64_MAX), as a reader makes it. */
-static void feed(uint64_t t_us, const uint8_t *f, size_t len)
+/* One record at t_us (has_time false when t_us is UINT64_MAX), as a reader makes it, with the
+ * rate the record carries (0: none). */
+static void feed_at_rate(uint64_t t_us, const uint8_t *f, size_t len, uint32_t baud)
 {
     static cap_record_t rec;
     memset(&rec, 0, sizeof rec);
@@ -39,11 +62,30 @@ static void feed(uint64_t t_us, const uint8_t *f, size_t len)
     rec.position = 24u + 100u * (rec.index - 1u);
     rec.has_time = t_us != UINT64_MAX;
     rec.t_ns = rec.has_time ? 1700000000000000000ull + t_us * 1000u : 0u;
+    rec.baud = baud;
     rec.len = len;
     rec.orig_len = len;
     memcpy(rec.data, f, len);
     (void)cap_check_telegram(rec.data, rec.len, rec.problem, sizeof rec.problem);
     replay_feed(&rp, &rec);
+}
+
+static void feed(uint64_t t_us, const uint8_t *f, size_t len)
+{
+    feed_at_rate(t_us, f, len, 0);
+}
+
+/* The report as text (free it). */
+static char *report_text(int *status)
+{
+    char *text = NULL;
+    size_t size = 0;
+    FILE *out = open_memstream(&text, &size);
+    replay_report_info_t info = {.file = "t.pcap", .format = "pcap", .position_unit = "byte",
+                                 .baud_source = "given"};
+    *status = replay_report(&rp, &info, out);
+    fclose(out);
+    return text;
 }
 
 static size_t enc(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps, uint8_t dsap,
@@ -251,6 +293,12 @@ static void test_fcb_repeat(void)
     CHECK_EQ(rp.mismatches, 1);
     CHECK_EQ(rp.first.request.record, 5);
     CHECK(rp.first.fcb_repeat);
+    /* The context: the telegrams before the request, oldest first, the card's answers too. */
+    CHECK_EQ(rp.first.n_before, 4);
+    CHECK_EQ(rp.first.before[0].record, 1);
+    CHECK_EQ(rp.first.before[1].source, REPLAY_FROM_CARD);
+    CHECK_EQ(rp.first.before[2].record, 3);
+    CHECK_EQ(rp.first.before[3].source, REPLAY_FROM_CARD);
     CHECK(rp.first.actual_present);
     CHECK_BYTES(rp.first.actual.data, rp.first.actual.len, 0xA2, 0x82, 0x84, 0x08, 0x3E, 0x3C,
                 0x02, 0x05, 0x00, 0xFF, 0x60, 0x03, 0xF1, 0x16);
@@ -429,7 +477,7 @@ static void test_scan(void)
     CHECK_EQ(s.answers[7], 1);
     CHECK(s.master[2]);
     CHECK(s.master[3]);
-    CHECK_EQ(replay_scan_rate(&s), 0); /* no times: nothing to go by */
+    CHECK_EQ(replay_scan_rate(&s, NULL), 0); /* no times: nothing to go by */
 }
 
 static void scan_timed(replay_scan_t *s, uint64_t t_us, const uint8_t *f, size_t len)
@@ -454,19 +502,21 @@ static void test_scan_rate(void)
     next_index = 0;
     scan_timed(&s, 100, fdl_status_req, sizeof fdl_status_req);
     scan_timed(&s, 106, fdl_status_rsp, sizeof fdl_status_rsp);
-    CHECK_EQ(replay_scan_rate(&s), 12000000u);
-    CHECK_EQ(s.need_record, 2);
-    CHECK_EQ(s.need_bits, 77);
+    replay_scan_rate_t why;
+    CHECK_EQ(replay_scan_rate(&s, &why), 12000000u);
+    CHECK_EQ(why.decided.record, 2);
+    CHECK_EQ(why.decided.bits, 77);
+    CHECK(!why.outlier);
     replay_scan_init(&s);
     scan_timed(&s, 100, fdl_status_req, sizeof fdl_status_req);
     scan_timed(&s, 151, fdl_status_rsp, sizeof fdl_status_rsp);
     scan_timed(&s, 400, fdl_status_req, sizeof fdl_status_req);
-    CHECK_EQ(replay_scan_rate(&s), 1500000u);
+    CHECK_EQ(replay_scan_rate(&s, NULL), 1500000u);
     /* Telegrams that overlap at any rate: 12M, the highest there is. */
     replay_scan_init(&s);
     scan_timed(&s, 100, fdl_status_req, sizeof fdl_status_req);
     scan_timed(&s, 100, fdl_status_rsp, sizeof fdl_status_rsp);
-    CHECK_EQ(replay_scan_rate(&s), 12000000u);
+    CHECK_EQ(replay_scan_rate(&s, NULL), 12000000u);
 }
 
 static void test_describe(void)
@@ -510,6 +560,309 @@ static void test_describe(void)
     CHECK_EQ(m.kind, REPLAY_KIND_GARBAGE);
 }
 
+/* A record stamped a day earlier than the one before (a text capture over midnight) and one
+ * 1 us earlier (a pcap): no unsigned difference across the step (which made a gap of 584
+ * years), the record goes right after the one before (no spacing known yet) and is the anchor
+ * for the rest. */
+static void test_time_going_back(void)
+{
+    start(false, true);
+    feed(86399999000ull, fdl_status_req, sizeof fdl_status_req); /* 23:59:59.999 */
+    feed(1000, fdl_status_req, sizeof fdl_status_req);           /* 00:00:00.001 */
+    feed(3000, fdl_status_req, sizeof fdl_status_req);
+    replay_finish(&rp);
+    CHECK_EQ(rp.backwards, 1);
+    CHECK_EQ(rp.clock_steps, 1);
+    CHECK_EQ(rp.out_of_order, 0);
+    CHECK_EQ(rp.max_back_ns, 86399998000000ull);
+    CHECK_EQ(rp.first_back_record, 2);
+    CHECK_EQ(rp.first_back_position, 124);
+    CHECK_EQ(rp.deferred, 0);
+    CHECK_EQ(seen, 3);
+    /* Request 1 takes 6 x 7333 ns; the card's answer (fixed rate) follows, then TSYN. */
+    uint64_t answer_end = 44000u + 11u * 1000u * 1000u / 1500u + 6u * 7333u;
+    CHECK(seen_ns[1] >= answer_end && seen_ns[1] < answer_end + 30000u);
+    CHECK_EQ(seen_ns[2], seen_ns[1] + 2000000u); /* its recorded spacing from the anchor */
+    CHECK(rp.bus.now_ns < 10000000u);
+    int status;
+    char *text = report_text(&status);
+    CHECK_EQ(status, 0);
+    CHECK(strstr(text, "timing    1 records stamped earlier than the record before (first: "
+                       "record 2 (byte 124); at most 86399.998000 s back): 1 clock steps, "
+                       "re-anchored") != NULL);
+    free(text);
+
+    start(false, true);
+    feed(100, fdl_status_req, sizeof fdl_status_req);
+    feed(99, fdl_status_req, sizeof fdl_status_req);
+    replay_finish(&rp);
+    CHECK_EQ(rp.clock_steps, 1);
+    CHECK_EQ(seen, 2);
+    CHECK(seen_ns[1] < 1000000u);
+}
+
+/* A clock step back in a cyclic capture (records 2 ms apart, then 150 ms back): the record after
+ * the step goes on at the cycle the records before had, the rest keep their spacing from it.
+ * Without re-anchoring every later record was "late" and packed behind the one before. */
+static void test_clock_step_keeps_the_pace(void)
+{
+    start(true, true);
+    for (unsigned i = 0; i < 6u; i++) {
+        uint64_t t = 2000u * i - (i >= 3u ? 150000u : 0u) + 150000u;
+        feed(t, fdl_status_req, sizeof fdl_status_req);
+        feed(t + 51u, fdl_status_rsp, sizeof fdl_status_rsp);
+    }
+    replay_finish(&rp);
+    CHECK_EQ(rp.backwards, 1);
+    CHECK_EQ(rp.clock_steps, 1);
+    CHECK_EQ(rp.first_back_record, 7);
+    CHECK_EQ(rp.deferred, 0);
+    CHECK_EQ(seen, 6);
+    for (unsigned i = 1; i < 6u; i++) {
+        CHECK_EQ(seen_ns[i] - seen_ns[i - 1u], 2000000u);
+    }
+    CHECK_EQ(rp.svc[REPLAY_SVC_FDL_STATUS].matched, 6);
+    /* Telemetry's clock goes on steadily across the step. */
+    CHECK_EQ(replay_capture_ns(&rp, seen_ns[3]), 1700000000000000000ull + 156000000ull);
+}
+
+/* A record out of order by less than the spacing before it (10 us back, records 2 ms apart):
+ * right after the one before; the anchor stays, so the next records keep their recorded times. */
+static void test_record_out_of_order(void)
+{
+    start(false, true);
+    feed(0, fdl_status_req, sizeof fdl_status_req);
+    feed(2000, fdl_status_req, sizeof fdl_status_req);
+    feed(4000, fdl_status_req, sizeof fdl_status_req);
+    feed(3990, fdl_status_req, sizeof fdl_status_req);
+    feed(6000, fdl_status_req, sizeof fdl_status_req);
+    replay_finish(&rp);
+    CHECK_EQ(rp.backwards, 1);
+    CHECK_EQ(rp.out_of_order, 1);
+    CHECK_EQ(rp.clock_steps, 0);
+    CHECK_EQ(seen, 5);
+    CHECK(seen_ns[3] > seen_ns[2] && seen_ns[3] < seen_ns[2] + 200000u);
+    CHECK_EQ(seen_ns[4], 6000000u);
+    CHECK_EQ(rp.deferred, 0);
+}
+
+/* A card searching its rate since power-up (the first request is at 1.5 Mbit/s, it listens at
+ * 12 first): it listens at 1.5 Mbit/s from 60 to 80 ms into each search cycle. A request 30 days
+ * later in that window is answered, one in the 500 kbit/s window (80..100 ms) is not: the gap
+ * is shortened by whole cycles and the card is where a full simulation would have it (checked
+ * against the unshortened replay, which took 4.7 s for this gap). */
+static void test_long_gap_shortened_exactly(void)
+{
+    const uint64_t cycle_us = replay_search_cycle_ns() / 1000u;
+    CHECK_EQ(cycle_us, 1189754u); /* 5 x 20 ms + the dwells at 187.5k .. 9.6k */
+    const uint64_t k = 2178589u;  /* 30 days of cycles */
+    const uint64_t offsets[2] = {70000u, 90000u};
+    for (unsigned i = 0; i < 2u; i++) {
+        start(true, false);
+        uint64_t t2 = k * cycle_us + offsets[i];
+        feed(0, fdl_status_req, sizeof fdl_status_req);
+        feed(t2, fdl_status_req, sizeof fdl_status_req);
+        feed(t2 + 51u, fdl_status_rsp, sizeof fdl_status_rsp);
+        replay_finish(&rp);
+        CHECK_EQ(rp.gaps_cut, 1);
+        CHECK_EQ(rp.gaps_turning, 0);
+        CHECK_EQ(rp.first_cut_record, 2);
+        CHECK_EQ(seen, 2);
+        CHECK_EQ(seen_ns[1] + rp.cut_ns, t2 * 1000u);
+        CHECK_EQ(rp.cut_ns % (cycle_us * 1000u), 0);
+        /* Kept: the settling time and less than a cycle more. */
+        CHECK(seen_ns[1] >= REPLAY_GAP_SETTLE_NS);
+        CHECK(seen_ns[1] < REPLAY_GAP_SETTLE_NS + cycle_us * 1000u + 2000000000u);
+        const replay_counts_t *c = &rp.svc[REPLAY_SVC_FDL_STATUS];
+        CHECK_EQ(c->requests, 2);
+        CHECK_EQ(c->card_silent, i == 0u ? 1u : 2u);
+        CHECK_EQ(rp.card_tx, i == 0u ? 1u : 0u);
+        /* The capture's clock is still known after the cut (LCM telemetry uses it). */
+        CHECK_EQ(replay_capture_ns(&rp, seen_ns[1]), 1700000000000000000ull + t2 * 1000u);
+    }
+    int status;
+    char *text = report_text(&status);
+    CHECK(strstr(text, "timing    1 idle gaps shortened, by ") != NULL);
+    CHECK(strstr(text, "whole baud-search cycles of 1.189754 s were left out") != NULL);
+    free(text);
+    /* A gap of centuries (a pcap's epoch 0 before 2024) ends as quickly. */
+    start(false, false);
+    feed(0, fdl_status_req, sizeof fdl_status_req);
+    feed(UINT64_MAX / 1000u - 1700000000000000000ull / 1000u, fdl_status_req,
+         sizeof fdl_status_req);
+    replay_finish(&rp);
+    CHECK_EQ(rp.gaps_cut, 1);
+    CHECK(rp.bus.now_ns < REPLAY_GAP_SETTLE_NS + 10000000000ull);
+}
+
+/* With a fixed rate the idle card has nothing periodic: the whole gap beyond the settling
+ * time goes, in whole microseconds. */
+static void test_long_gap_fixed_rate(void)
+{
+    start(true, true);
+    feed(0, fdl_status_req, sizeof fdl_status_req);
+    feed(51, fdl_status_rsp, sizeof fdl_status_rsp);
+    feed(3600000000ull, fdl_status_req, sizeof fdl_status_req); /* an hour later */
+    feed(3600000051ull, fdl_status_rsp, sizeof fdl_status_rsp);
+    replay_finish(&rp);
+    CHECK_EQ(rp.gaps_cut, 1);
+    CHECK_EQ(rp.mismatches, 0);
+    CHECK_EQ(rp.svc[REPLAY_SVC_FDL_STATUS].matched, 2);
+    CHECK(seen_ns[1] >= REPLAY_GAP_SETTLE_NS && seen_ns[1] < REPLAY_GAP_SETTLE_NS + 1000000u);
+}
+
+/* A gap shorter than the settling time is simulated as recorded. */
+static void test_gap_below_settling_kept(void)
+{
+    start(true, true);
+    feed(0, fdl_status_req, sizeof fdl_status_req);
+    feed(1000000000ull, fdl_status_req, sizeof fdl_status_req); /* 1000 s */
+    replay_finish(&rp);
+    CHECK_EQ(rp.gaps_cut, 0);
+    CHECK_EQ(seen_ns[1], 1000000000000ull);
+}
+
+static volatile int stop_flag;
+
+/* Stands for SIGINT arriving while the bus runs through a gap: the card's baud search steps are
+ * the only events there. */
+static void stop_after_10_s(void *ctx, uint64_t t_ns, const dp_event_t *ev)
+{
+    (void)ctx;
+    (void)ev;
+    if (t_ns >= 10000000000ull) {
+        stop_flag = 1;
+    }
+}
+
+/* A stop request while the bus runs through a long gap ends the run within a slice (the bus ran
+ * the whole gap before looking at it): the record after the gap is not put on the bus and the
+ * request before it is not judged. */
+static void test_stop_in_a_gap(void)
+{
+    stop_flag = 0;
+    replay_options_t o = {.address = CARD, .check = true, .baud = BAUD,
+                          .inverter = CARD_INVERTER_NONE, .stop = &stop_flag,
+                          .on_telegram = on_telegram, .on_card_event = stop_after_10_s};
+    start_with(&o);
+    feed(0, fdl_status_req, sizeof fdl_status_req);
+    feed(2000, fdl_status_req, sizeof fdl_status_req);
+    feed(1000000000ull, fdl_status_req, sizeof fdl_status_req); /* 1000 s later: not reached */
+    replay_finish(&rp);
+    CHECK(rp.interrupted);
+    CHECK_EQ(seen, 2);
+    CHECK_EQ(rp.records, 2);
+    CHECK(rp.bus.now_ns >= 10000000000ull);
+    CHECK(rp.bus.now_ns <= 10000000000ull + REPLAY_SLICE_NS + 1000000000ull);
+    CHECK_EQ(replay_total_requests(&rp), 1); /* the second request's window never closed */
+}
+
+/* A record's rate: the ten PROFIBUS rates only (anything else goes at the options' rate and is
+ * counted), and baud_override puts every record at the options' rate. */
+static void test_record_rates(void)
+{
+    start(false, true);
+    feed_at_rate(0, fdl_status_req, sizeof fdl_status_req, 1000000u); /* not a PROFIBUS rate */
+    feed_at_rate(1000, fdl_status_req, sizeof fdl_status_req, 0xFFFFFFFFu);
+    replay_finish(&rp);
+    CHECK_EQ(rp.odd_rate_records, 2);
+    CHECK_EQ(rp.first_odd_rate, 1000000u);
+    CHECK_EQ(rp.min_baud_seen, 0);
+    CHECK_EQ(rp.last_end_ns, seen_ns[1] + 6u * (uint64_t)hal_uart_char_ns(BAUD));
+    CHECK_EQ(rp.card_tx, 2); /* at the card's fixed 1.5 Mbit/s */
+    int status;
+    char *text = report_text(&status);
+    CHECK(strstr(text, "note      2 records carry a rate that is not a PROFIBUS rate (first: "
+                       "1000000 bit/s): they went onto the bus at 1.5 Mbit/s") != NULL);
+    free(text);
+
+    cap_record_t rec;
+    memset(&rec, 0, sizeof rec);
+    rec.baud = 12000000u;
+    CHECK_EQ(replay_bus_baud(&rp, &rec), 12000000u);
+    rec.baud = 1000000u;
+    CHECK_EQ(replay_bus_baud(&rp, &rec), BAUD);
+    replay_options_t o = {.address = CARD, .baud = BAUD, .baud_override = true,
+                          .fixed_card_baud = true, .inverter = CARD_INVERTER_NONE,
+                          .on_telegram = on_telegram};
+    start_with(&o);
+    rec.baud = 12000000u;
+    CHECK_EQ(replay_bus_baud(&rp, &rec), BAUD);
+    feed_at_rate(0, fdl_status_req, sizeof fdl_status_req, 12000000u);
+    replay_finish(&rp);
+    CHECK_EQ(rp.rate_overridden, 1);
+    CHECK_EQ(rp.card_tx, 1); /* it went at 1.5 Mbit/s, the card's rate */
+    text = report_text(&status);
+    CHECK(strstr(text, "bus       1.5 Mbit/s (given; it overrides the capture's own rate, "
+                       "12 Mbit/s, for every record)") != NULL);
+    free(text);
+
+    o.baud = 1000000u; /* the engine refuses a rate it has no character time for */
+    char err[128];
+    CHECK_EQ(replay_init(&rp, &o, err, sizeof err), -1);
+    CHECK_STR(err, "1000000 bit/s is not a PROFIBUS rate");
+}
+
+/* The first pass: a pair of records whose time goes back bounds nothing (it was taken as a gap
+ * of 1 us, which needs 12 Mbit/s); with enough answers, one pair alone needing a rate four
+ * times higher than any other is left out; with few, it decides. */
+static void test_scan_rate_robust(void)
+{
+    replay_scan_t s;
+    replay_scan_rate_t why;
+    replay_scan_init(&s);
+    next_index = 0;
+    for (unsigned i = 0; i < 3u; i++) {
+        scan_timed(&s, 2000u * i, fdl_status_req, sizeof fdl_status_req);
+        scan_timed(&s, 2000u * i + 51u, fdl_status_rsp, sizeof fdl_status_rsp);
+    }
+    scan_timed(&s, 3000, fdl_status_req, sizeof fdl_status_req); /* 1051 us back */
+    scan_timed(&s, 3051, fdl_status_rsp, sizeof fdl_status_rsp);
+    CHECK_EQ(replay_scan_rate(&s, &why), 1500000u);
+    CHECK_EQ(s.backward_pairs, 1);
+    CHECK_EQ(s.timed_answers, 4);
+    CHECK(!why.outlier);
+
+    /* Ten request/answer pairs at 1.5 Mbit/s pace, and one answer 3 us after its request. */
+    replay_scan_init(&s);
+    next_index = 0;
+    for (unsigned i = 0; i < 10u; i++) {
+        scan_timed(&s, 2000u * i, fdl_status_req, sizeof fdl_status_req);
+        scan_timed(&s, 2000u * i + (i == 6u ? 3u : 51u), fdl_status_rsp, sizeof fdl_status_rsp);
+    }
+    CHECK_EQ(replay_scan_rate(&s, &why), 1500000u);
+    CHECK(why.outlier);
+    CHECK_EQ(why.ignored.record, 14);
+    CHECK_EQ(why.ignored.prev_record, 13);
+    CHECK_EQ(why.ignored.gap_ns, 3000);
+    CHECK_EQ(why.decided.bits, 77);
+    CHECK_EQ(why.decided.gap_ns, 51000);
+
+    /* The same with only four pairs: too few to call one an outlier. */
+    replay_scan_init(&s);
+    next_index = 0;
+    for (unsigned i = 0; i < 4u; i++) {
+        scan_timed(&s, 2000u * i, fdl_status_req, sizeof fdl_status_req);
+        scan_timed(&s, 2000u * i + (i == 2u ? 3u : 51u), fdl_status_rsp, sizeof fdl_status_rsp);
+    }
+    CHECK_EQ(replay_scan_rate(&s, &why), 12000000u);
+    CHECK(!why.outlier);
+    CHECK_EQ(why.decided.record, 6);
+
+    /* A rate outside the ten in a record is no recorded rate. */
+    replay_scan_init(&s);
+    cap_record_t rec;
+    memset(&rec, 0, sizeof rec);
+    rec.baud = 1000000u;
+    rec.len = sizeof fdl_status_req;
+    memcpy(rec.data, fdl_status_req, rec.len);
+    replay_scan_feed(&s, &rec);
+    CHECK_EQ(s.recorded_baud, 0);
+    rec.baud = 500000u;
+    replay_scan_feed(&s, &rec);
+    CHECK_EQ(s.recorded_baud, 500000u);
+}
+
 int main(void)
 {
     RUN_TEST(test_startup_matches);
@@ -528,5 +881,14 @@ int main(void)
     RUN_TEST(test_scan);
     RUN_TEST(test_scan_rate);
     RUN_TEST(test_describe);
+    RUN_TEST(test_time_going_back);
+    RUN_TEST(test_clock_step_keeps_the_pace);
+    RUN_TEST(test_record_out_of_order);
+    RUN_TEST(test_long_gap_shortened_exactly);
+    RUN_TEST(test_long_gap_fixed_rate);
+    RUN_TEST(test_gap_below_settling_kept);
+    RUN_TEST(test_stop_in_a_gap);
+    RUN_TEST(test_record_rates);
+    RUN_TEST(test_scan_rate_robust);
     return check_report();
 }

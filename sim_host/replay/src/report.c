@@ -86,7 +86,6 @@ static bool answer_fits(const replay_kept_t *req, const replay_kept_t *ans)
 /* The reasons a reader needs to make sense of the first difference. */
 static void explain(FILE *out, const replay_t *r, const replay_mismatch_t *m)
 {
-    char b[32];
     const char *lead = "  why       ";
     const char *more = "            ";
     const char *p = lead;
@@ -114,6 +113,7 @@ static void explain(FILE *out, const replay_t *r, const replay_mismatch_t *m)
             "telegram in the capture, e.g. a late answer to an earlier request");
     }
     if (m->baud_state == DP_BAUD_SEARCH) {
+        char b[32];
         WHY("the card had not found the bus rate when the request ended (listening at %s): it "
             "heard the request garbled. The card powers up at the first record and searches "
             "from 12 Mbit/s down; if the real card was on the bus earlier, replay with "
@@ -168,7 +168,22 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
             r->opt.fixed_card_baud ? "fixed at the bus rate"
                                    : "automatic baud search from the first record",
             r->opt.inverter == CARD_INVERTER_SIM ? "emulated MOVIDRIVE" : "none (PI echoes PO)");
-    if (r->min_baud_seen != 0u && r->min_baud_seen == r->max_baud_seen) {
+    if (r->opt.baud_override && r->min_baud_seen != 0u && r->rate_overridden == 0u) {
+        fprintf(out, "  bus       %s (%s, the rate the capture records too)\n",
+                baud_text(r->opt.baud, b, sizeof b),
+                info->baud_source != NULL ? info->baud_source : "given");
+    } else if (r->opt.baud_override && r->min_baud_seen != 0u) {
+        char b2[32];
+        char b3[32];
+        fprintf(out, "  bus       %s (%s; it overrides the capture's own rate, %s%s%s, for "
+                     "every record)\n",
+                baud_text(r->opt.baud, b, sizeof b),
+                info->baud_source != NULL ? info->baud_source : "given",
+                baud_text(r->min_baud_seen, b2, sizeof b2),
+                r->max_baud_seen != r->min_baud_seen ? " .. " : "",
+                r->max_baud_seen != r->min_baud_seen ? baud_text(r->max_baud_seen, b3, sizeof b3)
+                                                     : "");
+    } else if (r->min_baud_seen != 0u && r->min_baud_seen == r->max_baud_seen) {
         fprintf(out, "  bus       %s (recorded in the capture)\n",
                 baud_text(r->min_baud_seen, b, sizeof b));
     } else if (r->min_baud_seen != 0u) {
@@ -195,6 +210,12 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
             (unsigned long long)r->card_tx, dp_state_name(dp_slave_state(&r->card.card.dp)),
             dp_baud_state_name(dp_slave_baud_state(&r->card.card.dp)),
             baud_text(dp_slave_baud(&r->card.card.dp), b, sizeof b));
+    if (r->odd_rate_records > 0u) {
+        fprintf(out, "  note      %llu records carry a rate that is not a PROFIBUS rate (first: "
+                     "%u bit/s): they went onto the bus at %s\n",
+                (unsigned long long)r->odd_rate_records, r->first_odd_rate,
+                baud_text(r->opt.baud, b, sizeof b));
+    }
     if (r->stray_answers > 0u) {
         fprintf(out, "  note      %llu answers from station %u in the capture follow no request "
                      "to it (not compared)\n",
@@ -215,8 +236,37 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
                 baud_text(r->opt.baud, b, sizeof b), (double)r->max_defer_ns / 1e3, at);
     }
     if (r->backwards > 0u) {
-        fprintf(out, "  timing    %llu records have an earlier time than the one before: taken "
-                     "as simultaneous\n", (unsigned long long)r->backwards);
+        where(info, r->first_back_record, r->first_back_position, at, sizeof at);
+        fprintf(out, "  timing    %llu records stamped earlier than the record before (first: %s; "
+                     "at most %.6f s back)", (unsigned long long)r->backwards, at,
+                (double)r->max_back_ns / 1e9);
+        if (r->clock_steps > 0u) {
+            fprintf(out, ": %llu clock steps, re-anchored (the record went onto the bus at the "
+                         "spacing of the records before it, the records after it keep their "
+                         "recorded spacing from it)", (unsigned long long)r->clock_steps);
+        }
+        if (r->out_of_order > 0u) {
+            fprintf(out, "%s %llu out of order by less than that spacing (the record went onto "
+                         "the bus right after the one before, the records after it at their "
+                         "recorded times)", r->clock_steps > 0u ? ";" : ":",
+                    (unsigned long long)r->out_of_order);
+        }
+        fputc('\n', out);
+    }
+    if (r->gaps_cut > 0u) {
+        where(info, r->first_cut_record, r->first_cut_position, at, sizeof at);
+        fprintf(out, "  timing    %llu idle gaps shortened, by %.6f s of bus time in all (first: "
+                     "before %s): after at least %.1f s of each the card had settled (rate "
+                     "lost or fixed, no watchdog, drive at rest) and whole baud-search cycles "
+                     "of %.6f s were left out; bus times after a shortened gap are that much "
+                     "earlier than the capture's\n",
+                (unsigned long long)r->gaps_cut, (double)r->cut_ns / 1e9, at,
+                (double)REPLAY_GAP_SETTLE_NS / 1e9, (double)replay_search_cycle_ns() / 1e9);
+    }
+    if (r->gaps_turning > 0u) {
+        fprintf(out, "  timing    %llu idle gaps longer than %.1f s simulated whole: the "
+                     "emulated drive was still turning (its position changes with time)\n",
+                (unsigned long long)r->gaps_turning, (double)REPLAY_GAP_SETTLE_NS / 1e9);
     }
 
     bool file_ok = info->file_error == NULL && !info->interrupted;

@@ -4,7 +4,10 @@
  * in-memory bus (membus, simulated time) next to an injector port. Records are fed one at a time
  * (replay_feed): every telegram of the capture goes onto the bus at its recorded time, except
  * the card's own recorded answers: the card produces its own. Time starts at the first record,
- * where the card powers up (automatic baud search unless fixed_card_baud).
+ * where the card powers up (automatic baud search unless fixed_card_baud). A record stamped
+ * earlier than the one before goes on after it (re-anchoring when it is a clock step: the records
+ * after it keep their spacing from it); an idle gap in which the card has settled is shortened
+ * by whole baud-search cycles (docs/replay.md, "Timing model").
  *
  * With check on, every request addressed to the card (DA == address, not broadcast) is matched
  * with the record that follows it when that is the card's answer (SC, or a response with SA ==
@@ -36,6 +39,13 @@
 /* Gaps before a record without a time (text captures), in bit times at the bus rate. */
 #define REPLAY_SYNTH_GAP_ANSWER_BITS 11u   /* min TSDR before an answer */
 #define REPLAY_SYNTH_GAP_REQUEST_BITS 66u  /* twice TSYN before a request or token */
+/* The bus runs in slices of at most this much bus time; the stop flag is looked at between
+ * them, so a long gap is never a long wait for SIGINT. */
+#define REPLAY_SLICE_NS 1000000000ull
+/* How long after the last record the card's one-shot timers may still run out (replay.c,
+ * settle_ns): the longest baud control, twice the longest DP watchdog 255 x 255 x 10 ms. An
+ * idle gap is only shortened after this much of it has been simulated. */
+#define REPLAY_GAP_SETTLE_NS (2ull * 255u * 255u * 10u * 1000000ull)
 
 typedef enum replay_speed {
     REPLAY_SPEED_MAX = 0, /* simulated time only */
@@ -62,12 +72,15 @@ typedef struct replay_telegram {
 typedef struct replay_options {
     uint8_t address;        /* the card's DIP address */
     bool check;
-    uint32_t baud;          /* for records without a rate; 0: REPLAY_DEFAULT_BAUD */
+    uint32_t baud;          /* for records without a rate; 0: REPLAY_DEFAULT_BAUD. Must be one
+                               of hal_uart_bauds[] (replay_init refuses others) */
+    bool baud_override;     /* baud applies to every record, also those that carry a rate */
     bool fixed_card_baud;   /* the card starts at the bus rate instead of searching */
     card_inverter_t inverter; /* CARD_INVERTER_SIM or CARD_INVERTER_NONE */
     uint32_t inverter_delay_us;
     replay_speed_t speed;
-    /* Non-zero when the user asked to stop (SIGINT): --speed real stops waiting. Optional. */
+    /* Non-zero when the user asked to stop (SIGINT): the bus stops at the next slice (at most
+     * REPLAY_SLICE_NS of bus time), --speed real stops waiting. Optional. */
     volatile const int *stop;
     /* Optional observers. */
     void (*on_telegram)(void *ctx, const replay_telegram_t *t);
@@ -134,9 +147,19 @@ typedef struct replay {
     uint32_t inj_baud;
     bool started;
     bool finished;
-    /* time */
-    bool have_origin;
-    uint64_t origin_ns;   /* capture time that maps to bus time 0 */
+    /* time: a timed record's bus time is anchor_bus_ns + (its time - anchor_capture_ns). The
+     * anchor is the first timed record, moved to a record whose time goes back or that follows a
+     * shortened gap. */
+    bool have_anchor;
+    uint64_t origin_ns;      /* capture time minus bus time at the first anchor (may wrap) */
+    uint64_t anchor_capture_ns;
+    uint64_t anchor_bus_ns;
+    bool have_last_time;
+    uint64_t last_time_ns;   /* recorded time of the last timed record put on the bus (the
+                                latest, when one came out of order) */
+    uint64_t last_spacing_ns; /* recorded time between the last two timed records put on the
+                                 bus, their time going forward (0: none yet) */
+    bool interrupted;        /* *opt.stop stopped the bus short of a record's time */
     uint64_t last_inject_ns; /* bus time the last injected telegram started */
     uint64_t last_end_ns;    /* ... and ended */
     uint64_t wall_start_ns;
@@ -179,7 +202,21 @@ typedef struct replay {
     uint64_t card_tx;
     uint64_t unsolicited;    /* card transmissions with no request waiting */
     uint64_t untimed;        /* records given synthetic times */
-    uint64_t backwards;      /* records whose time went back */
+    uint64_t backwards;      /* records whose time went back: */
+    uint64_t out_of_order;   /* ... by less than last_spacing_ns: right after the one before */
+    uint64_t clock_steps;    /* ... by more: re-anchored */
+    uint64_t max_back_ns;    /* ... the largest step back */
+    uint64_t first_back_record;
+    uint64_t first_back_position;
+    uint64_t gaps_cut;       /* idle gaps shortened (the card had settled) */
+    uint64_t cut_ns;         /* ... bus time left out in all */
+    uint64_t first_cut_record; /* the record after the first shortened gap */
+    uint64_t first_cut_position;
+    uint64_t gaps_turning;   /* long idle gaps kept whole: the emulated drive was turning */
+    uint64_t odd_rate_records; /* records carrying a rate outside hal_uart_bauds[]: replayed at
+                                  opt.baud */
+    uint32_t first_odd_rate;
+    uint64_t rate_overridden;  /* records whose recorded rate baud_override replaced */
     uint64_t deferred;       /* injected later than recorded: the line was busy */
     uint64_t deferred_beyond_resolution;
     uint64_t max_defer_ns;
@@ -188,8 +225,6 @@ typedef struct replay {
     uint32_t min_baud_seen;  /* rates taken from the records (0: none) */
     uint32_t max_baud_seen;
     uint64_t last_record_ns; /* bus time of the last record */
-    bool have_last_want;
-    uint64_t last_want_ns;   /* recorded time of the last timed record, as bus time */
     uint64_t last_index;     /* index of the last record fed */
     /* The file ends right after a request to the card: its answer is not in the capture, so
      * the request is not compared (a recorder stopped mid-exchange). */
@@ -207,8 +242,17 @@ void replay_feed(replay_t *r, const cap_record_t *rec);
 /* After the last record: lets the card answer the last request and closes the check. */
 void replay_finish(replay_t *r);
 
-/* The bus rate used for a record (the record's own, else the options'). */
+/* The bus rate used for a record: the options' with baud_override, else the record's own if it
+ * is a PROFIBUS rate, else the options'. Always one of hal_uart_bauds[]. */
 uint32_t replay_bus_baud(const replay_t *r, const cap_record_t *rec);
+/* Is baud one of the ten PROFIBUS rates (hal_uart_bauds[])? */
+bool replay_is_profibus_baud(uint32_t baud);
+/* The capture's clock at a bus instant, for telemetry: the first timed record's time plus the
+ * bus time since and the bus time left out of shortened gaps. It runs on steadily across a clock
+ * step in the capture (never backwards). Without any timed record, the bus time itself. */
+uint64_t replay_capture_ns(const replay_t *r, uint64_t bus_ns);
+/* One full baud search of the card over the ten rates, in ns: the period of an idle card. */
+uint64_t replay_search_cycle_ns(void);
 static inline uint64_t replay_total_requests(const replay_t *r)
 {
     uint64_t n = 0;
@@ -235,6 +279,26 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
 
 #define REPLAY_SCAN_MAX 128u
 
+/* Two consecutive timed records: the rate at which the first fits into the gap between them. */
+typedef struct replay_scan_pair {
+    uint64_t need_baud;   /* 0: no such pair */
+    uint64_t record;      /* the second record */
+    uint64_t prev_record; /* the first */
+    uint64_t gap_ns;
+    uint32_t bits;        /* bit times that had to fit into the gap */
+} replay_scan_pair_t;
+
+/* With at least this many timed request/answer pairs, one pair alone needing a higher rate than
+ * all the others is taken for a bad timestamp and left out (replay_scan_rate). */
+#define REPLAY_SCAN_OUTLIER_MIN_ANSWERS 8u
+
+typedef struct replay_scan_rate {
+    uint32_t baud;               /* 0: nothing to go by */
+    replay_scan_pair_t decided;  /* the pair that decided it */
+    bool outlier;                /* a single pair needing more was left out: */
+    replay_scan_pair_t ignored;
+} replay_scan_rate_t;
+
 typedef struct replay_scan {
     uint64_t answers[REPLAY_SCAN_MAX]; /* answers seen from each address (slaves only) */
     bool master[REPLAY_SCAN_MAX];      /* sent a request or a token: a master */
@@ -248,11 +312,10 @@ typedef struct replay_scan {
     size_t prev_len;
     uint64_t prev_index;
     uint64_t timed_answers;   /* requests followed by their answer, both with times */
-    uint64_t need_baud;       /* the highest rate any pair of records needs */
-    uint64_t need_record;     /* ... the pair: this record */
-    uint64_t need_prev_record; /* ... and the one before */
-    uint64_t need_gap_ns;
-    uint32_t need_bits;       /* bit times that had to fit into the gap */
+    uint64_t timed_pairs;     /* consecutive timed records whose time does not go back */
+    uint64_t backward_pairs;  /* ... whose time does: they say nothing about the rate */
+    replay_scan_pair_t need;  /* the pair of records needing the highest rate */
+    replay_scan_pair_t need2; /* the pair needing the highest rate after it */
 } replay_scan_t;
 
 void replay_scan_init(replay_scan_t *s);
@@ -262,8 +325,10 @@ void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec);
 unsigned replay_scan_result(const replay_scan_t *s, uint8_t *out, unsigned max);
 /* The lowest PROFIBUS rate at which no recorded telegram begins before the one before it ended
  * and no answer before min TSDR after its request (12 Mbit/s when even that does not fit); 0
- * when the file has no request followed by its answer with times. */
-uint32_t replay_scan_rate(const replay_scan_t *s);
+ * when the file has no request followed by its answer with times. Pairs whose time goes back
+ * are left out, and with REPLAY_SCAN_OUTLIER_MIN_ANSWERS answers also a single pair that alone
+ * needs a higher rate than every other (why says which). why may be NULL. */
+uint32_t replay_scan_rate(const replay_scan_t *s, replay_scan_rate_t *why);
 
 /* ---- files ------------------------------------------------------------------------------- */
 
