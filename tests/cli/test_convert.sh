@@ -18,8 +18,10 @@ expect_exit 0 "pcapng to pcap keeps USER0" -- "$sim" convert d.pcapng u.pcap
 expect_in "summary" "d.pcapng (pcapng) -> u.pcap (pcap, link type 147, µs): 1311 records" "$out"
 if [ "$(od -An -tu4 -j20 -N4 u.pcap | tr -d ' ')" = 147 ]; then ok; else bad "link type not 147"; fi
 expect_exit 0 "back to PROFIBUS_DL" -- "$sim" convert u.pcap p.pcap --linktype profibus
-# The demo runs in simulated time from a whole second, so both pcaps hold the same records.
-if cmp -s <(tail -c +25 p.pcap) <(tail -c +25 d.pcap); then ok; else bad "records differ after two conversions"; fi
+# Two conversions give the file one conversion gives (the same demo run: its wall-clock base
+# differs between runs).
+expect_exit 0 "pcapng straight to PROFIBUS_DL pcap" -- "$sim" convert d.pcapng p1.pcap --linktype profibus
+if cmp -s p.pcap p1.pcap; then ok; else bad "records differ after two conversions"; fi
 expect_exit 0 "to text" -- "$sim" convert d.pcap d.txt
 expect_exit 0 "text back to pcap" -- "$sim" convert d.txt d2.pcap
 if cmp -s d.pcap d2.pcap; then ok; else bad "pcap -> text -> pcap is not identical"; fi
