@@ -6,18 +6,7 @@
 # loopback needs a multicast route, so the test runs in a private network namespace.
 sim=$1
 channels=$2 # lcm_log_channels: events per channel of a log
-if [ -z "$DFP_LCM_NETNS" ]; then
-  if ! unshare -n true 2>/dev/null; then
-    echo "SKIP: cannot create a network namespace (unshare -n needs root or user namespaces)"
-    exit 77
-  fi
-  exec unshare -n env DFP_LCM_NETNS=1 bash "$0" "$@"
-fi
-if ! { ip link set lo up && ip route add 239.0.0.0/8 dev lo; }; then
-  echo "cannot add the multicast route 239.0.0.0/8 dev lo in the private namespace"
-  echo "0 passed, 1 failed"
-  exit 1
-fi
+. "$(dirname "$0")/netns.sh"
 . "$(dirname "$0")/../cli/lib.sh"
 tmp=$(mktemp -d)
 pids=()
