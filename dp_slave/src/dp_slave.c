@@ -669,7 +669,7 @@ void dp_slave_rx_char(dp_slave_t *s, uint8_t byte, uint8_t flags, hal_time_us_t 
 
 hal_time_us_t dp_slave_poll(dp_slave_t *s, hal_time_us_t now)
 {
-    hal_time_us_t next = now + HAL_TIME_NO_DEADLINE_US;
+    hal_time_us_t next = fdl_rx_poll(&s->rx, now);
     if (s->wd_on && s->state != DP_STATE_WAIT_PRM) {
         if (hal_time_reached(now, s->wd_deadline)) {
             emit(s, DP_EV_WD_EXPIRED, now, s->wd_time_ms, s->master_add);

@@ -97,6 +97,19 @@ static uint16_t length_for_sd(uint8_t sd)
     }
 }
 
+hal_time_us_t fdl_rx_poll(fdl_rx_t *rx, hal_time_us_t now)
+{
+    if (!rx->have_last) {
+        return now + HAL_TIME_NO_DEADLINE_US;
+    }
+    hal_time_us_t forget_at = rx->last_char_t + FDL_RX_FORGET_US;
+    if (!hal_time_reached(now, forget_at)) {
+        return forget_at;
+    }
+    rx->have_last = false;
+    return now + HAL_TIME_NO_DEADLINE_US;
+}
+
 fdl_rx_result_t fdl_rx_char(fdl_rx_t *rx, uint8_t byte, uint8_t flags, hal_time_us_t t)
 {
     /* How long the line was idle between the previous character and this one. */

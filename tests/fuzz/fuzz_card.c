@@ -298,6 +298,7 @@ static hal_time_us_t card_poll(void)
 {
     hal_time_us_t now = now_us();
     r.wd_expired = false;
+    (void)fdl_rx_poll(&r.shadow, now); /* the card's receiver forgets the line as this one does */
     hal_time_us_t next;
     if (r.use_md) {
         next = md_inproc_link_poll(&r.md_link, now);

@@ -4,7 +4,8 @@
  * Input: mode (bit 0 relaxed, bits 1..4 rate index), a 32-bit start time (the µs clock wraps),
  * then operations, each an op octet:
  *   00xxxxxx  x+1 octets back to back (no error flags)
- *   01uuxxxx  pause, then one octet: pause = u16 * (1, 10, 100, 1000 µs by uu)
+ *   01uuxxxx  pause, then one octet: pause = u16 * (1, 10, 100, 1000 µs by uu); after the
+ *             longest pauses (uu = 3) the receiver is polled first, as a main loop would
  *   10000fff  one octet with UART error flags fff (parity, framing, overrun)
  *   10001xxx  one octet back to back whose time runs backwards by x µs (clock jitter)
  *   11kkkccc  a telegram built from the input (kk: 0 raw length+octets, 1 SD1, 2 SD2/SD3 with
@@ -16,7 +17,8 @@
  *    last frame_len octets delivered, all error-free, with no pause above the gap tolerance
  *    between them in strict timing; it is valid by an independent check (SD, LE = LEr, range,
  *    repeated SD2, FCS, ED); frame_end_t is the last octet's time; idle_before_ns matches the
- *    pause in front of its first octet;
+ *    pause in front of its first octet, or is "unknown" (UINT32_MAX) after a poll that came
+ *    FDL_RX_FORGET_US or more after the previous octet;
  *  - a well-formed telegram sent after an idle line is always reported, at its last octet and
  *    not before (no valid request is lost, none is reported early);
  *  - the collected length never exceeds 255;
@@ -30,6 +32,7 @@ typedef struct hist_entry {
     uint8_t byte;
     uint8_t flags;
     hal_time_us_t t;
+    bool forgotten; /* a poll before this octet made fdl_rx forget the previous one */
 } hist_entry_t;
 
 typedef struct rig {
@@ -82,6 +85,7 @@ static void check_frame(rig_t *r)
         uint64_t dt_ns = dt < 0 ? 0u : (uint64_t)dt * 1000u;
         uint64_t idle = dt_ns > r->char_ns ? dt_ns - r->char_ns : 0u;
         if (idle > UINT32_MAX - 1u) idle = UINT32_MAX - 1u;
+        if (first->forgotten) idle = UINT32_MAX;
         PROPERTY(rx->idle_before_ns == idle, "idle_before_ns %u, the line was idle %llu ns",
                  rx->idle_before_ns, (unsigned long long)idle);
     } else {
@@ -93,12 +97,22 @@ static void check_frame(rig_t *r)
 
 /* Delivers one character dt_ns after the end of the previous one (its own duration included). */
 static fdl_rx_result_t deliver(rig_t *r, uint8_t byte, uint8_t flags, uint64_t dt_ns,
-                               int32_t jitter_us)
+                               int32_t jitter_us, bool poll_first)
 {
     r->t_ns += dt_ns;
     hal_time_us_t t = (hal_time_us_t)(r->t0 + (hal_time_us_t)(r->t_ns / 1000u) + (uint32_t)jitter_us);
+    bool forgotten = false;
+    if (poll_first) {
+        forgotten = r->count > 0u && hal_time_diff(t, hist_at(r, 0)->t) >= (int32_t)FDL_RX_FORGET_US;
+        hal_time_us_t next = fdl_rx_poll(&r->rx, t);
+        PROPERTY(!r->rx.have_last || hal_time_diff(next, t) > 0,
+                 "fdl_rx_poll keeps the last octet but asks to be polled now");
+        PROPERTY(r->rx.have_last == (r->count > 0u && !forgotten),
+                 "fdl_rx_poll %s the last octet, %d us old", r->rx.have_last ? "kept" : "forgot",
+                 r->count > 0u ? hal_time_diff(t, hist_at(r, 0)->t) : 0);
+    }
     hist_entry_t *e = &r->hist[r->count % HIST];
-    *e = (hist_entry_t){.byte = byte, .flags = flags, .t = t};
+    *e = (hist_entry_t){.byte = byte, .flags = flags, .t = t, .forgotten = forgotten};
     r->count++;
     fdl_rx_result_t res = fdl_rx_char(&r->rx, byte, flags, t);
     PROPERTY(r->rx.len <= FDL_FRAME_MAX && r->rx.expected <= FDL_FRAME_MAX,
@@ -165,22 +179,22 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         case 0: {
             size_t n = (size_t)(op & 0x3Fu) + 1u;
             for (size_t k = 0; k < n; k++) {
-                (void)deliver(&r, fz_u8(&f), 0, r.char_ns, 0);
+                (void)deliver(&r, fz_u8(&f), 0, r.char_ns, 0, false);
             }
             break;
         }
         case 1: {
             static const uint32_t unit_us[4] = {1u, 10u, 100u, 1000u};
             uint64_t pause_us = (uint64_t)fz_u16(&f) * unit_us[(op >> 4) & 3u];
-            (void)deliver(&r, fz_u8(&f), 0, r.char_ns + pause_us * 1000u, 0);
+            (void)deliver(&r, fz_u8(&f), 0, r.char_ns + pause_us * 1000u, 0, (op & 0x30u) == 0x30u);
             break;
         }
         case 2:
             if ((op & 0x08u) == 0u) {
                 uint8_t flags = (uint8_t)(op & 0x07u);
-                (void)deliver(&r, fz_u8(&f), flags, r.char_ns, 0);
+                (void)deliver(&r, fz_u8(&f), flags, r.char_ns, 0, false);
             } else {
-                (void)deliver(&r, fz_u8(&f), 0, r.char_ns, -(int32_t)(op & 0x07u));
+                (void)deliver(&r, fz_u8(&f), 0, r.char_ns, -(int32_t)(op & 0x07u), false);
             }
             break;
         default: {
@@ -194,7 +208,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             bool valid = fz_frame_valid(frame, n);
             for (size_t k = 0; k < n; k++) {
                 fdl_rx_result_t res =
-                    deliver(&r, frame[k], 0, k == 0u ? idle_ns + r.char_ns : r.char_ns, 0);
+                    deliver(&r, frame[k], 0, k == 0u ? idle_ns + r.char_ns : r.char_ns, 0, false);
                 if (!valid) continue;
                 if (k + 1u < n) {
                     PROPERTY(res != FDL_RX_FRAME, "a telegram of %zu octets reported after %zu",

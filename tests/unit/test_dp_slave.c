@@ -1269,6 +1269,30 @@ static void test_time_wrap(void)
     check_expiry(100u, R.a.outputs_calls);
 }
 
+/* A card at a fixed rate without watchdog has no deadline of its own, yet after 40 min of bus
+ * silence (more than half the 32-bit µs clock) the first request must be answered, not taken
+ * for one that came without TSYN idle: dp_slave_poll asks to be called 1 s after the last
+ * character and forgets it then. */
+static void test_long_silence(void)
+{
+    rig_init(BAUD, 0);
+    bring_up(0x80, 0, 0, 0, CFG_P3PD, sizeof CFG_P3PD); /* no watchdog */
+    CHECK(dx(&R.m2, DX14, sizeof DX14));
+    hal_time_us_t end = line_now_us(&R.l);
+    hal_time_us_t next = dp_slave_poll(&R.s, end);
+    CHECK(hal_time_diff(next, end) > 0 && hal_time_diff(next, end) <= (int32_t)FDL_RX_FORGET_US);
+    R.l.now_ns += (uint64_t)hal_time_diff(next, end) * 1000u;
+    next = dp_slave_poll(&R.s, line_now_us(&R.l));
+    CHECK_EQ(next, line_now_us(&R.l) + HAL_TIME_NO_DEADLINE_US);
+    R.l.now_ns += 2400ull * 1000000000ull;
+    (void)dp_slave_poll(&R.s, line_now_us(&R.l));
+    uint32_t tsyn = R.s.rx.error_count[FDL_RX_ERR_TSYN];
+    CHECK(dx(&R.m2, DX14, sizeof DX14));
+    CHECK_EQ(R.u.last[6], FDL_RSP_DL);
+    CHECK_EQ(R.s.rx.error_count[FDL_RX_ERR_TSYN], tsyn);
+    CHECK_EQ(dp_slave_state(&R.s), DP_STATE_DATA_EXCH);
+}
+
 static void test_dx_output_length(void)
 {
     rig_init(BAUD, 0);
@@ -1351,6 +1375,7 @@ int main(void)
     RUN_TEST(test_ext_diag_overflow);
     RUN_TEST(test_dx_without_inputs);
     RUN_TEST(test_time_wrap);
+    RUN_TEST(test_long_silence);
     RUN_TEST(test_dx_output_length);
     RUN_TEST(test_srd_low);
     return check_report();

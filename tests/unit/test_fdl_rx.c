@@ -304,6 +304,47 @@ static void test_char_flags(void)
     }
 }
 
+/* The idle time is a 32-bit microsecond difference: after 2^31 µs (36 min) of silence it reads
+ * as negative. Without fdl_rx_poll that is taken for clock jitter (no idle), so the telegram
+ * after the silence fails TSYN; a poll in the silence forgets the old character instead. */
+static void test_poll_forgets_after_long_silence(void)
+{
+    feeder_t f;
+    feeder_init(&f, BAUD, true);
+    feed(&f, F_FDL_REQ, sizeof F_FDL_REQ);
+    hal_time_us_t last = now_us(&f);
+    CHECK_EQ(fdl_rx_poll(&f.rx, last), last + FDL_RX_FORGET_US);
+    CHECK_EQ(fdl_rx_poll(&f.rx, last + FDL_RX_FORGET_US - 1u), last + FDL_RX_FORGET_US);
+    CHECK(f.rx.have_last);
+    /* 2400 s of silence, polled once at the deadline */
+    CHECK_EQ(fdl_rx_poll(&f.rx, last + FDL_RX_FORGET_US), last + FDL_RX_FORGET_US + HAL_TIME_NO_DEADLINE_US);
+    CHECK(!f.rx.have_last);
+    f.now_ns += 2400000000000ull;
+    CHECK_EQ(fdl_rx_poll(&f.rx, now_us(&f)), now_us(&f) + HAL_TIME_NO_DEADLINE_US);
+    expect_frame(&f, F_DIAG_REQ, sizeof F_DIAG_REQ);
+    CHECK_EQ(f.rx.idle_before_ns, UINT32_MAX); /* unknown: long */
+
+    /* The same silence without a poll: the difference is negative, the idle reads as 0. */
+    feeder_init(&f, BAUD, true);
+    feed(&f, F_FDL_REQ, sizeof F_FDL_REQ);
+    f.now_ns += 2400000000000ull;
+    expect_frame(&f, F_DIAG_REQ, sizeof F_DIAG_REQ);
+    CHECK_EQ(f.rx.idle_before_ns, 0u);
+
+    /* A telegram cut off and followed by a silence of 1 s: the next one starts cleanly. */
+    feeder_init(&f, BAUD, true);
+    feed(&f, F_SET_PRM, 5);
+    f.now_ns += 1000000000ull;
+    (void)fdl_rx_poll(&f.rx, now_us(&f));
+    expect_frame(&f, F_FDL_REQ, sizeof F_FDL_REQ);
+    CHECK_EQ(f.rx.error_count[FDL_RX_ERR_GAP], 1u);
+    CHECK_EQ(f.rx.idle_before_ns, UINT32_MAX);
+    /* Time running backwards (jitter between two clocks) forgets nothing. */
+    hal_time_us_t end = now_us(&f);
+    CHECK_EQ(fdl_rx_poll(&f.rx, end - 5u), end + FDL_RX_FORGET_US);
+    CHECK(f.rx.have_last);
+}
+
 static void test_gap_inside_strict(void)
 {
     feeder_t f;
@@ -716,6 +757,7 @@ int main(void)
     RUN_TEST(test_ed_wrong);
     RUN_TEST(test_char_flags);
     RUN_TEST(test_gap_inside_strict);
+    RUN_TEST(test_poll_forgets_after_long_silence);
     RUN_TEST(test_gap_12m_within_tolerance);
     RUN_TEST(test_resync_after_garbage);
     RUN_TEST(test_relaxed_mode);

@@ -23,6 +23,10 @@
 #define FDL_RX_GAP_TOLERANCE_NS 1000u
 #define FDL_RX_RELAXED_GAP_US_DEFAULT 20000u
 #define FDL_RX_RELAXED_RESYNC_US_DEFAULT 1000u
+/* After this much silence the previous character no longer matters: every pause fdl_rx judges
+ * (TSYN at 9.6 kbit/s 3.4 ms, relaxed gap 20 ms) is far shorter. fdl_rx_poll() forgets it then,
+ * so an idle line longer than half the 32-bit microsecond clock (36 min) is still "long". */
+#define FDL_RX_FORGET_US 1000000u
 
 typedef enum fdl_rx_error {
     FDL_RX_OK = 0,
@@ -66,6 +70,10 @@ void fdl_rx_set_baud(fdl_rx_t *rx, uint32_t baud);
 /* Discard any telegram in progress, e.g. after the station transmitted or changed rate. */
 void fdl_rx_reset(fdl_rx_t *rx);
 fdl_rx_result_t fdl_rx_char(fdl_rx_t *rx, uint8_t byte, uint8_t flags, hal_time_us_t t);
+/* Call at least once per 35 minutes of silence, best at the deadline it returns: after
+ * FDL_RX_FORGET_US without a character the next one counts as after an idle line of unknown
+ * (long) length, as the first one after init does. */
+hal_time_us_t fdl_rx_poll(fdl_rx_t *rx, hal_time_us_t now);
 
 const char *fdl_rx_error_name(fdl_rx_error_t e);
 
