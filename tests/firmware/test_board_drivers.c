@@ -38,20 +38,28 @@ static hal_time_us_t clock_now(void)
     return fake_now++; /* every look at the clock takes 1 µs */
 }
 
+#define RX_LOG_MAX 600u
 typedef struct rx_log {
     unsigned n;
-    uint8_t byte[8];
-    uint8_t flags[8];
+    unsigned pending; /* rx_pending calls by the interrupt */
+    uint8_t byte[RX_LOG_MAX];
+    uint8_t flags[RX_LOG_MAX];
+    hal_time_us_t t[RX_LOG_MAX];
 } rx_log_t;
 static void rx_cb(void *ctx, uint8_t byte, uint8_t flags, hal_time_us_t t)
 {
-    (void)t;
     rx_log_t *l = ctx;
-    if (l->n < 8u) {
+    if (l->n < RX_LOG_MAX) {
         l->byte[l->n] = byte;
         l->flags[l->n] = flags;
+        l->t[l->n] = t;
     }
     l->n++;
+}
+static void rx_pending_cb(void *ctx)
+{
+    rx_log_t *l = ctx;
+    l->pending++;
 }
 
 static void test_brr(void)
@@ -90,7 +98,8 @@ static void uart_setup(void)
     memset(&rxl, 0, sizeof rxl);
     fake_now = 1000;
     rs485_uart_cfg_t cfg = {.regs = &usart, .de_port = &gpio_a, .de_pin = 8, .pclk_hz = 84000000u,
-                            .baud = 19200u, .now = clock_now, .rx = rx_cb, .rx_ctx = &rxl};
+                            .baud = 19200u, .now = clock_now, .rx = rx_cb, .rx_ctx = &rxl,
+                            .rx_pending = rx_pending_cb};
     CHECK_EQ(rs485_uart_init(&u, &cfg), 0);
 }
 
@@ -123,7 +132,11 @@ static void test_uart_rx_flags(void)
     usart.SR = USART_SR_RXNE;
     usart.DR = 0x168u; /* parity bit (bit 8) is not data */
     rs485_uart_isr(&u);
-    /* the fake keeps RXNE: the driver takes at most 4 characters per interrupt */
+    /* the fake keeps RXNE: the driver takes at most 4 characters per interrupt, into its ring;
+     * the core sees them only when the lower-priority context drains it */
+    CHECK_EQ(rxl.n, 0);
+    CHECK_EQ(rxl.pending, 1);
+    CHECK_EQ(rs485_uart_rx_drain(&u), 4u);
     CHECK_EQ(rxl.n, 4);
     CHECK_EQ(rxl.byte[0], 0x68);
     CHECK_EQ(rxl.flags[0], 0);
@@ -131,13 +144,59 @@ static void test_uart_rx_flags(void)
     usart.SR = USART_SR_RXNE | USART_SR_PE | USART_SR_FE | USART_SR_ORE;
     usart.DR = 0x10u;
     rs485_uart_isr(&u);
+    (void)rs485_uart_rx_drain(&u);
     CHECK_EQ(rxl.flags[0], HAL_UART_RX_PARITY_ERR | HAL_UART_RX_FRAMING_ERR |
                                HAL_UART_RX_OVERRUN_ERR);
     CHECK_EQ(u.rx_parity_errors, 4);
     memset(&rxl, 0, sizeof rxl);
     usart.SR = 0;
+    unsigned pending = rxl.pending;
     rs485_uart_isr(&u);
+    CHECK_EQ(rs485_uart_rx_drain(&u), 0u);
     CHECK_EQ(rxl.n, 0);
+    CHECK_EQ(rxl.pending, pending); /* nothing stored, nothing to do */
+}
+
+/* The main loop holds the drain off (BASEPRI) while it polls the card: characters keep their
+ * own times and order; past RS485_RX_RING the next stored one carries an overrun flag. */
+static void test_uart_rx_ring(void)
+{
+    uart_setup();
+    usart.SR = USART_SR_RXNE;
+    for (unsigned k = 0; k < RS485_RX_RING / 4u; k++) {
+        usart.DR = k;
+        rs485_uart_isr(&u);
+    }
+    CHECK_EQ(rxl.n, 0);
+    CHECK_EQ(u.rx_ring_overflows, 0);
+    usart.DR = 0x99u; /* the ring is full: these four are lost */
+    rs485_uart_isr(&u);
+    CHECK_EQ(u.rx_ring_overflows, 4);
+    CHECK_EQ(u.rx_chars, RS485_RX_RING + 4u);
+    CHECK_EQ(rs485_uart_rx_drain(&u), RS485_RX_RING);
+    CHECK_EQ(rxl.n, RS485_RX_RING);
+    bool in_order = true;
+    for (unsigned i = 0; i < RS485_RX_RING; i++) {
+        in_order = in_order && rxl.byte[i] == (uint8_t)(i / 4u) && rxl.flags[i] == 0u &&
+                   rxl.t[i] == 1000u + i; /* the time the interrupt took each one */
+    }
+    CHECK(in_order);
+    usart.DR = 0x68u;
+    rs485_uart_isr(&u);
+    CHECK_EQ(rs485_uart_rx_drain(&u), 4u);
+    CHECK_EQ(rxl.flags[RS485_RX_RING], HAL_UART_RX_OVERRUN_ERR); /* the loss is told */
+    CHECK_EQ(rxl.flags[RS485_RX_RING + 1u], 0u);
+    CHECK_EQ(rxl.byte[RS485_RX_RING], 0x68);
+    CHECK_EQ(rs485_uart_rx_drain(&u), 0u);
+    /* head and tail run on across many laps of the ring */
+    for (unsigned lap = 0; lap < 3u * RS485_RX_RING; lap++) {
+        rs485_uart_isr(&u);
+        if (rs485_uart_rx_drain(&u) != 4u) {
+            CHECK(false);
+            break;
+        }
+    }
+    CHECK_EQ(u.rx_ring_overflows, 4);
 }
 
 static void test_uart_transmit(void)
@@ -152,8 +211,12 @@ static void test_uart_transmit(void)
     CHECK((usart.CR1 & USART_CR1_RE) == 0u); /* own characters not heard */
     CHECK((usart.CR1 & USART_CR1_TXEIE) != 0u);
     CHECK_EQ(u.tx_pos, 0);
-    /* a second frame while one is going out is refused */
+    /* a second frame while one is going out is refused, and so is a new rate (the
+     * interrupt owns CR1 until TC) */
     CHECK_EQ(rs485_uart_transmit(&u, frame, sizeof frame, 0u), -1);
+    uint32_t brr = usart.BRR;
+    CHECK_EQ(rs485_uart_set_baud(&u, 1500000u), -1);
+    CHECK_EQ(usart.BRR, brr);
     usart.SR = USART_SR_TXE; /* free: the ISR feeds DR */
     rs485_uart_isr(&u);
     CHECK_EQ(u.tx_pos, sizeof frame);
@@ -370,6 +433,7 @@ int main(void)
     RUN_TEST(test_brr);
     RUN_TEST(test_uart_init_and_baud);
     RUN_TEST(test_uart_rx_flags);
+    RUN_TEST(test_uart_rx_ring);
     RUN_TEST(test_uart_transmit);
     RUN_TEST(test_bxcan);
     RUN_TEST(test_timebase);

@@ -1,11 +1,13 @@
 /* The DFP21B card on the STM32F405 reference board.
  *
- * Interrupt context: USART1 (the receive-to-reply path: every character into dfp21b_rx_char,
- * which decodes, answers and hands the reply to the UART driver at once), SysTick (time base,
+ * Interrupt context: USART1 (characters with flags and time into the driver's ring; the
+ * transmit steps), PendSV (the receive-to-reply path: the ring into dfp21b_rx_char, which
+ * decodes, answers and hands the reply to the UART driver at once), SysTick (time base,
  * deadlines, LED patterns), CAN1 RX0 (frames into a ring).
  * Main loop: dfp21b_poll (timers, outputs to the inverter, MOVILINK, data set 47, inputs for the
- * next reply) and the SBus link, with the USART interrupt masked (BASEPRI) while they run; then
- * sleep until a telegram ended, a CAN frame came, or the deadline passed.
+ * next reply) and the SBus link, with PendSV and CAN masked (BASEPRI) while they run, so the
+ * core is never entered twice; the USART keeps receiving and sending meanwhile. Then sleep until
+ * a telegram ended, a CAN frame came, or the deadline passed.
  *
  * Build variants (CMake targets, firmware/board/stm32f405/CMakeLists.txt):
  *   card image   automatic baud search, strict timing, address from the DIP switches
@@ -72,6 +74,7 @@ static hal_time_us_t now_us(void)
 
 void SysTick_Handler(void);
 void USART1_IRQHandler(void);
+void PendSV_Handler(void);
 void CAN1_RX0_IRQHandler(void);
 
 void SysTick_Handler(void)
@@ -95,6 +98,19 @@ void USART1_IRQHandler(void)
      * raises it again instead of being stranded (tooling notes, "RX interrupt pitfall"). */
     NVIC_ICPR[IRQ_USART1 / 32u] = 1u << (IRQ_USART1 % 32u);
     rs485_uart_isr(&uart);
+}
+
+static void uart_rx_pending(void *ctx)
+{
+    (void)ctx;
+    SCB_ICSR = SCB_ICSR_PENDSVSET;
+}
+
+/* Tail-chains to the USART interrupt unless the main loop is inside the core (BASEPRI): then
+ * right after it, with the characters' own times. */
+void PendSV_Handler(void)
+{
+    (void)rs485_uart_rx_drain(&uart);
 }
 
 void CAN1_RX0_IRQHandler(void)
@@ -145,7 +161,8 @@ static void board_init(void)
     RCC->APB2ENR |= RCC_APB2ENR_USART1;
     RCC->APB1ENR |= RCC_APB1ENR_CAN1;
     /* SysTick priority (SHPR3 bits 31..24). */
-    SCB_SHPR3 = (SCB_SHPR3 & 0x00FFFFFFu) | ((BOARD_PRIO_SYSTICK << BOARD_PRIO_SHIFT) << 24);
+    SCB_SHPR3 = (SCB_SHPR3 & 0x0000FFFFu) | ((BOARD_PRIO_SYSTICK << BOARD_PRIO_SHIFT) << 24) |
+                ((BOARD_PRIO_CORE << BOARD_PRIO_SHIFT) << 16); /* PendSV: bits 23..16 */
     SCB_SHCSR |= (1u << 16) | (1u << 17) | (1u << 18); /* MemManage, BusFault, UsageFault */
     timebase_init(&tb, SYSTICK, &SCB_ICSR, clocks.hclk_hz);
     board_leds_init(&leds);
@@ -242,7 +259,8 @@ int main(void)
     rs485_uart_cfg_t ucfg = {.regs = USART1, .de_port = GPIOA, .de_pin = 8u,
                              .pclk_hz = clocks.pclk2_hz,
                              .baud = DFP_BOARD_FIXED_BAUD != 0u ? DFP_BOARD_FIXED_BAUD : 6000000u,
-                             .now = now_us, .rx = uart_rx, .rx_ctx = &card};
+                             .now = now_us, .rx = uart_rx, .rx_ctx = &card,
+                             .rx_pending = uart_rx_pending};
     (void)rs485_uart_init(&uart, &ucfg);
 
     bxcan_cfg_t ccfg = {.regs = CAN1, .pclk_hz = clocks.pclk1_hz,
@@ -282,7 +300,7 @@ int main(void)
         .software_revision = {FW_VERSION_MAJOR, FW_VERSION_MINOR, FW_VERSION_BUGFIX},
         .event = card_event,
     };
-    board_basepri(BOARD_PRIO_USART);
+    board_basepri(BOARD_PRIO_CORE);
     dfp21b_init(&card, &cfg, now_us());
     board_basepri(0);
     nvic_enable(IRQ_USART1, BOARD_PRIO_USART);
@@ -294,7 +312,7 @@ int main(void)
     for (;;) {
         poll_request = false;
         hal_time_us_t now = now_us();
-        board_basepri(BOARD_PRIO_USART);
+        board_basepri(BOARD_PRIO_CORE);
         if (can.up) {
             (void)bxcan_drain(&can);
         }

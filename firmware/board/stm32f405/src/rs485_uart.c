@@ -33,6 +33,8 @@ static void de_set(const rs485_uart_t *u, bool on)
 int rs485_uart_init(rs485_uart_t *u, const rs485_uart_cfg_t *cfg)
 {
     memset(u, 0, sizeof *u);
+    atomic_init(&u->rx_head, 0u);
+    atomic_init(&u->rx_tail, 0u);
     u->cfg = *cfg;
     usart_regs_t *r = cfg->regs;
     de_set(u, false);
@@ -55,7 +57,7 @@ int rs485_uart_set_baud(rs485_uart_t *u, uint32_t baud)
 {
     uint32_t brr;
     bool over8;
-    if (!rs485_uart_brr(u->cfg.pclk_hz, baud, &brr, &over8)) {
+    if (u->tx_busy || !rs485_uart_brr(u->cfg.pclk_hz, baud, &brr, &over8)) {
         u->baud_refused++;
         return -1;
     }
@@ -129,11 +131,46 @@ int rs485_uart_transmit(rs485_uart_t *u, const uint8_t *frame, size_t len,
     return 0;
 }
 
+static unsigned rx_store(rs485_uart_t *u, uint8_t byte, uint8_t flags, hal_time_us_t t)
+{
+    uint32_t head = atomic_load_explicit(&u->rx_head, memory_order_relaxed);
+    uint32_t tail = atomic_load_explicit(&u->rx_tail, memory_order_acquire);
+    if (head - tail >= RS485_RX_RING) {
+        u->rx_ring_overflows++;
+        u->rx_lost = true;
+        return 0;
+    }
+    if (u->rx_lost) {
+        flags |= HAL_UART_RX_OVERRUN_ERR; /* characters before this one were lost */
+        u->rx_lost = false;
+    }
+    u->rx_ring[head % RS485_RX_RING] = (rs485_rx_entry_t){.t = t, .byte = byte, .flags = flags};
+    atomic_store_explicit(&u->rx_head, head + 1u, memory_order_release);
+    return 1;
+}
+
+unsigned rs485_uart_rx_drain(rs485_uart_t *u)
+{
+    unsigned n = 0;
+    uint32_t tail = atomic_load_explicit(&u->rx_tail, memory_order_relaxed);
+    while (tail != atomic_load_explicit(&u->rx_head, memory_order_acquire)) {
+        rs485_rx_entry_t e = u->rx_ring[tail % RS485_RX_RING];
+        tail++;
+        atomic_store_explicit(&u->rx_tail, tail, memory_order_release);
+        if (u->cfg.rx != NULL) {
+            u->cfg.rx(u->cfg.rx_ctx, e.byte, e.flags, e.t);
+        }
+        n++;
+    }
+    return n;
+}
+
 void rs485_uart_isr(rs485_uart_t *u)
 {
     usart_regs_t *r = u->cfg.regs;
     /* Receive: SR first, then DR, per character (that order clears PE/FE/ORE). At most a few
      * characters per call: the USART holds one, plus the one being shifted in. */
+    unsigned stored = 0;
     for (unsigned n = 0; n < 4u; n++) {
         uint32_t sr = r->SR;
         if ((sr & USART_SR_RXNE) == 0u) {
@@ -158,9 +195,10 @@ void rs485_uart_isr(rs485_uart_t *u)
             u->rx_overruns++;
         }
         u->rx_chars++;
-        if (u->cfg.rx != NULL) {
-            u->cfg.rx(u->cfg.rx_ctx, byte, flags, t);
-        }
+        stored += rx_store(u, byte, flags, t);
+    }
+    if (stored != 0u && u->cfg.rx_pending != NULL) {
+        u->cfg.rx_pending(u->cfg.rx_ctx);
     }
     /* Transmit. */
     uint32_t cr1 = r->CR1;

@@ -17,6 +17,7 @@ void Default_Handler(void);
 void HardFault_Handler(void);
 void SysTick_Handler(void);
 void USART1_IRQHandler(void);
+void PendSV_Handler(void);
 void CAN1_RX0_IRQHandler(void);
 void board_fault_entry(uint32_t *frame, uint32_t exc_return, uint32_t exception);
 
@@ -182,7 +183,7 @@ __attribute__((section(".isr_vector"), used)) const vector_t board_vectors[16u +
     Default_Handler,   /* SVCall */
     Default_Handler,   /* DebugMon */
     0,
-    Default_Handler,   /* PendSV */
+    PendSV_Handler,
     SysTick_Handler,
     /* IRQ  0 */ Default_Handler,
     /* IRQ  1 */ Default_Handler,

@@ -25,7 +25,7 @@ import sys
 LIB_LEAF = 32
 EXC_FRAME = 108
 ENTRIES_THREAD = ["board_reset_c"]
-ENTRIES_IRQ = ["SysTick_Handler", "USART1_IRQHandler", "CAN1_RX0_IRQHandler"]
+ENTRIES_IRQ = ["SysTick_Handler", "USART1_IRQHandler", "PendSV_Handler", "CAN1_RX0_IRQHandler"]
 ENTRIES_FAULT = ["board_fault_entry"]
 # Indirect calls the member-name rule cannot see or would over-approximate, stated by hand:
 # (caller, member) -> callees (static functions as "file.c:name"). Keep this list short.

@@ -8,9 +8,11 @@
  *   DIP     PC0..PC6 = 2^0..2^6     switch ON pulls to ground (internal pull-ups)
  *
  * Interrupt priorities (4 bits, lower = more urgent): SysTick 0 (the time base must never
- * stall), USART1 1 (the receive-to-reply path), CAN1 RX0 2. The main loop masks priority >= 1
- * with BASEPRI while it runs the core's poll, so the ISR and the main loop never work on the
- * card at the same time (the core has no locks; see docs/porting.md). */
+ * stall), USART1 1 (characters into the driver's ring, transmit steps: never masked, so no
+ * character is lost and no reply stalls mid-frame), PendSV 2 (the core's receive-to-reply
+ * path: the ring into dfp21b_rx_char), CAN1 RX0 3. The main loop masks priority >= 2 with
+ * BASEPRI while it runs the core's poll, so the reply path and the main loop never work on
+ * the card at the same time (the core has no locks; see docs/porting.md). */
 #ifndef BOARD_BOARD_H
 #define BOARD_BOARD_H
 
@@ -27,7 +29,8 @@
 
 #define BOARD_PRIO_SYSTICK 0u
 #define BOARD_PRIO_USART 1u
-#define BOARD_PRIO_CAN 2u
+#define BOARD_PRIO_CORE 2u /* PendSV */
+#define BOARD_PRIO_CAN 3u
 #define BOARD_PRIO_SHIFT 4u
 
 typedef enum board_clock_source {

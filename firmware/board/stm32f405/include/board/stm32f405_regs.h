@@ -172,6 +172,7 @@ typedef struct systick_regs {
 #define SYSTICK_CTRL_CLKSOURCE (1u << 2)
 
 #define SCB_ICSR_PENDSTSET (1u << 26)
+#define SCB_ICSR_PENDSVSET (1u << 28)
 
 #ifndef BOARD_HOST_TEST
 /* Real addresses (STM32F405, RM0090 Table 1). */
