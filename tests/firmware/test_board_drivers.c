@@ -188,15 +188,50 @@ static void test_uart_rx_ring(void)
     CHECK_EQ(rxl.flags[RS485_RX_RING + 1u], 0u);
     CHECK_EQ(rxl.byte[RS485_RX_RING], 0x68);
     CHECK_EQ(rs485_uart_rx_drain(&u), 0u);
-    /* head and tail run on across many laps of the ring */
+    /* head and tail run on across many laps of the ring, and across the wrap of the 32-bit
+     * indices; every character comes out as it went in */
+    atomic_store(&u.rx_head, 0xFFFFFF00u);
+    atomic_store(&u.rx_tail, 0xFFFFFF00u);
+    bool laps_ok = true;
     for (unsigned lap = 0; lap < 3u * RS485_RX_RING; lap++) {
+        usart.DR = (uint8_t)(lap * 7u);
+        rxl.n = 0;
         rs485_uart_isr(&u);
-        if (rs485_uart_rx_drain(&u) != 4u) {
-            CHECK(false);
-            break;
-        }
+        laps_ok = laps_ok && rs485_uart_rx_drain(&u) == 4u && rxl.n == 4u &&
+                  rxl.byte[0] == (uint8_t)(lap * 7u) && rxl.byte[3] == (uint8_t)(lap * 7u) &&
+                  rxl.flags[3] == 0u;
     }
+    CHECK(laps_ok);
+    CHECK(atomic_load(&u.rx_head) < 0x1000u); /* the indices wrapped */
     CHECK_EQ(u.rx_ring_overflows, 4);
+    /* a full ring: nothing stored, nobody woken */
+    for (unsigned k = 0; k < RS485_RX_RING / 4u; k++) {
+        rs485_uart_isr(&u);
+    }
+    unsigned pending = rxl.pending;
+    rs485_uart_isr(&u);
+    CHECK_EQ(rxl.pending, pending);
+    CHECK_EQ(u.rx_ring_overflows, 8);
+}
+
+/* A reply the drain produces late, with characters after its request already waiting (the
+ * master's retry), is not sent: it would collide with them. */
+static void test_uart_no_stale_reply(void)
+{
+    uart_setup();
+    static const uint8_t frame[] = {0x10, 0x02, 0x04, 0x00, 0x06, 0x16};
+    usart.SR = USART_SR_RXNE;
+    usart.DR = 0x10u;
+    rs485_uart_isr(&u); /* four characters waiting */
+    usart.SR = USART_SR_TXE | USART_SR_TC;
+    CHECK_EQ(rs485_uart_transmit(&u, frame, sizeof frame, 0u), -1);
+    CHECK_EQ(u.tx_stale, 1);
+    CHECK(!u.tx_busy);
+    CHECK_EQ(gpio_a.BSRR, 1u << (8 + 16)); /* DE stayed low */
+    CHECK((usart.CR1 & USART_CR1_RE) != 0u);
+    (void)rs485_uart_rx_drain(&u);
+    CHECK_EQ(rs485_uart_transmit(&u, frame, sizeof frame, 0u), 0);
+    CHECK_EQ(u.tx_frames, 1);
 }
 
 static void test_uart_transmit(void)
@@ -434,6 +469,7 @@ int main(void)
     RUN_TEST(test_uart_init_and_baud);
     RUN_TEST(test_uart_rx_flags);
     RUN_TEST(test_uart_rx_ring);
+    RUN_TEST(test_uart_no_stale_reply);
     RUN_TEST(test_uart_transmit);
     RUN_TEST(test_bxcan);
     RUN_TEST(test_timebase);

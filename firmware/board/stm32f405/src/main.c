@@ -219,6 +219,9 @@ static void report_and_exit(void)
     p = put_u32(p, rx_err);
     p = put_s(p, ", frames sent ");
     p = put_u32(p, uart.tx_frames);
+    p = put_s(p, " (late, not sent: ");
+    p = put_u32(p, uart.tx_stale);
+    p = put_s(p, ")");
     p = put_s(p, ", stack ");
     p = put_u32(p, stack);
     p = put_s(p, "/");

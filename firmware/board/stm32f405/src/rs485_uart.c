@@ -57,6 +57,9 @@ int rs485_uart_set_baud(rs485_uart_t *u, uint32_t baud)
 {
     uint32_t brr;
     bool over8;
+    /* Refused while a frame goes out (the interrupt owns CR1 until TC). The core changes the
+     * rate only in its baud search and after the baud-control timeout, both long after its
+     * last reply, so it never meets this refusal in practice. */
     if (u->tx_busy || !rs485_uart_brr(u->cfg.pclk_hz, baud, &brr, &over8)) {
         u->baud_refused++;
         return -1;
@@ -105,6 +108,14 @@ int rs485_uart_transmit(rs485_uart_t *u, const uint8_t *frame, size_t len,
 {
     if (len == 0u || len > RS485_TX_MAX || u->tx_busy) {
         u->tx_refused++;
+        return -1;
+    }
+    /* Characters after the request are waiting in the ring: the drain ran late (the main loop
+     * held it off) and the bus has moved on, e.g. to the master's retry. Answering now would
+     * collide with it; the retry gets its answer when it is drained. */
+    if (atomic_load_explicit(&u->rx_head, memory_order_acquire) !=
+        atomic_load_explicit(&u->rx_tail, memory_order_relaxed)) {
+        u->tx_stale++;
         return -1;
     }
     memcpy(u->tx_buf, frame, len);

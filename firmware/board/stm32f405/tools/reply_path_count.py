@@ -4,13 +4,15 @@ counted on the target under QEMU (netduinoplus2, Cortex-M4 TCG).
 
 Method: QEMU runs the image with `-singlestep -d exec,nochain -D TRACE`: one trace line per
 executed instruction, with its PC. For every reply, count the instructions from the entry of the
-USART1 interrupt that took the request's last character into the driver's ring, through the
-PendSV it tail-chains to (the drain: decode, FDL, DP service, DP-V1 SAP, encoding, FCB cache),
-to the entry of rs485_uart_transmit, leaving out SysTick (its own interrupt, at most one per
-reply). Replies whose last character came while the main loop held PendSV off (BASEPRI), or
-while a drain was running, are not counted (they are reported as skipped): the trace does not
-tell the main loop's instructions from the drain's there, and the main loop's are a wait, not
-reply-path work (before the ring the same wait delayed the USART interrupt itself). Then add the transmit tail measured the same way without the
+dfp21b_rx_char call that took the request's last character (in the PendSV drain) to the entry
+of rs485_uart_transmit (FCS/ED, FDL, DP service, DP-V1 SAP, encoding, FCB cache), leaving out
+SysTick (its own interrupt, at most one per reply), and add the driver's share for a lone
+character measured in the same trace: the largest USART1 interrupt that stored exactly one
+character (clock read included) and the largest PendSV drain that handed on exactly one. Not
+counted: the exception entries themselves (12 cycles, 6 for the tail-chain into PendSV) and a
+wait for the main loop when it held PendSV off (BASEPRI). QEMU often hands a telegram over in
+one burst; the whole drain after such a telegram's last interrupt is reported separately.
+Then add the transmit tail measured the same way without the
 min TSDR spin (a fresh not_before has already passed at 12 Mbit/s): transmit entry to its
 first clock read, one clock read, and from the spin's last clock read to the first DR write in
 tx_fill. Replies are matched in order to the pcap captures of the master runs (request -> reply).
@@ -98,17 +100,15 @@ def main():
     isr = s["USART1_IRQHandler"][0]
     pendsv = s["PendSV_Handler"][0] if "PendSV_Handler" in s else None
     rx_char = s["dfp21b_rx_char"][0]
-    # the driver's share per character: the interrupt storing it, the PendSV drain handing it on
-    driver_names = [("USART1_IRQHandler", "rs485_uart_isr", "rx_store", "uart_rx_pending"),
-                    ("PendSV_Handler", "rs485_uart_rx_drain", "uart_rx")]
-    driver = []
-    driver_of = []
-    for k, names in enumerate(driver_names):
-        for n in names:
-            if n in s:
-                driver.append((s[n][0], s[n][0] + s[n][1]))
-                driver_of.append(k)
-    driver_n = [0] * len(driver)
+    # The driver's share for a lone character, as on a real line (QEMU often hands over several
+    # at once): the largest USART1 interrupt that stored exactly one (its clock read included),
+    # and the largest PendSV drain that handed on exactly one.
+    drain_funcs = [(s[n][0], s[n][0] + s[n][1]) for n in
+                   ("PendSV_Handler", "rs485_uart_rx_drain", "uart_rx") if n in s]
+    isr_one = []
+    drain_one = []
+    cur_isr = None    # [instructions, characters] of the interrupt running
+    cur_drain = None  # same for the last PendSV
     rx_calls = 0
     last_char_at = 0
     gi = 0  # instructions so far, SysTick left out
@@ -132,6 +132,8 @@ def main():
     in_isr = False
     chained = False
     chars = 0
+    refused = 0
+    pending = None
     with open(trace, errors="replace") as f:
         for l in f:
             m = line_re.match(l)
@@ -145,22 +147,37 @@ def main():
                 chars = 0
                 in_isr = True
                 chained = pendsv is None
+                cur_isr = [0, 0]
             elif in_isr and not any(a <= pc < b for a, b in isr_funcs):
                 in_isr = False
                 chained = pc == pendsv
-            for k, (a, b) in enumerate(driver):
-                if a <= pc < b:
-                    driver_n[k] += 1
+                if cur_isr[1] == 1:
+                    isr_one.append(cur_isr[0])
+            if in_isr:
+                cur_isr[0] += 1
+                if pc == now_a:
+                    cur_isr[1] += 1
+            if pendsv is not None and pc == pendsv:
+                if cur_drain is not None and cur_drain[1] == 1:
+                    drain_one.append(cur_drain[0])
+                cur_drain = [0, 0]
+            if cur_drain is not None and any(a <= pc < b for a, b in drain_funcs):
+                cur_drain[0] += 1
             gi += 1
             if pc == rx_char:
                 rx_calls += 1
                 last_char_at = gi
+                if cur_drain is not None:
+                    cur_drain[1] += 1
             if count is not None:
                 count += 1
                 if pc == rx_char:
                     chars += 1
+            if tail is not None and pc in (isr, rx_char, tx):
+                refused += 1  # transmit returned without sending (late: characters waiting)
+                tail = None
             if pc == tx and count is not None:
-                results.append((count - 1 if chained else None, chars, gi - last_char_at))
+                pending = (count - 1 if chained else None, chars, gi - last_char_at)
                 count = None
                 tail = {"n": 0, "nows": []}
                 continue
@@ -176,6 +193,7 @@ def main():
                     else:
                         t = tail["n"]
                     tails.append(t)
+                    results.append(pending)
                     tail = None
     tail_max = max(tails) if tails else 0
     ps = pairs(caps)
@@ -184,10 +202,8 @@ def main():
               % (len(ps), len(results), min(len(ps), len(results))), file=sys.stderr)
     k = min(len(ps), len(results))
     ps, res = ps[-k:], results[-k:]
-    per_char = [0.0, 0.0]
-    for k, n in zip(driver_of, driver_n):
-        per_char[k] += n / max(rx_calls, 1)
-    driver_cost = int(round(per_char[0] + per_char[1]))
+    per_char = [max(isr_one) if isr_one else 0, max(drain_one) if drain_one else 0]
+    driver_cost = per_char[0] + per_char[1]
     core = defaultdict(list)
     backlog = []
     for (kind, _, _), (whole, chars, last) in zip(ps, res):
@@ -197,9 +213,10 @@ def main():
     print("Reply path on the target (QEMU netduinoplus2, TCG single-step), per telegram type: the "
           "request's last character through the driver (USART1 interrupt into the ring, PendSV "
           "drain) and the core to the first reply character")
-    print("driver per character (%d characters): interrupt store %.0f, PendSV drain %.0f "
-          "instructions; transmit tail (clock read, DE, RE off, first DR write): %d"
-          % (rx_calls, per_char[0], per_char[1], tail_max))
+    print("driver for a lone character: USART1 interrupt storing it %d (of %d such), PendSV "
+          "drain handing it on %d (of %d such) instructions; transmit tail (clock read, DE, RE "
+          "off, first DR write): %d; %d characters in all"
+          % (per_char[0], len(isr_one), per_char[1], len(drain_one), tail_max, rx_calls))
     hdr = "| telegram | n | instr. worst | instr. min | µs at %d MHz (1 instr./cycle) |" % MHZ
     hdr += " bit times at " + " / ".join("%g" % (b / 1e6) if b >= 1e6 else "%gk" % (b / 1e3)
                                           for b in BAUDS[:5]) + " |"
@@ -211,6 +228,8 @@ def main():
         bits = " / ".join("%.1f" % (us * b / 1e6) for b in BAUDS[:5])
         print("| %s | %d | %d | %d | %.2f | %s |" % (kind, len(core[kind]), w,
                                                    min(core[kind]) + tail_max + driver_cost, us, bits))
+    if refused:
+        print("replies not sent because characters after the request were waiting: %d" % refused)
     for n, c, kind in sorted(backlog, reverse=True)[:2]:
         print("QEMU hands a telegram over in one burst: %s with %d characters drained at once took "
               "%d instructions from its last interrupt (%.2f µs)" % (kind, c, n + tail_max, (n + tail_max) / MHZ))

@@ -11,7 +11,7 @@ resolved that way fails the report, as do recursion, a dynamic frame (VLA, alloc
 function linked into the image.
 
 Total: thread chain (reset -> main -> ...) + the worst chain of every interrupt that can nest on
-top of it (SysTick, USART1, CAN1 RX0; fault handlers end the program) + one exception frame with
+top of it (SysTick, USART1, PendSV, CAN1 RX0; fault handlers end the program) + one exception frame with
 FP context (26 words + alignment = 108 bytes) per nesting level. Library leaves that have no .ci
 (memcpy, memset, memcmp, EABI helpers from newlib/libgcc) are charged LIB_LEAF bytes each.
 """

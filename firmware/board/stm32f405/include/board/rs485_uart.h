@@ -34,6 +34,8 @@
  * overflow: the next character stored carries HAL_UART_RX_OVERRUN_ERR, so the telegram it
  * belongs to is dropped like one after a hardware overrun. */
 #define RS485_RX_RING 256u
+_Static_assert((RS485_RX_RING & (RS485_RX_RING - 1u)) == 0u,
+               "the free-running 32-bit ring indices need a power-of-two size");
 
 typedef void (*rs485_rx_fn)(void *ctx, uint8_t byte, uint8_t flags, hal_time_us_t t);
 typedef hal_time_us_t (*rs485_now_fn)(void);
@@ -77,6 +79,7 @@ typedef struct rs485_uart {
     uint32_t rx_ring_overflows; /* characters the ring could not hold */
     uint32_t tx_frames;
     uint32_t tx_refused;     /* transmit while a frame was still going out, or too long */
+    uint32_t tx_stale;       /* transmit refused: characters after the request were waiting */
     uint32_t tx_clock_mixups; /* not_before too far ahead */
     uint32_t baud_refused;
 } rs485_uart_t;
@@ -95,6 +98,8 @@ void rs485_uart_isr(rs485_uart_t *u);
 unsigned rs485_uart_rx_drain(rs485_uart_t *u);
 /* Refused (-1) while a frame is going out: the interrupt owns CR1 then. */
 int rs485_uart_set_baud(rs485_uart_t *u, uint32_t baud);
+/* Refused (-1) while a frame is going out, and when characters that came after the request
+ * are still waiting in the ring (a late reply would collide with them). */
 int rs485_uart_transmit(rs485_uart_t *u, const uint8_t *frame, size_t len,
                         hal_time_us_t not_before);
 
