@@ -3,7 +3,8 @@
 #
 #   make fuzz-smoke   what CI runs: every target over its regression corpus and the findings'
 #                     reproducers, then FUZZ_SECONDS (30) of fuzzing each; any finding fails
-#   make fuzz-long    FUZZ_RUNS (10^8) executions per target, artifacts in build/fuzz/long/
+#   make fuzz-long    FUZZ_RUNS (10^8) executions per target, artifacts in build/fuzz/long/,
+#                     one line per run appended to build/fuzz/long/summary.txt
 #   make fuzz-known   each reproducer in tests/fuzz/known/ with its own property named
 #                     (FUZZ_KNOWN=name, which includes the opt-in strict forms); fails if any does
 #   make fuzz-seeds   seed corpora from `dfp-sim demo --capture`, tests/fuzz/captures/*.pcap and
@@ -48,6 +49,11 @@ fuzz-long: fuzz-build
 	    -print_final_stats=1 -artifact_prefix=$$work/artifacts/ \
 	    $$work/corpus tests/fuzz/corpus/$$t 2>&1 | tee $$work/log.txt | \
 	    grep -E "^stat::|ERROR|PROPERTY|SUMMARY|^Done"; \
+	  runs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $$work/log.txt | tail -n 1); \
+	  rate=$$(sed -n 's/^stat::average_exec_per_sec: *//p' $$work/log.txt | tail -n 1); \
+	  if [ -n "$$(ls $$work/artifacts)" ]; then result="FINDING in $$work/artifacts"; else result="no finding"; fi; \
+	  echo "$$(date -u +%FT%TZ) $$(git rev-parse --short HEAD 2>/dev/null) fuzz_$$t max_len=$(FUZZ_MAX_LEN) runs=$$runs exec/s=$$rate $$result" | \
+	    tee -a $(FUZZ_BUILD)/long/summary.txt; \
 	done
 
 fuzz-known: fuzz-build
