@@ -209,14 +209,19 @@ while o < len(d):
     o += 16 + incl
 open(sys.argv[2], 'wb').write(out)
 PY
-"$sim" replay "$tmp/pause.pcap" --check --speed real >"$tmp/pause.out" 2>&1 &
-pid=$!
-sleep 1
-kill -INT $pid
-for _ in $(seq 50); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
-if kill -0 $pid 2>/dev/null; then bad "SIGINT did not stop --speed real"; kill -9 $pid; fi
-wait $pid; rc=$?
-[ $rc = 1 ] && ok || bad "interrupted replay: exit $rc"
+# Starts a replay (output to $1), interrupts it after 1 s; it must end within 5 s with exit 1.
+interrupt_replay() {
+  local out=$1 what=$2; shift 2
+  "$sim" replay "$@" >"$out" 2>&1 &
+  local pid=$!
+  sleep 1
+  kill -INT $pid
+  for _ in $(seq 50); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
+  if kill -0 $pid 2>/dev/null; then bad "SIGINT did not stop $what"; kill -9 $pid; fi
+  wait $pid; local rc=$?
+  [ $rc = 1 ] && ok || bad "$what interrupted: exit $rc"
+}
+interrupt_replay "$tmp/pause.out" "--speed real" "$tmp/pause.pcap" --check --speed real
 expect_in "interrupted reported" "interrupted after" "$(cat "$tmp/pause.out")"
 
 # ---- times going back, long gaps -------------------------------------------------------------
@@ -306,14 +311,7 @@ expect_exit 1 "drive turning through 3 h" -- timeout -k 2 20 "$sim" replay "$tmp
 expect_in "not shortened" "1 idle gaps longer than 1300.5 s simulated whole: the emulated drive was still turning" "$out"
 expect_rows "drive turning through 3 h" "$out" "Data_Exchange 200 134 66 0 66"
 pcap_edit "$tmp/nowd.pcap" "$tmp/nowd80y.pcap" "t + 2500000000000000 if n >= 301 else t"
-"$sim" replay "$tmp/nowd80y.pcap" --check >"$tmp/nowd80y.out" 2>&1 &
-pid=$!
-sleep 1
-kill -INT $pid
-for _ in $(seq 50); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
-if kill -0 $pid 2>/dev/null; then bad "SIGINT did not stop a replay inside a long gap"; kill -9 $pid; fi
-wait $pid; rc=$?
-[ $rc = 1 ] && ok || bad "replay interrupted in a gap: exit $rc"
+interrupt_replay "$tmp/nowd80y.out" "a replay inside a long gap" "$tmp/nowd80y.pcap" --check
 expect_in "interrupted in a gap" "interrupted after 300 records" "$(cat "$tmp/nowd80y.out")"
 
 # ---- pipes and rates -----------------------------------------------------------------------
