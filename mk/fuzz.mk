@@ -3,8 +3,8 @@
 #
 #   make fuzz-smoke   what CI runs: every target over its regression corpus and the findings'
 #                     reproducers, then FUZZ_SECONDS (30) of fuzzing each; any finding fails
-#   make fuzz-long    FUZZ_RUNS (10^8) executions per target, artifacts in build/fuzz/long/,
-#                     one line per run appended to build/fuzz/long/summary.txt
+#   make fuzz-long    FUZZ_RUNS (10^8) executions per target (FUZZ_JOBS processes share
+#                     them), artifacts in build/fuzz/long/, one line per run appended to build/fuzz/long/summary.txt
 #   make fuzz-known   each reproducer in tests/fuzz/known/ with its own property named
 #                     (FUZZ_KNOWN=name, which includes the opt-in strict forms); fails if any does
 #   make fuzz-seeds   seed corpora from `dfp-sim demo --capture`, tests/fuzz/captures/*.pcap and
@@ -41,18 +41,23 @@ fuzz-smoke: fuzz-build
 	done; echo "fuzz-smoke: $(words $(FUZZ_TARGETS)) targets, no finding"
 
 # One target: make fuzz-long FUZZ_TARGETS=card FUZZ_RUNS=1000000
+# FUZZ_JOBS=N runs N libFuzzer processes on the same corpus directory (each reloads what the
+# others add, libFuzzer's -reload), FUZZ_RUNS/N executions each; the summary line gives the total.
 fuzz-long: fuzz-build
 	@set -eo pipefail; for t in $(FUZZ_TARGETS); do \
 	  work=$(FUZZ_BUILD)/long/$$t; mkdir -p $$work/corpus $$work/artifacts; \
-	  echo "== fuzz_$$t: $(FUZZ_RUNS) executions, $$(date -u +%FT%TZ)"; \
-	  ./$(FUZZ_BUILD)/fuzz_$$t -runs=$(FUZZ_RUNS) -max_len=$(FUZZ_MAX_LEN) -timeout=10 \
-	    -print_final_stats=1 -artifact_prefix=$$work/artifacts/ \
-	    $$work/corpus tests/fuzz/corpus/$$t 2>&1 | tee $$work/log.txt | \
-	    grep -E "^stat::|ERROR|PROPERTY|SUMMARY|^Done"; \
-	  runs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $$work/log.txt | tail -n 1); \
-	  rate=$$(sed -n 's/^stat::average_exec_per_sec: *//p' $$work/log.txt | tail -n 1); \
-	  if [ -n "$$(ls $$work/artifacts)" ]; then result="FINDING in $$work/artifacts"; else result="no finding"; fi; \
-	  echo "$$(date -u +%FT%TZ) $$(git rev-parse --short HEAD 2>/dev/null) fuzz_$$t max_len=$(FUZZ_MAX_LEN) runs=$$runs exec/s=$$rate $$result" | \
+	  echo "== fuzz_$$t: $(FUZZ_RUNS) executions in $(FUZZ_JOBS) process(es), $$(date -u +%FT%TZ)"; \
+	  pids=""; for j in $$(seq 1 $(FUZZ_JOBS)); do \
+	    ./$(FUZZ_BUILD)/fuzz_$$t -runs=$$(( $(FUZZ_RUNS) / $(FUZZ_JOBS) )) -max_len=$(FUZZ_MAX_LEN) \
+	      -timeout=10 -print_final_stats=1 -artifact_prefix=$$work/artifacts/ \
+	      $$work/corpus tests/fuzz/corpus/$$t >$$work/log-$$j.txt 2>&1 & pids="$$pids $$!"; \
+	  done; for p in $$pids; do wait $$p || true; done; \
+	  grep -hE "^stat::|ERROR|PROPERTY|SUMMARY|^Done" $$work/log-*.txt || true; \
+	  runs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $$work/log-*.txt | awk '{s+=$$1} END {print s+0}'); \
+	  rate=$$(sed -n 's/^stat::average_exec_per_sec: *//p' $$work/log-*.txt | awk '{s+=$$1} END {print s+0}'); \
+	  if [ -n "$$(ls $$work/artifacts)" ]; then result="FINDING in $$work/artifacts"; \
+	  elif [ "$$runs" -lt $(FUZZ_RUNS) ]; then result="stopped early"; else result="no finding"; fi; \
+	  echo "$$(date -u +%FT%TZ) $$(git rev-parse --short HEAD 2>/dev/null) fuzz_$$t max_len=$(FUZZ_MAX_LEN) jobs=$(FUZZ_JOBS) runs=$$runs exec/s=$$rate $$result" | \
 	    tee -a $(FUZZ_BUILD)/long/summary.txt; \
 	done
 
