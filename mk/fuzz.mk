@@ -19,11 +19,13 @@ FUZZ_SECONDS ?= 30
 FUZZ_RUNS ?= 100000000
 FUZZ_MAX_LEN ?= 2048
 FUZZ_JOBS ?= 1
+FUZZ_TRACE_CMP ?= ON
 
 .PHONY: fuzz-build fuzz-smoke fuzz-long fuzz-known fuzz-seeds
 
 fuzz-build: deps-apt
-	cmake -S tests/fuzz -B $(FUZZ_BUILD) -G Ninja -DCMAKE_C_COMPILER=clang-14
+	cmake -S tests/fuzz -B $(FUZZ_BUILD) -G Ninja -DCMAKE_C_COMPILER=clang-14 \
+	  -DFUZZ_TRACE_CMP=$(FUZZ_TRACE_CMP)
 	cmake --build $(FUZZ_BUILD)
 
 fuzz-smoke: fuzz-build
@@ -43,6 +45,8 @@ fuzz-smoke: fuzz-build
 # One target: make fuzz-long FUZZ_TARGETS=card FUZZ_RUNS=1000000
 # FUZZ_JOBS=N runs N libFuzzer processes on the same corpus directory (each reloads what the
 # others add, libFuzzer's -reload), FUZZ_RUNS/N executions each; the summary line gives the total.
+# FUZZ_TRACE_CMP=OFF rebuilds without comparison tracing (3.4x faster fuzz_card); the next
+# make fuzz-* without it rebuilds with it again.
 fuzz-long: fuzz-build
 	@set -eo pipefail; for t in $(FUZZ_TARGETS); do \
 	  work=$(FUZZ_BUILD)/long/$$t; mkdir -p $$work/corpus $$work/artifacts; \
@@ -57,7 +61,7 @@ fuzz-long: fuzz-build
 	  rate=$$(sed -n 's/^stat::average_exec_per_sec: *//p' $$work/log-*.txt | awk '{s+=$$1} END {print s+0}'); \
 	  if [ -n "$$(ls $$work/artifacts)" ]; then result="FINDING in $$work/artifacts"; \
 	  elif [ "$$runs" -lt $(FUZZ_RUNS) ]; then result="stopped early"; else result="no finding"; fi; \
-	  echo "$$(date -u +%FT%TZ) $$(git rev-parse --short HEAD 2>/dev/null) fuzz_$$t max_len=$(FUZZ_MAX_LEN) jobs=$(FUZZ_JOBS) runs=$$runs exec/s=$$rate $$result" | \
+	  echo "$$(date -u +%FT%TZ) $$(git rev-parse --short HEAD 2>/dev/null) fuzz_$$t max_len=$(FUZZ_MAX_LEN) jobs=$(FUZZ_JOBS) trace_cmp=$(FUZZ_TRACE_CMP) runs=$$runs exec/s=$$rate $$result" | \
 	    tee -a $(FUZZ_BUILD)/long/summary.txt; \
 	done
 
