@@ -51,6 +51,29 @@ def first_dr_store(elf, start, size):
     return None
 
 
+def basepri_writes(elf, start, size):
+    """(raise, lower) addresses of the main loop's BASEPRI writes: `msr BASEPRI, rN` after a
+    `movs rN, #imm`, raise for imm != 0. The last raise before the last lower is the loop's (the
+    first pair brackets dfp21b_init, before the USART interrupt is on)."""
+    out = subprocess.run(["arm-none-eabi-objdump", "-d", "--start-address=%d" % start,
+                          "--stop-address=%d" % (start + size), elf],
+                         capture_output=True, text=True).stdout
+    imm = {}
+    raises, lowers = [], []
+    for l in out.splitlines():
+        m = re.match(r"\s*([0-9a-f]+):\s+\S+(?: \S+)?\s+movs?(?:\.w)?\s+(r\d+), #(\d+)", l)
+        if m:
+            imm[m.group(2)] = int(m.group(3))
+            continue
+        m = re.match(r"\s*([0-9a-f]+):\s+\S+ \S+\s+msr\s+BASEPRI, (r\d+)", l)
+        if m and m.group(2) in imm:
+            (raises if imm[m.group(2)] else lowers).append(int(m.group(1), 16))
+    if not raises or not lowers:
+        return None
+    lower = lowers[-1]
+    return max(a for a in raises if a < lower), lower
+
+
 def classify(req):
     sd = req[0]
     if sd == 0x10:
@@ -123,7 +146,12 @@ def main():
     for n in ("SysTick_Handler", "timebase_tick", "board_leds_tick"):
         if n in s:
             excl.append((s[n][0], s[n][0] + s[n][1]))
-    line_re = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[[0-9a-f]+/([0-9a-f]+)/")
+    # The first field is QEMU's cs_base; for M-profile its bit 0 is set in handler mode.
+    line_re = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[([0-9a-f]+)/([0-9a-f]+)/")
+    masked = basepri_writes(elf, *s["main"])
+    masked_at = None  # thread-mode instructions of the main-loop pass holding PendSV off
+    masked_irq = 0    # interrupt instructions that ran inside it (QEMU's pace, not the line's)
+    passes = []
     results = []
     count = None
     tail = None
@@ -139,7 +167,19 @@ def main():
             m = line_re.match(l)
             if not m:
                 continue
-            pc = int(m.group(1), 16)
+            pc = int(m.group(2), 16)
+            handler = int(m.group(1), 16) & 1
+            if masked is not None:
+                if not handler and pc == masked[0]:
+                    masked_at, masked_irq = 0, 0
+                elif masked_at is not None:
+                    if not handler and pc == masked[1]:
+                        passes.append((masked_at, masked_irq))
+                        masked_at = None
+                    elif handler:
+                        masked_irq += 1
+                    else:
+                        masked_at += 1
             if any(a <= pc < b for a, b in excl):
                 continue
             if pc == isr:
@@ -233,6 +273,12 @@ def main():
     for n, c, kind in sorted(backlog, reverse=True)[:2]:
         print("QEMU hands a telegram over in one burst: %s with %d characters drained at once took "
               "%d instructions from its last interrupt (%.2f µs)" % (kind, c, n + tail_max, (n + tail_max) / MHZ))
+    if passes:
+        worst, irq = max(passes)
+        print("main-loop pass holding PendSV off (BASEPRI, CAN drain + dfp21b_poll + SBus link): "
+              "worst %d instructions of its own (%.2f µs), median %d, %d passes; interrupts that "
+              "ran inside the worst: %d instructions at QEMU's single-step pace"
+              % (worst, worst / MHZ, sorted(p[0] for p in passes)[len(passes) // 2], len(passes), irq))
     return 0
 
 
