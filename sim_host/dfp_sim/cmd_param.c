@@ -1,5 +1,6 @@
-/* dfp-sim param: one parameter service against a DFP21B (or dfp-sim slave) on a tty/PTY, by
- * one of four paths:
+/* dfp-sim param: one parameter service against a DFP21B (or dfp-sim slave) on a tty/PTY, or a
+ * read of up to 19 parameters in one data set 47 request (as a PLC's block read does), by one of
+ * four paths:
  *   channel     DP start-up with "Param + 3 PD" (F3 F2), the cyclic 8-byte MOVILINK channel
  *   movilink    DP start-up with DP-V1 parameters, class-1 data set 47, request id 0x40
  *   profidrive  the same with request id 0x01 (read) / 0x02 (change, non-volatile)
@@ -48,20 +49,27 @@ typedef enum stage {
     ST_DONE,
 } stage_t;
 
+/* One parameter's outcome: a data set 47 answer fails or succeeds parameter by parameter. */
+typedef struct param_result {
+    bool ok;
+    bool have_value;
+    uint32_t value;
+    char error[32];  /* "0x0815", "DP-V1 0xB0", "timeout", "failed" */
+    char text[256];
+} param_result_t;
+
 typedef struct run {
     op_t op;
     via_t via;
-    uint16_t index;
+    uint8_t n;  /* parameters: 1, or up to DPM_DS47_MAX_PARAMS for a data set 47 read */
+    uint16_t index[DPM_DS47_MAX_PARAMS];
     uint32_t value;
     bool volatile_write;
     bool json;
     stage_t stage;
-    /* result */
+    /* result: the whole run's (ok only if every parameter's is), then each parameter's */
     bool ok;
-    bool have_value;
-    uint32_t result;
-    char error[32];  /* "0x0815", "DP-V1 0xB0", "timeout", "failed" */
-    char text[256];
+    param_result_t r[DPM_DS47_MAX_PARAMS];
     dpm_im0_t im0;
     /* paths */
     dp_master_t master;
@@ -81,16 +89,23 @@ static tty_port_t port;
 static tty_runner_t runner;
 static report_t rep;
 
+/* A failure of the whole request (no answer, a negative DP-V1 response, ...): every parameter
+ * in it gets it. */
 static void set_result_error(const char *code, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 static void set_result_error(const char *code, const char *fmt, ...)
 {
-    run.ok = false;
-    snprintf(run.error, sizeof run.error, "%s", code);
+    char text[sizeof run.r[0].text];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(run.text, sizeof run.text, fmt, ap);
+    vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
+    run.ok = false;
+    for (unsigned i = 0; i < run.n; i++) {
+        run.r[i].ok = false;
+        snprintf(run.r[i].error, sizeof run.r[i].error, "%s", code);
+        snprintf(run.r[i].text, sizeof run.r[i].text, "%s", text);
+    }
 }
 
 /* ---- output ------------------------------------------------------------------------------ */
@@ -121,16 +136,18 @@ static void trimmed(char *out, size_t max, const char *in)
     }
 }
 
-static void print_result(void)
+/* One line (or JSON object) per parameter, in the order asked. */
+static void print_param_result(unsigned i)
 {
+    const param_result_t *r = &run.r[i];
     char what[64];
     if (run.op == OP_IM0) {
         snprintf(what, sizeof what, "im0 via %s", via_names[run.via]);
     } else if (run.op == OP_READ) {
-        snprintf(what, sizeof what, "read %u via %s", run.index, via_names[run.via]);
+        snprintf(what, sizeof what, "read %u via %s", run.index[i], via_names[run.via]);
     } else {
         snprintf(what, sizeof what, "write%s %u = %d via %s", run.volatile_write ? " volatile" : "",
-                 run.index, (int32_t)run.value, via_names[run.via]);
+                 run.index[i], (int32_t)run.value, via_names[run.via]);
     }
     char order[24];
     char serial[20];
@@ -142,18 +159,18 @@ static void print_result(void)
     if (run.json) {
         printf("{\"op\":\"%s\"", op_names[run.op]);
         if (run.op != OP_IM0) {
-            printf(",\"index\":%u", run.index);
+            printf(",\"index\":%u", run.index[i]);
         }
         json_str("via", via_names[run.via]);
         if (run.op == OP_WRITE) {
             printf(",\"volatile\":%s,\"value\":%d", run.volatile_write ? "true" : "false",
                    (int32_t)run.value);
         }
-        printf(",\"ok\":%s", run.ok ? "true" : "false");
-        if (run.ok && run.have_value) {
-            printf(",\"value\":%d,\"hex\":\"0x%08X\"", (int32_t)run.result, run.result);
+        printf(",\"ok\":%s", r->ok ? "true" : "false");
+        if (r->ok && r->have_value) {
+            printf(",\"value\":%d,\"hex\":\"0x%08X\"", (int32_t)r->value, r->value);
         }
-        if (run.ok && run.op == OP_IM0) {
+        if (r->ok && run.op == OP_IM0) {
             printf(",\"manufacturer_id\":%u", run.im0.manufacturer_id);
             char hex[8];
             snprintf(hex, sizeof hex, "0x%04X", run.im0.manufacturer_id);
@@ -170,16 +187,15 @@ static void print_result(void)
             snprintf(hex, sizeof hex, "0x%04X", run.im0.im_supported);
             json_str("im_supported", hex);
         }
-        if (!run.ok) {
-            json_str("error", run.error);
-            json_str("text", run.text);
+        if (!r->ok) {
+            json_str("error", r->error);
+            json_str("text", r->text);
         }
         printf("}\n");
-        fflush(stdout);
         return;
     }
-    if (!run.ok) {
-        printf("%s: error %s: %s\n", what, run.error, run.text);
+    if (!r->ok) {
+        printf("%s: error %s: %s\n", what, r->error, r->text);
     } else if (run.op == OP_IM0) {
         printf("%s:\n"
                "  manufacturer id    0x%04X\n"
@@ -193,10 +209,17 @@ static void print_result(void)
                what, run.im0.manufacturer_id, order, serial, run.im0.hardware_revision, sw,
                run.im0.rev_counter, run.im0.profile_id, run.im0.profile_specific_type,
                run.im0.im_version_major, run.im0.im_version_minor, run.im0.im_supported);
-    } else if (run.have_value) {
-        printf("%s: %d (0x%08X)\n", what, (int32_t)run.result, run.result);
+    } else if (r->have_value) {
+        printf("%s: %d (0x%08X)\n", what, (int32_t)r->value, r->value);
     } else {
         printf("%s: ok\n", what);
+    }
+}
+
+static void print_result(void)
+{
+    for (unsigned i = 0; i < run.n; i++) {
+        print_param_result(i);
     }
     fflush(stdout);
 }
@@ -222,7 +245,7 @@ static void finish_call(void)
             set_result_error("failed", "%s", err);
             return;
         }
-        run.ok = true;
+        run.ok = run.r[0].ok = true;
         return;
     }
     dpm_ds47_rsp_t rsp;
@@ -230,16 +253,19 @@ static void finish_call(void)
         set_result_error("failed", "malformed data set 47 response: %s", err);
         return;
     }
-    if (!rsp.p[0].ok) {
-        char code[16];
-        snprintf(code, sizeof code, "0x%04X", rsp.p[0].error);
-        dpm_ds47_error_text(rsp.id, rsp.p[0].error, err, sizeof err);
-        set_result_error(code, "%s", err);
-        return;
-    }
     run.ok = true;
-    run.have_value = rsp.p[0].has_value;
-    run.result = rsp.p[0].value;
+    for (unsigned i = 0; i < run.n; i++) {
+        param_result_t *r = &run.r[i];
+        r->ok = rsp.p[i].ok;
+        if (!r->ok) {
+            run.ok = false;
+            snprintf(r->error, sizeof r->error, "0x%04X", rsp.p[i].error);
+            dpm_ds47_error_text(rsp.id, rsp.p[i].error, r->text, sizeof r->text);
+            continue;
+        }
+        r->have_value = rsp.p[i].has_value;
+        r->value = rsp.p[i].value;
+    }
 }
 
 static void finish_channel(const uint8_t *in)
@@ -259,9 +285,9 @@ static void finish_channel(const uint8_t *in)
         set_result_error(code, "%s", text);
         return;
     }
-    run.ok = true;
-    run.have_value = run.op == OP_READ;
-    run.result = ml_data(in);
+    run.ok = run.r[0].ok = true;
+    run.r[0].have_value = run.op == OP_READ;
+    run.r[0].value = ml_data(in);
 }
 
 static void c2_opened(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
@@ -282,17 +308,22 @@ static void c2_aborted(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
 
 static dpm_ds47_req_t build_request(void)
 {
-    dpm_ds47_req_t q = {.ref = 1, .axis = 0, .n = 1};
-    q.p[0].number = run.index;
-    q.p[0].value = run.value;
+    dpm_ds47_req_t q = {.ref = 1, .axis = 0, .n = run.n};
+    for (unsigned i = 0; i < run.n; i++) {
+        q.p[i].number = run.index[i];
+        q.p[i].value = run.value;
+        if (run.via == VIA_PROFIDRIVE) {
+            q.p[i].attribute = DPM_DS47_ATTR_VALUE;
+        } else {
+            q.p[i].attribute = run.op == OP_READ ? DPM_DS47_ATTR_ML_READ
+                               : run.volatile_write ? DPM_DS47_ATTR_ML_WRITE_VOLATILE
+                                                    : DPM_DS47_ATTR_ML_WRITE;
+        }
+    }
     if (run.via == VIA_PROFIDRIVE) {
         q.id = run.op == OP_WRITE ? DPM_DS47_ID_CHANGE : DPM_DS47_ID_READ;
-        q.p[0].attribute = DPM_DS47_ATTR_VALUE;
     } else {
         q.id = DPM_DS47_ID_MOVILINK;
-        q.p[0].attribute = run.op == OP_READ ? DPM_DS47_ATTR_ML_READ
-                           : run.volatile_write ? DPM_DS47_ATTR_ML_WRITE_VOLATILE
-                                                : DPM_DS47_ATTR_ML_WRITE;
     }
     return q;
 }
@@ -353,7 +384,7 @@ static void step(void)
             uint8_t svc = run.op == OP_READ ? ML_SVC_READ
                           : run.volatile_write ? ML_SVC_WRITE_VOLATILE : ML_SVC_WRITE;
             dpm_param_sync(&run.pc, s->inputs);
-            dpm_param_start(&run.pc, svc, run.index, run.value, run.out);
+            dpm_param_start(&run.pc, svc, run.index[0], run.value, run.out);
             dp_master_set_outputs(&run.master, 0, run.out, sizeof run.out);
             run.stage = ST_RUNNING;
             return;
@@ -460,7 +491,7 @@ int cmd_param(int argc, char **argv)
     uint32_t timeout_s = 10;
     bool via_given = false;
     bool verbose = false;
-    const char *pos[4];
+    const char *pos[1 + DPM_DS47_MAX_PARAMS]; /* read and its indices, or write INDEX VALUE */
     int npos = 0;
     memset(&run, 0, sizeof run);
     for (int i = 2; i < argc; i++) {
@@ -504,8 +535,9 @@ int cmd_param(int argc, char **argv)
             cli_error("param: unknown option '%s' (see dfp-sim --help)", o);
             return EXIT_USAGE;
         } else {
-            if (npos == 4) {
-                cli_error("param: too many arguments ('%s')", o);
+            if (npos == (int)(sizeof pos / sizeof pos[0])) {
+                cli_error("param: too many arguments ('%s'; a read takes up to %u indices)", o,
+                          DPM_DS47_MAX_PARAMS);
                 return EXIT_USAGE;
             }
             pos[npos++] = o;
@@ -516,14 +548,15 @@ int cmd_param(int argc, char **argv)
         return EXIT_USAGE;
     }
     if (npos == 0) {
-        cli_error("param: say what to do: read INDEX, write INDEX VALUE or im0");
+        cli_error("param: say what to do: read INDEX [INDEX ...], write INDEX VALUE or im0");
         return EXIT_USAGE;
     }
-    uint32_t index = 0;
     if (strcmp(pos[0], "read") == 0) {
         run.op = OP_READ;
-        if (npos != 2) {
-            cli_error("param: read takes one argument, the parameter INDEX (e.g. read 8300)");
+        if (npos < 2) {
+            cli_error("param: read takes the parameter INDEX, or up to %u of them for one data "
+                      "set 47 request (e.g. read 8300, read 8318 8319 8320 --via movilink)",
+                      DPM_DS47_MAX_PARAMS);
             return EXIT_USAGE;
         }
     } else if (strcmp(pos[0], "write") == 0) {
@@ -549,8 +582,17 @@ int cmd_param(int argc, char **argv)
         cli_error("param: unknown operation '%s' (read, write or im0)", pos[0]);
         return EXIT_USAGE;
     }
-    if (run.op != OP_IM0 && !cli_u32("INDEX", pos[1], 0, 65535, &index)) return EXIT_USAGE;
-    run.index = (uint16_t)index;
+    run.n = run.op == OP_READ ? (uint8_t)(npos - 1) : 1u;
+    for (unsigned i = 0; run.op != OP_IM0 && i < run.n; i++) {
+        uint32_t index = 0;
+        if (!cli_u32("INDEX", pos[1 + i], 0, 65535, &index)) return EXIT_USAGE;
+        run.index[i] = (uint16_t)index;
+    }
+    if (run.n > 1u && run.via == VIA_CHANNEL) {
+        cli_error("param: the cyclic channel carries one service at a time; read several "
+                  "indices with --via movilink, profidrive or c2 (one data set 47 request)");
+        return EXIT_USAGE;
+    }
     if (run.volatile_write && run.op != OP_WRITE) {
         cli_error("param: --volatile belongs to write");
         return EXIT_USAGE;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # dfp-sim param against dfp-sim slave (emulated MOVIDRIVE) over a socat PTY pair: read 8300 by
-# every path, writes read back by another path, --volatile, a value above the maximum (exit 1
+# every path, writes read back by another path, several indices in one data set 47 request, --volatile, a value above the maximum (exit 1
 # and the error text), I&M0 by class 1 and class 2, --json parsed by python3, a slave that does
 # not answer, and bad command lines (exit 2, one line on stderr, nothing on stdout).
 sim=$1
@@ -67,6 +67,24 @@ expect_exit 0 "write volatile H0 via channel" -- param write 11000 0x1234 --vola
 expect_exit 0 "read H0 via c2" -- param read 11000 --via c2
 expect_in "H0 = 0x1234" "read 11000 via c2: 4660 (0x00001234)" "$out"
 
+# Several indices in one data set 47 request: one line per parameter in the order asked; a
+# refused one fails alone (exit 1), the others keep their values.
+expect_exit 1 "read 4 indices via movilink, one illegal" -- param read 8300 11000 1 8489 --via movilink
+want=$'read 8300 via movilink: 823947913 (0x311C7289)\nread 11000 via movilink: 4660 (0x00001234)
+read 1 via movilink: error 0x0810: class 8, additional code 0x10: illegal parameter index
+read 8489 via movilink: 3000 (0x00000BB8)'
+[ "$out" = "$want" ] && ok || bad "4-index read: got
+$out"
+expect_exit 0 "read 2 indices via c2" -- param read 8489 11000 --via c2
+[ "$out" = $'read 8489 via c2: 3000 (0x00000BB8)\nread 11000 via c2: 4660 (0x00001234)' ] && ok || bad "2-index c2 read: $out"
+expect_exit 0 "read 3 indices via profidrive --json" -- param read 11000 8300 8489 --via profidrive --json
+if [ "$(printf '%s\n' "$out" | wc -l)" = 3 ]; then ok; else bad "--json: not 3 lines: $out"; fi
+[ "$(json_get "$(sed -n 2p <<<"$out")" index)" = 8300 ] && ok || bad "json line 2 index: $out"
+[ "$(json_get "$(sed -n 3p <<<"$out")" value)" = 3000 ] && ok || bad "json line 3 value: $out"
+nineteen=$(printf '8300 %.0s' $(seq 19))
+expect_exit 0 "read 19 indices via c2 (the most one request carries)" -- param read $nineteen --via c2
+[ "$(grep -c '^read 8300 via c2: 823947913 (0x311C7289)$' <<<"$out")" = 19 ] && ok || bad "19 results: $out"
+
 # A value above P302's maximum: exit 1 and the meaning, by every path.
 expect_exit 1 "P302 = 99000000 via movilink" -- param write 8517 99000000 --via movilink --volatile
 expect_in "MOVILINK error text" "error 0x0815: class 8, additional code 0x15: value too high" "$out"
@@ -109,7 +127,10 @@ usage() { # usage DESCRIPTION NEEDLE ARGS...
 P=(--port "$tmp/b" --address 4)
 usage "no operation" "say what to do" "${P[@]}"
 usage "no port" "--port DEV and --address N are required" read 8300
-usage "read without index" "read takes one argument" "${P[@]}" read
+usage "read without index" "read takes the parameter INDEX" "${P[@]}" read
+usage "20 indices" "a read takes up to 19 indices" "${P[@]}" read $nineteen 8300 --via c2
+usage "2 indices via channel" "the cyclic channel carries one service at a time" "${P[@]}" read 8300 8301
+usage "bad second index" "'x' is not a number from 0 to 65535" "${P[@]}" read 8300 x --via c2
 usage "index too big" "'70000' is not a number from 0 to 65535" "${P[@]}" read 70000
 usage "write without value" "write takes two arguments" "${P[@]}" write 8489
 usage "value not a number" "VALUE 'x12' is not a 32-bit number" "${P[@]}" write 8489 x12

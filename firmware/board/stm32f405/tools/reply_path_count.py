@@ -10,7 +10,9 @@ SysTick (its own interrupt, at most one per reply), and add the driver's share f
 character measured in the same trace: the largest USART1 interrupt that stored exactly one
 character (clock read included) and the largest PendSV drain that handed on exactly one. Not
 counted: the exception entries themselves (12 cycles, 6 for the tail-chain into PendSV) and a
-wait for the main loop when it held PendSV off (BASEPRI). QEMU often hands a telegram over in
+wait for the main loop when it held PendSV off (BASEPRI); that wait is reported on its own: the
+thread-mode instructions of each main-loop pass from its BASEPRI raise to the lower around
+dfp21b_poll (QEMU sets bit 0 of the trace's cs_base field in handler mode), interrupts left out. QEMU often hands a telegram over in
 one burst; the whole drain after such a telegram's last interrupt is reported separately.
 Then add the transmit tail measured the same way without the
 min TSDR spin (a fresh not_before has already passed at 12 Mbit/s): transmit entry to its
@@ -52,26 +54,39 @@ def first_dr_store(elf, start, size):
 
 
 def basepri_writes(elf, start, size):
-    """(raise, lower) addresses of the main loop's BASEPRI writes: `msr BASEPRI, rN` after a
-    `movs rN, #imm`, raise for imm != 0. The last raise before the last lower is the loop's (the
-    first pair brackets dfp21b_init, before the USART interrupt is on)."""
+    """(raise, lower) addresses of the main loop's BASEPRI writes around its dfp21b_poll call:
+    the nearest `msr BASEPRI, rN` before the `bl dfp21b_poll` where the last write to rN loads
+    a non-zero immediate, and the nearest after it where that write loads zero."""
     out = subprocess.run(["arm-none-eabi-objdump", "-d", "--start-address=%d" % start,
                           "--stop-address=%d" % (start + size), elf],
                          capture_output=True, text=True).stdout
-    imm = {}
-    raises, lowers = [], []
+    insns = []
     for l in out.splitlines():
-        m = re.match(r"\s*([0-9a-f]+):\s+\S+(?: \S+)?\s+movs?(?:\.w)?\s+(r\d+), #(\d+)", l)
+        m = re.match(r"\s*([0-9a-f]+):\s+[0-9a-f]{4}(?: [0-9a-f]{4})?\s+(.*)$", l)
         if m:
-            imm[m.group(2)] = int(m.group(3))
-            continue
-        m = re.match(r"\s*([0-9a-f]+):\s+\S+ \S+\s+msr\s+BASEPRI, (r\d+)", l)
-        if m and m.group(2) in imm:
-            (raises if imm[m.group(2)] else lowers).append(int(m.group(1), 16))
-    if not raises or not lowers:
+            insns.append((int(m.group(1), 16), m.group(2).split("@")[0].strip()))
+    call = next((i for i, (_, t) in enumerate(insns) if re.match(r"bl\s+\S+ <dfp21b_poll>", t)),
+                None)
+    if call is None:
         return None
-    lower = lowers[-1]
-    return max(a for a in raises if a < lower), lower
+
+    def basepri_at(i, want_zero):
+        m = re.match(r"msr\s+BASEPRI, (r\d+)$", insns[i][1])
+        if not m:
+            return False
+        # the last instruction before it that writes the register must load an immediate
+        for j in range(i - 1, max(i - 9, -1), -1):
+            if re.match(r"\S+\s+%s(?:,|$)" % m.group(1), insns[j][1]):
+                k = re.match(r"movs?(?:\.w)?\s+%s, #(\d+)$" % m.group(1), insns[j][1])
+                return k is not None and (int(k.group(1)) == 0) == want_zero
+        return False
+
+    raise_at = next((insns[i][0] for i in range(call - 1, -1, -1) if basepri_at(i, False)), None)
+    lower_at = next((insns[i][0] for i in range(call + 1, len(insns)) if basepri_at(i, True)),
+                    None)
+    if raise_at is None or lower_at is None:
+        return None
+    return raise_at, lower_at
 
 
 def classify(req):
@@ -149,6 +164,8 @@ def main():
     # The first field is QEMU's cs_base; for M-profile its bit 0 is set in handler mode.
     line_re = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[([0-9a-f]+)/([0-9a-f]+)/")
     masked = basepri_writes(elf, *s["main"])
+    if masked is None:
+        sys.exit("reply_path_count: no BASEPRI raise/lower around dfp21b_poll in main")
     masked_at = None  # thread-mode instructions of the main-loop pass holding PendSV off
     masked_irq = 0    # interrupt instructions that ran inside it (QEMU's pace, not the line's)
     passes = []
@@ -169,6 +186,9 @@ def main():
                 continue
             pc = int(m.group(2), 16)
             handler = int(m.group(1), 16) & 1
+            if pc == isr and not handler:
+                sys.exit("reply_path_count: USART1_IRQHandler runs with cs_base bit 0 clear; this "
+                         "QEMU does not mark handler mode there (QEMU >= 6.1 does)")
             if masked is not None:
                 if not handler and pc == masked[0]:
                     masked_at, masked_irq = 0, 0
@@ -273,9 +293,12 @@ def main():
     for n, c, kind in sorted(backlog, reverse=True)[:2]:
         print("QEMU hands a telegram over in one burst: %s with %d characters drained at once took "
               "%d instructions from its last interrupt (%.2f µs)" % (kind, c, n + tail_max, (n + tail_max) / MHZ))
+    if not passes:
+        sys.exit("reply_path_count: no complete main-loop pass in the trace")
     if passes:
         worst, irq = max(passes)
-        print("main-loop pass holding PendSV off (BASEPRI, CAN drain + dfp21b_poll + SBus link): "
+        print("main-loop pass holding PendSV off (BASEPRI: dfp21b_poll, the SBus link, here the "
+              "SBus stand-in inverter; on a card with a CAN bus the CAN drain instead): "
               "worst %d instructions of its own (%.2f µs), median %d, %d passes; interrupts that "
               "ran inside the worst: %d instructions at QEMU's single-step pace"
               % (worst, worst / MHZ, sorted(p[0] for p in passes)[len(passes) // 2], len(passes), irq))
