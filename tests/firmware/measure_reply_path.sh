@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Reply-path instruction counts on the target: the -qemu-sbus image single-stepped by QEMU with
-# an instruction trace, driven by dfp-sim (DP-V0 start-up + Data_Exchange, C1 and C2 reads).
+# an instruction trace, driven by dfp-sim (DP-V0 start-up + Data_Exchange, C1 and C2 reads, a
+# 19-parameter C2 read).
 # usage: measure_reply_path.sh IMAGE_DIR DFP_SIM OUT_DIR
 set -eu
 img=$1/dfp21b-stm32f405-qemu-sbus.elf
@@ -8,7 +9,7 @@ sim=$2
 out=$3
 mkdir -p "$out"
 rm -f "$out"/trace.log "$out"/*.pcap
-timeout 120 qemu-system-arm -M netduinoplus2 -nographic -monitor none \
+timeout 300 qemu-system-arm -M netduinoplus2 -nographic -monitor none \
   -semihosting-config enable=on,target=native -serial pty -singlestep -d exec,nochain \
   -D "$out/trace.log" -kernel "$img" > "$out/qemu.log" 2>&1 &
 qpid=$!
@@ -18,7 +19,10 @@ timeout 60 "$sim" master --port "$pts" --address 4 --config F3F2 --cycles 10 \
   --outputs 00000000000000001234ABCD5678 --capture "$out/1.pcap" > /dev/null
 timeout 60 "$sim" param --port "$pts" --address 4 --via movilink --capture "$out/2.pcap" read 8300
 timeout 60 "$sim" param --port "$pts" --address 4 --via c2 --capture "$out/3.pcap" read 8300
+# the largest data set 47 request: 19 parameters, parsed and answered by the main loop
+timeout 120 "$sim" param --port "$pts" --address 4 --via c2 --timeout 100 --capture "$out/4.pcap" \
+  read $(printf '8300 %.0s' $(seq 19)) > /dev/null
 exec 9>&-
 wait $qpid || true
 python3 "$(dirname "$0")/../../firmware/board/stm32f405/tools/reply_path_count.py" "$img" \
-  "$out/trace.log" "$out/1.pcap" "$out/2.pcap" "$out/3.pcap"
+  "$out/trace.log" "$out/1.pcap" "$out/2.pcap" "$out/3.pcap" "$out/4.pcap"

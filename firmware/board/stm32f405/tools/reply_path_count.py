@@ -12,12 +12,12 @@ character (clock read included) and the largest PendSV drain that handed on exac
 counted: the exception entries themselves (12 cycles, 6 for the tail-chain into PendSV) and a
 wait for the main loop when it held PendSV off (BASEPRI); that wait is reported on its own: the
 thread-mode instructions of each main-loop pass from its BASEPRI raise to the lower around
-dfp21b_poll (QEMU sets bit 0 of the trace's cs_base field in handler mode), interrupts left out. QEMU often hands a telegram over in
-one burst; the whole drain after such a telegram's last interrupt is reported separately.
-Then add the transmit tail measured the same way without the
-min TSDR spin (a fresh not_before has already passed at 12 Mbit/s): transmit entry to its
+dfp21b_poll (QEMU sets bit 0 of the trace's cs_base field in handler mode), interrupts left
+out. QEMU often hands a telegram over in one burst; the whole drain after such a telegram's last
+interrupt is reported separately. Then add each reply's transmit tail, without the min TSDR spin (a fresh not_before has already passed at 12 Mbit/s): transmit entry to its
 first clock read, one clock read, and from the spin's last clock read to the first DR write in
-tx_fill. Replies are matched in order to the pcap captures of the master runs (request -> reply).
+tx_fill. Each reply is labelled by the core functions that ran between the last character and
+transmit (classify_funcs); the captures only give the count and the largest reply.
 
 usage: reply_path_count.py ELF TRACE CAPTURE.pcap [CAPTURE.pcap ...]
 """
@@ -87,6 +87,28 @@ def basepri_writes(elf, start, size):
     if raise_at is None or lower_at is None:
         return None
     return raise_at, lower_at
+
+
+def classify_funcs(funcs):
+    """The request a reply answers, told by the core functions that ran for it (robust against
+    replies QEMU's pace made the firmware drop, which pairing with the captures is not)."""
+    if "hook_prm_check" in funcs:
+        return "Set_Prm (SC)"
+    if "hook_cfg_check" in funcs:
+        return "Chk_Cfg (SC)"
+    if any(f.startswith("dp_slave_build_diag") for f in funcs):
+        return "Slave_Diag"
+    if "hook_outputs" in funcs:
+        return "Data_Exchange"
+    if "dpv1_sap_request" in funcs:
+        if "conn_close" in funcs:
+            return "DP-V1 Abort (connection closed)"
+        if any(f.startswith("reply_sap") for f in funcs):
+            return "DP-V1 response with data"
+        return "DP-V1 request taken (SC)"
+    if "dp_service" not in funcs and any(f.startswith("reply_plain") for f in funcs):
+        return "FDL status (SD1)"
+    return "other"
 
 
 def classify(req):
@@ -162,7 +184,8 @@ def main():
         if n in s:
             excl.append((s[n][0], s[n][0] + s[n][1]))
     # The first field is QEMU's cs_base; for M-profile its bit 0 is set in handler mode.
-    line_re = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[([0-9a-f]+)/([0-9a-f]+)/")
+    line_re = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[([0-9a-f]+)/([0-9a-f]+)/[0-9a-f]+/[0-9a-f]+\] ?(\S*)")
+    funcs = set()  # functions run since the last dfp21b_rx_char call
     masked = basepri_writes(elf, *s["main"])
     if masked is None:
         sys.exit("reply_path_count: no BASEPRI raise/lower around dfp21b_poll in main")
@@ -225,6 +248,9 @@ def main():
                 cur_drain[0] += 1
             gi += 1
             if pc == rx_char:
+                funcs = set()
+            funcs.add(m.group(3))
+            if pc == rx_char:
                 rx_calls += 1
                 last_char_at = gi
                 if cur_drain is not None:
@@ -237,7 +263,8 @@ def main():
                 refused += 1  # transmit returned without sending (late: characters waiting)
                 tail = None
             if pc == tx and count is not None:
-                pending = (count - 1 if chained else None, chars, gi - last_char_at)
+                pending = (count - 1 if chained else None, chars, gi - last_char_at,
+                           classify_funcs(funcs))
                 count = None
                 tail = {"n": 0, "nows": []}
                 continue
@@ -253,46 +280,45 @@ def main():
                     else:
                         t = tail["n"]
                     tails.append(t)
-                    results.append(pending)
+                    results.append(pending + (t,))
                     tail = None
     tail_max = max(tails) if tails else 0
     ps = pairs(caps)
-    if len(ps) != len(results):
-        print("warning: %d replies in the captures, %d transmits in the trace; matching the last %d"
-              % (len(ps), len(results), min(len(ps), len(results))), file=sys.stderr)
-    k = min(len(ps), len(results))
-    ps, res = ps[-k:], results[-k:]
+    largest = max((len(rsp), kind) for kind, _, rsp in ps) if ps else (0, "")
     per_char = [max(isr_one) if isr_one else 0, max(drain_one) if drain_one else 0]
     driver_cost = per_char[0] + per_char[1]
     core = defaultdict(list)
     backlog = []
-    for (kind, _, _), (whole, chars, last) in zip(ps, res):
-        core[kind].append(last)
+    for whole, chars, last, kind, own_tail in results:
+        core[kind].append(last + own_tail)
         if whole is not None and chars > 1:
-            backlog.append((whole, chars, kind))
-    print("Reply path on the target (QEMU netduinoplus2, TCG single-step), per telegram type: the "
-          "request's last character through the driver (USART1 interrupt into the ring, PendSV "
+            backlog.append((whole + own_tail, chars, kind))
+    print("Reply path on the target (QEMU netduinoplus2, TCG single-step), per telegram type (told by "
+          "the core functions that ran for it): the request's last character through the driver (USART1 interrupt into the ring, PendSV "
           "drain) and the core to the first reply character")
     print("driver for a lone character: USART1 interrupt storing it %d (of %d such), PendSV "
           "drain handing it on %d (of %d such) instructions; transmit tail (clock read, DE, RE "
-          "off, first DR write): %d; %d characters in all"
-          % (per_char[0], len(isr_one), per_char[1], len(drain_one), tail_max, rx_calls))
+          "off, first DR write; it grows with the frame, which transmit copies first): %d to %d, "
+          "each reply counted with its own; %d characters in all; %d replies in the trace, %d in "
+          "the captures, the largest %d octets (%s)"
+          % (per_char[0], len(isr_one), per_char[1], len(drain_one), min(tails) if tails else 0,
+             tail_max, rx_calls, len(results), len(ps), largest[0], largest[1]))
     hdr = "| telegram | n | instr. worst | instr. min | µs at %d MHz (1 instr./cycle) |" % MHZ
     hdr += " bit times at " + " / ".join("%g" % (b / 1e6) if b >= 1e6 else "%gk" % (b / 1e3)
                                           for b in BAUDS[:5]) + " |"
     print(hdr)
     print("|---|---:|---:|---:|---:|---:|")
     for kind in sorted(core, key=lambda k: -max(core[k])):
-        w = max(core[kind]) + tail_max + driver_cost
+        w = max(core[kind]) + driver_cost
         us = w / MHZ
         bits = " / ".join("%.1f" % (us * b / 1e6) for b in BAUDS[:5])
         print("| %s | %d | %d | %d | %.2f | %s |" % (kind, len(core[kind]), w,
-                                                   min(core[kind]) + tail_max + driver_cost, us, bits))
+                                                   min(core[kind]) + driver_cost, us, bits))
     if refused:
         print("replies not sent because characters after the request were waiting: %d" % refused)
     for n, c, kind in sorted(backlog, reverse=True)[:2]:
         print("QEMU hands a telegram over in one burst: %s with %d characters drained at once took "
-              "%d instructions from its last interrupt (%.2f µs)" % (kind, c, n + tail_max, (n + tail_max) / MHZ))
+              "%d instructions from its last interrupt (%.2f µs)" % (kind, c, n, n / MHZ))
     if not passes:
         sys.exit("reply_path_count: no complete main-loop pass in the trace")
     if passes:
