@@ -8,10 +8,10 @@ img=$1/dfp21b-stm32f405-qemu-sbus.elf
 sim=$2
 out=$3
 mkdir -p "$out"
-rm -f "$out"/trace.log "$out"/*.pcap
+rm -f "$out"/trace.log "$out"/*.pcap "$out"/qemu.log
 timeout 300 qemu-system-arm -M netduinoplus2 -nographic -monitor none \
   -semihosting-config enable=on,target=native -serial pty -singlestep -d exec,nochain \
-  -D "$out/trace.log" -kernel "$img" > "$out/qemu.log" 2>&1 &
+  -D "$out/trace.log" -kernel "$img" >> "$out/qemu.log" 2>&1 & # append: semihosting writes through its own offset
 qpid=$!
 for _ in $(seq 100); do pts=$(grep -o '/dev/pts/[0-9]*' "$out/qemu.log" || true); [ -n "$pts" ] && break; sleep 0.1; done
 exec 9<>"$pts"
@@ -23,6 +23,15 @@ timeout 60 "$sim" param --port "$pts" --address 4 --via c2 --capture "$out/3.pca
 timeout 120 "$sim" param --port "$pts" --address 4 --via c2 --timeout 100 --capture "$out/4.pcap" \
   read $(printf '8300 %.0s' $(seq 19)) > /dev/null
 exec 9>&-
+# The image prints its summary and exits by semihosting after its silence timeout; QEMU does not
+# always leave then (seen under load: it sat until the outer timeout), so stop it once the
+# summary is out. SIGTERM lets it flush the trace.
+for _ in $(seq 600); do
+  kill -0 $qpid 2>/dev/null || break
+  if grep -q "dfp21b-qemu:" "$out/qemu.log"; then sleep 2; kill $qpid 2>/dev/null; break; fi
+  sleep 0.1
+done
 wait $qpid || true
+grep -q "dfp21b-qemu:" "$out/qemu.log" || { echo "measure_reply_path: the image printed no summary" >&2; exit 1; }
 python3 "$(dirname "$0")/../../firmware/board/stm32f405/tools/reply_path_count.py" "$img" \
   "$out/trace.log" "$out/1.pcap" "$out/2.pcap" "$out/3.pcap" "$out/4.pcap"

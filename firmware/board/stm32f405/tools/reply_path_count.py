@@ -92,23 +92,30 @@ def basepri_writes(elf, start, size):
 def classify_funcs(funcs):
     """The request a reply answers, told by the core functions that ran for it (robust against
     replies QEMU's pace made the firmware drop, which pairing with the captures is not)."""
+    def ran(prefix):
+        return any(f == prefix or f.startswith(prefix + ".") for f in funcs)
+    if ran("reply_rs"):
+        return "refused (RS)"
     if "hook_prm_check" in funcs:
         return "Set_Prm (SC)"
     if "hook_cfg_check" in funcs:
         return "Chk_Cfg (SC)"
-    if any(f.startswith("dp_slave_build_diag") for f in funcs):
+    if ran("dp_slave_build_diag"):
         return "Slave_Diag"
     if "hook_outputs" in funcs:
         return "Data_Exchange"
     if "dpv1_sap_request" in funcs:
+        if ran("reply_sap"):
+            # the resource manager frees the slot it opens (conn_close) before an Initiate
+            return "DP-V1 MSAC2 Initiate (RM)" if "conn_close" in funcs else "DP-V1 response with data"
         if "conn_close" in funcs:
-            return "DP-V1 Abort (connection closed)"
-        if any(f.startswith("reply_sap") for f in funcs):
-            return "DP-V1 response with data"
+            return "DP-V1 Abort (SC)"
         return "DP-V1 request taken (SC)"
-    if "dp_service" not in funcs and any(f.startswith("reply_plain") for f in funcs):
+    if "dp_service" not in funcs and "fcb_touch" in funcs:
+        return "repeat from the FCB cache"
+    if "dp_service" not in funcs and ran("reply_plain"):
         return "FDL status (SD1)"
-    return "other"
+    return "other (Get_Cfg, Rd_Inp, Rd_Outp, ...)"
 
 
 def classify(req):
@@ -157,6 +164,10 @@ def pairs(paths):
 def main():
     elf, trace, caps = sys.argv[1], sys.argv[2], sys.argv[3:]
     s = symbols(elf)
+    for need in ("reply_plain", "reply_sap", "dp_slave_build_diag", "hook_prm_check",
+                 "hook_cfg_check", "hook_outputs", "dpv1_sap_request", "conn_close", "fcb_touch"):
+        if not any(n == need or n.startswith(need + ".") for n in s):
+            sys.exit("reply_path_count: no function %s in the image; the labels need updating" % need)
     isr = s["USART1_IRQHandler"][0]
     pendsv = s["PendSV_Handler"][0] if "PendSV_Handler" in s else None
     rx_char = s["dfp21b_rx_char"][0]
@@ -262,9 +273,12 @@ def main():
             if tail is not None and pc in (isr, rx_char, tx):
                 refused += 1  # transmit returned without sending (late: characters waiting)
                 tail = None
-            if pc == tx and count is not None:
-                pending = (count - 1 if chained else None, chars, gi - last_char_at,
-                           classify_funcs(funcs))
+            if pc == tx:
+                # "whole" (the drain of a burst) only when a USART interrupt came since the last
+                # transmit; the reply path itself counts from the last character in any case
+                burst = count is not None and chained
+                pending = (count - 1 if burst else None, chars if count is not None else 0,
+                           gi - last_char_at, classify_funcs(funcs))
                 count = None
                 tail = {"n": 0, "nows": []}
                 continue
