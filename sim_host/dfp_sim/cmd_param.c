@@ -5,8 +5,8 @@
  *   movilink    DP start-up with DP-V1 parameters, class-1 data set 47, request id 0x40
  *   profidrive  the same with request id 0x01 (read) / 0x02 (change, non-volatile)
  *   c2          a class-2 connection (no start-up), data set 47 with id 0x40, then Abort
- * and I&M0 through class 1 or class 2. Exit 0 on a positive result, 1 on a negative one or no
- * result in time, 2 on a bad command line. */
+ * and I&M0 through class 1 or class 2. Exit 0 when every result is positive, 1 on a negative
+ * one or no result in time, 2 on a bad command line. */
 #include <errno.h>
 #include <stdarg.h>
 #include <signal.h>
@@ -536,8 +536,9 @@ int cmd_param(int argc, char **argv)
             return EXIT_USAGE;
         } else {
             if (npos == (int)(sizeof pos / sizeof pos[0])) {
-                cli_error("param: too many arguments ('%s'; a read takes up to %u indices)", o,
-                          DPM_DS47_MAX_PARAMS);
+                cli_error("param: too many arguments ('%s'%s)", o,
+                          strcmp(pos[0], "read") == 0 ? "; a read takes up to 19 indices" : "");
+                _Static_assert(DPM_DS47_MAX_PARAMS == 19u, "the message above names 19");
                 return EXIT_USAGE;
             }
             pos[npos++] = o;

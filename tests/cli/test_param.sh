@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # dfp-sim param against dfp-sim slave (emulated MOVIDRIVE) over a socat PTY pair: read 8300 by
-# every path, writes read back by another path, several indices in one data set 47 request, --volatile, a value above the maximum (exit 1
+# every path, writes read back by another path, several indices in one data set 47 request (each
+# result in its place, one request on the wire), --volatile, a value above the maximum (exit 1
 # and the error text), I&M0 by class 1 and class 2, --json parsed by python3, a slave that does
 # not answer, and bad command lines (exit 2, one line on stderr, nothing on stdout).
 sim=$1
@@ -81,9 +82,40 @@ expect_exit 0 "read 3 indices via profidrive --json" -- param read 11000 8300 84
 if [ "$(printf '%s\n' "$out" | wc -l)" = 3 ]; then ok; else bad "--json: not 3 lines: $out"; fi
 [ "$(json_get "$(sed -n 2p <<<"$out")" index)" = 8300 ] && ok || bad "json line 2 index: $out"
 [ "$(json_get "$(sed -n 3p <<<"$out")" value)" = 3000 ] && ok || bad "json line 3 value: $out"
-nineteen=$(printf '8300 %.0s' $(seq 19))
-expect_exit 0 "read 19 indices via c2 (the most one request carries)" -- param read $nineteen --via c2
-[ "$(grep -c '^read 8300 via c2: 823947913 (0x311C7289)$' <<<"$out")" = 19 ] && ok || bad "19 results: $out"
+expect_exit 1 "read 2 indices via c2 --json, the second illegal" -- param read 8300 1 --via c2 --json
+[ "$(json_get "$(sed -n 1p <<<"$out")" ok)" = True ] && ok || bad "json line 1 ok: $out"
+[ "$(json_get "$(sed -n 2p <<<"$out")" ok)" = False ] && ok || bad "json line 2 not ok: $out"
+[ "$(json_get "$(sed -n 2p <<<"$out")" error)" = 0x0810 ] && ok || bad "json line 2 error: $out"
+# 19 distinct indices (the most one request carries), H5 set first so that a shifted result shows:
+# each answer in its place, and all of them through one data set 47 write on the wire.
+expect_exit 0 "write volatile H5 = 55" -- param write 11005 55 --via movilink --volatile
+nineteen="8300 8489 11000 $(seq -s ' ' 11001 11016)"
+expect_exit 0 "read 19 indices via c2" -- param read $nineteen --via c2 --capture "$tmp/19.pcap"
+want="read 8300 via c2: 823947913 (0x311C7289)
+read 8489 via c2: 3000 (0x00000BB8)
+read 11000 via c2: 4660 (0x00001234)"
+for i in $(seq 11001 11016); do
+  v=0; [ "$i" = 11005 ] && v=55
+  want="$want
+read $i via c2: $v (0x$(printf '%08X' $v))"
+done
+[ "$out" = "$want" ] && ok || bad "19 results: got
+$out"
+writes=$(python3 - "$tmp/19.pcap" <<'PY'
+import struct, sys
+d = open(sys.argv[1], "rb").read()
+o, n = 24, []
+while o + 16 <= len(d):
+    cl = struct.unpack("<I", d[o + 8:o + 12])[0]
+    r = d[o + 16:o + 16 + cl]
+    o += 16 + cl
+    # SD2 to station 4 with SAPs, DP-V1 Write (0x5F) of index 47
+    if len(r) > 11 and r[0] == 0x68 and r[4] == 0x84 and r[9] == 0x5F and r[11] == 47:
+        n.append(len(r))
+print(" ".join(map(str, n)))
+PY
+)
+[ "$writes" = 133 ] && ok || bad "data set 47 writes on the wire (octets each): '$writes', expected one of 133"
 
 # A value above P302's maximum: exit 1 and the meaning, by every path.
 expect_exit 1 "P302 = 99000000 via movilink" -- param write 8517 99000000 --via movilink --volatile
@@ -110,7 +142,11 @@ expect_exit 0 "im0 via c2 --json" -- param im0 --via c2 --json
 [ "$(json_get "$out" order_id)" = "824 240 2" ] && ok || bad "im0 order_id: $out"
 [ "$(json_get "$out" im_supported)" = 0x001E ] && ok || bad "im0 im_supported: $out"
 
-# Nobody at address 5: exit 1 within the timeout, with the reason.
+# Nobody at address 5: exit 1 within the timeout, with the reason (for each index asked).
+expect_exit 1 "no slave at 5, two indices" -- "$sim" param --port "$tmp/b" --address 5 --timeout 1 read 8300 8301 --via movilink
+want="read 8300 via movilink: error timeout: no result within 1 s: slave 5 did not reach data exchange (phase FDL status)
+read 8301 via movilink: error timeout: no result within 1 s: slave 5 did not reach data exchange (phase FDL status)"
+[ "$out" = "$want" ] && ok || bad "timeout for both indices: $out"
 expect_exit 1 "no slave at 5 (class 1)" -- "$sim" param --port "$tmp/b" --address 5 --timeout 1 read 8300 --via movilink
 expect_in "class-1 timeout text" "error timeout: no result within 1 s: slave 5 did not reach data exchange" "$out"
 expect_exit 1 "no slave at 5 (class 2)" -- "$sim" param --port "$tmp/b" --address 5 --timeout 2 read 8300 --via c2 --json
