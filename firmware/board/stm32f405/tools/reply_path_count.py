@@ -14,7 +14,8 @@ wait for the main loop when it held PendSV off (BASEPRI); that wait is reported 
 thread-mode instructions of each main-loop pass from its BASEPRI raise to the lower around
 dfp21b_poll (QEMU sets bit 0 of the trace's cs_base field in handler mode), interrupts left
 out. QEMU often hands a telegram over in one burst; the whole drain after such a telegram's last
-interrupt is reported separately. Then add each reply's transmit tail, without the min TSDR spin (a fresh not_before has already passed at 12 Mbit/s): transmit entry to its
+interrupt is reported separately. Then add each reply's transmit tail, without the min TSDR
+spin (a fresh not_before has already passed at 12 Mbit/s): transmit entry to its
 first clock read, one clock read, and from the spin's last clock read to the first DR write in
 tx_fill. Each reply is labelled by the core functions that ran between the last character and
 transmit (classify_funcs); the captures only give the count and the largest reply.
@@ -223,17 +224,16 @@ def main():
             if pc == isr and not handler:
                 sys.exit("reply_path_count: USART1_IRQHandler runs with cs_base bit 0 clear; this "
                          "QEMU does not mark handler mode there (QEMU >= 6.1 does)")
-            if masked is not None:
-                if not handler and pc == masked[0]:
-                    masked_at, masked_irq = 0, 0
-                elif masked_at is not None:
-                    if not handler and pc == masked[1]:
-                        passes.append((masked_at, masked_irq))
-                        masked_at = None
-                    elif handler:
-                        masked_irq += 1
-                    else:
-                        masked_at += 1
+            if not handler and pc == masked[0]:
+                masked_at, masked_irq = 0, 0
+            elif masked_at is not None:
+                if not handler and pc == masked[1]:
+                    passes.append((masked_at, masked_irq))
+                    masked_at = None
+                elif handler:
+                    masked_irq += 1
+                else:
+                    masked_at += 1
             if any(a <= pc < b for a, b in excl):
                 continue
             if pc == isr:
@@ -307,8 +307,9 @@ def main():
         core[kind].append(last + own_tail)
         if whole is not None and chars > 1:
             backlog.append((whole + own_tail, chars, kind))
-    print("Reply path on the target (QEMU netduinoplus2, TCG single-step), per telegram type (told by "
-          "the core functions that ran for it): the request's last character through the driver (USART1 interrupt into the ring, PendSV "
+    print("Reply path on the target (QEMU netduinoplus2, TCG single-step), per telegram type "
+          "(told by the core functions that ran for it): the request's last character through "
+          "the driver (USART1 interrupt into the ring, PendSV "
           "drain) and the core to the first reply character")
     print("driver for a lone character: USART1 interrupt storing it %d (of %d such), PendSV "
           "drain handing it on %d (of %d such) instructions; transmit tail (clock read, DE, RE "
@@ -335,13 +336,13 @@ def main():
               "%d instructions from its last interrupt (%.2f µs)" % (kind, c, n, n / MHZ))
     if not passes:
         sys.exit("reply_path_count: no complete main-loop pass in the trace")
-    if passes:
-        worst, irq = max(passes)
-        print("main-loop pass holding PendSV off (BASEPRI: dfp21b_poll, the SBus link, here the "
-              "SBus stand-in inverter; on a card with a CAN bus the CAN drain instead): "
-              "worst %d instructions of its own (%.2f µs), median %d, %d passes; interrupts that "
-              "ran inside the worst: %d instructions at QEMU's single-step pace"
-              % (worst, worst / MHZ, sorted(p[0] for p in passes)[len(passes) // 2], len(passes), irq))
+    worst, irq = max(passes)
+    print("main-loop pass holding PendSV off (BASEPRI: dfp21b_poll, the SBus link, here the "
+          "SBus stand-in inverter; on a card with a CAN bus the CAN drain instead): "
+          "worst %d instructions of its own (%.2f µs), median %d, %d passes; interrupts that "
+          "ran inside the worst: %d instructions at QEMU's single-step pace"
+          % (worst, worst / MHZ, sorted(p[0] for p in passes)[len(passes) // 2], len(passes),
+             irq))
     return 0
 
 
