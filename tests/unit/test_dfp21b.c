@@ -335,6 +335,11 @@ static void test_user_prm(void)
     const uint8_t dpv1[] = {0x80, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x01};
     CHECK(dfp21b_check_user_prm(dpv1, 9, &alarm));
     CHECK(!alarm);
+    /* DP-V1 with octet 8 = 00: accepted, but the DP-V0-only external diagnosis stays off. */
+    const uint8_t dpv1_alarm[] = {0x80, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x00};
+    alarm = true;
+    CHECK(dfp21b_check_user_prm(dpv1_alarm, 9, &alarm));
+    CHECK(!alarm);
 
     /* Every other value of the user block (octets 3..8) is refused, and so are other lengths. */
     static const struct {
@@ -726,6 +731,27 @@ static void test_ext_diag_alarm_switched_on(void)
     DIAG_IS(0x08, 0x0C, 0x00, 0x02, 0x60, 0x03, 0x02, 0x11);
 }
 
+/* dfp21b.md §4: the external diagnosis is DP-V0 only. A DP-V1 master that asks for it with
+ * octet 8 = 00 gets its Set_Prm accepted and a diagnosis without Ext_Diag and without the
+ * 2-octet block (a DP-V1 master would parse it as a malformed alarm/status block). */
+static void test_ext_diag_not_in_dpv1_mode(void)
+{
+    static const uint8_t dpv1_alarm_on[] = {0x80, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x00};
+    crig_init(4, BAUD, false);
+    bring_up(CFG_P3PD, 2, dpv1_alarm_on);
+    CHECK(dp_slave_dpv1_mode(&C.c.dp));
+    CHECK(!C.c.diag_alarm);
+    dfp21b_set_inverter_fault(&C.c, 0x11);
+    CHECK(dx(DX14, sizeof DX14));
+    CHECK_EQ(C.u.last[6], FDL_RSP_DL);
+    DIAG_IS(0x00, 0x0C, 0x00, 0x02, 0x60, 0x03);
+    /* The same master back in DP-V0 mode with alarms on: the active fault is reported. */
+    CHECK(set_prm(0x88, 1, 100, USER_ALARM_ON, 9));
+    CHECK(chk_cfg(CFG_P3PD, 2));
+    CHECK(!dp_slave_dpv1_mode(&C.c.dp));
+    DIAG_IS(0x08, 0x0C, 0x00, 0x02, 0x60, 0x03, 0x02, 0x11);
+}
+
 int main(void)
 {
     RUN_TEST(test_cfg_predefined);
@@ -744,5 +770,6 @@ int main(void)
     RUN_TEST(test_ext_diag_alarm_off);
     RUN_TEST(test_ext_diag_alarm_switched_off);
     RUN_TEST(test_ext_diag_alarm_switched_on);
+    RUN_TEST(test_ext_diag_not_in_dpv1_mode);
     return check_report();
 }

@@ -117,7 +117,10 @@ bool dfp21b_check_user_prm(const uint8_t *prm, size_t len, bool *diag_alarm)
     if (memcmp(&prm[3], block, sizeof block) != 0 || prm[8] > 1u) {
         return false;
     }
-    *diag_alarm = prm[8] == 0u;
+    /* The manual (§4.2) defines this external diagnosis for DP-V0 only: in DP-V1 mode the
+     * device-related diagnosis has the alarm/status block format, which a 2-octet block would
+     * violate. Accept the Set_Prm (the master may offer the GSD's choice) but stay silent. */
+    *diag_alarm = prm[8] == 0u && (prm[0] & DP_DPV1_1_ENABLE) == 0u;
     return true;
 }
 

@@ -88,7 +88,7 @@ typedef struct dfp21b {
     hal_led_mode_t led[HAL_LED_COUNT];
     bool leds_known;
     bool master_lost; /* watchdog expired and the master has not come back yet */
-    bool diag_alarm;  /* user prm byte 8 = 00: inverter faults go out as Ext_Diag */
+    bool diag_alarm;  /* user prm byte 8 = 00 in DP-V0 mode: inverter faults go out as Ext_Diag */
     dfp21b_pd_cfg_t pd;
     dfp21b_pd_cfg_t pd_candidate; /* result of the last cfg_check */
     bool outputs_new;
