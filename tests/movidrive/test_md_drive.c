@@ -433,10 +433,23 @@ static void test_monitor_values(void)
     CHECK_EQ(md_read(&md, 8453), 1500000); /* P092 baud (conversion -3: kBaud) */
     CHECK_EQ(md_read(&md, 8454), 4);       /* P093 address */
     CHECK_EQ(md_read(&md, MD_IDX_P819_FIELDBUS_TIMEOUT), 120);
-    /* P819 written elsewhere: shown until the master's next parameterisation */
+    /* P819 written elsewhere: shown until the master's next parameterisation, however often
+     * the card reports other changes (baud, data exchange, timeout) in between */
     CHECK_EQ(md_write(&md, MD_IDX_P819_FIELDBUS_TIMEOUT, 300, 1), 0);
     CHECK_EQ(md_read(&md, MD_IDX_P819_FIELDBUS_TIMEOUT), 300);
+    st.data_exchange = false;
+    movidrive_fieldbus_status(&md, &st);
+    st.baud = 500000;
+    movidrive_fieldbus_status(&md, &st);
+    CHECK_EQ(md_read(&md, MD_IDX_P819_FIELDBUS_TIMEOUT), 300);
+    CHECK_EQ(md_read(&md, 8453), 500000);
+    /* the same watchdog time at the next Set_Prm still overwrites it */
+    st.prm_count++;
+    movidrive_fieldbus_status(&md, &st);
+    CHECK_EQ(md_read(&md, MD_IDX_P819_FIELDBUS_TIMEOUT), 120);
+    CHECK_EQ(md_write(&md, MD_IDX_P819_FIELDBUS_TIMEOUT, 300, 1), 0);
     st.watchdog_ms = 250;
+    st.prm_count++;
     movidrive_fieldbus_status(&md, &st);
     CHECK_EQ(md_read(&md, MD_IDX_P819_FIELDBUS_TIMEOUT), 250);
     /* no valid configuration: "0PD" is shown as 255 */

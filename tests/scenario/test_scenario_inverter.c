@@ -16,6 +16,7 @@ typedef struct rig {
     membus_port_t *master_port;
     uint8_t out[14];
     dpm_param_t param;
+    unsigned gc_events;
 } rig_t;
 
 static rig_t rig;
@@ -23,6 +24,13 @@ static rig_t rig;
 static uint64_t start_ns;
 
 static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
+
+static void on_card_event(void *ctx, const dp_event_t *ev)
+{
+    if (ev->type == DP_EV_GLOBAL_CONTROL) {
+        ((rig_t *)ctx)->gc_events++;
+    }
+}
 
 static void setup(uint32_t inverter_delay_us, uint8_t diag_alarm_octet)
 {
@@ -36,7 +44,8 @@ static void setup(uint32_t inverter_delay_us, uint8_t diag_alarm_octet)
     membus_attach(&rig.bus, &cs, &cu);
     rig.master_port = membus_attach(&rig.bus, &ms, &mu);
     card_options_t co = {.address = 4, .fixed_baud = 1500000, .strict_timing = true,
-                         .inverter = CARD_INVERTER_SIM, .inverter_delay_us = inverter_delay_us};
+                         .inverter = CARD_INVERTER_SIM, .inverter_delay_us = inverter_delay_us,
+                         .event = on_card_event, .ctx = &rig};
     char err[256];
     CHECK_EQ(card_station_init(&rig.card, &co, cu, membus_now_us(&rig.bus), err, sizeof err), 0);
     dp_master_cfg_t mc = {.address = 2, .baud = 1500000, .strict_timing = true,
@@ -239,6 +248,58 @@ static void test_no_ext_diag_with_alarm_off(void)
                 0x00, 0x02, 0x60, 0x03);
 }
 
+static int32_t p819(void)
+{
+    int32_t v = -1;
+    CHECK(movidrive_read_value(&rig.card.md, MD_IDX_P819_FIELDBUS_TIMEOUT, &v));
+    return v;
+}
+
+/* dfp21b.md §5: P819 shows the master's watchdog time; written through another interface it is
+ * shown until the next parameterisation. Global_Control and the other DP events in between also
+ * reach the drive as fieldbus status (P090..P093) and must not bring the old value back. */
+static void test_p819_written_elsewhere_stays_until_next_set_prm(void)
+{
+    setup(0, 0x01);
+    CHECK_EQ(p819(), 50);
+    start(ML_SVC_WRITE_VOLATILE, MD_IDX_P819_FIELDBUS_TIMEOUT, 300);
+    CHECK(finish(100000) != UINT32_MAX);
+    CHECK_EQ(inputs()[0] & ML_MGMT_ERROR, 0);
+    CHECK_EQ(p819(), 300);
+    unsigned gc_before = rig.gc_events;
+    dp_master_global_control(&rig.master, DP_GC_CLEAR_DATA, 0);
+    membus_run_for_us(&rig.bus, 20000);
+    CHECK_EQ(rig.gc_events, gc_before + 1u);
+    CHECK_EQ(p819(), 300);
+    /* The master parameterises again with the same 50 ms: that overwrites it. */
+    dpm_slave_cfg_t sc = rig.master.slaves[0].cfg;
+    CHECK_EQ(dp_master_reconfigure(&rig.master, 0, &sc, membus_now_us(&rig.bus)), 0);
+    membus_run_for_us(&rig.bus, 20000);
+    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(p819(), 50);
+}
+
+/* dfp21b.md §9: with the DIP switches above 125 the card stays off the bus, and the manual's
+ * first diagnosis step is to read P093 on the drive: it must show that address. */
+static void test_address_above_125_shown_in_p093(void)
+{
+    memset(&rig, 0, sizeof rig);
+    membus_init(&rig.bus);
+    hal_uart_t cu;
+    sim_station_t cs = card_station(&rig.card);
+    membus_attach(&rig.bus, &cs, &cu);
+    card_options_t co = {.address = 126, .fixed_baud = 1500000, .inverter = CARD_INVERTER_SIM};
+    char err[256];
+    CHECK_EQ(card_station_init(&rig.card, &co, cu, membus_now_us(&rig.bus), err, sizeof err), 0);
+    membus_run_for_us(&rig.bus, 10000);
+    CHECK(!rig.card.card.on_bus);
+    int32_t v = -1;
+    CHECK(movidrive_read_value(&rig.card.md, 8454, &v)); /* P093 */
+    CHECK_EQ(v, 126);
+    CHECK(movidrive_read_value(&rig.card.md, 8452, &v)); /* P091: PROFIBUS DP */
+    CHECK_EQ(v, 5);
+}
+
 /* Regression: deadlines that started at 0 never came due once the clock was past 2^31 us. */
 static void test_everything_works_after_35_minutes_of_uptime(void)
 {
@@ -258,6 +319,8 @@ int main(void)
     RUN_TEST(test_process_data_ramp_and_status_word);
     RUN_TEST(test_fieldbus_timeout_fault_ext_diag_and_reset);
     RUN_TEST(test_no_ext_diag_with_alarm_off);
+    RUN_TEST(test_p819_written_elsewhere_stays_until_next_set_prm);
+    RUN_TEST(test_address_above_125_shown_in_p093);
     RUN_TEST(test_everything_works_after_35_minutes_of_uptime);
     return check_report();
 }

@@ -254,6 +254,7 @@ static void hook_event(void *ctx, const dp_event_t *ev)
         break;
     case DP_EV_PRM_OK:
         c->p819_ms = ev->value;
+        c->prm_count++;
         /* The master may have switched the diagnostic alarm (user prm octet 8): report the
          * fault that is active now under the new setting. */
         dfp21b_set_inverter_fault(c, c->inverter_fault);
@@ -378,6 +379,7 @@ static void push_fieldbus_status(dfp21b_t *c)
         .baud = dfp21b_p092_baud(c),
         .address = c->address,
         .watchdog_ms = c->p819_ms,
+        .prm_count = c->prm_count,
         .data_exchange = dp_slave_state(&c->dp) == DP_STATE_DATA_EXCH,
         .timeout = c->fieldbus_timeout,
     };
@@ -498,6 +500,11 @@ static void poll_inverter_status(dfp21b_t *c, hal_time_us_t now)
 hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now)
 {
     if (!c->on_bus) {
+        /* Off the bus the inverter still shows P093 (the manual's first diagnosis step for an
+         * address above 125), so its monitor values are pushed once. */
+        if (c->status_dirty) {
+            push_fieldbus_status(c);
+        }
         return now + HAL_TIME_NO_DEADLINE_US;
     }
     c->now = now;

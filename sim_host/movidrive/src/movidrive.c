@@ -823,7 +823,9 @@ static void load_defaults(movidrive_t *md, bool keep_read_only)
     memset(md->ee_ipos, 0, sizeof md->ee_ipos);
 }
 
-static void apply_fieldbus_values(movidrive_t *md)
+/* P819 is the exception: written through another interface it is shown until the master's
+ * next parameterisation (dfp21b.md §5), so it is taken only when that happened. */
+static void apply_fieldbus_values(movidrive_t *md, bool take_p819)
 {
     if (!md->have_fieldbus) {
         return;
@@ -833,7 +835,9 @@ static void apply_fieldbus_values(movidrive_t *md)
     set_ram(md, IDX_P091_FIELDBUS_TYPE, 5); /* PROFIBUS DP */
     set_ram(md, IDX_P092_BAUD, (int32_t)st->baud);
     set_ram(md, IDX_P093_ADDRESS, st->address);
-    set_ram(md, MD_IDX_P819_FIELDBUS_TIMEOUT, (int32_t)st->watchdog_ms);
+    if (take_p819) {
+        set_ram(md, MD_IDX_P819_FIELDBUS_TIMEOUT, (int32_t)st->watchdog_ms);
+    }
 }
 
 int movidrive_init(movidrive_t *md, const movidrive_cfg_t *cfg, char *err, size_t errlen)
@@ -860,7 +864,7 @@ int movidrive_init(movidrive_t *md, const movidrive_cfg_t *cfg, char *err, size_
 int movidrive_factory_reset(movidrive_t *md)
 {
     load_defaults(md, true);
-    apply_fieldbus_values(md);
+    apply_fieldbus_values(md, true); /* the defaults replaced the master's watchdog time */
     int rc = md->cfg.eeprom.ops != NULL ? ee_save_all(md) : 0;
     evaluate(md);
     return rc;
@@ -1126,9 +1130,10 @@ void movidrive_process_outputs(movidrive_t *md, const uint16_t *po, uint8_t n)
 
 void movidrive_fieldbus_status(movidrive_t *md, const ml_fieldbus_status_t *st)
 {
+    bool parameterised = !md->have_fieldbus || st->prm_count != md->fieldbus.prm_count;
     md->fieldbus = *st;
     md->have_fieldbus = true;
-    apply_fieldbus_values(md);
+    apply_fieldbus_values(md, parameterised);
     if (st->timeout && !md->fieldbus_timeout) {
         md->fieldbus_timeout = true;
         uint8_t r = (uint8_t)pv(md, MD_IDX_P831_FIELDBUS_REACTION);

@@ -101,6 +101,7 @@ typedef struct dfp21b {
     uint8_t param_rsp[DFP21B_PARAM_LEN];
     uint8_t inverter_fault;
     uint32_t p819_ms;
+    uint8_t prm_count; /* accepted Set_Prm, for the inverter's P819 (ml_fieldbus_status_t) */
     ml_client_t ml;
     ml_channel_t param;
     dpv1_t dpv1;
