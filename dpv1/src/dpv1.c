@@ -216,18 +216,17 @@ static size_t do_write(dpv1_t *d, dpv1_conn_t *c, const uint8_t *pdu, size_t len
     return DPV1_HEADER_LEN;
 }
 
-/* Initiate.res: our limits, the requested profile features and ident mirrored. */
-static size_t do_initiate(const uint8_t *pdu, uint8_t *rsp)
+/* Initiate.res: our limits. A slave mirrors the Profile_Ident_Number only if it supports the
+ * requested profile (profibus-dp.md §4.4); the DFP21B's profile ident is 0 (manual §6.5), so a
+ * master asking for PROFIdrive (3A 00) must not be told it is there: ident and profile features
+ * are answered 0 whatever was asked. */
+static size_t do_initiate(uint8_t *rsp)
 {
     rsp[0] = DPV1_FN_INITIATE;
     rsp[1] = DPV1_MAX_DATA;
     rsp[2] = 0x01; /* Features_Supported_1: DPV1_RW */
     rsp[3] = 0x00;
-    rsp[4] = pdu[8];
-    rsp[5] = pdu[9];
-    rsp[6] = pdu[10];
-    rsp[7] = pdu[11];
-    memset(&rsp[8], 0, 4);
+    memset(&rsp[4], 0, 8);
     return 12;
 }
 
@@ -248,7 +247,7 @@ static void serve(dpv1_t *d, dpv1_conn_t *c, bool class2, hal_time_us_t now)
         n = do_write(d, c, pdu, len, c->rsp, now);
         break;
     case DPV1_FN_INITIATE:
-        n = class2 ? do_initiate(pdu, c->rsp) : negative(c->rsp, pdu[0], DPV1_ERR_NOT_SUPPORTED);
+        n = class2 ? do_initiate(c->rsp) : negative(c->rsp, pdu[0], DPV1_ERR_NOT_SUPPORTED);
         break;
     default:
         n = negative(c->rsp, pdu[0], DPV1_ERR_NOT_SUPPORTED);

@@ -398,7 +398,7 @@ static void bench_dpv1(uint32_t baud, uint32_t inverter_us, unsigned n)
                 uint32_t tel = 0;
                 uint32_t busy = 0;
                 good += dpv1_access(port, &req, step_us, &us, &cycles, &tel, &busy) ? 1u : 0u;
-                req.ref = (uint8_t)(req.ref + 1u);
+                req.ref = (uint8_t)(req.ref % 255u + 1u); /* 1..255: 0 is not a reference */
                 sum_us += us;
                 sum_cycles += cycles;
                 sum_tel += tel;

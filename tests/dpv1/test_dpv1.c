@@ -624,6 +624,10 @@ static void test_header_errors_b7(void)
     C1_TRANSACT(B(0x5F, 0x00, 0x2F, 0x0C, 0x01, 0x40, 0x00, 0x01, 0x10, 0x00, 0x20, 0x6C, 0x00,
                   0x00, 0x00, 0x00),
                 0xDF, 0x80, 0xB7, 0x00);
+    /* Request Reference 0: the range is 0x01..0xFF. */
+    C1_TRANSACT(B(0x5F, 0x00, 0x2F, 0x0A, 0x00, 0x40, 0x00, 0x01, 0x10, 0x00, 0x20, 0x6C, 0x00,
+                  0x00),
+                0xDF, 0x80, 0xB7, 0x00);
     /* Only a request header of 3 octets. */
     C1_TRANSACT(B(0x5F, 0x00, 0x2F, 0x03, 0x01, 0x40, 0x00), 0xDF, 0x80, 0xB7, 0x00);
     /* Nothing was accepted. */
@@ -881,9 +885,10 @@ static void c2_open(int line, uint8_t ma, uint8_t sap)
     expect_frame(line, SC, 1);
     main_loop();
     send_sap(ma, sap, SSAP_C2, NULL, 0);
-    /* 57, Max_Len_Data_Unit F0, Features 01 00, profile features and ident mirrored, 4 x 00 */
-    const uint8_t res[12] = {0x57, 0xF0, 0x01, 0x00, 0x12, 0x34,
-                             0x3A, 0x00, 0x00, 0x00, 0x00, 0x00};
+    /* 57, Max_Len_Data_Unit F0, Features 01 00; the requested profile 3A 00 (features 12 34)
+     * is not the card's (profile ident 0): 00 00 00 00, then 4 x 00 */
+    const uint8_t res[12] = {0x57, 0xF0, 0x01, 0x00, 0x00, 0x00,
+                             0x00, 0x00, 0x00, 0x00, 0x00, 0x00};
     expect_du(line, ma, sap, SSAP_C2, res, sizeof res);
     send_sap(ma, sap, SSAP_C2, NULL, 0);
     expect_frame(line, SC, 1);
@@ -956,7 +961,7 @@ static void test_msac2_rm_decisions(void)
     EXPECT_DU(3, DPV1_SAP_RM, SSAP_C2, 0x56, 0x00, 0x00, 0x00);
     main_loop();
     send_sap(3, 0, SSAP_C2, NULL, 0);
-    EXPECT_DU(3, 0, SSAP_C2, 0x57, 0xF0, 0x01, 0x00, 0x12, 0x34, 0x3A, 0x00, 0x00, 0x00, 0x00,
+    EXPECT_DU(3, 0, SSAP_C2, 0x57, 0xF0, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
               0x00);
     /* Master 5 takes SAP 1; master 3 initiates again (a restart): its connection is replaced,
      * SAP 0 again, master 5's stays. A request with its old state finds a fresh mailbox. */

@@ -216,7 +216,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             PROPERTY((rc == DPV1_ERR_STATE_CONFLICT) == busy, "ds47_write %02X while busy %d",
                      rc, busy);
             if (known && !busy) {
-                PROPERTY(rc == 0u || r.e.req.id != DS47_ID_REQUEST,
+                PROPERTY(r.e.req.ref != 0u || rc == DPV1_ERR_INVALID_RANGE,
+                         "request reference 0 answered %02X", rc);
+                PROPERTY(rc == 0u || r.e.req.id != DS47_ID_REQUEST || r.e.req.ref == 0u,
                          "a well-formed PROFIdrive request refused with %02X", rc);
             }
             if (rc != 0u) {
