@@ -8,14 +8,16 @@ For SEW_6003.GSD (DP-V0) and SEWA6003.GSD (DP-V1):
   - the file is ASCII with CRLF line ends and pyprofibus.gsd.interp.GsdInterp loads it;
   - ident 0x6003, vendor, model, GSD revision, DP-V1 flag, the ten baud rates with the
     MaxTsdr table, the DP service flags and the length limits;
-  - the module list is exactly the ten predefined configurations of dfp21b.md 3, in order, with
-    their identifier bytes, and selecting each module by name makes pyprofibus put exactly those
-    bytes into Chk_Cfg;
+  - the module list is exactly the ten predefined configurations of dfp21b.md 3 and the ten
+    4/5/7/8/9-word ones the manual builds as universal modules, in order, with their identifier
+    bytes, and selecting each module by name makes pyprofibus put exactly those bytes into
+    Chk_Cfg; Max_Module is 1 (each module is a whole configuration);
   - the User_Prm_Data pyprofibus builds is 00 00 00 06 81 00 00 01 01 (dfp21b.md 4);
   - SEWA6003.GSD carries the DP-V1 keys (pyprofibus ignores them, so they are read from the text).
 With --dfp-sim (the card's own configuration check, `dfp-sim check-cfg HEX`):
   - every module's Chk_Cfg bytes are accepted (exit 0) with the expected in/out lengths;
-  - universal configurations the manual allows are accepted, wrong ones refused (exit 1).
+  - universal configurations the manual allows are accepted, wrong ones refused (exit 1);
+  - any two modules side by side (what Max_Module = 2 would let a configurator build) refused.
 
 Prints one line per check and "N passed, M failed"; exit 0 when all passed, 1 otherwise, 77 (a
 ctest skip) when pyprofibus is not installed for this interpreter.
@@ -46,13 +48,23 @@ MODULES = [
     ("Param + 3 PD", "F3F2", True, 3),
     ("Param + 6 PD", "F3F5", True, 6),
     ("Param + 10 PD", "F3F9", True, 10),
+    # the manual's universal-module sizes (4.1), offered as whole configurations too
+    ("4 PD", "00F3", False, 4),
+    ("5 PD", "00F4", False, 5),
+    ("7 PD", "00F6", False, 7),
+    ("8 PD", "00F7", False, 8),
+    ("9 PD", "00F8", False, 9),
+    ("Param + 4 PD", "F3F3", True, 4),
+    ("Param + 5 PD", "F3F4", True, 5),
+    ("Param + 7 PD", "F3F6", True, 7),
+    ("Param + 8 PD", "F3F7", True, 8),
+    ("Param + 9 PD", "F3F8", True, 9),
 ]
 
-# Universal-module configurations (manual 4.1) beyond the GSD's list: (hex, out = in bytes)
+# Universal-module forms (manual 4.1) the GSD's modules do not spell: (hex, out = in bytes)
 UNIVERSAL_OK = [
     ("F3", 8),      # 4 PD alone: also used by test_pyprofibus_interop.py (SD3 data exchange)
-    ("F3F3", 16),   # parameter channel + 4 PD
-    ("00F8", 18),   # empty slot + 9 PD
+    ("F7", 16),     # 8 PD as one identifier, no empty slot
     ("B7F4", 18),   # parameter channel as 8 consistent I/O bytes + 5 PD
 ]
 # Configurations the card must refuse: (hex, why)
@@ -78,7 +90,7 @@ COMMON_FIELDS = {
     "Freeze_Mode_supp": True,
     "Sync_Mode_supp": True,
     "Modular_Station": True,
-    "Max_Module": 2,
+    "Max_Module": 1,  # every module is a whole configuration: two would be refused
     "Max_Input_Len": 28,
     "Max_Output_Len": 28,
     "Max_Data_Len": 56,
@@ -163,7 +175,7 @@ def check_file(c, gsd_dir, name, info, GsdInterp):
 
     mods = [(m.name, bytes(m.configBytes).hex().upper()) for m in gsd.getField("Module", [])]
     c.equal(mods, [(n, h) for n, h, _, _ in MODULES],
-            tag + "modules: exactly the ten predefined configurations with their cfg bytes")
+            tag + "modules: exactly the twenty configurations with their cfg bytes")
     for mname, hexcfg, _, _ in MODULES:
         gsd.clearConfiguredModules()
         try:
@@ -217,6 +229,12 @@ def check_card(c, dfp_sim):
         lengths = (int(m.group(1)), int(m.group(2))) if m else None
         c.check(rc == 0 and lengths == (nbytes, nbytes) and "accepted" in out, what,
                 "exit %r, output %r" % (rc, out))
+    # Why Max_Module is 1: two of these modules side by side are never a configuration.
+    for first in ("F0", "00F5", "F3F2"):
+        for second in ("F0", "00F3", "F3F9"):
+            rc, out = run_check_cfg(dfp_sim, first + second)
+            c.check(rc == 1, "dfp-sim check-cfg %s%s: two modules refused" % (first, second),
+                    "exit %r, output %r" % (rc, out))
     for hexcfg, why in REFUSED:
         rc, out = run_check_cfg(dfp_sim, hexcfg)
         c.check(rc == 1, "dfp-sim check-cfg %s: refused (%s)" % (hexcfg, why),
