@@ -512,6 +512,62 @@ static void test_led_sequence(void)
     }
 }
 
+/* dfp21b.md §2: BUS FAULT on when the bus is interrupted or the master stopped, also without a
+ * DP watchdog (baud control runs out), and off again once the master's telegrams return; RUN
+ * stays on throughout. */
+static void test_led_bus_interrupted_without_watchdog(void)
+{
+    crig_init(4, 0, false); /* automatic baud detection, the line at 12 Mbit/s */
+    bring_up(CFG_P3PD, 2, USER_ALARM_OFF);
+    CHECK(set_prm(0x80, 0, 0, USER_ALARM_OFF, 9)); /* watchdog off */
+    CHECK(chk_cfg(CFG_P3PD, 2));
+    CHECK(dx(DX14, sizeof DX14));
+    CHECK_EQ(dp_slave_state(&C.c.dp), DP_STATE_DATA_EXCH);
+    CHECK_EQ(dfp21b_p819_timeout_ms(&C.c), 0u);
+    CHECK_EQ(C.leds.now[HAL_LED_BUS_FAULT], HAL_LED_OFF);
+    hal_time_us_t end = C.l.req_end_us;
+    (void)dfp21b_poll(&C.c, end + 1000u);
+    CHECK_EQ(C.leds.now[HAL_LED_BUS_FAULT], HAL_LED_OFF);
+    /* The master goes silent: no watchdog fires, but the baud control does. */
+    (void)dfp21b_poll(&C.c, end + (hal_time_us_t)DP_BAUD_CONTROL_MS_DEFAULT * 1000u + 1000u);
+    CHECK_EQ(ev_count(&C.log, DP_EV_BAUD_LOST), 1u);
+    CHECK_EQ(ev_count(&C.log, DP_EV_WD_EXPIRED), 0u);
+    CHECK_EQ(C.leds.now[HAL_LED_BUS_FAULT], HAL_LED_ON);
+    CHECK_EQ(C.leds.now[HAL_LED_RUN], HAL_LED_ON);
+    CHECK_EQ(C.timeouts, 0u); /* no P831 reaction without a watchdog */
+    /* The master is back (the search starts at 12 Mbit/s): off again, still in Data_Exch. */
+    C.l.now_ns = (uint64_t)(end + (hal_time_us_t)DP_BAUD_CONTROL_MS_DEFAULT * 1000u + 2000u) *
+                 1000u;
+    CHECK(dx(DX14, sizeof DX14));
+    CHECK_EQ(C.u.last[6], FDL_RSP_DL);
+    CHECK_EQ(dp_slave_state(&C.c.dp), DP_STATE_DATA_EXCH);
+    CHECK_EQ(C.leds.now[HAL_LED_BUS_FAULT], HAL_LED_OFF);
+}
+
+/* dfp21b.md §1: the address is read at power-up only; moving the switches later changes
+ * nothing until the next start. */
+static void test_dip_read_at_power_up_only(void)
+{
+    crig_init(4, BAUD, false);
+    C.dip = 9;
+    for (unsigned k = 0; k < 10; k++) {
+        (void)dfp21b_poll(&C.c, line_now_us(&C.l) + k * 100000u);
+    }
+    CHECK_EQ(dfp21b_p093_address(&C.c), 4);
+    CHECK(REQ(F_FDL_REQ)); /* to station 4 */
+    LAST_IS(0x10, 0x02, 0x04, 0x00, 0x06, 0x16);
+    uint8_t fdl9[] = {0x10, 0x09, 0x02, 0x49, 0, 0x16};
+    fdl9[4] = fdl_fcs(&fdl9[1], 3);
+    size_t before = C.u.tx_count;
+    CHECK(!REQ(fdl9));
+    CHECK_EQ(C.u.tx_count, before);
+    /* The next power-up takes the new setting. */
+    crig_init(9, BAUD, false);
+    CHECK_EQ(dfp21b_p093_address(&C.c), 9);
+    CHECK(REQ(fdl9));
+    CHECK_BYTES(C.u.last, 3, 0x10, 0x02, 0x09);
+}
+
 static void test_led_fixed_baud(void)
 {
     /* A fixed rate needs no search, but until an error-free telegram is seen there is no
@@ -762,6 +818,8 @@ int main(void)
     RUN_TEST(test_dip_address);
     RUN_TEST(test_led_sequence);
     RUN_TEST(test_led_fixed_baud);
+    RUN_TEST(test_led_bus_interrupted_without_watchdog);
+    RUN_TEST(test_dip_read_at_power_up_only);
     RUN_TEST(test_monitor_values);
     RUN_TEST(test_pi_echo);
     RUN_TEST(test_process_data_app);
