@@ -408,14 +408,19 @@ static void test_leds_dip(void)
     CHECK_EQ(bus_changes, 5);  /* BUS FAULT 1 Hz: on at 1 ms, then an edge every 500 ms */
     l.fault_pattern = true;
     bus_changes = 0;
+    on_ms = 0;
     for (unsigned ms = 0; ms < 1000u; ms++) {
         board_leds_tick(&l);
+        if (l.lit[HAL_LED_RUN]) {
+            on_ms++;
+        }
         if (l.lit[HAL_LED_BUS_FAULT] != bus_lit) {
             bus_lit = l.lit[HAL_LED_BUS_FAULT];
             bus_changes++;
         }
     }
     CHECK_EQ(bus_changes, 8); /* 4 Hz */
+    CHECK_EQ(on_ms, 1000);    /* RUN keeps its meaning: not the blink of an address > 125 */
 
     gpio_regs_t gc = {0};
     gc.IDR = 0xFFFFu & ~((1u << 2) | (1u << 0)); /* switches 2^0 and 2^2 ON (pulled low) */

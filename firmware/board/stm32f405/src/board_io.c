@@ -39,7 +39,9 @@ void board_leds_tick(board_leds_t *l)
     bool fast_on = (l->ms / BOARD_FAULT_HALF_MS) % 2u == 0u;
     for (unsigned i = 0; i < HAL_LED_COUNT; i++) {
         bool on;
-        if (l->fault_pattern) {
+        /* The crash indication is BUS FAULT alone: RUN blinking means an address above 125
+         * (dfp21b.md §2), and a card that restarted after a fault is not that. */
+        if (l->fault_pattern && i == HAL_LED_BUS_FAULT) {
             on = fast_on;
         } else if (l->mode[i] == HAL_LED_BLINK) {
             on = blink_on;

@@ -257,7 +257,7 @@ int main(void)
     board_fault.magic = 0;
     (void)*(volatile uint32_t *)0xFFFFFFF0u;
 #endif
-    leds.fault_pattern = had_fault; /* until the card is in Data_Exch (below) */
+    leds.fault_pattern = had_fault; /* BUS FAULT at 4 Hz until the card is in Data_Exch (below) */
 
     rs485_uart_cfg_t ucfg = {.regs = USART1, .de_port = GPIOA, .de_pin = 8u,
                              .pclk_hz = clocks.pclk2_hz,
