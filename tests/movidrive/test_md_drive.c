@@ -199,7 +199,7 @@ static ml_fieldbus_status_t fb(bool timeout)
 {
     ml_fieldbus_status_t st = {.pd_config = 4, .pd_words = 3, .param_channel = true,
                                .baud = 1500000, .address = 4, .watchdog_ms = 120,
-                               .data_exchange = !timeout, .timeout = timeout};
+                               .prm_count = 1, .data_exchange = !timeout, .timeout = timeout};
     return st;
 }
 
@@ -426,7 +426,15 @@ static void test_monitor_values(void)
     fieldbus_mode();
     CHECK_EQ(md_read(&md, MD_IDX_P090), 4); /* CSV default before the card reports */
     CHECK_EQ(md_read(&md, 8452), 0);        /* P091: no fieldbus yet */
+    /* A card not yet parameterised (prm_count 0) leaves the drive's own P819 alone. */
+    CHECK_EQ(md_write(&md, MD_IDX_P819_FIELDBUS_TIMEOUT, 700, 1), 0);
     ml_fieldbus_status_t st = fb(false);
+    st.prm_count = 0;
+    st.watchdog_ms = 0;
+    movidrive_fieldbus_status(&md, &st);
+    CHECK_EQ(md_read(&md, MD_IDX_P819_FIELDBUS_TIMEOUT), 700);
+    CHECK_EQ(md_read(&md, 8454), 4); /* the monitor values are taken */
+    st = fb(false);
     movidrive_fieldbus_status(&md, &st);
     CHECK_EQ(md_read(&md, MD_IDX_P090), 4);
     CHECK_EQ(md_read(&md, 8452), 5);       /* PROFIBUS DP */

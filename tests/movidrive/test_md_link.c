@@ -154,7 +154,7 @@ static void test_process_data(void)
     CHECK_EQ(md.speed_actual_mrpm, 150000);
     /* fieldbus status: P819, and the timeout reaction */
     ml_fieldbus_status_t st = {.pd_config = 4, .pd_words = 3, .param_channel = true,
-                               .baud = 12000000, .address = 7, .watchdog_ms = 60,
+                               .baud = 12000000, .address = 7, .watchdog_ms = 60, .prm_count = 1,
                                .data_exchange = true};
     ml.ops->fieldbus_status(ml.ctx, &st);
     CHECK_EQ(md_read(&md, MD_IDX_P819_FIELDBUS_TIMEOUT), 60);

@@ -298,6 +298,11 @@ static void test_address_above_125_shown_in_p093(void)
     CHECK_EQ(v, 126);
     CHECK(movidrive_read_value(&rig.card.md, 8452, &v)); /* P091: PROFIBUS DP */
     CHECK_EQ(v, 5);
+    CHECK(movidrive_read_value(&rig.card.md, 8453, &v)); /* P092: no rate heard */
+    CHECK_EQ(v, 0);
+    /* No master ever parameterised the card: the drive keeps its own P819 (CSV default). */
+    CHECK(movidrive_read_value(&rig.card.md, MD_IDX_P819_FIELDBUS_TIMEOUT, &v));
+    CHECK_EQ(v, 500);
 }
 
 /* Regression: deadlines that started at 0 never came due once the clock was past 2^31 us. */

@@ -568,6 +568,24 @@ static void test_dip_read_at_power_up_only(void)
     CHECK_BYTES(C.u.last, 3, 0x10, 0x02, 0x09);
 }
 
+/* The Set_Prm count the inverter uses for P819 (ml_fieldbus_status_t): 0 only before the first
+ * Set_Prm, then 1..255 and round again, never 0. */
+static void test_prm_count_never_returns_to_zero(void)
+{
+    crig_init(4, BAUD, false);
+    CHECK_EQ(C.c.prm_count, 0u);
+    for (unsigned k = 1; k <= 256u; k++) {
+        CHECK(set_prm(0x88, 1, 100, USER_ALARM_OFF, 9));
+        CHECK_EQ(C.c.prm_count, k <= 255u ? k : 1u);
+    }
+    /* A refused Set_Prm does not count. */
+    uint8_t bad[9];
+    memcpy(bad, USER_ALARM_OFF, 9);
+    bad[7] = 0x02;
+    CHECK(set_prm(0x88, 1, 100, bad, 9));
+    CHECK_EQ(C.c.prm_count, 1u);
+}
+
 static void test_led_fixed_baud(void)
 {
     /* A fixed rate needs no search, but until an error-free telegram is seen there is no
@@ -820,6 +838,7 @@ int main(void)
     RUN_TEST(test_led_fixed_baud);
     RUN_TEST(test_led_bus_interrupted_without_watchdog);
     RUN_TEST(test_dip_read_at_power_up_only);
+    RUN_TEST(test_prm_count_never_returns_to_zero);
     RUN_TEST(test_monitor_values);
     RUN_TEST(test_pi_echo);
     RUN_TEST(test_process_data_app);

@@ -254,7 +254,8 @@ static void hook_event(void *ctx, const dp_event_t *ev)
         break;
     case DP_EV_PRM_OK:
         c->p819_ms = ev->value;
-        c->prm_count++;
+        /* 0 stays "never parameterised": the inverter keeps its P819 until a master sets it. */
+        c->prm_count = (uint8_t)(c->prm_count == UINT8_MAX ? 1u : c->prm_count + 1u);
         /* The master may have switched the diagnostic alarm (user prm octet 8): report the
          * fault that is active now under the new setting. */
         dfp21b_set_inverter_fault(c, c->inverter_fault);
@@ -376,7 +377,7 @@ static void push_fieldbus_status(dfp21b_t *c)
         .pd_config = p090_code(&c->pd),
         .pd_words = c->pd.valid ? c->pd.pd_words : 0u,
         .param_channel = c->pd.valid && c->pd.param_channel,
-        .baud = dfp21b_p092_baud(c),
+        .baud = c->on_bus ? dfp21b_p092_baud(c) : 0u, /* off the bus nothing is heard */
         .address = c->address,
         .watchdog_ms = c->p819_ms,
         .prm_count = c->prm_count,

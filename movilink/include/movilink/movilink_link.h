@@ -32,9 +32,10 @@ typedef struct ml_fieldbus_status {
     uint32_t baud;           /* P092, bit/s; 0 = none detected */
     uint8_t address;         /* P093 */
     uint32_t watchdog_ms;    /* P819 */
-    uint8_t prm_count;       /* accepted Set_Prm so far (wraps): P819 can be written elsewhere and
-                                is overwritten only at the next parameterisation (dfp21b.md §5),
-                                so the inverter takes watchdog_ms only when this changes */
+    uint8_t prm_count;       /* accepted Set_Prm so far, 0 = none yet, wraps 255 -> 1: P819 can be
+                                written elsewhere and is overwritten only at the next
+                                parameterisation (dfp21b.md §5), so the inverter takes
+                                watchdog_ms only when this is non-zero and changed */
     bool data_exchange;      /* the master exchanges process data */
     bool timeout;            /* DP watchdog expired: perform the P831 reaction */
 } ml_fieldbus_status_t;

@@ -1130,7 +1130,8 @@ void movidrive_process_outputs(movidrive_t *md, const uint16_t *po, uint8_t n)
 
 void movidrive_fieldbus_status(movidrive_t *md, const ml_fieldbus_status_t *st)
 {
-    bool parameterised = !md->have_fieldbus || st->prm_count != md->fieldbus.prm_count;
+    bool parameterised = st->prm_count != 0u &&
+                         (!md->have_fieldbus || st->prm_count != md->fieldbus.prm_count);
     md->fieldbus = *st;
     md->have_fieldbus = true;
     apply_fieldbus_values(md, parameterised);

@@ -124,8 +124,9 @@ void dfp21b_inverter_param_response(dfp21b_t *c, uint8_t channel,
                                     const uint8_t rsp[ML_TELEGRAM_LEN]);
 void dfp21b_inverter_process_inputs(dfp21b_t *c, const uint16_t *pi, uint8_t n);
 
-/* Inverter fault number (0 = none). With diagnostic alarms enabled (user prm byte 8 = 00) a
- * fault is reported as device-related Ext_Diag: header 0x02 + fault number (8 octets in all). */
+/* Inverter fault number (0 = none). With diagnostic alarms enabled (user prm byte 8 = 00, in
+ * DP-V0 mode only) a fault is reported as device-related Ext_Diag: header 0x02 + fault number
+ * (8 octets in all). */
 void dfp21b_set_inverter_fault(dfp21b_t *c, uint8_t fault);
 
 /* The checks the card applies, usable without a running slave (tests, GSD check). */
