@@ -248,12 +248,15 @@ static void test_no_ext_diag_with_alarm_off(void)
                 0x00, 0x02, 0x60, 0x03);
 }
 
-static int32_t p819(void)
+/* A parameter of the emulated drive behind the card, -1 if it cannot be read. */
+static int32_t drive_value(uint16_t index)
 {
     int32_t v = -1;
-    CHECK(movidrive_read_value(&rig.card.md, MD_IDX_P819_FIELDBUS_TIMEOUT, &v));
+    CHECK(movidrive_read_value(&rig.card.md, index, &v));
     return v;
 }
+
+static int32_t p819(void) { return drive_value(MD_IDX_P819_FIELDBUS_TIMEOUT); }
 
 /* dfp21b.md §5: P819 shows the master's watchdog time; written through another interface it is
  * shown until the next parameterisation. Global_Control and the other DP events in between also
@@ -293,16 +296,11 @@ static void test_address_above_125_shown_in_p093(void)
     CHECK_EQ(card_station_init(&rig.card, &co, cu, membus_now_us(&rig.bus), err, sizeof err), 0);
     membus_run_for_us(&rig.bus, 10000);
     CHECK(!rig.card.card.on_bus);
-    int32_t v = -1;
-    CHECK(movidrive_read_value(&rig.card.md, 8454, &v)); /* P093 */
-    CHECK_EQ(v, 126);
-    CHECK(movidrive_read_value(&rig.card.md, 8452, &v)); /* P091: PROFIBUS DP */
-    CHECK_EQ(v, 5);
-    CHECK(movidrive_read_value(&rig.card.md, 8453, &v)); /* P092: no rate heard */
-    CHECK_EQ(v, 0);
+    CHECK_EQ(drive_value(8454), 126); /* P093 */
+    CHECK_EQ(drive_value(8452), 5);   /* P091: PROFIBUS DP */
+    CHECK_EQ(drive_value(8453), 0);   /* P092: no rate heard */
     /* No master ever parameterised the card: the drive keeps its own P819 (CSV default). */
-    CHECK(movidrive_read_value(&rig.card.md, MD_IDX_P819_FIELDBUS_TIMEOUT, &v));
-    CHECK_EQ(v, 500);
+    CHECK_EQ(p819(), 500);
 }
 
 /* Regression: deadlines that started at 0 never came due once the clock was past 2^31 us. */
