@@ -5,8 +5,10 @@
  *   movilink    DP start-up with DP-V1 parameters, class-1 data set 47, request id 0x40
  *   profidrive  the same with request id 0x01 (read) / 0x02 (change, non-volatile)
  *   c2          a class-2 connection (no start-up), data set 47 with id 0x40, then Abort
- * and I&M0 through class 1 or class 2. Exit 0 when every result is positive, 1 on a negative
- * one or no result in time, 2 on a bad command line. */
+ * and I&M0 through class 1 or class 2. A parameter is named by index, P-number, name (md_names.h)
+ * or IPOS variable Hn; results carry the name and the value in its unit or enumeration text.
+ * Exit 0 when every result is positive, 1 on a negative one or no result in time, 2 on a bad
+ * command line. */
 #include <errno.h>
 #include <stdarg.h>
 #include <signal.h>
@@ -20,6 +22,7 @@
 #include "dp_master/dpv1_c2.h"
 #include "dp_master/dpv1_ds47.h"
 #include "dp_master/param_channel.h"
+#include "movidrive/md_names.h"
 #include "report.h"
 #include "sim_hal/tty_port.h"
 #include "sim_stations/stations.h"
@@ -136,10 +139,56 @@ static void trimmed(char *out, size_t max, const char *in)
     }
 }
 
+#define IPOS_FIRST 11000u /* H0; H0..H511 are 11000 + n */
+#define IPOS_COUNT 512u
+
+/* "P100" and "setpoint source" for a table row, "H12" and "IPOS plus variable H12" for an IPOS
+ * variable; false for an index the name table lacks. */
+static bool param_names(uint16_t index, const md_param_info_t **info, char *pnum, size_t pn,
+                        char *name, size_t nn)
+{
+    *info = md_param_info(index);
+    if (*info != NULL) {
+        snprintf(pnum, pn, "%s", (*info)->p_number);
+        snprintf(name, nn, "%s", (*info)->name);
+        return true;
+    }
+    if (index >= IPOS_FIRST && index < IPOS_FIRST + IPOS_COUNT) {
+        snprintf(pnum, pn, "H%u", index - IPOS_FIRST);
+        snprintf(name, nn, "IPOS plus variable H%u", index - IPOS_FIRST);
+        return true;
+    }
+    return false;
+}
+
+/* "P100 setpoint source = 3 (FIELDBUS)", "P076 firmware basic unit = 823947913 (0x311C7289)",
+ * "P160 internal setpoint n11 = 1.500 rpm (raw 1500, 0x000005DC)": the raw value stays in
+ * sight wherever the text does not show it. */
+static void value_line(const md_param_info_t *info, uint32_t value, char *out, size_t n)
+{
+    char text[96];
+    char raw[16];
+    md_value_text(info, (int32_t)value, text, sizeof text);
+    snprintf(raw, sizeof raw, "%d", (int32_t)value);
+    if (info->num_enums > 0u) {
+        snprintf(out, n, "%s %s = %s", info->p_number, info->name, text);
+    } else if (strcmp(text, raw) == 0) {
+        snprintf(out, n, "%s %s = %s (0x%08X)", info->p_number, info->name, text, value);
+    } else {
+        snprintf(out, n, "%s %s = %s (raw %s, 0x%08X)", info->p_number, info->name, text, raw,
+                 value);
+    }
+}
+
 /* One line (or JSON object) per parameter, in the order asked. */
 static void print_param_result(unsigned i)
 {
     const param_result_t *r = &run.r[i];
+    const md_param_info_t *info = NULL;
+    char pnum[24] = "";
+    char pname[64] = "";
+    bool named = run.op != OP_IM0 &&
+                 param_names(run.index[i], &info, pnum, sizeof pnum, pname, sizeof pname);
     char what[64];
     if (run.op == OP_IM0) {
         snprintf(what, sizeof what, "im0 via %s", via_names[run.via]);
@@ -161,14 +210,27 @@ static void print_param_result(unsigned i)
         if (run.op != OP_IM0) {
             printf(",\"index\":%u", run.index[i]);
         }
+        if (named) {
+            json_str("p_number", pnum);
+            json_str("name", pname);
+        }
         json_str("via", via_names[run.via]);
+        char vtext[96];
         if (run.op == OP_WRITE) {
             printf(",\"volatile\":%s,\"value\":%d", run.volatile_write ? "true" : "false",
                    (int32_t)run.value);
+            if (r->ok && named) {
+                md_value_text(info, (int32_t)run.value, vtext, sizeof vtext);
+                json_str("text", vtext);
+            }
         }
         printf(",\"ok\":%s", r->ok ? "true" : "false");
         if (r->ok && r->have_value) {
             printf(",\"value\":%d,\"hex\":\"0x%08X\"", (int32_t)r->value, r->value);
+            if (named && run.op == OP_READ) {
+                md_value_text(info, (int32_t)r->value, vtext, sizeof vtext);
+                json_str("text", vtext);
+            }
         }
         if (r->ok && run.op == OP_IM0) {
             printf(",\"manufacturer_id\":%u", run.im0.manufacturer_id);
@@ -209,8 +271,16 @@ static void print_param_result(unsigned i)
                what, run.im0.manufacturer_id, order, serial, run.im0.hardware_revision, sw,
                run.im0.rev_counter, run.im0.profile_id, run.im0.profile_specific_type,
                run.im0.im_version_major, run.im0.im_version_minor, run.im0.im_supported);
+    } else if (r->have_value && info != NULL) {
+        char line[200];
+        value_line(info, r->value, line, sizeof line);
+        printf("%s: %s\n", what, line);
     } else if (r->have_value) {
         printf("%s: %d (0x%08X)\n", what, (int32_t)r->value, r->value);
+    } else if (info != NULL) {
+        char line[200];
+        value_line(info, run.value, line, sizeof line);
+        printf("%s: ok (%s)\n", what, line);
     } else {
         printf("%s: ok\n", what);
     }
@@ -453,16 +523,52 @@ static void quiet_event(void *ctx, const dpm_event_t *ev)
 
 /* ---- command line ------------------------------------------------------------------------ */
 
-static bool parse_value(const char *text, uint32_t *out)
+/* A raw 32-bit number (decimal, -N, 0xHEX) for any index; for a named parameter also an
+ * enumeration text ("FIELDBUS") or a value in its unit ("300.5", "300 rpm"). */
+static bool parse_value(uint16_t index, const char *text, uint32_t *out)
 {
-    char *end = NULL;
-    errno = 0;
-    long long v = strtoll(text, &end, 0);
-    if (text[0] == '\0' || *end != '\0' || errno != 0 || v < INT32_MIN || v > (long long)UINT32_MAX) {
-        cli_error("param: VALUE '%s' is not a 32-bit number (decimal, -N or 0xHEX)", text);
+    char err[200];
+    int32_t raw = 0;
+    if (!md_value_parse(md_param_info(index), text, &raw, err, sizeof err)) {
+        cli_error("param: VALUE %s", err);
         return false;
     }
-    *out = (uint32_t)(int64_t)v;
+    *out = (uint32_t)raw;
+    return true;
+}
+
+/* INDEX as a number (any, whether the table has it or not), Hn (IPOS variable), a P-number or
+ * a name. */
+static bool parse_index(const char *text, uint16_t *index)
+{
+    uint32_t v = 0;
+    if (text[0] >= '0' && text[0] <= '9') {
+        char *end = NULL;
+        (void)strtoul(text, &end, 0);
+        if (*end == '\0') {
+            if (!cli_u32("INDEX", text, 0, 65535, &v)) return false;
+            *index = (uint16_t)v;
+            return true;
+        }
+    }
+    if ((text[0] == 'H' || text[0] == 'h') && text[1] >= '0' && text[1] <= '9') {
+        char *end = NULL;
+        errno = 0;
+        unsigned long n = strtoul(text + 1, &end, 10);
+        if (*end != '\0' || errno != 0 || n >= IPOS_COUNT) {
+            cli_error("param: '%s' is not an IPOS variable (H0..H511)", text);
+            return false;
+        }
+        *index = (uint16_t)(IPOS_FIRST + n);
+        return true;
+    }
+    char err[256];
+    const md_param_info_t *p = md_param_find(text, err, sizeof err);
+    if (p == NULL) {
+        cli_error("param: %s", err);
+        return false;
+    }
+    *index = p->index;
     return true;
 }
 
@@ -556,17 +662,18 @@ int cmd_param(int argc, char **argv)
         run.op = OP_READ;
         if (npos < 2) {
             cli_error("param: read takes the parameter INDEX, or up to %u of them for one data "
-                      "set 47 request (e.g. read 8300, read 8318 8319 8320 --via movilink)",
+                      "set 47 request (e.g. read 8300, read P100, read 8318 8319 8320 --via "
+                      "movilink)",
                       DPM_DS47_MAX_PARAMS);
             return EXIT_USAGE;
         }
     } else if (strcmp(pos[0], "write") == 0) {
         run.op = OP_WRITE;
         if (npos != 3) {
-            cli_error("param: write takes two arguments, INDEX and VALUE (e.g. write 8489 1500)");
+            cli_error("param: write takes two arguments, INDEX and VALUE (e.g. write 8489 1500, "
+                      "write P100 FIELDBUS)");
             return EXIT_USAGE;
         }
-        if (!parse_value(pos[2], &run.value)) return EXIT_USAGE;
     } else if (strcmp(pos[0], "im0") == 0) {
         run.op = OP_IM0;
         if (npos != 1) {
@@ -585,10 +692,9 @@ int cmd_param(int argc, char **argv)
     }
     run.n = run.op == OP_READ ? (uint8_t)(npos - 1) : 1u;
     for (unsigned i = 0; run.op != OP_IM0 && i < run.n; i++) {
-        uint32_t index = 0;
-        if (!cli_u32("INDEX", pos[1 + i], 0, 65535, &index)) return EXIT_USAGE;
-        run.index[i] = (uint16_t)index;
+        if (!parse_index(pos[1 + i], &run.index[i])) return EXIT_USAGE;
     }
+    if (run.op == OP_WRITE && !parse_value(run.index[0], pos[2], &run.value)) return EXIT_USAGE;
     if (run.n > 1u && run.via == VIA_CHANNEL) {
         cli_error("param: the cyclic channel carries one service at a time; read several "
                   "indices with --via movilink, profidrive or c2 (one data set 47 request)");

@@ -25,10 +25,10 @@ json_get() { python3 -c 'import json,sys; print(json.loads(sys.argv[1])[sys.argv
 # Firmware version 8300 by each path.
 for via in channel movilink profidrive c2; do
   expect_exit 0 "read 8300 via $via" -- param read 8300 --via "$via"
-  expect_in "8300 via $via" "read 8300 via $via: 823947913 (0x311C7289)" "$out"
+  expect_in "8300 via $via" "read 8300 via $via: P076 firmware basic unit = 823947913 (0x311C7289)" "$out"
 done
 expect_exit 0 "read without --via is the cyclic channel" -- param read 8300
-expect_in "default path" "read 8300 via channel: 823947913" "$out"
+expect_in "default path" "read 8300 via channel: P076 firmware basic unit = 823947913" "$out"
 
 # JSON, one object, parsed.
 expect_exit 0 "read 8300 --json" -- param read 8300 --via movilink --json
@@ -43,22 +43,22 @@ if [ "$(printf '%s\n' "$out" | wc -l)" = 1 ]; then ok; else bad "--json printed 
 expect_exit 0 "write 8489 via profidrive (id 0x02)" -- param write 8489 1500 --via profidrive
 expect_in "write ok" "write 8489 = 1500 via profidrive: ok" "$out"
 expect_exit 0 "read back via c2" -- param read 8489 --via c2
-expect_in "read back 1500" "read 8489 via c2: 1500 (0x000005DC)" "$out"
+expect_in "read back 1500" "read 8489 via c2: P160 internal setpoint n11 = 1.500 rpm (raw 1500, 0x000005DC)" "$out"
 expect_exit 0 "write 8489 via c2" -- param write 8489 2250 --via c2 --json
 [ "$(json_get "$out" ok)" = True ] && ok || bad "c2 write json: $out"
 expect_exit 0 "read back via channel" -- param read 8489
-expect_in "read back 2250" "read 8489 via channel: 2250" "$out"
+expect_in "read back 2250" "read 8489 via channel: P160 internal setpoint n11 = 2.250 rpm (raw 2250," "$out"
 expect_exit 0 "write 8489 via channel" -- param write 8489 3000 --via channel
 expect_exit 0 "read back via movilink" -- param read 8489 --via movilink
-expect_in "read back 3000" "read 8489 via movilink: 3000" "$out"
+expect_in "read back 3000" "read 8489 via movilink: P160 internal setpoint n11 = 3.000 rpm (raw 3000," "$out"
 # Back-to-back masters on the cyclic channel: the card keeps its handshake across masters, each
 # new one must toggle relative to the reply it sees (dpm_param_sync), or nothing runs.
 expect_exit 0 "second write via channel" -- param write 8489 4000
 expect_exit 0 "read back via channel again" -- param read 8489
-expect_in "read back 4000" "read 8489 via channel: 4000" "$out"
+expect_in "read back 4000" "read 8489 via channel: P160 internal setpoint n11 = 4.000 rpm (raw 4000," "$out"
 expect_exit 0 "third write via channel" -- param write 8489 3000
 expect_exit 0 "read back via channel once more" -- param read 8489
-expect_in "read back 3000 again" "read 8489 via channel: 3000" "$out"
+expect_in "read back 3000 again" "read 8489 via channel: P160 internal setpoint n11 = 3.000 rpm (raw 3000," "$out"
 expect_exit 0 "write volatile H0 via movilink" -- param write 11000 -7 --via movilink --volatile
 expect_in "volatile write" "write volatile 11000 = -7 via movilink: ok" "$out"
 expect_exit 0 "read H0 via profidrive" -- param read 11000 --via profidrive --json
@@ -71,13 +71,13 @@ expect_in "H0 = 0x1234" "read 11000 via c2: 4660 (0x00001234)" "$out"
 # Several indices in one data set 47 request: one line per parameter in the order asked; a
 # refused one fails alone (exit 1), the others keep their values.
 expect_exit 1 "read 4 indices via movilink, one illegal" -- param read 8300 11000 1 8489 --via movilink
-want=$'read 8300 via movilink: 823947913 (0x311C7289)\nread 11000 via movilink: 4660 (0x00001234)
+want=$'read 8300 via movilink: P076 firmware basic unit = 823947913 (0x311C7289)\nread 11000 via movilink: 4660 (0x00001234)
 read 1 via movilink: error 0x0810: class 8, additional code 0x10: illegal parameter index
-read 8489 via movilink: 3000 (0x00000BB8)'
+read 8489 via movilink: P160 internal setpoint n11 = 3.000 rpm (raw 3000, 0x00000BB8)'
 [ "$out" = "$want" ] && ok || bad "4-index read: got
 $out"
 expect_exit 0 "read 2 indices via c2" -- param read 8489 11000 --via c2
-[ "$out" = $'read 8489 via c2: 3000 (0x00000BB8)\nread 11000 via c2: 4660 (0x00001234)' ] && ok || bad "2-index c2 read: $out"
+[ "$out" = $'read 8489 via c2: P160 internal setpoint n11 = 3.000 rpm (raw 3000, 0x00000BB8)\nread 11000 via c2: 4660 (0x00001234)' ] && ok || bad "2-index c2 read: $out"
 expect_exit 0 "read 3 indices via profidrive --json" -- param read 11000 8300 8489 --via profidrive --json
 if [ "$(printf '%s\n' "$out" | wc -l)" = 3 ]; then ok; else bad "--json: not 3 lines: $out"; fi
 [ "$(json_get "$(sed -n 2p <<<"$out")" index)" = 8300 ] && ok || bad "json line 2 index: $out"
@@ -91,8 +91,8 @@ expect_exit 1 "read 2 indices via c2 --json, the second illegal" -- param read 8
 expect_exit 0 "write volatile H5 = 55" -- param write 11005 55 --via movilink --volatile
 nineteen="8300 8489 11000 $(seq -s ' ' 11001 11016)"
 expect_exit 0 "read 19 indices via c2" -- param read $nineteen --via c2 --capture "$tmp/19.pcap"
-want="read 8300 via c2: 823947913 (0x311C7289)
-read 8489 via c2: 3000 (0x00000BB8)
+want="read 8300 via c2: P076 firmware basic unit = 823947913 (0x311C7289)
+read 8489 via c2: P160 internal setpoint n11 = 3.000 rpm (raw 3000, 0x00000BB8)
 read 11000 via c2: 4660 (0x00001234)"
 for i in $(seq 11001 11016); do
   v=0; [ "$i" = 11005 ] && v=55
@@ -166,10 +166,10 @@ usage "no port" "--port DEV and --address N are required" read 8300
 usage "read without index" "read takes the parameter INDEX" "${P[@]}" read
 usage "20 indices" "a read takes up to 19 indices" "${P[@]}" read $nineteen 8300 --via c2
 usage "2 indices via channel" "the cyclic channel carries one service at a time" "${P[@]}" read 8300 8301
-usage "bad second index" "'x' is not a number from 0 to 65535" "${P[@]}" read 8300 x --via c2
+usage "bad second index" "'x' matches 11 parameters" "${P[@]}" read 8300 x --via c2
 usage "index too big" "'70000' is not a number from 0 to 65535" "${P[@]}" read 70000
 usage "write without value" "write takes two arguments" "${P[@]}" write 8489
-usage "value not a number" "VALUE 'x12' is not a 32-bit number" "${P[@]}" write 8489 x12
+usage "value not a number" "VALUE 'x12' is not a number for P160" "${P[@]}" write 8489 x12
 usage "unknown path" "--via 'usb'" "${P[@]}" read 8300 --via usb
 usage "volatile on read" "--volatile belongs to write" "${P[@]}" read 8300 --volatile
 usage "volatile via profidrive" "--volatile works with --via movilink or channel" "${P[@]}" write 8489 1 --via profidrive --volatile

@@ -261,6 +261,7 @@ sd1 05 02 5D                                            # 50 FCB toggled
 sd2 84 81 5D 00 32 48 00 00 00                          # 51 MSAC2 Idle.req on connection SAP 0
 sd2 81 84 08 32 00 48 00 00 00                          # 52 Idle.res
 sd2 81 84 08 32 00 58 01 13 00                          # 53 Abort: local, MSAC_C2, TO (connection timeout)
+sd2 04 02 7D 41 00 21 0D 00 00 00 00 00 06 05 DC 00 00  # 54 Data_Exchange: ML read 8461 (P100) HS=1
 EOF
 hand=$tmp/hand.pcap
 eq "hand-written capture has link type 147" "$(linktype_of "$hand")" 147
@@ -280,7 +281,7 @@ for n in 1 2 4 5 6 8 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 29 30
 done
 eq "FCS correct on the 42 intact SD1/SD2/SD3 telegrams (spec examples and mkpcap's FCS)" "$good_fcs" 42
 eq "tree text of a Data_Exchange" "$(hand 11 6)" \
-  "SD2 DA=4 SA=2 SRD high FCB=0 FCV=1 Data_Exchange 14 octets ML read 8300 HS=1 PO 0006 05DC 0000"
+  "SD2 DA=4 SA=2 SRD high FCB=0 FCV=1 Data_Exchange 14 octets ML read 8300 (P076 firmware basic unit) HS=1 PO 0006 05DC 0000"
 eq "tree text of an SC" "$(hand 7 6)" "SC ack to Set_Prm (frame 6)"
 malformed_frames=$(awk -F'\t' '$4 != "" { printf "%s ", $1 }' "$tmp/hand.tsv")
 eq "exactly the broken telegrams are malformed" "$malformed_frames" \
@@ -333,7 +334,14 @@ eq "MOVILINK negative DS47 response 0x0811" "$(first)" "0xc0${tab}0x44${tab}0x08
 q "$hand" 'frame.number==32' profibus.ds47.id profibus.ds47.axis profibus.ds47.pnu profibus.ds47.value
 eq "PROFIdrive change parameter 8489 = 1500" "$(first)" "0x02${tab}0${tab}8489${tab}0x000005dc"
 
-q "$hand" 'frame.number>=51' profibus.service profibus.dsap profibus.ssap profibus.dpv1.function \
+# MOVILINK indices carry the parameter's name (tools/wireshark/movidrive_params.lua).
+q "$hand" 'frame.number==54' profibus.ml.index profibus.ml.param _ws.col.Info
+eq "MOVILINK request for 8461 names P100" "$(first)" \
+  "8461${tab}P100 setpoint source${tab}SD2 DA=4 SA=2 SRD high FCB=1 FCV=1 Data_Exchange 14 octets ML read 8461 (P100 setpoint source) HS=1 PO 0006 05DC 0000"
+q "$tmp/ml.pcap" 'profibus.ds47.pnu && profibus.fc.request==1' profibus.ds47.pnu profibus.ds47.param
+eq "data set 47 request for 8300 names P076" "$(first)" "8300${tab}P076 firmware basic unit"
+
+q "$hand" 'frame.number>=51 && frame.number<=53' profibus.service profibus.dsap profibus.ssap profibus.dpv1.function \
   profibus.dpv1.abort.subnet profibus.dpv1.abort.instance profibus.dpv1.abort.reason
 eq "MSAC2 Idle.req" "$(row 1)" "MSAC2${tab}0${tab}50${tab}0x48${tab}${tab}${tab}"
 eq "MSAC2 Idle.res" "$(row 2)" "MSAC2${tab}50${tab}0${tab}0x48${tab}${tab}${tab}"
@@ -352,5 +360,10 @@ HOME="$tmp/home" XDG_CONFIG_HOME="$tmp/home/.config" "$tshark" -r "$hand" -Y 'fr
   -T fields -e profibus.dp.ident >"$tmp/plugin.out" 2>"$tmp/plugin.err"
 eq "from the personal plugin folder" "$(cat "$tmp/plugin.out")" 0x6003
 eq "plugin folder: nothing on stderr" "$(grep -v '^Running as user "root"' "$tmp/plugin.err")" ""
+# ... and without movidrive_params.lua beside it the indices are bare numbers
+HOME="$tmp/home" XDG_CONFIG_HOME="$tmp/home/.config" "$tshark" -r "$hand" -Y 'frame.number==54' \
+  -T fields -e profibus.ml.index -e profibus.ml.param >"$tmp/plugin.out" 2>"$tmp/plugin.err"
+eq "no name table: bare index" "$(cat "$tmp/plugin.out")" "8461${tab}"
+eq "no name table: nothing on stderr" "$(grep -v '^Running as user "root"' "$tmp/plugin.err")" ""
 
 finish

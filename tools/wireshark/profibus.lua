@@ -71,6 +71,25 @@ local ml_services = {
     [0] = "no service", [1] = "read", [2] = "write", [3] = "write volatile", [4] = "read minimum",
     [5] = "read maximum", [6] = "read default", [7] = "read scale", [8] = "read attribute",
 }
+-- MOVILINK index -> "P100 setpoint source": movidrive_params.lua beside this script, generated
+-- from the emulated MOVIDRIVE's parameter data (sim_host/movidrive/tools/gen_params.py). Without
+-- it (e.g. this file alone in the plugin folder) indices stay bare numbers.
+local ml_param_names = {}
+do
+    local dir = ""
+    if debug and debug.getinfo then
+        local src = (debug.getinfo(1, "S") or {}).source or ""
+        dir = src:match("^@(.*[/\\])") or ""
+    end
+    local ok, t = pcall(dofile, dir .. "movidrive_params.lua")
+    if ok and type(t) == "table" then ml_param_names = t end
+end
+-- "8461 (P100 setpoint source)", or "8461" for an index the table does not name.
+local function ml_index_text(index)
+    local name = ml_param_names[index]
+    return name and string.format("%d (%s)", index, name) or tostring(index)
+end
+
 local ml_lengths = { [0] = "1 octet", [1] = "2 octets", [2] = "3 octets", [3] = "4 octets" }
 local ml_error_classes = {
     [1] = "vfd state", [2] = "application reference", [3] = "definition", [4] = "resource",
@@ -357,6 +376,7 @@ local F = {
     ml_subindex = ProtoField.uint8("profibus.ml.subindex", "Subindex (reserved)", base.HEX),
     ml_index = ProtoField.uint16("profibus.ml.index", "Index", base.DEC_HEX),
     ml_data = ProtoField.uint32("profibus.ml.data", "Data", base.HEX_DEC),
+    ml_param = ProtoField.string("profibus.ml.param", "Parameter"),
     ml_error_class = ProtoField.uint8("profibus.ml.error_class", "Error class", base.DEC,
         ml_error_classes),
     ml_error_code = ProtoField.uint8("profibus.ml.error_code", "Error code", base.DEC),
@@ -413,6 +433,7 @@ local F = {
     ds47_attribute = ProtoField.uint8("profibus.ds47.attribute", "Attribute", base.HEX),
     ds47_elements = ProtoField.uint8("profibus.ds47.elements", "Number of elements", base.DEC),
     ds47_pnu = ProtoField.uint16("profibus.ds47.pnu", "Parameter number", base.DEC_HEX),
+    ds47_param = ProtoField.string("profibus.ds47.param", "Parameter"),
     ds47_subindex = ProtoField.uint16("profibus.ds47.subindex", "Subindex", base.DEC),
     ds47_format = ProtoField.uint8("profibus.ds47.format", "Format", base.HEX, ds47_formats),
     ds47_n_values = ProtoField.uint8("profibus.ds47.n_values", "Number of values", base.DEC),
@@ -740,11 +761,16 @@ local function decode_movilink_channel(st, tree, c, is_request, source)
     add_bits(mit, rm, { F.ml_status, F.ml_handshake, F.ml_length, F.ml_service })
     mt:add(F.ml_subindex, c:take(1, "subindex"))
     local ri = c:take(2, "index")
-    mt:add(F.ml_index, ri)
+    local iit = mt:add(F.ml_index, ri)
+    local pname = ml_param_names[ri:uint()]
+    if pname then
+        iit:append_text(" (" .. pname .. ")")
+        mt:add(F.ml_param, ri, pname)
+    end
     local rd = c:take(4, "data")
     local service = bits(m, 0, 4)
-    local text = string.format("ML %s %d HS=%d", ml_services[service] or
-        string.format("service %d", service), ri:uint(), bits(m, 6, 1))
+    local text = string.format("ML %s %s HS=%d", ml_services[service] or
+        string.format("service %d", service), ml_index_text(ri:uint()), bits(m, 6, 1))
     if has(m, 0x80) then
         local class, code, add = rd(0, 1):uint(), rd(1, 1):uint(), rd(2, 2):uint()
         mt:add(F.ml_error_class, rd(0, 1))
@@ -895,9 +921,15 @@ local function decode_ds47_request(st, tree, c)
         end
         at:add(F.ds47_elements, c:take(1, "number of elements"))
         local rp = c:take(2, "parameter number")
-        at:add(F.ds47_pnu, rp)
+        local pit = at:add(F.ds47_pnu, rp)
+        local pname = ml_param_names[rp:uint()]
+        if pname then
+            pit:append_text(" (" .. pname .. ")")
+            at:add(F.ds47_param, rp, pname)
+        end
         at:add(F.ds47_subindex, c:take(2, "subindex"))
-        local ptext = string.format("%s %d", is_movilink_id(id) and what or "PNU", rp:uint())
+        local ptext = string.format("%s %s", is_movilink_id(id) and what or "PNU",
+            ml_index_text(rp:uint()))
         at:append_text(": " .. ptext)
         params[#params + 1] = ptext
     end

@@ -1,0 +1,566 @@
+/* Names for people (md_names.h) over the generated tables in md_names_table.c. */
+#include "movidrive/md_names.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "md_names_table.h"
+#include "md_params.h"
+
+#define MAX_LISTED 5u /* an ambiguous name lists this many candidates */
+
+/* ---- small helpers --------------------------------------------------------------------- */
+
+/* Appends like snprintf to a buffer that may be too small (or absent), counting what a large
+ * enough one would hold, so callers can return snprintf's result. */
+typedef struct appender {
+    char *out;
+    size_t n;
+    size_t len;
+} appender_t;
+
+static appender_t app_init(char *out, size_t n)
+{
+    appender_t a = {.out = out, .n = n, .len = 0u};
+    if (out != NULL && n > 0u) {
+        out[0] = '\0';
+    }
+    return a;
+}
+
+static void app(appender_t *a, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void app(appender_t *a, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char *dst = a->out != NULL && a->len < a->n ? a->out + a->len : NULL;
+    size_t room = dst != NULL ? a->n - a->len : 0u;
+    int k = vsnprintf(dst, room, fmt, ap);
+    va_end(ap);
+    if (k > 0) {
+        a->len += (size_t)k;
+    }
+}
+
+static int app_result(const appender_t *a)
+{
+    return a->len > (size_t)INT32_MAX ? INT32_MAX : (int)a->len;
+}
+
+static void set_err(char *err, size_t n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void set_err(char *err, size_t n, const char *fmt, ...)
+{
+    if (err == NULL || n == 0u) {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, n, fmt, ap);
+    va_end(ap);
+}
+
+static int lower(char c)
+{
+    return tolower((unsigned char)c);
+}
+
+/* Case-insensitive: a[0..alen) equals the whole of b. */
+static bool ci_equal(const char *a, size_t alen, const char *b)
+{
+    size_t i = 0;
+    for (; i < alen && b[i] != '\0'; i++) {
+        if (lower(a[i]) != lower(b[i])) {
+            return false;
+        }
+    }
+    return i == alen && b[i] == '\0';
+}
+
+/* Case-insensitive: needle[0..nlen) occurs in hay. */
+static bool ci_contains(const char *hay, const char *needle, size_t nlen)
+{
+    size_t hlen = strlen(hay);
+    for (size_t i = 0; i + nlen <= hlen; i++) {
+        size_t k = 0;
+        while (k < nlen && lower(hay[i + k]) == lower(needle[k])) {
+            k++;
+        }
+        if (k == nlen) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/* The text without leading and trailing blanks: start and length. */
+static const char *trim(const char *s, size_t *len)
+{
+    while (*s != '\0' && isspace((unsigned char)*s)) {
+        s++;
+    }
+    size_t n = strlen(s);
+    while (n > 0u && isspace((unsigned char)s[n - 1u])) {
+        n--;
+    }
+    *len = n;
+    return s;
+}
+
+static const md_param_def_t *param_def(uint16_t index)
+{
+    size_t lo = 0;
+    size_t hi = md_params_count;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2u;
+        if (md_params[mid].index == index) {
+            return &md_params[mid];
+        }
+        if (md_params[mid].index < index) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return NULL;
+}
+
+static bool is_unsigned(const md_param_info_t *p)
+{
+    const md_param_def_t *d = param_def(p->index);
+    return d != NULL && (d->flags & MD_PF_UNSIGNED) != 0u;
+}
+
+static int64_t pow10_i64(int32_t e)
+{
+    int64_t v = 1;
+    for (int32_t i = 0; i < e && i < 18; i++) {
+        v *= 10;
+    }
+    return v;
+}
+
+/* ---- parameters ------------------------------------------------------------------------ */
+
+const md_param_info_t *md_param_info(uint16_t index)
+{
+    size_t lo = 0;
+    size_t hi = md_param_infos_count;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2u;
+        const md_param_info_t *p = &md_param_infos[md_param_infos_by_index[mid]];
+        if (p->index == index) {
+            return p;
+        }
+        if (p->index < index) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return NULL;
+}
+
+size_t md_param_count(void)
+{
+    return md_param_infos_count;
+}
+
+const md_param_info_t *md_param_at(size_t i)
+{
+    return i < md_param_infos_count ? &md_param_infos[i] : NULL;
+}
+
+/* "'speed' matches 12 parameters: P000 speed, P001 ..., ..." */
+static void ambiguous(const char *s, size_t len, bool exact, char *err, size_t errlen)
+{
+    size_t count = 0;
+    for (size_t i = 0; i < md_param_infos_count; i++) {
+        const char *name = md_param_infos[i].name;
+        if (exact ? ci_equal(s, len, name) : ci_contains(name, s, len)) {
+            count++;
+        }
+    }
+    appender_t a = app_init(err, errlen);
+    app(&a, "'%.*s' matches %zu parameters:", (int)len, s, count);
+    size_t listed = 0;
+    for (size_t i = 0; i < md_param_infos_count && listed < MAX_LISTED; i++) {
+        const md_param_info_t *p = &md_param_infos[i];
+        if (exact ? ci_equal(s, len, p->name) : ci_contains(p->name, s, len)) {
+            app(&a, "%s %s %s", listed == 0u ? "" : ",", p->p_number, p->name);
+            listed++;
+        }
+    }
+    if (count > listed) {
+        app(&a, ", ...");
+    }
+    (void)app_result(&a);
+}
+
+static bool all_digits(const char *s, size_t len)
+{
+    for (size_t i = 0; i < len; i++) {
+        if (!isdigit((unsigned char)s[i])) {
+            return false;
+        }
+    }
+    return len > 0u;
+}
+
+const md_param_info_t *md_param_find(const char *text, char *err, size_t errlen)
+{
+    size_t len = 0;
+    const char *s = text != NULL ? trim(text, &len) : "";
+    if (len == 0u) {
+        set_err(err, errlen, "no parameter given (P-number, index or name)");
+        return NULL;
+    }
+    if (len > 80u) {
+        set_err(err, errlen, "no parameter '%.40s...'", s);
+        return NULL;
+    }
+    /* P-number: "P100", or an error memory sub-entry "P080.Speed" */
+    if ((s[0] == 'P' || s[0] == 'p') && len >= 2u && isdigit((unsigned char)s[1])) {
+        for (size_t i = 0; i < md_param_infos_count; i++) {
+            if (ci_equal(s, len, md_param_infos[i].p_number)) {
+                return &md_param_infos[i];
+            }
+        }
+        for (size_t i = 0; i < md_param_aliases_count; i++) {
+            if (ci_equal(s, len, md_param_aliases[i].p_number)) {
+                return md_param_info(md_param_aliases[i].index);
+            }
+        }
+        set_err(err, errlen, "no parameter '%.*s'", (int)len, s);
+        return NULL;
+    }
+    if ((s[0] == 'H' || s[0] == 'h') && all_digits(s + 1, len - 1u)) {
+        long n = strtol(s + 1, NULL, 10);
+        if (n >= 0 && n <= 511) {
+            set_err(err, errlen, "'%.*s' is IPOS variable H%ld (index %ld), not a table parameter",
+                    (int)len, s, n, 11000 + n);
+        } else {
+            set_err(err, errlen, "no parameter '%.*s' (IPOS variables are H0..H511)", (int)len, s);
+        }
+        return NULL;
+    }
+    if (isdigit((unsigned char)s[0])) {
+        char num[24];
+        if (len < sizeof num) {
+            memcpy(num, s, len);
+            num[len] = '\0';
+            char *end = NULL;
+            errno = 0;
+            unsigned long v = strtoul(num, &end, 0);
+            if (*end == '\0' && errno == 0) {
+                if (v > 65535u) {
+                    set_err(err, errlen, "index %s is out of 0..65535", num);
+                    return NULL;
+                }
+                const md_param_info_t *p = md_param_info((uint16_t)v);
+                if (p == NULL) {
+                    set_err(err, errlen, "no parameter with index %lu", v);
+                }
+                return p;
+            }
+        }
+        /* not a number after all ("4-quadrant operation 1"): a name */
+    }
+    const md_param_info_t *hit = NULL;
+    size_t hits = 0;
+    for (size_t i = 0; i < md_param_infos_count; i++) {
+        if (ci_equal(s, len, md_param_infos[i].name)) {
+            hit = &md_param_infos[i];
+            hits++;
+        }
+    }
+    if (hits == 1u) {
+        return hit;
+    }
+    if (hits > 1u) {
+        ambiguous(s, len, true, err, errlen);
+        return NULL;
+    }
+    for (size_t i = 0; i < md_param_infos_count; i++) {
+        if (ci_contains(md_param_infos[i].name, s, len)) {
+            hit = &md_param_infos[i];
+            hits++;
+        }
+    }
+    if (hits == 1u) {
+        return hit;
+    }
+    if (hits > 1u) {
+        ambiguous(s, len, false, err, errlen);
+        return NULL;
+    }
+    set_err(err, errlen, "no parameter '%.*s'", (int)len, s);
+    return NULL;
+}
+
+/* ---- values ---------------------------------------------------------------------------- */
+
+const char *md_enum_text(const md_param_info_t *p, int32_t raw)
+{
+    if (p == NULL) {
+        return NULL;
+    }
+    for (uint16_t i = 0; i < p->num_enums; i++) {
+        if (p->enums[i].value == raw) {
+            return p->enums[i].text;
+        }
+    }
+    return NULL;
+}
+
+int md_value_text(const md_param_info_t *p, int32_t raw, char *out, size_t n)
+{
+    appender_t a = app_init(out, n);
+    if (p == NULL) {
+        app(&a, "%ld", (long)raw);
+        return app_result(&a);
+    }
+    if (p->num_enums > 0u) {
+        const char *t = md_enum_text(p, raw);
+        app(&a, "%ld (%s)", (long)raw, t != NULL ? t : "unknown value");
+        return app_result(&a);
+    }
+    int64_t v = is_unsigned(p) ? (int64_t)(uint32_t)raw : (int64_t)raw;
+    const char *sep = p->unit[0] != '\0' ? " " : "";
+    if (p->scale_exp >= 0) {
+        app(&a, "%lld%s%s", (long long)v * (long long)pow10_i64(p->scale_exp), sep, p->unit);
+    } else {
+        int32_t decimals = -p->scale_exp;
+        int64_t d = pow10_i64(decimals);
+        uint64_t mag = v < 0 ? (uint64_t)(-v) : (uint64_t)v;
+        app(&a, "%s%llu.%0*llu%s%s", v < 0 ? "-" : "", (unsigned long long)(mag / (uint64_t)d),
+            (int)decimals, (unsigned long long)(mag % (uint64_t)d), sep, p->unit);
+    }
+    return app_result(&a);
+}
+
+/* "300.5", "-1.25 rpm", "2000 ms": sign, digits, optional fraction, optional unit. Raw value
+ * in *raw; false with a reason. *scaled tells whether it was a value in the unit (a fraction or
+ * a unit given) rather than a raw integer. */
+static bool parse_number(const md_param_info_t *p, const char *s, size_t len, int64_t *raw,
+                         bool *scaled, char *err, size_t errlen)
+{
+    size_t i = 0;
+    bool neg = false;
+    if (i < len && (s[i] == '-' || s[i] == '+')) {
+        neg = s[i] == '-';
+        i++;
+    }
+    uint64_t whole = 0;
+    size_t wdigits = 0;
+    while (i < len && isdigit((unsigned char)s[i])) {
+        if (whole > 1000000000000ull) {
+            set_err(err, errlen, "'%.*s' is out of the 32-bit range", (int)len, s);
+            return false;
+        }
+        whole = whole * 10u + (uint64_t)(s[i] - '0');
+        wdigits++;
+        i++;
+    }
+    uint64_t frac = 0;
+    size_t fdigits = 0;
+    bool point = false;
+    int32_t decimals = p != NULL && p->scale_exp < 0 ? -p->scale_exp : 0;
+    if (i < len && s[i] == '.') {
+        point = true;
+        i++;
+        while (i < len && isdigit((unsigned char)s[i])) {
+            if ((int32_t)fdigits < decimals) {
+                frac = frac * 10u + (uint64_t)(s[i] - '0');
+                fdigits++;
+            } else if (s[i] != '0') {
+                set_err(err, errlen, "'%.*s' has more than %ld decimal%s for %s", (int)len, s,
+                        (long)decimals, decimals == 1 ? "" : "s",
+                        p != NULL && p->unit[0] != '\0' ? p->unit : "this parameter");
+                return false;
+            }
+            i++;
+        }
+    }
+    if (wdigits == 0u && !(point && fdigits > 0u)) {
+        return false;
+    }
+    while (i < len && s[i] == ' ') {
+        i++;
+    }
+    bool unit = false;
+    if (i < len) {
+        if (p == NULL || p->unit[0] == '\0' || !ci_equal(s + i, len - i, p->unit)) {
+            return false;
+        }
+        unit = true;
+    }
+    *scaled = point || unit;
+    if (!*scaled) {
+        *raw = neg ? -(int64_t)whole : (int64_t)whole;
+        return true;
+    }
+    while ((int32_t)fdigits < decimals) {
+        frac *= 10u;
+        fdigits++;
+    }
+    uint64_t mag;
+    if (p != NULL && p->scale_exp > 0) {
+        uint64_t d = (uint64_t)pow10_i64(p->scale_exp);
+        if (whole % d != 0u) {
+            set_err(err, errlen, "'%.*s' is not a multiple of %llu %s", (int)len, s,
+                    (unsigned long long)d, p->unit);
+            return false;
+        }
+        mag = whole / d;
+    } else {
+        mag = whole * (uint64_t)pow10_i64(decimals) + frac;
+    }
+    *raw = neg ? -(int64_t)mag : (int64_t)mag;
+    return true;
+}
+
+bool md_value_parse(const md_param_info_t *p, const char *text, int32_t *raw, char *err,
+                    size_t errlen)
+{
+    size_t len = 0;
+    const char *s = text != NULL ? trim(text, &len) : "";
+    if (len == 0u) {
+        set_err(err, errlen, "no value given");
+        return false;
+    }
+    if (p != NULL) {
+        for (uint16_t i = 0; i < p->num_enums; i++) {
+            if (ci_equal(s, len, p->enums[i].text)) {
+                *raw = p->enums[i].value;
+                return true;
+            }
+        }
+    }
+    /* strtoll takes the hexadecimal and octal forms a raw integer may have ("0x10") */
+    char num[32];
+    if (len < sizeof num) {
+        memcpy(num, s, len);
+        num[len] = '\0';
+        char *end = NULL;
+        errno = 0;
+        long long v = strtoll(num, &end, 0);
+        if (*end == '\0' && end != num) {
+            if (errno != 0 || v < INT32_MIN || v > (long long)UINT32_MAX) {
+                set_err(err, errlen, "'%s' is out of the 32-bit range", num);
+                return false;
+            }
+            *raw = (int32_t)(uint32_t)(uint64_t)v;
+            return true;
+        }
+    }
+    int64_t v = 0;
+    bool scaled = false;
+    char why[160] = "";
+    if (parse_number(p, s, len, &v, &scaled, why, sizeof why)) {
+        bool uns = p != NULL && is_unsigned(p);
+        if (v < (uns ? 0 : INT32_MIN) || v > (uns ? (int64_t)UINT32_MAX : INT32_MAX)) {
+            set_err(err, errlen, "'%.*s' is out of %s range", (int)len, s,
+                    uns ? "the unsigned 32-bit" : "the 32-bit");
+            return false;
+        }
+        *raw = (int32_t)(uint32_t)(uint64_t)v;
+        return true;
+    }
+    if (why[0] != '\0') {
+        set_err(err, errlen, "%s", why);
+        return false;
+    }
+    if (p == NULL) {
+        set_err(err, errlen, "'%.*s' is not a number (decimal, -N or 0xHEX)", (int)len, s);
+        return false;
+    }
+    appender_t a = app_init(err, errlen);
+    if (p->num_enums > 0u) {
+        app(&a, "'%.*s' is not a value of %s %s:", (int)len, s, p->p_number, p->name);
+        uint16_t k = 0;
+        for (; k < p->num_enums && k < MAX_LISTED; k++) {
+            app(&a, "%s %s", k == 0u ? "" : ",", p->enums[k].text);
+        }
+        app(&a, "%s or a number", k < p->num_enums ? ", ..." : ",");
+    } else if (p->unit[0] != '\0' || p->scale_exp != 0) {
+        app(&a, "'%.*s' is not a number for %s %s (raw integer, or %s with up to %ld decimals)",
+            (int)len, s, p->p_number, p->name, p->unit[0] != '\0' ? p->unit : "a value",
+            (long)(p->scale_exp < 0 ? -p->scale_exp : 0));
+    } else {
+        app(&a, "'%.*s' is not a number for %s %s (decimal, -N or 0xHEX)", (int)len, s,
+            p->p_number, p->name);
+    }
+    (void)app_result(&a);
+    return false;
+}
+
+/* ---- faults, unit status, control and status words ------------------------------------- */
+
+static const char *code_name(const md_code_name_t *t, size_t n, uint8_t code)
+{
+    for (size_t i = 0; i < n; i++) {
+        if (t[i].code == code) {
+            return t[i].name;
+        }
+    }
+    return NULL;
+}
+
+const char *md_fault_name(uint8_t fault)
+{
+    return code_name(md_fault_names, md_fault_names_count, fault);
+}
+
+const char *md_unit_status_name(uint8_t code)
+{
+    return code_name(md_unit_status_names, md_unit_status_names_count, code);
+}
+
+/* Bits 0..2 say what they mean set or clear; the others only when set. */
+static void word_bits(appender_t *a, const md_bit_text_t *bits, uint16_t w, uint16_t skip)
+{
+    bool first = true;
+    for (unsigned b = 0; b < 8u; b++) {
+        if ((skip & (1u << b)) != 0u) {
+            continue;
+        }
+        bool set = (w & (1u << b)) != 0u;
+        const char *t = set ? bits[b].set : (b < 3u ? bits[b].clear : "");
+        if (t[0] == '\0') {
+            continue;
+        }
+        app(a, "%s%s", first ? "" : ", ", t);
+        first = false;
+    }
+}
+
+int md_control_word_text(uint16_t cw, char *out, size_t n)
+{
+    appender_t a = app_init(out, n);
+    app(&a, "%04X = ", cw);
+    word_bits(&a, md_control_bits, cw, 0u);
+    if ((cw >> 8) != 0u) {
+        app(&a, ", high byte 0x%02X", (unsigned)(cw >> 8));
+    }
+    return app_result(&a);
+}
+
+int md_status_word_text(uint16_t sw, char *out, size_t n)
+{
+    appender_t a = app_init(out, n);
+    app(&a, "%04X = ", sw);
+    word_bits(&a, md_status_bits, sw, 1u << 5); /* bit 5 shows as the fault below */
+    uint8_t high = (uint8_t)(sw >> 8);
+    if ((sw & 0x0020u) != 0u) {
+        const char *f = md_fault_name(high);
+        app(&a, ", fault %u (%s)", (unsigned)high, f != NULL ? f : "unknown");
+    } else {
+        const char *u = md_unit_status_name(high);
+        app(&a, ", unit status %u (%s)", (unsigned)high, u != NULL ? u : "unknown");
+    }
+    return app_result(&a);
+}
