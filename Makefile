@@ -37,13 +37,19 @@ deps-apt:
 	  fi; \
 	fi
 
-# pyprofibus is the independent DP master of the interoperability tests.
-$(PYTHON):
+# pyprofibus is the independent DP master of the interoperability tests; pytest runs the Python
+# client's tests (python/, installed editable), selenium drives chromium for the panel test. The
+# stamp's number goes up whenever this list changes, so an older venv is topped up.
+VENV_STAMP := $(VENV)/.deps-2
+$(VENV_STAMP):
 	@mkdir -p build
-	python3 -m venv $(VENV) || { apt-get install -y -qq python3-venv && python3 -m venv $(VENV); }
-	$(VENV)/bin/pip install -q --disable-pip-version-check pyprofibus==1.13 pyserial
+	[ -x $(PYTHON) ] || python3 -m venv $(VENV) || { apt-get install -y -qq python3-venv && python3 -m venv $(VENV); }
+	$(VENV)/bin/pip install -q --disable-pip-version-check pyprofibus==1.13 pyserial \
+	  pytest==8.3.4 selenium==4.27.1
+	$(VENV)/bin/pip install -q --disable-pip-version-check -e ./python
+	touch $@
 
-deps-python: $(PYTHON)
+deps-python: $(VENV_STAMP)
 
 build: deps
 	cmake --preset host -DDFP_PYTHON=$(abspath $(PYTHON)) -DDFP_REQUIRE_INTEROP=ON -DDFP_REQUIRE_TSHARK=ON

@@ -2,6 +2,7 @@
  * a timeline: start-up, commissioning through the parameter channel as the manual's §4.3 does it,
  * a drive that ramps up, a fieldbus timeout and its fault reset, a wrong configuration. Everything
  * runs in simulated time, so the run takes milliseconds and is the same every time. */
+#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -9,10 +10,10 @@
 #include "cli.h"
 #include "commands.h"
 #include "dp_master/param_channel.h"
+#include "instrument.h"
 #include "lcm_cli.h"
 #include "report.h"
-#include "sim_hal/membus.h"
-#include "sim_stations/stations.h"
+#include "rig/rig.h"
 
 #define DEMO_ADDRESS 4u
 #define DEMO_MASTER 2u
@@ -21,22 +22,59 @@
 #define DEMO_INVERTER_DELAY_US 3000u /* each parameter service takes a few bus cycles */
 
 typedef struct demo {
-    membus_t bus;
-    card_station_t card;
-    dp_master_t master;
-    membus_port_t *master_port;
-    report_t rep;
+    rig_t rig;
+    card_station_t *card;
+    dp_master_t *master;
+    instrument_t in;
+    report_t rep; /* --capture */
     uint8_t out[14]; /* parameter channel + PO1..PO3 */
     dpm_param_t param;
     bool ok;
     lcm_cli_t lcm; /* --lcm URL */
+    bool paced;    /* --http: simulated time follows the wall clock, so a person can watch */
+    uint64_t wall_start_ns;
 } demo_t;
 
 static demo_t demo; /* several kB of telegram buffers: not on the stack */
+static volatile int stop_requested;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop_requested = 1;
+}
 
 static uint64_t demo_now_ns(void *ctx)
 {
-    return ((demo_t *)ctx)->bus.now_ns;
+    return ((demo_t *)ctx)->rig.bus.now_ns;
+}
+
+static uint64_t wall_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
+}
+
+#define say(who, ...) rig_log(&demo.in.log, RIG_LOG_INFO, who, "demo", __VA_ARGS__)
+
+/* One 0.5 ms step of simulated time; with --http it also waits for the wall clock to catch up
+ * and lets the control API act between steps. */
+static void step(void)
+{
+    membus_run_for_us(&demo.rig.bus, 500u);
+    lcm_cli_poll_state(&demo.lcm);
+    lcm_cli_pace(&demo.lcm, demo.rig.bus.now_ns);
+    if (demo.paced) {
+        instrument_service(&demo.in);
+        uint64_t due = demo.wall_start_ns + demo.rig.bus.now_ns;
+        uint64_t now = wall_ns();
+        if (due > now) {
+            struct timespec d = {.tv_sec = (time_t)((due - now) / 1000000000u),
+                                 .tv_nsec = (long)((due - now) % 1000000000u)};
+            nanosleep(&d, NULL);
+        }
+    }
 }
 
 static void scene(const char *title)
@@ -51,9 +89,7 @@ static bool run_until(bool (*cond)(void), uint64_t limit_us)
         if (cond != NULL && cond()) {
             return true;
         }
-        membus_run_for_us(&demo.bus, 500u);
-        lcm_cli_poll_state(&demo.lcm);
-        lcm_cli_pace(&demo.lcm, demo.bus.now_ns);
+        step();
     }
     return cond != NULL && cond();
 }
@@ -61,20 +97,20 @@ static bool run_until(bool (*cond)(void), uint64_t limit_us)
 static void expect(bool cond, const char *what)
 {
     if (!cond) {
-        report_line(&demo.rep, "demo", "UNEXPECTED: %s", what);
+        rig_log(&demo.in.log, RIG_LOG_ERROR, "demo", "demo", "UNEXPECTED: %s", what);
         demo.ok = false;
     }
 }
 
 static bool card_in_data_exchange(void)
 {
-    return dp_slave_state(&demo.card.card.dp) == DP_STATE_DATA_EXCH &&
-           demo.master.slaves[0].phase == DPM_PHASE_DATA_EXCH;
+    return dp_slave_state(&demo.card->card.dp) == DP_STATE_DATA_EXCH &&
+           demo.master->slaves[0].phase == DPM_PHASE_DATA_EXCH;
 }
 
 static bool card_in_wait_prm(void)
 {
-    return dp_slave_state(&demo.card.card.dp) == DP_STATE_WAIT_PRM;
+    return dp_slave_state(&demo.card->card.dp) == DP_STATE_WAIT_PRM;
 }
 
 static void slave_cfg(dpm_slave_cfg_t *sc, const uint8_t *cfg, size_t len)
@@ -95,12 +131,12 @@ static void set_po(uint16_t cw, uint16_t speed)
     demo.out[9] = (uint8_t)cw;
     demo.out[10] = (uint8_t)(speed >> 8);
     demo.out[11] = (uint8_t)speed;
-    dp_master_set_outputs(&demo.master, 0, demo.out, sizeof demo.out);
+    dp_master_set_outputs(demo.master, 0, demo.out, sizeof demo.out);
 }
 
 static bool param_done(void)
 {
-    return dpm_param_done(&demo.param, demo.master.slaves[0].inputs);
+    return dpm_param_done(&demo.param, demo.master->slaves[0].inputs);
 }
 
 /* One MOVILINK service through the cyclic channel, the way a PLC program does it: toggle the
@@ -109,19 +145,19 @@ static bool param(uint8_t service, uint16_t index, uint32_t value, const char *w
                   uint32_t *result)
 {
     dpm_param_start(&demo.param, service, index, value, demo.out);
-    dp_master_set_outputs(&demo.master, 0, demo.out, sizeof demo.out);
-    uint32_t cycles0 = demo.master.slaves[0].cycles;
+    dp_master_set_outputs(demo.master, 0, demo.out, sizeof demo.out);
+    uint32_t cycles0 = demo.master->slaves[0].cycles;
     if (!run_until(param_done, 1000000u)) {
-        report_line(&demo.rep, "master", "%s: no answer in the parameter channel", what);
+        say("master", "%s: no answer in the parameter channel", what);
         demo.ok = false;
         return false;
     }
-    const uint8_t *rsp = demo.master.slaves[0].inputs;
-    uint32_t cycles = demo.master.slaves[0].cycles - cycles0;
+    const uint8_t *rsp = demo.master->slaves[0].inputs;
+    uint32_t cycles = demo.master->slaves[0].cycles - cycles0;
     if ((rsp[0] & ML_MGMT_ERROR) != 0u) {
         char text[128];
         ml_error_text(rsp, text, sizeof text);
-        report_line(&demo.rep, "master", "%s -> error: %s (%u bus cycles)", what, text, cycles);
+        say("master", "%s -> error: %s (%u bus cycles)", what, text, cycles);
         return false;
     }
     uint32_t v = ml_data(rsp);
@@ -129,20 +165,20 @@ static bool param(uint8_t service, uint16_t index, uint32_t value, const char *w
         *result = v;
     }
     if (service == ML_SVC_READ) {
-        report_line(&demo.rep, "master", "%s -> %u (0x%08X) (%u bus cycles)", what, v, v, cycles);
+        say("master", "%s -> %u (0x%08X) (%u bus cycles)", what, v, v, cycles);
     } else {
-        report_line(&demo.rep, "master", "%s -> done (%u bus cycles)", what, cycles);
+        say("master", "%s -> done (%u bus cycles)", what, cycles);
     }
     return true;
 }
 
 static void show_pi(const char *label)
 {
-    const uint8_t *in = demo.master.slaves[0].inputs;
+    const uint8_t *in = demo.master->slaves[0].inputs;
     uint16_t sw = (uint16_t)((in[8] << 8) | in[9]);
     int16_t speed = (int16_t)((in[10] << 8) | in[11]);
     uint16_t cur = (uint16_t)((in[12] << 8) | in[13]);
-    report_line(&demo.rep, "master",
+    say("master",
                 "%s PI1 status %04X (%s%s%s%s, %s %u) PI2 %5.1f rpm PI3 %4.1f %% I_N", label, sw,
                 (sw & 0x01u) ? "enabled" : "not enabled", (sw & 0x02u) ? ", ready" : "",
                 (sw & 0x04u) ? ", PO enabled" : "", (sw & 0x20u) ? ", FAULT" : "",
@@ -151,18 +187,18 @@ static void show_pi(const char *label)
 
 static bool drive_at_300_rpm(void)
 {
-    const uint8_t *in = demo.master.slaves[0].inputs;
+    const uint8_t *in = demo.master->slaves[0].inputs;
     return (int16_t)((in[10] << 8) | in[11]) >= 1500;
 }
 
 static bool status_shows_fault(void)
 {
-    return (demo.master.slaves[0].inputs[9] & 0x20u) != 0u;
+    return (demo.master->slaves[0].inputs[9] & 0x20u) != 0u;
 }
 
 static void print_monitor(void)
 {
-    const dfp21b_t *c = &demo.card.card;
+    const dfp21b_t *c = &demo.card->card;
     char p090[16];
     dfp21b_p090_text(&c->pd, p090, sizeof p090);
     printf("    fieldbus monitor as the inverter shows it:\n");
@@ -176,52 +212,65 @@ static void print_monitor(void)
     printf("      P819 fieldbus timeout  %u ms\n", dfp21b_p819_timeout_ms(c));
 }
 
-static void setup(void)
+static void lcm_param(void *ctx, unsigned card, uint8_t channel,
+                      const uint8_t req[ML_TELEGRAM_LEN], const uint8_t rsp[ML_TELEGRAM_LEN])
 {
-    membus_init(&demo.bus);
+    (void)card;
+    dfp_lcm_bridge_param_observer(&((lcm_cli_t *)ctx)->bridge, channel, req, rsp);
+}
+
+static hal_uart_t lcm_wrap(void *ctx, hal_uart_t inner)
+{
+    return lcm_cli_card_uart(ctx, inner);
+}
+
+static void setup(const instrument_opts_t *io)
+{
+    rig_cfg_t rc = {.medium = RIG_MEDIUM_MEMBUS};
     if (demo.lcm.open) {
-        membus_set_tap(&demo.bus, lcm_cli_tap, &demo.lcm);
-    } else {
-        membus_set_tap(&demo.bus, report_tap, &demo.rep);
+        rc.wrap_card_uart = lcm_wrap;
+        rc.wrap_ctx = &demo.lcm;
     }
-    hal_uart_t card_uart;
-    hal_uart_t master_uart;
-    sim_station_t cs = card_station(&demo.card);
-    sim_station_t ms = master_station(&demo.master);
-    membus_attach(&demo.bus, &cs, &card_uart);
-    demo.master_port = membus_attach(&demo.bus, &ms, &master_uart);
+    rig_init(&demo.rig, &rc);
+    instrument_attach_log(&demo.in, &demo.rig, io);
+    rig_tap_t capture = {.ctx = &demo.rep, .frame = report_tap};
+    if (demo.lcm.open) {
+        capture = (rig_tap_t){.ctx = &demo.lcm, .frame = lcm_cli_tap, .param = lcm_param};
+    }
+    rig_add_tap(&demo.rig, &capture);
+    char err[256];
+    rig_open(&demo.rig, err, sizeof err);
     card_options_t co = {.address = DEMO_ADDRESS, .fixed_baud = 0, .strict_timing = true,
                          .inverter = CARD_INVERTER_SIM,
-                         .inverter_delay_us = DEMO_INVERTER_DELAY_US,
-                         .event = report_card_event, .led_change = report_led,
-                         .ctx = &demo.rep};
-    if (demo.lcm.open) {
-        card_uart = lcm_cli_card_uart(&demo.lcm, card_uart);
-        lcm_cli_observe_params(&demo.lcm, &co);
-    }
-    char err[256];
-    card_station_init(&demo.card, &co, card_uart, 0, err, sizeof err);
+                         .inverter_delay_us = DEMO_INVERTER_DELAY_US};
+    demo.card = &rig_add_card(&demo.rig, &co, 0)->cs;
     dp_master_cfg_t mc = {.address = DEMO_MASTER, .baud = DEMO_BAUD, .strict_timing = true,
-                          .cycle_us = 2000, .uart = master_uart, .event = report_master_event,
-                          .event_ctx = &demo.rep};
-    dp_master_init(&demo.master, &mc, 0);
+                          .cycle_us = 2000};
+    demo.master = rig_add_master(&demo.rig, &mc, 0);
 }
 
 static void reconfigure(const uint8_t *cfg, size_t len)
 {
     dpm_slave_cfg_t sc;
     slave_cfg(&sc, cfg, len);
-    dp_master_reconfigure(&demo.master, 0, &sc, membus_now_us(&demo.bus));
-    membus_wake(demo.master_port);
+    dp_master_reconfigure(demo.master, 0, &sc, membus_now_us(&demo.rig.bus));
+    rig_wake(&demo.rig);
 }
 
 int cmd_demo(int argc, char **argv)
 {
     capture_opts_t capture = {.path = NULL};
     const char *lcm_url = NULL;
+    instrument_opts_t io;
+    instrument_defaults(&io, RIG_LOG_TIME_BUS);
     for (int i = 2; i < argc; i++) {
         if (strcmp(argv[i], "--lcm") == 0) {
             if ((lcm_url = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+            continue;
+        }
+        int iopt = instrument_option(argc, argv, &i, &io);
+        if (iopt != 0) {
+            if (iopt < 0) return EXIT_USAGE;
             continue;
         }
         int copt = capture_option(argc, argv, &i, &capture);
@@ -237,7 +286,7 @@ int cmd_demo(int argc, char **argv)
     demo.ok = true;
     demo.rep.now_ns = demo_now_ns;
     demo.rep.now_ctx = &demo;
-    demo.rep.card = &demo.card.card;
+    demo.rep.card = &demo.rig.cards[0].cs.card;
     capture.w.baud = DEMO_BAUD;
     struct timespec wall;
     clock_gettime(CLOCK_REALTIME, &wall);
@@ -247,22 +296,37 @@ int cmd_demo(int argc, char **argv)
     if (lcm_url != NULL) {
         /* Simulated time 0 is now: utime = wall clock at start + simulated time. */
         int64_t start = dfp_lcm_wall_us();
-        if (lcm_cli_open(&demo.lcm, lcm_url, &demo.card.card, DEMO_ADDRESS, &demo.rep, start,
+        if (lcm_cli_open(&demo.lcm, lcm_url, &demo.rig.cards[0].cs.card, DEMO_ADDRESS, &demo.rep, start,
                          start) != 0) {
             return 1;
         }
     }
     printf("dfp-sim demo: a DFP21B (DIP address %u, automatic baud rate) in an emulated MOVIDRIVE,\n"
            "and a DP master (address %u, %s, watchdog %u ms) on a simulated RS-485 segment.\n"
-           "Times are simulated bus time.\n",
-           DEMO_ADDRESS, DEMO_MASTER, report_baud_text(DEMO_BAUD), DEMO_WATCHDOG_MS);
+           "Times are simulated bus time%s.\n",
+           DEMO_ADDRESS, DEMO_MASTER, report_baud_text(DEMO_BAUD), DEMO_WATCHDOG_MS,
+           io.http != NULL ? ", running at wall-clock speed while the panel is open" : "");
 
     scene("1. Power-up, baud search and start-up with \"Param + 3 PD\" (F3 F2)");
-    setup();
+    setup(&io);
+    if (io.http != NULL) {
+        int rc = instrument_start_http(&demo.in, &demo.rig, &io, "demo", false);
+        if (rc != 0) {
+            report_close_capture(&demo.rep);
+            return rc;
+        }
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_signal;
+        sigaction(SIGINT, &sa, NULL);
+        sigaction(SIGTERM, &sa, NULL);
+        demo.paced = true;
+        demo.wall_start_ns = wall_ns();
+    }
     const uint8_t param_3pd[] = {0xF3, 0xF2};
     dpm_slave_cfg_t sc;
     slave_cfg(&sc, param_3pd, sizeof param_3pd);
-    dp_master_add_slave(&demo.master, &sc);
+    dp_master_add_slave(demo.master, &sc);
     expect(run_until(card_in_data_exchange, 2000000u), "start-up reaches Data_Exch");
     run_until(NULL, 10000u);
     show_pi("drive as delivered:");
@@ -294,18 +358,18 @@ int cmd_demo(int argc, char **argv)
     print_monitor();
 
     scene("4. The master stops (PLC in STOP, cable pulled): DP watchdog, P831 reaction");
-    dp_master_stop(&demo.master);
-    report_line(&demo.rep, "master", "stopped sending");
+    dp_master_stop(demo.master);
+    say("master", "stopped sending");
     expect(run_until(card_in_wait_prm, 500000u), "watchdog expiry");
     run_until(NULL, 300000u);
-    report_line(&demo.rep, "master", "running again");
-    dp_master_start(&demo.master, membus_now_us(&demo.bus));
-    membus_wake(demo.master_port);
+    say("master", "running again");
+    dp_master_start(demo.master, membus_now_us(&demo.rig.bus));
+    rig_wake(&demo.rig);
     expect(run_until(card_in_data_exchange, 500000u), "back in Data_Exch");
     expect(run_until(status_shows_fault, 500000u), "status word 1 shows the fault");
     run_until(NULL, 250000u); /* the card's status poll turns the fault into Ext_Diag */
     show_pi("after the timeout:");
-    report_line(&demo.rep, "master", "reset: control word bit 6 rising edge (0046, then 0006)");
+    say("master", "reset: control word bit 6 rising edge (0046, then 0006)");
     set_po(0x0046, 1500);
     run_until(NULL, 10000u);
     set_po(0x0006, 1500);
@@ -326,14 +390,22 @@ int cmd_demo(int argc, char **argv)
     run_until(NULL, 300000u);
     show_pi("running:");
 
+    if (demo.paced) {
+        scene("The simulation goes on at wall-clock speed: the front panel stays up until Ctrl-C");
+        while (!stop_requested) {
+            step();
+        }
+        say("sim", "stopping (signal)");
+        instrument_stop(&demo.in);
+    }
     if (demo.lcm.open) {
         lcm_cli_close(&demo.lcm);
     }
     printf("\n--- Summary\n");
     printf("    %llu telegrams on the bus, %u Data_Exchange cycles, %u master timeouts, "
            "simulated %.1f ms\n",
-           (unsigned long long)demo.bus.frames_sent, demo.master.slaves[0].cycles,
-           demo.master.timeouts, (double)demo.bus.now_ns / 1e6);
+           (unsigned long long)demo.rig.bus.frames_sent, demo.master->slaves[0].cycles,
+           demo.master->timeouts, (double)demo.rig.bus.now_ns / 1e6);
     if (demo.rep.capturing) {
         cap_writer_options_t w = demo.rep.capture.opt;
         if (report_close_capture(&demo.rep) != 0) {

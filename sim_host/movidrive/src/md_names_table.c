@@ -791,8 +791,19 @@ const size_t md_param_aliases_count = sizeof md_param_aliases / sizeof md_param_
 const md_code_name_t md_fault_names[] = {
     {0, "no fault"},
     {1, "overcurrent"},
+    {3, "ground fault"},
+    {4, "brake chopper"},
+    {6, "mains phase failure"},
+    {7, "DC link overvoltage"},
+    {8, "speed monitoring"},
+    {11, "overtemperature"},
+    {14, "encoder"},
+    {25, "EEPROM"},
+    {26, "external terminal"},
     {28, "fieldbus timeout"},
+    {31, "TF sensor"},
     {43, "RS-485 timeout"},
+    {44, "inverter utilization"},
     {47, "SBus timeout"},
 };
 

@@ -633,6 +633,15 @@ static void raise_fault(movidrive_t *md, uint8_t number, uint8_t reaction)
     record_fault(md, number);
 }
 
+void movidrive_inject_fault(movidrive_t *md, uint8_t number)
+{
+    if (number == 0u) {
+        return;
+    }
+    raise_fault(md, number, REACT_IMM_ERROR);
+    evaluate(md);
+}
+
 static void fault_reset(movidrive_t *md)
 {
     if (md->fault == MD_FAULT_FIELDBUS_TIMEOUT && md->fieldbus_timeout) {

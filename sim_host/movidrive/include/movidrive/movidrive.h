@@ -177,6 +177,9 @@ int movidrive_factory_reset(movidrive_t *md);
 uint16_t movidrive_status_word(const movidrive_t *md);
 /* DI00 /CONTROLLER INHIBIT changed (true = +24 V, enabled). */
 void movidrive_set_terminal_enable(movidrive_t *md, bool enabled);
+/* A fault the unit detected itself (a simulated over-temperature, ...): immediate switch-off,
+ * recorded in P080..P084, reset like any fault (control word bit 6 edge). 0 does nothing. */
+void movidrive_inject_fault(movidrive_t *md, uint8_t number);
 /* Bytes the EEPROM (hal_nvm) must offer for the image. */
 size_t movidrive_eeprom_size(void);
 /* The table entry of an index, NULL if none (H0..H511 share one entry). */

@@ -1,0 +1,216 @@
+/* The bridge between a running rig and clients in other threads (the HTTP control API).
+ *
+ * The bus loop owns the rig; nothing outside it touches the rig's structs. Instead:
+ * - the loop publishes a snapshot (plain values) that clients copy under a mutex;
+ * - log events go into a ring of RIG_CTL_EVENTS entries that clients read by sequence number;
+ *   a client that falls behind loses the oldest and is told how many, the loop never waits;
+ * - actions are queued as commands; the loop carries them out between two bus events
+ *   (rig_ctl_service) and a client waits for the result with a timeout. A command whose client
+ *   gave up is still carried out and then freed, so the rig sees exactly what was asked.
+ * A slow or stuck client can therefore never delay the bus: the loop only ever holds the mutex
+ * for a copy. */
+#ifndef RIG_RIG_CTL_H
+#define RIG_RIG_CTL_H
+
+#include <pthread.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "dp_master/dpv1_ds47.h"
+#include "dp_master/param_channel.h"
+#include "rig/rig.h"
+
+#define RIG_CTL_EVENTS 4096u
+#define RIG_CTL_CMDS 16u
+#define RIG_CTL_TEXT 240u
+
+typedef enum rig_log_level {
+    RIG_LOG_ERROR = 0,
+    RIG_LOG_WARN,
+    RIG_LOG_INFO,
+    RIG_LOG_DEBUG,
+} rig_log_level_t;
+
+typedef struct rig_ctl_event {
+    uint64_t seq;
+    uint64_t t_us;
+    rig_log_level_t level;
+    char source[16]; /* "card 4", "drive 4", "master", "sim" */
+    char kind[12];   /* docs/api.md */
+    char text[RIG_CTL_TEXT];
+} rig_ctl_event_t;
+
+/* ---- snapshot ------------------------------------------------------------------------------ */
+
+typedef struct rig_snap_card {
+    uint8_t address;
+    uint8_t next_address;
+    bool cable;
+    bool on_bus;
+    uint8_t dp_state;    /* dp_state_t */
+    uint8_t baud_state;  /* dp_baud_state_t */
+    uint32_t baud;
+    int16_t master;      /* -1: none */
+    uint32_t watchdog_ms;
+    uint8_t cfg[32];
+    uint8_t cfg_len;
+    uint8_t diag[32];
+    uint8_t diag_len;
+    uint8_t led[HAL_LED_COUNT]; /* hal_led_mode_t */
+    char p090[16];
+    uint16_t po[DFP21B_MAX_PD];
+    uint16_t pi[DFP21B_MAX_PD];
+    uint8_t pd_words;
+    uint32_t p819_ms;
+    bool dpv1_enabled;
+    bool msac1_open;
+    bool msac2_open[2];
+    int16_t msac2_master[2];
+    char nvm_note[320];
+    char eeprom_path[160];
+    char card_nvm_path[160];
+    /* the drive */
+    bool has_drive;
+    uint16_t control_word;
+    uint16_t status_word;
+    bool enabled;
+    uint8_t fault;
+    int32_t setpoint_mrpm;
+    int32_t speed_mrpm;
+    int32_t current_mpct;
+    int32_t ramp_up_ms;
+    int32_t ramp_down_ms;
+    bool di00;
+} rig_snap_card_t;
+
+typedef struct rig_snap_slave {
+    uint8_t address;
+    uint8_t phase; /* dpm_phase_t */
+    uint32_t cycles;
+    uint8_t outputs[64];
+    uint16_t out_len;
+    uint8_t inputs[64];
+    uint16_t in_len;
+    bool param_channel;
+    uint8_t diag[32];
+    uint8_t diag_len;
+} rig_snap_slave_t;
+
+typedef struct rig_snapshot {
+    uint64_t t_us;
+    uint8_t medium; /* rig_medium_t */
+    char medium_name[96];
+    uint32_t medium_baud;
+    uint8_t num_cards;
+    rig_snap_card_t cards[RIG_MAX_CARDS];
+    bool has_master;
+    uint8_t master_address;
+    bool master_running;
+    uint32_t master_baud;
+    uint8_t num_slaves;
+    rig_snap_slave_t slaves[DPM_MAX_SLAVES];
+} rig_snapshot_t;
+
+/* ---- commands ------------------------------------------------------------------------------ */
+
+typedef enum rig_cmd_type {
+    RIG_CMD_INPUTS = 0,  /* card: flag = DI00 */
+    RIG_CMD_FAULT,       /* card: value = fault number */
+    RIG_CMD_CABLE,       /* card: flag = connected */
+    RIG_CMD_POWER_CYCLE, /* card */
+    RIG_CMD_DIP,         /* card: value = address */
+    RIG_CMD_PARAM_READ,  /* card: index (directly at the drive) */
+    RIG_CMD_PARAM_WRITE, /* card: index, value, flag = volatile */
+    RIG_CMD_MASTER_RUN,  /* flag = running */
+    RIG_CMD_MASTER_OUTPUTS, /* card = slave address; words/num_words (from word first_word) or
+                               raw/raw_len */
+    RIG_CMD_MASTER_PARAM, /* card = slave address; via, index, value, flag = volatile, write */
+} rig_cmd_type_t;
+
+typedef enum rig_param_via {
+    RIG_VIA_CHANNEL = 0, /* the cyclic 8-octet MOVILINK channel */
+    RIG_VIA_DS47,        /* DP-V1 class 1, data set 47 with a MOVILINK request */
+} rig_param_via_t;
+
+typedef struct rig_cmd {
+    rig_cmd_type_t type;
+    uint8_t card;     /* the card's (or master's slave's) bus address */
+    bool flag;
+    bool write;
+    int32_t value;
+    uint16_t index;
+    rig_param_via_t via;
+    uint16_t words[DFP21B_MAX_PD];
+    uint8_t num_words;
+    uint8_t raw[64];
+    uint8_t raw_len;
+    bool raw_given;
+    /* result */
+    int status;        /* HTTP status: 200, 400, 404, 409, 504 */
+    bool refused;      /* the drive answered with an error (a service that worked) */
+    int32_t result;    /* the value read or written */
+    char error[200];
+} rig_cmd_t;
+
+typedef enum rig_slot_state {
+    RIG_SLOT_FREE = 0,
+    RIG_SLOT_QUEUED,
+    RIG_SLOT_RUNNING,  /* a master parameter service over the bus */
+    RIG_SLOT_DONE,
+    RIG_SLOT_ABANDONED, /* the client gave up; freed when done */
+} rig_slot_state_t;
+
+typedef struct rig_ctl {
+    pthread_mutex_t lock;
+    pthread_cond_t changed;   /* new events, a new snapshot or a command done */
+    rig_t *rig;
+    bool read_only;
+    const char *mode;         /* "demo", "slave", "master", "replay" */
+    rig_snapshot_t snap;      /* under lock */
+    rig_snapshot_t scratch;   /* the loop fills it, then copies it into snap under the lock */
+    uint64_t snap_version;
+    rig_ctl_event_t events[RIG_CTL_EVENTS];
+    uint64_t next_seq;        /* seq of the next event; events[seq % N] */
+    rig_cmd_t cmds[RIG_CTL_CMDS];
+    rig_slot_state_t slot[RIG_CTL_CMDS];
+    uint64_t slot_deadline_us[RIG_CTL_CMDS]; /* a running service's time limit (rig time) */
+    int wake_fd;              /* eventfd the loop waits on; -1 on the in-memory bus */
+    bool closing;
+    /* the master's parameter service in progress (one at a time, like a PLC's FB) */
+    int active_slot;          /* -1: none */
+    dpm_param_t param;
+    dpm_call_t call;
+    dpm_ds47_req_t ds47;
+    bool call_started;
+    uint32_t wait_cycles;
+    /* loop side */
+    uint64_t last_publish_ns;
+} rig_ctl_t;
+
+int rig_ctl_init(rig_ctl_t *c, rig_t *r, const char *mode, bool read_only);
+void rig_ctl_destroy(rig_ctl_t *c);
+
+/* Loop side. Publishes a log event (any thread may call it; it never blocks for long). */
+void rig_ctl_event(rig_ctl_t *c, uint64_t t_us, rig_log_level_t level, const char *source,
+                   const char *kind, const char *text);
+/* Runs queued commands, advances a master parameter service, publishes the snapshot when it is
+ * older than publish_ns (wall clock). Call often from the loop. */
+void rig_ctl_service(rig_ctl_t *c, uint64_t publish_every_ns);
+/* Registers the wake-up descriptor with the rig's wall-clock loop. */
+int rig_ctl_attach(rig_ctl_t *c);
+
+/* Client side. Copies the snapshot. */
+void rig_ctl_snapshot(rig_ctl_t *c, rig_snapshot_t *out);
+/* Queues cmd and waits up to timeout_ms for the loop to carry it out; cmd gets the result.
+ * Returns false on timeout (cmd->status = 504) or a full queue (503). */
+bool rig_ctl_submit(rig_ctl_t *c, rig_cmd_t *cmd, unsigned timeout_ms);
+/* Copies events with seq >= since into out (at most max, oldest first). Returns how many;
+ * *lost = how many with seq >= since are no longer held. */
+size_t rig_ctl_events(rig_ctl_t *c, uint64_t since, rig_ctl_event_t *out, size_t max,
+                      uint64_t *lost);
+/* Waits until an event with seq >= since exists or timeout_ms passes. */
+void rig_ctl_wait(rig_ctl_t *c, uint64_t since, unsigned timeout_ms);
+uint64_t rig_ctl_next_seq(rig_ctl_t *c);
+
+#endif

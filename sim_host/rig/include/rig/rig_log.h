@@ -1,0 +1,54 @@
+/* The log a person follows: what the cards, their drives and the master do, decoded with the
+ * drive's parameter names and texts, one line per event. A rig tap; every line also goes to a
+ * control bridge (the HTTP event stream) when one is attached.
+ *
+ * Levels: error, warn, info (the default: state changes, services, faults, ramps), debug
+ * (every baud-search step, every Data_Exchange input of `master --verbose`). The baud search
+ * is one line when it starts and one when it ends at info. */
+#ifndef RIG_RIG_LOG_H
+#define RIG_RIG_LOG_H
+
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "rig/rig.h"
+#include "rig/rig_ctl.h"
+
+typedef enum rig_log_time {
+    RIG_LOG_TIME_BUS = 0, /* ms since the medium started (simulated time on the in-memory bus) */
+    RIG_LOG_TIME_WALL,    /* local wall-clock time */
+} rig_log_time_t;
+
+typedef struct rig_log {
+    rig_t *rig;
+    FILE *out;
+    rig_log_level_t level;
+    rig_log_time_t time;
+    rig_ctl_t *ctl;      /* NULL: print only */
+    bool show_inputs;    /* master --verbose: decoded inputs whenever they change */
+    bool slave_silent;   /* unanswered polls of a silent address are told once */
+    uint32_t baud_steps[RIG_MAX_CARDS];
+    uint8_t last_inputs[DPM_MAX_SLAVES][DPM_MAX_IO];
+    uint16_t last_inputs_len[DPM_MAX_SLAVES];
+} rig_log_t;
+
+void rig_log_init(rig_log_t *l, rig_t *r, FILE *out);
+rig_tap_t rig_log_tap(rig_log_t *l);
+void rig_log(rig_log_t *l, rig_log_level_t level, const char *source, const char *kind,
+             const char *fmt, ...) __attribute__((format(printf, 5, 6)));
+void rig_vlog(rig_log_t *l, rig_log_level_t level, const char *source, const char *kind,
+              const char *fmt, va_list ap);
+/* "error", "warn", "info", "debug" → level; false for anything else. */
+bool rig_log_level_parse(const char *text, rig_log_level_t *level);
+const char *rig_log_level_name(rig_log_level_t level);
+
+/* "Station_Not_Ready Prm_Req | Master_Add 2, ident 0x6003" for a Slave_Diag answer. */
+void rig_diag_text(const uint8_t *d, size_t len, char *out, size_t max);
+const char *rig_baud_text(uint32_t baud);
+/* PO/PI words of a DFP21B image (after the parameter channel), decoded: control word 1, speed
+ * setpoint; status word 1, speed, current. */
+void rig_pi_text(const uint16_t *pi, unsigned n, char *out, size_t max);
+void rig_po_text(const uint16_t *po, unsigned n, char *out, size_t max);
+
+#endif

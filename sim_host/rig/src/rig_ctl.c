@@ -1,0 +1,639 @@
+#include "rig/rig_ctl.h"
+
+#include <errno.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/eventfd.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "dp_master/param_channel.h"
+
+#define SERVICE_TIMEOUT_US 5000000u
+
+static uint64_t mono_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
+}
+
+int rig_ctl_init(rig_ctl_t *c, rig_t *r, const char *mode, bool read_only)
+{
+    memset(c, 0, sizeof *c);
+    c->rig = r;
+    c->mode = mode;
+    c->read_only = read_only;
+    c->active_slot = -1;
+    c->wake_fd = -1;
+    if (pthread_mutex_init(&c->lock, NULL) != 0) {
+        return -1;
+    }
+    pthread_condattr_t ca;
+    pthread_condattr_init(&ca);
+    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+    int rc = pthread_cond_init(&c->changed, &ca);
+    pthread_condattr_destroy(&ca);
+    if (rc != 0) {
+        pthread_mutex_destroy(&c->lock);
+        return -1;
+    }
+    c->wake_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    return c->wake_fd < 0 ? -1 : 0;
+}
+
+void rig_ctl_destroy(rig_ctl_t *c)
+{
+    pthread_mutex_lock(&c->lock);
+    c->closing = true;
+    pthread_cond_broadcast(&c->changed);
+    pthread_mutex_unlock(&c->lock);
+    if (c->wake_fd >= 0) {
+        close(c->wake_fd);
+        c->wake_fd = -1;
+    }
+}
+
+static void drain_wake(void *ctx, hal_time_us_t now)
+{
+    (void)now;
+    rig_ctl_t *c = ctx;
+    uint64_t v;
+    while (read(c->wake_fd, &v, sizeof v) == (ssize_t)sizeof v) {
+    }
+    rig_ctl_service(c, 0);
+}
+
+int rig_ctl_attach(rig_ctl_t *c)
+{
+    return rig_add_fd(c->rig, c->wake_fd, drain_wake, c);
+}
+
+/* ---- events -------------------------------------------------------------------------------- */
+
+static void copy_text(char *dst, size_t n, const char *src)
+{
+    snprintf(dst, n, "%s", src != NULL ? src : "");
+}
+
+void rig_ctl_event(rig_ctl_t *c, uint64_t t_us, rig_log_level_t level, const char *source,
+                   const char *kind, const char *text)
+{
+    pthread_mutex_lock(&c->lock);
+    rig_ctl_event_t *e = &c->events[c->next_seq % RIG_CTL_EVENTS];
+    e->seq = c->next_seq++;
+    e->t_us = t_us;
+    e->level = level;
+    copy_text(e->source, sizeof e->source, source);
+    copy_text(e->kind, sizeof e->kind, kind);
+    copy_text(e->text, sizeof e->text, text);
+    pthread_cond_broadcast(&c->changed);
+    pthread_mutex_unlock(&c->lock);
+}
+
+size_t rig_ctl_events(rig_ctl_t *c, uint64_t since, rig_ctl_event_t *out, size_t max,
+                      uint64_t *lost)
+{
+    pthread_mutex_lock(&c->lock);
+    uint64_t oldest = c->next_seq > RIG_CTL_EVENTS ? c->next_seq - RIG_CTL_EVENTS : 0u;
+    *lost = 0;
+    if (since < oldest) {
+        *lost = oldest - since;
+        since = oldest;
+    }
+    size_t n = 0;
+    for (uint64_t s = since; s < c->next_seq && n < max; s++) {
+        out[n++] = c->events[s % RIG_CTL_EVENTS];
+    }
+    pthread_mutex_unlock(&c->lock);
+    return n;
+}
+
+uint64_t rig_ctl_next_seq(rig_ctl_t *c)
+{
+    pthread_mutex_lock(&c->lock);
+    uint64_t s = c->next_seq;
+    pthread_mutex_unlock(&c->lock);
+    return s;
+}
+
+static struct timespec deadline_in(unsigned ms)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    ts.tv_sec += (time_t)(ms / 1000u);
+    ts.tv_nsec += (long)(ms % 1000u) * 1000000L;
+    if (ts.tv_nsec >= 1000000000L) {
+        ts.tv_sec++;
+        ts.tv_nsec -= 1000000000L;
+    }
+    return ts;
+}
+
+void rig_ctl_wait(rig_ctl_t *c, uint64_t since, unsigned timeout_ms)
+{
+    struct timespec until = deadline_in(timeout_ms);
+    pthread_mutex_lock(&c->lock);
+    while (c->next_seq <= since && !c->closing) {
+        if (pthread_cond_timedwait(&c->changed, &c->lock, &until) == ETIMEDOUT) {
+            break;
+        }
+    }
+    pthread_mutex_unlock(&c->lock);
+}
+
+/* ---- snapshot ------------------------------------------------------------------------------ */
+
+static void snap_card(const rig_card_t *rc, rig_snap_card_t *s)
+{
+    const dfp21b_t *card = &rc->cs.card;
+    const dp_slave_t *dp = &card->dp;
+    memset(s, 0, sizeof *s);
+    s->address = card->address;
+    s->next_address = rc->next_address;
+    s->cable = rc->cable;
+    s->on_bus = card->on_bus;
+    s->dp_state = (uint8_t)dp_slave_state(dp);
+    s->baud_state = (uint8_t)dp_slave_baud_state(dp);
+    s->baud = dfp21b_p092_baud(card);
+    s->master = dp_slave_state(dp) != DP_STATE_WAIT_PRM || dp->master_add != 0xFFu
+                    ? (int16_t)(dp->master_add == 0xFFu ? -1 : dp->master_add)
+                    : -1;
+    s->watchdog_ms = dp->wd_on ? dp->wd_time_ms : 0u;
+    s->cfg_len = dp->cfg_len < sizeof s->cfg ? dp->cfg_len : (uint8_t)sizeof s->cfg;
+    memcpy(s->cfg, dp->cfg_data, s->cfg_len);
+    s->diag_len = (uint8_t)dp_slave_build_diag(dp, s->diag, sizeof s->diag);
+    for (unsigned i = 0; i < HAL_LED_COUNT; i++) {
+        s->led[i] = (uint8_t)rc->cs.leds.mode[i];
+    }
+    dfp21b_p090_text(&card->pd, s->p090, sizeof s->p090);
+    s->pd_words = card->pd.valid ? card->pd.pd_words : 0u;
+    memcpy(s->po, card->po, sizeof s->po);
+    memcpy(s->pi, card->pi, sizeof s->pi);
+    s->p819_ms = card->p819_ms;
+    s->dpv1_enabled = dp_slave_dpv1_mode(dp);
+    s->msac1_open = card->dpv1.c1.open;
+    for (unsigned i = 0; i < 2u && i < DPV1_C2_CONNECTIONS; i++) {
+        s->msac2_open[i] = card->dpv1.c2[i].open;
+        s->msac2_master[i] = card->dpv1.c2[i].open ? (int16_t)card->dpv1.c2[i].master : -1;
+    }
+    copy_text(s->nvm_note, sizeof s->nvm_note, rc->nvm_note);
+    copy_text(s->eeprom_path, sizeof s->eeprom_path, rc->opt.eeprom_path);
+    copy_text(s->card_nvm_path, sizeof s->card_nvm_path, rc->opt.card_nvm_path);
+    if (rc->cs.inverter == CARD_INVERTER_SIM) {
+        const movidrive_t *md = &rc->cs.md;
+        int32_t v = 0;
+        s->has_drive = true;
+        s->control_word = md->control_word;
+        s->status_word = movidrive_status_word(md);
+        s->enabled = md->output_stage_enabled;
+        s->fault = md->fault;
+        s->setpoint_mrpm = md->speed_setpoint_mrpm;
+        s->speed_mrpm = md->speed_actual_mrpm;
+        s->current_mpct = md->current_mpct;
+        s->ramp_up_ms = movidrive_read_value(md, MD_IDX_P130_RAMP_UP, &v) ? v : 0;
+        s->ramp_down_ms = movidrive_read_value(md, MD_IDX_P131_RAMP_DOWN, &v) ? v : 0;
+        s->di00 = md->cfg.terminal_enable;
+    }
+}
+
+static bool has_param_channel(const dpm_slave_t *sl)
+{
+    dfp21b_pd_cfg_t pd;
+    return dfp21b_check_cfg(sl->cfg.cfg, sl->cfg.cfg_len, &pd) && pd.param_channel;
+}
+
+static void snap_slave(const dpm_slave_t *sl, rig_snap_slave_t *s)
+{
+    memset(s, 0, sizeof *s);
+    s->address = sl->cfg.address;
+    s->phase = (uint8_t)sl->phase;
+    s->cycles = sl->cycles;
+    s->out_len = sl->out_len < sizeof s->outputs ? sl->out_len : (uint16_t)sizeof s->outputs;
+    memcpy(s->outputs, sl->outputs, s->out_len);
+    s->in_len = sl->inputs_len < sizeof s->inputs ? sl->inputs_len : (uint16_t)sizeof s->inputs;
+    memcpy(s->inputs, sl->inputs, s->in_len);
+    s->param_channel = has_param_channel(sl);
+    s->diag_len = sl->last_diag_len < sizeof s->diag ? sl->last_diag_len
+                                                     : (uint8_t)sizeof s->diag;
+    memcpy(s->diag, sl->last_diag, s->diag_len);
+}
+
+static const char *medium_text(const rig_t *r, char *buf, size_t n)
+{
+    switch (r->cfg.medium) {
+    case RIG_MEDIUM_MEMBUS:
+        return "in-memory bus";
+    case RIG_MEDIUM_TTY:
+        return r->cfg.device;
+    case RIG_MEDIUM_LCM:
+        snprintf(buf, n, "LCM segment %s", r->cfg.lcm_channel);
+        return buf;
+    }
+    return "";
+}
+
+static void publish(rig_ctl_t *c)
+{
+    rig_snapshot_t *sp = &c->scratch; /* filled outside the lock: only the loop writes it */
+    const rig_t *r = c->rig;
+    char buf[96];
+    memset(sp, 0, offsetof(rig_snapshot_t, cards));
+    sp->t_us = rig_elapsed_ns(r) / 1000u;
+    sp->medium = (uint8_t)r->cfg.medium;
+    copy_text(sp->medium_name, sizeof sp->medium_name, medium_text(r, buf, sizeof buf));
+    sp->num_cards = (uint8_t)r->num_cards;
+    for (unsigned i = 0; i < r->num_cards; i++) {
+        snap_card(&r->cards[i], &sp->cards[i]);
+    }
+    sp->medium_baud = r->num_cards > 0u ? sp->cards[0].baud : r->cfg.baud;
+    sp->has_master = r->has_master;
+    if (r->has_master) {
+        const dp_master_t *m = &r->master;
+        sp->master_address = m->cfg.address;
+        sp->master_running = m->running;
+        sp->master_baud = m->cfg.baud;
+        sp->medium_baud = m->cfg.baud;
+        sp->num_slaves = m->num_slaves;
+        for (unsigned i = 0; i < m->num_slaves; i++) {
+            snap_slave(&m->slaves[i], &sp->slaves[i]);
+        }
+    }
+    pthread_mutex_lock(&c->lock);
+    memcpy(&c->snap, sp, sizeof *sp);
+    c->snap_version++;
+    pthread_cond_broadcast(&c->changed);
+    pthread_mutex_unlock(&c->lock);
+}
+
+void rig_ctl_snapshot(rig_ctl_t *c, rig_snapshot_t *out)
+{
+    pthread_mutex_lock(&c->lock);
+    memcpy(out, &c->snap, sizeof *out);
+    pthread_mutex_unlock(&c->lock);
+}
+
+/* ---- commands ------------------------------------------------------------------------------ */
+
+bool rig_ctl_submit(rig_ctl_t *c, rig_cmd_t *cmd, unsigned timeout_ms)
+{
+    pthread_mutex_lock(&c->lock);
+    int k = -1;
+    for (unsigned i = 0; i < RIG_CTL_CMDS; i++) {
+        if (c->slot[i] == RIG_SLOT_FREE) {
+            k = (int)i;
+            break;
+        }
+    }
+    if (k < 0 || c->closing) {
+        pthread_mutex_unlock(&c->lock);
+        cmd->status = 503;
+        snprintf(cmd->error, sizeof cmd->error, "too many actions waiting; try again");
+        return false;
+    }
+    c->cmds[k] = *cmd;
+    c->slot[k] = RIG_SLOT_QUEUED;
+    pthread_mutex_unlock(&c->lock);
+    uint64_t one = 1;
+    if (write(c->wake_fd, &one, sizeof one) < 0) {
+        /* The loop also looks at the queue on every turn; the wake-up only makes it sooner. */
+    }
+    struct timespec until = deadline_in(timeout_ms);
+    bool done = false;
+    pthread_mutex_lock(&c->lock);
+    while (!c->closing) {
+        if (c->slot[k] == RIG_SLOT_DONE) {
+            *cmd = c->cmds[k];
+            c->slot[k] = RIG_SLOT_FREE;
+            done = true;
+            break;
+        }
+        if (pthread_cond_timedwait(&c->changed, &c->lock, &until) == ETIMEDOUT) {
+            break;
+        }
+    }
+    if (!done) {
+        c->slot[k] = RIG_SLOT_ABANDONED;
+        cmd->status = 504;
+        snprintf(cmd->error, sizeof cmd->error, "the simulation did not carry the action out "
+                                                "within %u ms", timeout_ms);
+    }
+    pthread_mutex_unlock(&c->lock);
+    return done;
+}
+
+static void fail(rig_cmd_t *cmd, int status, const char *fmt, const char *arg)
+{
+    cmd->status = status;
+    snprintf(cmd->error, sizeof cmd->error, fmt, arg);
+}
+
+static int slave_index(const rig_t *r, uint8_t address)
+{
+    for (unsigned i = 0; i < r->master.num_slaves; i++) {
+        if (r->master.slaves[i].cfg.address == address) {
+            return (int)i;
+        }
+    }
+    return -1;
+}
+
+static void run_card_param(rig_card_t *rc, rig_cmd_t *cmd)
+{
+    if (rc->cs.inverter != CARD_INVERTER_SIM) {
+        fail(cmd, 409, "%s", "this card has no emulated drive (--inverter none or an SBus link)");
+        return;
+    }
+    uint8_t req[ML_TELEGRAM_LEN] = {0};
+    uint8_t rsp[ML_TELEGRAM_LEN];
+    uint8_t service = cmd->type == RIG_CMD_PARAM_READ ? ML_SVC_READ
+                      : cmd->flag                     ? ML_SVC_WRITE_VOLATILE
+                                                      : ML_SVC_WRITE;
+    dpm_param_t build = {0};
+    dpm_param_start(&build, service, cmd->index, (uint32_t)cmd->value, req);
+    movidrive_param(&rc->cs.md, req, rsp);
+    cmd->status = 200;
+    if ((rsp[0] & ML_MGMT_ERROR) != 0u) {
+        cmd->refused = true;
+        ml_error_text(rsp, cmd->error, sizeof cmd->error);
+        return;
+    }
+    cmd->result = (int32_t)ml_data(rsp);
+    rig_wake(rc->rig);
+}
+
+static void set_slave_words(dp_master_t *m, unsigned idx, const rig_cmd_t *cmd)
+{
+    dpm_slave_t *sl = &m->slaves[idx];
+    uint8_t out[DPM_MAX_IO];
+    memcpy(out, sl->outputs, sl->out_len);
+    size_t base = has_param_channel(sl) ? ML_TELEGRAM_LEN : 0u;
+    for (unsigned w = 0; w < cmd->num_words; w++) {
+        size_t at = base + 2u * w;
+        if (at + 1u < sl->out_len) {
+            out[at] = (uint8_t)(cmd->words[w] >> 8);
+            out[at + 1u] = (uint8_t)cmd->words[w];
+        }
+    }
+    dp_master_set_outputs(m, idx, out, sl->out_len);
+}
+
+/* Starts a master parameter service; returns false when it finished at once (error). */
+static bool start_master_param(rig_ctl_t *c, rig_cmd_t *cmd, unsigned idx)
+{
+    rig_t *r = c->rig;
+    dpm_slave_t *sl = &r->master.slaves[idx];
+    hal_time_us_t now = rig_now_us(r);
+    if (sl->phase != DPM_PHASE_DATA_EXCH) {
+        cmd->status = 409;
+        snprintf(cmd->error, sizeof cmd->error, "slave %u is not in data exchange (%s)",
+                 sl->cfg.address, dpm_phase_name(sl->phase));
+        return false;
+    }
+    uint8_t service = !cmd->write ? ML_SVC_READ : cmd->flag ? ML_SVC_WRITE_VOLATILE
+                                                             : ML_SVC_WRITE;
+    if (cmd->via == RIG_VIA_CHANNEL) {
+        if (!has_param_channel(sl) || sl->out_len < ML_TELEGRAM_LEN) {
+            fail(cmd, 409, "%s", "the slave's configuration has no parameter channel (F3/B7)");
+            return false;
+        }
+        uint8_t out[DPM_MAX_IO];
+        memcpy(out, sl->outputs, sl->out_len);
+        dpm_param_sync(&c->param, sl->inputs);
+        dpm_param_start(&c->param, service, cmd->index, (uint32_t)cmd->value, out);
+        dp_master_set_outputs(&r->master, idx, out, sl->out_len);
+        return true;
+    }
+    if (!dpm_prm_is_dpv1(sl->cfg.prm, sl->cfg.prm_len)) {
+        fail(cmd, 409, "%s", "the slave is not parameterised for DP-V1 (data set 47 needs it)");
+        return false;
+    }
+    memset(&c->ds47, 0, sizeof c->ds47);
+    c->ds47.ref = (uint8_t)(c->ds47.ref + 1u) == 0u ? 1u : (uint8_t)(c->ds47.ref + 1u);
+    c->ds47.id = DPM_DS47_ID_MOVILINK;
+    c->ds47.n = 1;
+    c->ds47.p[0].attribute = !cmd->write ? DPM_DS47_ATTR_ML_READ
+                             : cmd->flag ? DPM_DS47_ATTR_ML_WRITE_VOLATILE
+                                         : DPM_DS47_ATTR_ML_WRITE;
+    c->ds47.p[0].number = cmd->index;
+    c->ds47.p[0].value = (uint32_t)cmd->value;
+    memset(&c->call, 0, sizeof c->call);
+    if (dpm_ds47_start(&c->call, dp_master_c1_port(&r->master, idx), &c->ds47, NULL, NULL, now) !=
+        0) {
+        fail(cmd, 409, "%s", "the class-1 channel is busy");
+        return false;
+    }
+    rig_wake(r);
+    return true;
+}
+
+/* A running master service: true when it finished (cmd has the result). */
+static bool advance_master_param(rig_ctl_t *c, rig_cmd_t *cmd)
+{
+    rig_t *r = c->rig;
+    int idx = slave_index(r, cmd->card);
+    if (idx < 0) {
+        fail(cmd, 404, "%s", "the slave left the master's list");
+        return true;
+    }
+    dpm_slave_t *sl = &r->master.slaves[idx];
+    if (cmd->via == RIG_VIA_CHANNEL) {
+        if (!dpm_param_done(&c->param, sl->inputs)) {
+            return false;
+        }
+        cmd->status = 200;
+        if ((sl->inputs[0] & ML_MGMT_ERROR) != 0u) {
+            cmd->refused = true;
+            ml_error_text(sl->inputs, cmd->error, sizeof cmd->error);
+        } else {
+            cmd->result = (int32_t)ml_data(sl->inputs);
+        }
+        return true;
+    }
+    if (!dpm_call_done(&c->call)) {
+        return false;
+    }
+    cmd->status = 200;
+    if (!c->call.ok) {
+        cmd->status = 502;
+        snprintf(cmd->error, sizeof cmd->error, "data set 47: %.180s",
+                 c->call.error[0] != '\0' ? c->call.error : "negative DP-V1 response");
+        return true;
+    }
+    dpm_ds47_rsp_t rsp;
+    char err[160];
+    if (!dpm_ds47_parse(&c->ds47, c->call.data, c->call.len, &rsp, err, sizeof err)) {
+        cmd->status = 502;
+        snprintf(cmd->error, sizeof cmd->error, "data set 47: %.180s", err);
+        return true;
+    }
+    if (!rsp.p[0].ok) {
+        cmd->refused = true;
+        dpm_ml_error_value_text(rsp.p[0].error, cmd->error, sizeof cmd->error);
+        return true;
+    }
+    cmd->result = rsp.p[0].has_value ? (int32_t)rsp.p[0].value : cmd->value;
+    return true;
+}
+
+static void run_master_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
+{
+    rig_t *r = c->rig;
+    if (!r->has_master) {
+        fail(cmd, 409, "%s", "this process has no master (use dfp-sim master or demo)");
+        return;
+    }
+    hal_time_us_t now = rig_now_us(r);
+    if (cmd->type == RIG_CMD_MASTER_RUN) {
+        if (cmd->flag && !r->master.running) {
+            dp_master_start(&r->master, now);
+        } else if (!cmd->flag && r->master.running) {
+            dp_master_stop(&r->master);
+        }
+        rig_wake(r);
+        cmd->status = 200;
+        return;
+    }
+    int idx = slave_index(r, cmd->card);
+    if (idx < 0) {
+        fail(cmd, 404, "%s", "the master has no slave with that address");
+        return;
+    }
+    if (cmd->type == RIG_CMD_MASTER_OUTPUTS) {
+        dpm_slave_t *sl = &r->master.slaves[idx];
+        if (cmd->raw_given) {
+            if (cmd->raw_len != sl->out_len) {
+                cmd->status = 400;
+                snprintf(cmd->error, sizeof cmd->error,
+                         "hex: %u octets given, the slave's outputs are %u octets", cmd->raw_len,
+                         sl->out_len);
+                return;
+            }
+            dp_master_set_outputs(&r->master, (unsigned)idx, cmd->raw, cmd->raw_len);
+        } else {
+            size_t base = has_param_channel(sl) ? ML_TELEGRAM_LEN : 0u;
+            if (base + 2u * cmd->num_words > sl->out_len) {
+                cmd->status = 400;
+                snprintf(cmd->error, sizeof cmd->error,
+                         "po: %u words given, the slave takes %u PO words", cmd->num_words,
+                         (unsigned)((sl->out_len - base) / 2u));
+                return;
+            }
+            set_slave_words(&r->master, (unsigned)idx, cmd);
+        }
+        cmd->status = 200;
+        return;
+    }
+    /* RIG_CMD_MASTER_PARAM: one at a time, like a PLC's parameter block */
+    if (c->active_slot >= 0) {
+        fail(cmd, 409, "%s", "another parameter service is running; try again");
+        return;
+    }
+    if (start_master_param(c, cmd, (unsigned)idx)) {
+        c->active_slot = k;
+        c->slot_deadline_us[k] = rig_elapsed_ns(r) / 1000u + SERVICE_TIMEOUT_US;
+    }
+}
+
+static void run_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
+{
+    rig_t *r = c->rig;
+    cmd->status = 200;
+    if (cmd->type >= RIG_CMD_MASTER_RUN) {
+        run_master_cmd(c, cmd, k);
+        return;
+    }
+    rig_card_t *rc = rig_card_by_address(r, cmd->card);
+    if (rc == NULL) {
+        fail(cmd, 404, "%s", "no card with that address");
+        return;
+    }
+    bool needs_drive = cmd->type == RIG_CMD_INPUTS || cmd->type == RIG_CMD_FAULT;
+    if (needs_drive && rc->cs.inverter != CARD_INVERTER_SIM) {
+        fail(cmd, 409, "%s", "this card has no emulated drive (--inverter none or an SBus link)");
+        return;
+    }
+    switch (cmd->type) {
+    case RIG_CMD_INPUTS:
+        rig_card_set_input(rc, cmd->flag);
+        break;
+    case RIG_CMD_FAULT:
+        rig_card_inject_fault(rc, (uint8_t)cmd->value);
+        break;
+    case RIG_CMD_CABLE:
+        rig_card_set_cable(rc, cmd->flag);
+        break;
+    case RIG_CMD_POWER_CYCLE:
+        rig_card_power_cycle(rc, rig_now_us(r));
+        break;
+    case RIG_CMD_DIP:
+        rig_card_set_dip(rc, (uint8_t)cmd->value);
+        break;
+    case RIG_CMD_PARAM_READ:
+    case RIG_CMD_PARAM_WRITE:
+        run_card_param(rc, cmd);
+        break;
+    default:
+        break;
+    }
+}
+
+static void finish(rig_ctl_t *c, int k)
+{
+    pthread_mutex_lock(&c->lock);
+    c->slot[k] = c->slot[k] == RIG_SLOT_ABANDONED ? RIG_SLOT_FREE : RIG_SLOT_DONE;
+    pthread_cond_broadcast(&c->changed);
+    pthread_mutex_unlock(&c->lock);
+}
+
+void rig_ctl_service(rig_ctl_t *c, uint64_t publish_every_ns)
+{
+    /* The command is copied out of the slot under the lock and run outside it. */
+    for (int k = 0; k < (int)RIG_CTL_CMDS; k++) {
+        pthread_mutex_lock(&c->lock);
+        bool queued = c->slot[k] == RIG_SLOT_QUEUED;
+        rig_cmd_t cmd;
+        if (queued) {
+            cmd = c->cmds[k];
+            c->slot[k] = RIG_SLOT_RUNNING;
+        }
+        pthread_mutex_unlock(&c->lock);
+        if (!queued) {
+            continue;
+        }
+        run_cmd(c, &cmd, k);
+        pthread_mutex_lock(&c->lock);
+        c->cmds[k] = cmd;
+        pthread_mutex_unlock(&c->lock);
+        if (c->active_slot != k) {
+            finish(c, k);
+        }
+    }
+    if (c->active_slot >= 0) {
+        int k = c->active_slot;
+        rig_cmd_t cmd;
+        pthread_mutex_lock(&c->lock);
+        cmd = c->cmds[k];
+        pthread_mutex_unlock(&c->lock);
+        bool done = advance_master_param(c, &cmd);
+        if (!done && rig_elapsed_ns(c->rig) / 1000u > c->slot_deadline_us[k]) {
+            cmd.status = 504;
+            snprintf(cmd.error, sizeof cmd.error, "no answer from slave %u within 5 s",
+                     cmd.card);
+            done = true;
+        }
+        if (done) {
+            pthread_mutex_lock(&c->lock);
+            c->cmds[k] = cmd;
+            pthread_mutex_unlock(&c->lock);
+            c->active_slot = -1;
+            finish(c, k);
+        }
+    }
+    uint64_t now = mono_ns();
+    if (publish_every_ns == 0u || now - c->last_publish_ns >= publish_every_ns) {
+        c->last_publish_ns = now;
+        publish(c);
+    }
+}
