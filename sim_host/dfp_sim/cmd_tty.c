@@ -267,9 +267,10 @@ int cmd_slave(int argc, char **argv)
     for (int i = 2; i < argc; i++) {
         const char *v;
         int mo = medium_option(&med, argc, argv, &i);
+        if (mo == 0) {
+            mo = instrument_option(argc, argv, &i, &io);
+        }
         if (mo != 0) {
-            if (mo < 0) return EXIT_USAGE;
-        } else if ((mo = instrument_option(argc, argv, &i, &io)) != 0) {
             if (mo < 0) return EXIT_USAGE;
         } else if (strcmp(argv[i], "--lcm") == 0) {
             if ((lcm_url = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
@@ -347,8 +348,12 @@ int cmd_slave(int argc, char **argv)
             }
         }
     }
-    if (!session_open(&med, num_cards == 1u ? (int16_t)addresses[0] : -1,
-                      baud != 0u ? baud : hal_uart_bauds[0], &capture, &io, echo)) {
+    int16_t station = -1; /* several cards: no single station address on an LCM segment */
+    if (num_cards == 1u) {
+        station = (int16_t)addresses[0];
+    }
+    if (!session_open(&med, station, baud != 0u ? baud : hal_uart_bauds[0], &capture, &io,
+                      echo)) {
         return 1;
     }
     card_station_t *first = &rig.cards[0].cs;
@@ -545,6 +550,9 @@ int cmd_master(int argc, char **argv)
         const char *v;
         const char *o = argv[i];
         int mo = medium_option(&med, argc, argv, &i);
+        if (mo == 0) {
+            mo = instrument_option(argc, argv, &i, &io);
+        }
         if (mo != 0) {
             if (mo < 0) return EXIT_USAGE;
         } else if (strcmp(o, "--address") == 0) {
@@ -574,8 +582,6 @@ int cmd_master(int argc, char **argv)
             if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 1, 86400u, &timeout_s))
                 return EXIT_USAGE;
             timeout_given = true;
-        } else if ((mo = instrument_option(argc, argv, &i, &io)) != 0) {
-            if (mo < 0) return EXIT_USAGE;
         } else if (strcmp(o, "--watchdog") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 0, 650000u, &wd_ms))
                 return EXIT_USAGE;

@@ -20,7 +20,7 @@ read -r -a dirs <<<"${LINT_DIRS:-dp_slave dpv1 movilink firmware/dfp21b hal sim_
 # types are generated (lcm-gen) so that the sources including them parse; generated code is
 # not ours and stays out of the file list (it lives under the build directory).
 cmake --preset host -B "$build" >/dev/null
-cmake --build "$build" --target dfp_lcm_generate >/dev/null
+cmake --build "$build" --target dfp_lcm_generate dfp_http_www >/dev/null
 db="$build/compile_commands.json"
 
 # Sources of those directories that the host build compiles (a file compiled into two targets

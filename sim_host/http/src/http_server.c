@@ -45,8 +45,10 @@ typedef struct request {
 static enum MHD_Result send_text(struct MHD_Connection *conn, unsigned status, const char *type,
                                  const char *text, size_t len, bool copy)
 {
+    void *buf; /* MHD takes a non-const pointer but only reads a PERSISTENT or copied buffer */
+    memcpy(&buf, &text, sizeof buf);
     struct MHD_Response *r = MHD_create_response_from_buffer(
-        len, (void *)(uintptr_t)text, copy ? MHD_RESPMEM_MUST_COPY : MHD_RESPMEM_PERSISTENT);
+        len, buf, copy ? MHD_RESPMEM_MUST_COPY : MHD_RESPMEM_PERSISTENT);
     if (r == NULL) {
         return MHD_NO;
     }
@@ -862,12 +864,11 @@ static enum MHD_Result master_outputs(http_server_t *srv, struct MHD_Connection 
                      "octets)", sizeof cmd.raw);
         }
         for (size_t i = 0; err[0] == '\0' && i < len; i += 2u) {
-            unsigned v;
             char pair[3] = {t[i], t[i + 1u], 0};
-            if (sscanf(pair, "%2x", &v) != 1 || strspn(pair, "0123456789abcdefABCDEF") != 2u) {
+            if (strspn(pair, "0123456789abcdefABCDEF") != 2u) {
                 snprintf(err, sizeof err, "'hex': '%s' is not a hex octet", pair);
             } else {
-                cmd.raw[i / 2u] = (uint8_t)v;
+                cmd.raw[i / 2u] = (uint8_t)strtoul(pair, NULL, 16);
             }
         }
         cmd.raw_len = (uint8_t)(len / 2u);
@@ -1173,8 +1174,11 @@ static int open_listener(const char *host, uint16_t port, char *err, size_t errl
         return -1;
     }
     struct sockaddr_storage got;
+    memset(&got, 0, sizeof got);
     socklen_t glen = sizeof got;
-    getsockname(fd, (struct sockaddr *)&got, &glen);
+    if (getsockname(fd, (struct sockaddr *)&got, &glen) != 0) {
+        got = ss;
+    }
     *bound = ntohs(got.ss_family == AF_INET ? ((struct sockaddr_in *)&got)->sin_port
                                             : ((struct sockaddr_in6 *)&got)->sin6_port);
     return fd;

@@ -264,6 +264,14 @@ rig_card_t *rig_add_card(rig_t *r, const card_options_t *opt, hal_time_us_t now)
     c->index = r->num_cards;
     c->cable = true;
     c->opt = *opt;
+    if (opt->eeprom_path != NULL) {
+        snprintf(c->eeprom_path, sizeof c->eeprom_path, "%s", opt->eeprom_path);
+        c->opt.eeprom_path = c->eeprom_path;
+    }
+    if (opt->card_nvm_path != NULL) {
+        snprintf(c->card_nvm_path, sizeof c->card_nvm_path, "%s", opt->card_nvm_path);
+        c->opt.card_nvm_path = c->card_nvm_path;
+    }
     c->opt.event = on_card_event;
     c->opt.led_change = on_led;
     c->opt.ctx = c;

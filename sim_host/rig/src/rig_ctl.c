@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "dp_master/param_channel.h"
+#include "dp_slave/dp_wire.h"
 
 #define SERVICE_TIMEOUT_US 5000000u
 
@@ -157,9 +158,10 @@ static void snap_card(const rig_card_t *rc, rig_snap_card_t *s)
     s->dp_state = (uint8_t)dp_slave_state(dp);
     s->baud_state = (uint8_t)dp_slave_baud_state(dp);
     s->baud = dfp21b_p092_baud(card);
-    s->master = dp_slave_state(dp) != DP_STATE_WAIT_PRM || dp->master_add != 0xFFu
-                    ? (int16_t)(dp->master_add == 0xFFu ? -1 : dp->master_add)
-                    : -1;
+    s->master = -1;
+    if (dp->master_add != DP_MASTER_ADD_NONE) {
+        s->master = (int16_t)dp->master_add;
+    }
     s->watchdog_ms = dp->wd_on ? dp->wd_time_ms : 0u;
     s->cfg_len = dp->cfg_len < sizeof s->cfg ? dp->cfg_len : (uint8_t)sizeof s->cfg;
     memcpy(s->cfg, dp->cfg_data, s->cfg_len);
@@ -176,7 +178,10 @@ static void snap_card(const rig_card_t *rc, rig_snap_card_t *s)
     s->msac1_open = card->dpv1.c1.open;
     for (unsigned i = 0; i < 2u && i < DPV1_C2_CONNECTIONS; i++) {
         s->msac2_open[i] = card->dpv1.c2[i].open;
-        s->msac2_master[i] = card->dpv1.c2[i].open ? (int16_t)card->dpv1.c2[i].master : -1;
+        s->msac2_master[i] = -1;
+        if (card->dpv1.c2[i].open) {
+            s->msac2_master[i] = (int16_t)card->dpv1.c2[i].master;
+        }
     }
     copy_text(s->nvm_note, sizeof s->nvm_note, rc->nvm_note);
     copy_text(s->eeprom_path, sizeof s->eeprom_path, rc->opt.eeprom_path);
@@ -370,7 +375,7 @@ static void set_slave_words(dp_master_t *m, unsigned idx, const rig_cmd_t *cmd)
     memcpy(out, sl->outputs, sl->out_len);
     size_t base = has_param_channel(sl) ? ML_TELEGRAM_LEN : 0u;
     for (unsigned w = 0; w < cmd->num_words; w++) {
-        size_t at = base + 2u * w;
+        size_t at = base + (size_t)2u * w;
         if (at + 1u < sl->out_len) {
             out[at] = (uint8_t)(cmd->words[w] >> 8);
             out[at + 1u] = (uint8_t)cmd->words[w];
@@ -513,7 +518,7 @@ static void run_master_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
             dp_master_set_outputs(&r->master, (unsigned)idx, cmd->raw, cmd->raw_len);
         } else {
             size_t base = has_param_channel(sl) ? ML_TELEGRAM_LEN : 0u;
-            if (base + 2u * cmd->num_words > sl->out_len) {
+            if (base + (size_t)2u * cmd->num_words > sl->out_len) {
                 cmd->status = 400;
                 snprintf(cmd->error, sizeof cmd->error,
                          "po: %u words given, the slave takes %u PO words", cmd->num_words,

@@ -56,7 +56,9 @@ void rig_vlog(rig_log_t *l, rig_log_level_t level, const char *source, const cha
         struct tm tm;
         localtime_r(&ts.tv_sec, &tm);
         char stamp[32];
-        strftime(stamp, sizeof stamp, "%H:%M:%S", &tm);
+        if (strftime(stamp, sizeof stamp, "%H:%M:%S", &tm) == 0u) {
+            stamp[0] = '\0';
+        }
         fprintf(l->out, "%s.%03ld  %-7s  %s\n", stamp, ts.tv_nsec / 1000000L, source, text);
     } else {
         fprintf(l->out, "%10.3f ms  %-7s  %s\n", (double)ns / 1e6, source, text);

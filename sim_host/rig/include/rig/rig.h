@@ -87,6 +87,8 @@ typedef struct rig_card {
     bool cable;             /* bus connector plugged in */
     uint8_t next_address;   /* DIP switches as set now: read at the next power-up */
     char nvm_note[320];     /* why the drive's EEPROM or the card's NVM was not used as is */
+    char eeprom_path[256];  /* opt's paths point here: the caller's strings may not last */
+    char card_nvm_path[256];
     /* Drive watch (rig_drive_event_t). */
     bool w_known;
     bool w_enabled;
