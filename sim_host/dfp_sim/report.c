@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "rig/rig_log.h"
 #include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_rx.h"
 #include "sim_hal/sim_board.h"
@@ -23,56 +24,12 @@ void report_line(report_t *r, const char *who, const char *fmt, ...)
 
 const char *report_baud_text(uint32_t baud)
 {
-    switch (baud) {
-    case 12000000u: return "12 Mbit/s";
-    case 6000000u: return "6 Mbit/s";
-    case 3000000u: return "3 Mbit/s";
-    case 1500000u: return "1.5 Mbit/s";
-    case 500000u: return "500 kbit/s";
-    case 187500u: return "187.5 kbit/s";
-    case 93750u: return "93.75 kbit/s";
-    case 45450u: return "45.45 kbit/s";
-    case 19200u: return "19.2 kbit/s";
-    case 9600u: return "9.6 kbit/s";
-    default: return "?";
-    }
+    return rig_baud_text(baud);
 }
 
 void report_diag_text(const uint8_t *d, size_t len, char *out, size_t max)
 {
-    static const char *const st1[8] = {"Station_Non_Existent", "Station_Not_Ready", "Cfg_Fault",
-                                       "Ext_Diag", "Not_Supported", "Invalid_Slave_Response",
-                                       "Prm_Fault", "Master_Lock"};
-    static const char *const st2[8] = {"Prm_Req", "Stat_Diag", NULL, "WD_On", "Freeze_Mode",
-                                       "Sync_Mode", NULL, "Deactivated"};
-    size_t n = 0;
-    out[0] = '\0';
-    if (len < DP_DIAG_STD_LEN) {
-        snprintf(out, max, "(short diagnosis, %zu octets)", len);
-        return;
-    }
-    for (unsigned b = 0; b < 8; b++) {
-        if ((d[0] >> b) & 1u) n += (size_t)snprintf(out + n, max - n, "%s ", st1[b]);
-    }
-    for (unsigned b = 0; b < 8 && n < max; b++) {
-        if (((d[1] >> b) & 1u) && st2[b] != NULL) {
-            n += (size_t)snprintf(out + n, max - n, "%s ", st2[b]);
-        }
-    }
-    if (n < max) {
-        if (d[DP_DIAG_MASTER_ADD] == DP_MASTER_ADD_NONE) {
-            n += (size_t)snprintf(out + n, max - n, "| no master");
-        } else {
-            n += (size_t)snprintf(out + n, max - n, "| Master_Add %u", d[DP_DIAG_MASTER_ADD]);
-        }
-    }
-    if (n < max) {
-        n += (size_t)snprintf(out + n, max - n, ", ident 0x%02X%02X", d[4], d[5]);
-    }
-    for (size_t i = DP_DIAG_STD_LEN; i < len && n + 4 < max; i++) {
-        n += (size_t)snprintf(out + n, max - n, "%s%02X", i == DP_DIAG_STD_LEN ? ", ext " : " ",
-                              d[i]);
-    }
+    rig_diag_text(d, len, out, max);
 }
 
 static const char *prm_fault_text(uint32_t why)
