@@ -105,7 +105,7 @@ if start_image dfp21b-stm32f405-qemu; then
   expect_has "I&M0 by class 2" "$out" '"via":"c2","ok":true,"manufacturer_id":266'
   out=$(sim param --address 4 --via movilink --json read 8300)
   expect_eq "no inverter: data set 47 read answers class 6 code 2" "$out" \
-    '{"op":"read","index":8300,"via":"movilink","ok":false,"error":"0x0602","text":"class 6 code 2: card <-> inverter communication fault"}'
+    '{"op":"read","index":8300,"p_number":"P076","name":"firmware basic unit","via":"movilink","ok":false,"error":"0x0602","text":"class 6 code 2: card <-> inverter communication fault"}'
   rc=0; finish_image || rc=$?
   expect_eq "image's own verdict (semihosting exit code)" "$rc" "0"
   summary=$(grep '^dfp21b-qemu:' "$qlog")
@@ -122,7 +122,7 @@ if start_image dfp21b-stm32f405-qemu-sbus; then
   for via in channel movilink profidrive c2; do
     out=$(sim param --address 4 --via $via --json read 8300)
     expect_eq "SBus: read 8300 via $via" "$out" \
-      "{\"op\":\"read\",\"index\":8300,\"via\":\"$via\",\"ok\":true,\"value\":823947913,\"hex\":\"0x311C7289\"}"
+      "{\"op\":\"read\",\"index\":8300,\"p_number\":\"P076\",\"name\":\"firmware basic unit\",\"via\":\"$via\",\"ok\":true,\"value\":823947913,\"hex\":\"0x311C7289\",\"text\":\"823947913\"}"
   done
   out=$(sim param --address 4 --via movilink --json write 8601 4711 --volatile)
   expect_has "SBus: write 8601 = 4711" "$out" '"ok":true'
