@@ -364,9 +364,9 @@ int cmd_slave(int argc, char **argv)
         return 1;
     }
     static inverter_can_t can_link;
-    char err[256];
     ml_link_t external = {0};
     if (kind == CARD_INVERTER_LINK) {
+        char err[256];
         if (inverter_can_open(&can_link, inverter, card_station_param_response,
                               card_station_process_inputs, first, &rig.runner, err,
                               sizeof err) != 0) {

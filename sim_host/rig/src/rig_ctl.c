@@ -415,7 +415,8 @@ static bool start_master_param(rig_ctl_t *c, rig_cmd_t *cmd, unsigned idx)
         return false;
     }
     memset(&c->ds47, 0, sizeof c->ds47);
-    c->ds47.ref = (uint8_t)(c->ds47.ref + 1u) == 0u ? 1u : (uint8_t)(c->ds47.ref + 1u);
+    c->ds47_ref = (uint8_t)(c->ds47_ref % 255u + 1u); /* 1..255: reference 0 is refused */
+    c->ds47.ref = c->ds47_ref;
     c->ds47.id = DPM_DS47_ID_MOVILINK;
     c->ds47.n = 1;
     c->ds47.p[0].attribute = !cmd->write ? DPM_DS47_ATTR_ML_READ

@@ -389,8 +389,12 @@ static void log_inputs(rig_log_t *l, const dpm_event_t *ev)
     if (!l->show_inputs || i >= m->num_slaves) {
         return;
     }
-    size_t len = ev->len < DPM_MAX_IO ? ev->len : DPM_MAX_IO;
-    if (len == l->last_inputs_len[i] && memcmp(l->last_inputs[i], ev->data, len) == 0) {
+    size_t len = ev->len;
+    if (len > DPM_MAX_IO) {
+        len = DPM_MAX_IO;
+    }
+    bool same = len == l->last_inputs_len[i] && memcmp(l->last_inputs[i], ev->data, len) == 0;
+    if (same) {
         return;
     }
     memcpy(l->last_inputs[i], ev->data, len);
@@ -406,7 +410,7 @@ static void log_inputs(rig_log_t *l, const dpm_event_t *ev)
         for (size_t k = base; k + 1u < len && words < DFP21B_MAX_PD; k += 2u) {
             pi[words++] = (uint16_t)(ev->data[k] << 8 | ev->data[k + 1u]);
         }
-        if (pd.param_channel) {
+        if (pd.param_channel && len >= ML_TELEGRAM_LEN) {
             n += (size_t)snprintf(text, sizeof text, "param %02X%02X %02X%02X %02X%02X%02X%02X, ",
                                   ev->data[0], ev->data[1], ev->data[2], ev->data[3],
                                   ev->data[4], ev->data[5], ev->data[6], ev->data[7]);

@@ -182,6 +182,7 @@ typedef struct rig_ctl {
     dpm_param_t param;
     dpm_call_t call;
     dpm_ds47_req_t ds47;
+    uint8_t ds47_ref;         /* request reference of the last data set 47 request */
     bool call_started;
     uint32_t wait_cycles;
     /* loop side */
