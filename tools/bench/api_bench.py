@@ -124,10 +124,10 @@ def main():
         t0 = time.monotonic()
         streaming = cycle_rate(pm, a.window)
         span = time.monotonic() - t0
+        rates = [(c[0] - b) / span for c, b in zip(counters, c_before)]
         poller.start()
         busy = cycle_rate(pm, a.window)
         stop.set()
-        rates = [(c[0] - b) / span for c, b in zip(counters, c_before)]
         print(f"event stream: {min(rates):.1f}..{max(rates):.1f} state events/s per client "
               f"(10 clients)")
         print(f"master Data_Exchange cycles/s at 19.2 kbit/s: {quiet:.1f} without clients, "
