@@ -6,9 +6,6 @@
 
 #include "cli.h"
 #include "rig/rig_log.h"
-#include "dp_slave/dp_wire.h"
-#include "dp_slave/fdl_rx.h"
-#include "sim_hal/sim_board.h"
 
 void report_line(report_t *r, const char *who, const char *fmt, ...)
 {
@@ -32,125 +29,25 @@ void report_diag_text(const uint8_t *d, size_t len, char *out, size_t max)
     rig_diag_text(d, len, out, max);
 }
 
-static const char *prm_fault_text(uint32_t why)
-{
-    switch (why) {
-    case DP_PRM_FAULT_LENGTH: return "wrong length";
-    case DP_PRM_FAULT_IDENT: return "wrong ident number";
-    case DP_PRM_FAULT_WATCHDOG: return "invalid watchdog factors";
-    case DP_PRM_FAULT_RESERVED_BITS: return "reserved bits set";
-    case DP_PRM_FAULT_USER: return "user parameters not 00 00 00 06 81 00 00 01 0x";
-    case DP_PRM_FAULT_UNSUPPORTED: return "requested function not supported";
-    default: return "?";
-    }
-}
-
 void report_card_event(void *ctx, const dp_event_t *ev)
 {
     report_t *r = ctx;
-    char p090[16] = "";
-    if (r->card != NULL) {
-        dfp21b_p090_text(&r->card->pd, p090, sizeof p090);
+    static const dfp21b_t no_card;
+    char text[RIG_CTL_TEXT];
+    rig_log_level_t level;
+    const char *kind;
+    if (rig_card_event_text(ev, r->card != NULL ? r->card : &no_card, &r->baud_steps, text,
+                            sizeof text, &level, &kind) &&
+        level <= RIG_LOG_INFO) {
+        report_line(r, "card", "%s", text);
     }
-    switch (ev->type) {
-    case DP_EV_STATE:
-        report_line(r, "card", "%s -> %s", dp_state_name(ev->old_state),
-                    dp_state_name(ev->new_state));
-        break;
-    case DP_EV_BAUD_SET:
-        report_line(r, "card", "baud search: listening at %s", report_baud_text(ev->value));
-        break;
-    case DP_EV_BAUD_FOUND:
-        report_line(r, "card", "baud rate found: %s (P092)", report_baud_text(ev->value));
-        break;
-    case DP_EV_BAUD_LOST:
-        report_line(r, "card", "no telegram for this station within the baud control time: "
-                               "searching again");
-        break;
-    case DP_EV_WD_EXPIRED:
-        report_line(r, "card", "DP watchdog expired (%u ms without the master): outputs "
-                               "cleared, inverter performs the P831 fieldbus timeout reaction",
-                    ev->value);
-        break;
-    case DP_EV_PRM_OK:
-        report_line(r, "card", "Set_Prm from master %u accepted; watchdog %u ms (P819)",
-                    ev->master, ev->value);
-        break;
-    case DP_EV_PRM_FAULT:
-        report_line(r, "card", "Set_Prm from master %u refused: %s -> Prm_Fault", ev->master,
-                    prm_fault_text(ev->value));
-        break;
-    case DP_EV_CFG_OK:
-        report_line(r, "card", "Chk_Cfg accepted: %u octets out, %u in; P090 = %s",
-                    ev->value >> 8, ev->value & 0xFFu, p090);
-        break;
-    case DP_EV_CFG_FAULT:
-        report_line(r, "card", "Chk_Cfg refused -> Cfg_Fault; P090 = 0PD");
-        break;
-    case DP_EV_GLOBAL_CONTROL:
-        report_line(r, "card", "Global_Control 0x%02X from master %u", ev->value, ev->master);
-        break;
-    case DP_EV_LOCKED_OUT:
-        report_line(r, "card", "request from master %u refused (RS): locked by master %u",
-                    ev->master, r->card != NULL ? dp_slave_master(&r->card->dp) : 0u);
-        break;
-    case DP_EV_RX_ERROR:
-        break; /* during a baud search these are expected by the thousand */
-    case DP_EV_FCB_REPEAT:
-        report_line(r, "card", "repeated request from master %u (same FCB): cached reply sent",
-                    ev->master);
-        break;
-    case DP_EV_ADDRESSED:
-        break;
-    }
-}
-
-void report_led(void *ctx, hal_led_id_t led, hal_led_mode_t mode)
-{
-    report_t *r = ctx;
-    report_line(r, "card", "LED %-9s %s", sim_led_name(led), hal_led_mode_name(mode));
 }
 
 void report_master_event(void *ctx, const dpm_event_t *ev)
 {
     report_t *r = ctx;
-    char text[256];
-    switch (ev->type) {
-    case DPM_EV_PHASE:
-        if (r->slave_silent && (ev->new_phase == DPM_PHASE_FDL_STATUS ||
-                                ev->new_phase == DPM_PHASE_BACKOFF)) {
-            break;
-        }
-        if (ev->new_phase > DPM_PHASE_FDL_STATUS) {
-            r->slave_silent = false;
-        }
-        if (ev->new_phase == DPM_PHASE_DATA_EXCH) {
-            report_line(r, "master", "slave %u is in data exchange", ev->slave);
-        } else if (ev->new_phase != DPM_PHASE_BACKOFF) {
-            report_line(r, "master", "slave %u: %s", ev->slave, dpm_phase_name(ev->new_phase));
-        }
-        break;
-    case DPM_EV_DIAG:
-        report_diag_text(ev->data, ev->len, text, sizeof text);
-        report_line(r, "master", "slave %u diagnosis: %s", ev->slave, text);
-        break;
-    case DPM_EV_FAULT:
-        if (ev->old_phase == DPM_PHASE_FDL_STATUS) {
-            if (!r->slave_silent) {
-                report_line(r, "master", "slave %u: no answer; asking again every few ms "
-                                         "until it answers", ev->slave);
-            }
-            r->slave_silent = true;
-            break;
-        }
-        report_line(r, "master", "slave %u: %s; start-up again later", ev->slave, ev->text);
-        break;
-    case DPM_EV_RETRY:
-        if (!r->slave_silent && ev->old_phase != DPM_PHASE_FDL_STATUS) {
-            report_line(r, "master", "slave %u: no answer, retry", ev->slave);
-        }
-        break;
-    case DPM_EV_INPUTS:
+    char text[RIG_CTL_TEXT];
+    if (ev->type == DPM_EV_INPUTS) {
         if (r->show_inputs) {
             size_t n = 0;
             for (size_t i = 0; i < ev->len && n + 4 < sizeof text; i++) {
@@ -160,11 +57,12 @@ void report_master_event(void *ctx, const dpm_event_t *ev)
             text[n] = '\0';
             report_line(r, "master", "slave %u inputs: %s", ev->slave, text);
         }
-        break;
-    case DPM_EV_GLOBAL_CONTROL_SENT:
-        report_line(r, "master", "Global_Control 0x%02X to group 0x%02X (broadcast)",
-                    ev->data[0], ev->data[1]);
-        break;
+        return;
+    }
+    rig_log_level_t level;
+    const char *kind;
+    if (rig_master_event_text(ev, &r->slave_silent, text, sizeof text, &level, &kind)) {
+        report_line(r, "master", "%s", text);
     }
 }
 

@@ -19,6 +19,7 @@ typedef struct report {
     bool show_inputs;
     bool show_addressed;
     bool slave_silent; /* unanswered polls of a silent address are reported once */
+    uint32_t baud_steps; /* the card's baud search: told when it starts and ends */
     cap_writer_t capture;
     bool capturing;
     bool capture_direction; /* mark frames of the local station TX, others RX (tty sessions) */
@@ -29,7 +30,6 @@ typedef struct report {
 void report_line(report_t *r, const char *who, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 void report_card_event(void *ctx, const dp_event_t *ev);
-void report_led(void *ctx, hal_led_id_t led, hal_led_mode_t mode);
 void report_master_event(void *ctx, const dpm_event_t *ev);
 /* Formats the standard diagnosis bits, e.g. "Station_Not_Ready Prm_Req | Master_Add 2". */
 void report_diag_text(const uint8_t *d, size_t len, char *out, size_t max);

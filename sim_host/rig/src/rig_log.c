@@ -180,72 +180,76 @@ static const char *prm_fault_text(uint32_t why)
     }
 }
 
-static void log_card_event(void *ctx, unsigned card, const dp_event_t *ev)
+#define SAY(lvl, k, ...) (*level = (lvl), *kind = (k), snprintf(out, n, __VA_ARGS__), true)
+
+bool rig_card_event_text(const dp_event_t *ev, const dfp21b_t *c, uint32_t *baud_steps, char *out,
+                         size_t n, rig_log_level_t *level, const char **kind)
 {
-    rig_log_t *l = ctx;
-    const dfp21b_t *c = &l->rig->cards[card].cs.card;
-    char src[16];
-    card_source(l->rig, card, src, sizeof src, "card");
     char p090[16] = "";
     dfp21b_p090_text(&c->pd, p090, sizeof p090);
     switch (ev->type) {
     case DP_EV_STATE:
-        rig_log(l, RIG_LOG_INFO, src, "dp_state", "%s -> %s", dp_state_name(ev->old_state),
-                dp_state_name(ev->new_state));
-        break;
+        return SAY(RIG_LOG_INFO, "dp_state", "%s -> %s", dp_state_name(ev->old_state),
+                   dp_state_name(ev->new_state));
     case DP_EV_BAUD_SET:
-        if (l->baud_steps[card]++ == 0u) {
-            rig_log(l, RIG_LOG_INFO, src, "baud", "baud search started at %s",
-                    rig_baud_text(ev->value));
+        if ((*baud_steps)++ == 0u) {
+            return SAY(RIG_LOG_INFO, "baud", "baud search started at %s",
+                       rig_baud_text(ev->value));
         }
-        rig_log(l, RIG_LOG_DEBUG, src, "baud", "baud search: listening at %s",
-                rig_baud_text(ev->value));
-        break;
-    case DP_EV_BAUD_FOUND:
-        rig_log(l, RIG_LOG_INFO, src, "baud", "baud rate found: %s (P092) after %u search steps",
-                rig_baud_text(ev->value), l->baud_steps[card]);
-        l->baud_steps[card] = 0;
-        break;
+        return SAY(RIG_LOG_DEBUG, "baud", "baud search: listening at %s",
+                   rig_baud_text(ev->value));
+    case DP_EV_BAUD_FOUND: {
+        uint32_t steps = *baud_steps;
+        *baud_steps = 0;
+        return SAY(RIG_LOG_INFO, "baud", "baud rate found: %s (P092) after %u search steps",
+                   rig_baud_text(ev->value), steps);
+    }
     case DP_EV_BAUD_LOST:
-        rig_log(l, RIG_LOG_WARN, src, "baud",
-                "no telegram for this station within the baud control time: searching again");
-        l->baud_steps[card] = 0;
-        break;
+        *baud_steps = 0;
+        return SAY(RIG_LOG_WARN, "baud", "no telegram for this station within the baud control "
+                   "time: searching again");
     case DP_EV_WD_EXPIRED:
-        rig_log(l, RIG_LOG_WARN, src, "watchdog",
-                "DP watchdog expired (%u ms without the master): outputs cleared, inverter "
-                "performs the P831 fieldbus timeout reaction", ev->value);
-        break;
+        return SAY(RIG_LOG_WARN, "watchdog", "DP watchdog expired (%u ms without the master): "
+                   "outputs cleared, inverter performs the P831 fieldbus timeout reaction",
+                   ev->value);
     case DP_EV_PRM_OK:
-        rig_log(l, RIG_LOG_INFO, src, "prm", "Set_Prm from master %u accepted; watchdog %u ms "
-                "(P819)", ev->master, ev->value);
-        break;
+        return SAY(RIG_LOG_INFO, "prm", "Set_Prm from master %u accepted; watchdog %u ms (P819)",
+                   ev->master, ev->value);
     case DP_EV_PRM_FAULT:
-        rig_log(l, RIG_LOG_WARN, src, "prm", "Set_Prm from master %u refused: %s -> Prm_Fault",
-                ev->master, prm_fault_text(ev->value));
-        break;
+        return SAY(RIG_LOG_WARN, "prm", "Set_Prm from master %u refused: %s -> Prm_Fault",
+                   ev->master, prm_fault_text(ev->value));
     case DP_EV_CFG_OK:
-        rig_log(l, RIG_LOG_INFO, src, "cfg", "Chk_Cfg accepted: %u octets out, %u in; P090 = %s",
-                ev->value >> 8, ev->value & 0xFFu, p090);
-        break;
+        return SAY(RIG_LOG_INFO, "cfg", "Chk_Cfg accepted: %u octets out, %u in; P090 = %s",
+                   ev->value >> 8, ev->value & 0xFFu, p090);
     case DP_EV_CFG_FAULT:
-        rig_log(l, RIG_LOG_WARN, src, "cfg", "Chk_Cfg refused -> Cfg_Fault; P090 = 0PD");
-        break;
+        return SAY(RIG_LOG_WARN, "cfg", "Chk_Cfg refused -> Cfg_Fault; P090 = 0PD");
     case DP_EV_GLOBAL_CONTROL:
-        rig_log(l, RIG_LOG_INFO, src, "dp_state", "Global_Control 0x%02X from master %u",
-                ev->value, ev->master);
-        break;
+        return SAY(RIG_LOG_INFO, "dp_state", "Global_Control 0x%02X from master %u", ev->value,
+                   ev->master);
     case DP_EV_LOCKED_OUT:
-        rig_log(l, RIG_LOG_WARN, src, "prm", "request from master %u refused (RS): locked by "
-                "master %u", ev->master, dp_slave_master(&c->dp));
-        break;
+        return SAY(RIG_LOG_WARN, "prm", "request from master %u refused (RS): locked by master %u",
+                   ev->master, dp_slave_master(&c->dp));
     case DP_EV_FCB_REPEAT:
-        rig_log(l, RIG_LOG_INFO, src, "dp_state", "repeated request from master %u (same FCB): "
-                "cached reply sent", ev->master);
-        break;
+        return SAY(RIG_LOG_INFO, "dp_state", "repeated request from master %u (same FCB): cached "
+                   "reply sent", ev->master);
     case DP_EV_RX_ERROR: /* during a baud search these come by the thousand */
     case DP_EV_ADDRESSED:
         break;
+    }
+    return false;
+}
+
+static void log_card_event(void *ctx, unsigned card, const dp_event_t *ev)
+{
+    rig_log_t *l = ctx;
+    char src[16];
+    card_source(l->rig, card, src, sizeof src, "card");
+    char text[RIG_CTL_TEXT];
+    rig_log_level_t level;
+    const char *kind;
+    if (rig_card_event_text(ev, &l->rig->cards[card].cs.card, &l->baud_steps[card], text,
+                            sizeof text, &level, &kind)) {
+        rig_log(l, level, src, kind, "%s", text);
     }
 }
 
@@ -426,56 +430,68 @@ static void log_inputs(rig_log_t *l, const dpm_event_t *ev)
     rig_log(l, RIG_LOG_INFO, "master", "master", "slave %u inputs: %s", s->cfg.address, text);
 }
 
-static void log_master_event(void *ctx, const dpm_event_t *ev)
+bool rig_master_event_text(const dpm_event_t *ev, bool *slave_silent, char *out, size_t n,
+                           rig_log_level_t *level, const char **kind)
 {
-    rig_log_t *l = ctx;
     char text[256];
     switch (ev->type) {
     case DPM_EV_PHASE:
-        if (l->slave_silent && (ev->new_phase == DPM_PHASE_FDL_STATUS ||
-                                ev->new_phase == DPM_PHASE_BACKOFF)) {
+        if (*slave_silent && (ev->new_phase == DPM_PHASE_FDL_STATUS ||
+                              ev->new_phase == DPM_PHASE_BACKOFF)) {
             break;
         }
         if (ev->new_phase > DPM_PHASE_FDL_STATUS) {
-            l->slave_silent = false;
+            *slave_silent = false;
         }
         if (ev->new_phase == DPM_PHASE_DATA_EXCH) {
-            rig_log(l, RIG_LOG_INFO, "master", "master", "slave %u is in data exchange",
-                    ev->slave);
-        } else if (ev->new_phase != DPM_PHASE_BACKOFF) {
-            rig_log(l, RIG_LOG_INFO, "master", "master", "slave %u: %s", ev->slave,
-                    dpm_phase_name(ev->new_phase));
+            return SAY(RIG_LOG_INFO, "master", "slave %u is in data exchange", ev->slave);
+        }
+        if (ev->new_phase != DPM_PHASE_BACKOFF) {
+            return SAY(RIG_LOG_INFO, "master", "slave %u: %s", ev->slave,
+                       dpm_phase_name(ev->new_phase));
         }
         break;
     case DPM_EV_DIAG:
         rig_diag_text(ev->data, ev->len, text, sizeof text);
-        rig_log(l, RIG_LOG_INFO, "master", "diag", "slave %u diagnosis: %s", ev->slave, text);
-        break;
+        return SAY(RIG_LOG_INFO, "diag", "slave %u diagnosis: %s", ev->slave, text);
     case DPM_EV_FAULT:
         if (ev->old_phase == DPM_PHASE_FDL_STATUS) {
-            if (!l->slave_silent) {
-                rig_log(l, RIG_LOG_WARN, "master", "master", "slave %u: no answer; asking again "
-                        "every few ms until it answers", ev->slave);
+            bool first = !*slave_silent;
+            *slave_silent = true;
+            if (first) {
+                return SAY(RIG_LOG_WARN, "master", "slave %u: no answer; asking again every few "
+                           "ms until it answers", ev->slave);
             }
-            l->slave_silent = true;
             break;
         }
-        rig_log(l, RIG_LOG_WARN, "master", "master", "slave %u: %s; start-up again later",
-                ev->slave, ev->text);
-        break;
+        return SAY(RIG_LOG_WARN, "master", "slave %u: %s; start-up again later", ev->slave,
+                   ev->text);
     case DPM_EV_RETRY:
-        if (!l->slave_silent && ev->old_phase != DPM_PHASE_FDL_STATUS) {
-            rig_log(l, RIG_LOG_INFO, "master", "master", "slave %u: no answer, retry",
-                    ev->slave);
+        if (!*slave_silent && ev->old_phase != DPM_PHASE_FDL_STATUS) {
+            return SAY(RIG_LOG_INFO, "master", "slave %u: no answer, retry", ev->slave);
         }
         break;
-    case DPM_EV_INPUTS:
-        log_inputs(l, ev);
+    case DPM_EV_INPUTS: /* every cycle: each printer decides how to show them */
         break;
     case DPM_EV_GLOBAL_CONTROL_SENT:
-        rig_log(l, RIG_LOG_INFO, "master", "master", "Global_Control 0x%02X to group 0x%02X "
-                "(broadcast)", ev->data[0], ev->data[1]);
-        break;
+        return SAY(RIG_LOG_INFO, "master", "Global_Control 0x%02X to group 0x%02X (broadcast)",
+                   ev->data[0], ev->data[1]);
+    }
+    return false;
+}
+
+static void log_master_event(void *ctx, const dpm_event_t *ev)
+{
+    rig_log_t *l = ctx;
+    if (ev->type == DPM_EV_INPUTS) {
+        log_inputs(l, ev);
+        return;
+    }
+    char text[RIG_CTL_TEXT];
+    rig_log_level_t level;
+    const char *kind;
+    if (rig_master_event_text(ev, &l->slave_silent, text, sizeof text, &level, &kind)) {
+        rig_log(l, level, "master", kind, "%s", text);
     }
 }
 
