@@ -4,10 +4,7 @@
 # taken port refused with exit 2, and several clients streaming at once.
 sim=$1
 . "$(dirname "$0")/lib.sh"
-tmp=$(mktemp -d)
-pids=()
-cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$tmp"; }
-trap cleanup EXIT
+with_tmp
 
 free_port() { python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
 get() { curl -s --max-time 5 "http://127.0.0.1:$1$2"; }
@@ -19,10 +16,7 @@ wait_for() { # wait_for SECONDS DESCRIPTION COMMAND...: until the command prints
   bad "$what (waited ${limit} s)"; return 1
 }
 
-rm -f "$tmp/a" "$tmp/b"
-socat pty,raw,echo=0,link="$tmp/a" pty,raw,echo=0,link="$tmp/b" &
-pids+=($!)
-for _ in $(seq 50); do [ -e "$tmp/a" ] && [ -e "$tmp/b" ] && break; sleep 0.1; done
+pty_pair || exit 1
 mkdir "$tmp/ee"
 ps=$(free_port); pm=$(free_port)
 "$sim" slave --port "$tmp/a" --address 4-6 --eeprom "$tmp/ee" --http "$ps" >"$tmp/slave.out" 2>&1 &

@@ -6,14 +6,9 @@
 # not answer, and bad command lines (exit 2, one line on stderr, nothing on stdout).
 sim=$1
 . "$(dirname "$0")/lib.sh"
-tmp=$(mktemp -d)
-pids=()
-cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$tmp"; }
-trap cleanup EXIT
+with_tmp
 
-socat pty,raw,echo=0,link="$tmp/a" pty,raw,echo=0,link="$tmp/b" &
-pids+=($!)
-for _ in $(seq 50); do [ -e "$tmp/a" ] && [ -e "$tmp/b" ] && break; sleep 0.1; done
+pty_pair || exit 1
 "$sim" slave --port "$tmp/a" --address 4 --baud 19200 >"$tmp/slave.out" 2>&1 &
 slave=$!; pids+=($slave)
 sleep 0.3

@@ -3,18 +3,7 @@
 # the PO words come back as PI words; an address above 125 keeps the card off the bus.
 sim=$1
 . "$(dirname "$0")/lib.sh"
-tmp=$(mktemp -d)
-pids=()
-cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$tmp"; }
-trap cleanup EXIT
-
-pty_pair() { # makes $tmp/a and $tmp/b
-  rm -f "$tmp/a" "$tmp/b"
-  socat pty,raw,echo=0,link="$tmp/a" pty,raw,echo=0,link="$tmp/b" &
-  pids+=($!)
-  for _ in $(seq 50); do [ -e "$tmp/a" ] && [ -e "$tmp/b" ] && return 0; sleep 0.1; done
-  echo "socat did not create the PTY pair" >&2; return 1
-}
+with_tmp
 
 pty_pair || exit 1
 "$sim" slave --inverter none --port "$tmp/a" --address 4 --baud 19200 --capture "$tmp/slave.pcap" >"$tmp/slave.out" 2>&1 &
