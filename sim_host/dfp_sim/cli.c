@@ -2,6 +2,7 @@
 
 #include <ctype.h>
 #include <errno.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -113,4 +114,21 @@ bool cli_baud(const char *opt, const char *text, bool allow_auto, uint32_t *out)
     cli_error("%s: '%s' is not a PROFIBUS rate (9600 19200 45450 93750 187500 500000 1.5M 3M "
               "6M 12M%s)", opt, text, allow_auto ? " or auto" : "");
     return false;
+}
+
+volatile int cli_stop;
+
+static void on_stop_signal(int sig)
+{
+    (void)sig;
+    cli_stop = 1;
+}
+
+void cli_catch_stop_signals(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_stop_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
 }

@@ -18,4 +18,8 @@ bool cli_baud(const char *opt, const char *text, bool allow_auto, uint32_t *out)
 const char *cli_value(int argc, char **argv, int *i);
 void cli_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
+/* Set by SIGINT/SIGTERM once cli_catch_stop_signals() ran: a running command ends cleanly. */
+extern volatile int cli_stop;
+void cli_catch_stop_signals(void);
+
 #endif

@@ -2,7 +2,6 @@
  * a timeline: start-up, commissioning through the parameter channel as the manual's §4.3 does it,
  * a drive that ramps up, a fieldbus timeout and its fault reset, a wrong configuration. Everything
  * runs in simulated time, so the run takes milliseconds and is the same every time. */
-#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -36,14 +35,6 @@ typedef struct demo {
 } demo_t;
 
 static demo_t demo; /* several kB of telegram buffers: not on the stack */
-static volatile int stop_requested;
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    stop_requested = 1;
-}
-
 static uint64_t demo_now_ns(void *ctx)
 {
     return ((demo_t *)ctx)->rig.bus.now_ns;
@@ -315,11 +306,7 @@ int cmd_demo(int argc, char **argv)
             report_close_capture(&demo.rep);
             return rc;
         }
-        struct sigaction sa;
-        memset(&sa, 0, sizeof sa);
-        sa.sa_handler = on_signal;
-        sigaction(SIGINT, &sa, NULL);
-        sigaction(SIGTERM, &sa, NULL);
+        cli_catch_stop_signals();
         demo.paced = true;
         demo.wall_start_ns = wall_ns();
     }
@@ -392,7 +379,7 @@ int cmd_demo(int argc, char **argv)
 
     if (demo.paced) {
         scene("The simulation goes on at wall-clock speed: the front panel stays up until Ctrl-C");
-        while (!stop_requested) {
+        while (!cli_stop) {
             step();
         }
         say("sim", "stopping (signal)");

@@ -26,14 +26,6 @@
 
 #define IDX_P815_SBUS_TIMEOUT 8602u
 
-static volatile int inv_stop;
-
-static void inv_on_signal(int sig)
-{
-    (void)sig;
-    inv_stop = 1;
-}
-
 static struct {
     movidrive_t md;
     file_nvm_t nvm;
@@ -248,11 +240,7 @@ int cmd_inverter(int argc, char **argv)
         socketcan_close(&inv.sock);
         return 1;
     }
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = inv_on_signal;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    cli_catch_stop_signals();
 
     uint8_t a = (uint8_t)address;
     inv.t0_ms = mono_ms();
@@ -264,19 +252,19 @@ int cmd_inverter(int argc, char **argv)
     int rc = 0;
     /* The duration on a 64-bit clock: hal_time_us_t wraps after 71 minutes. */
     uint64_t end_ms = mono_ms() + (uint64_t)duration_s * 1000u;
-    while (!inv_stop && (duration_s == 0u || mono_ms() < end_ms)) {
+    while (!cli_stop && (duration_s == 0u || mono_ms() < end_ms)) {
         hal_time_us_t until = tty_now_us() + 200000u;
         if (duration_s != 0u && end_ms - mono_ms() < 200u) {
             until = tty_now_us() + (hal_time_us_t)((end_ms - mono_ms()) * 1000u);
         }
-        if (tty_runner_run_until(&inv.runner, until, &inv_stop) < 0) {
+        if (tty_runner_run_until(&inv.runner, until, &cli_stop) < 0) {
             cli_error("%s", tty_runner_error(&inv.runner));
             rc = 1;
             break;
         }
     }
     line("stopping (%s): %lu parameter services (%lu refused), %lu PO frames, %lu frames "
-         "received, %lu send errors", inv_stop ? "signal" : rc != 0 ? "error" : "end",
+         "received, %lu send errors", cli_stop ? "signal" : rc != 0 ? "error" : "end",
          (unsigned long)inv.services, (unsigned long)inv.service_errors,
          (unsigned long)inv.sbus.po_frames, (unsigned long)inv.sock.frames_received,
          (unsigned long)(inv.sock.send_errors + inv.sbus.send_errors));

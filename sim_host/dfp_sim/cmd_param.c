@@ -11,7 +11,6 @@
  * command line. */
 #include <errno.h>
 #include <stdarg.h>
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -32,14 +31,6 @@ typedef enum op { OP_READ = 0, OP_WRITE, OP_IM0 } op_t;
 
 static const char *const via_names[] = {"channel", "movilink", "profidrive", "c2"};
 static const char *const op_names[] = {"read", "write", "im0"};
-
-static volatile int stop_requested;
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    stop_requested = 1;
-}
 
 static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
 
@@ -736,11 +727,7 @@ int cmd_param(int argc, char **argv)
             return 1;
         }
     }
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    cli_catch_stop_signals();
 
     dp_master_cfg_t mc = {.address = (uint8_t)own, .baud = baud, .strict_timing = false,
                           .slot_time_us = 100000u, .uart = tty_port_uart(&port),
@@ -775,8 +762,8 @@ int cmd_param(int argc, char **argv)
 
     uint64_t end_ns = mono_ns() + (uint64_t)timeout_s * 1000000000ull;
     const char *fail = NULL;
-    while (run.stage != ST_DONE && !stop_requested && mono_ns() < end_ns) {
-        if (tty_runner_run_until(&runner, tty_now_us() + 5000u, &stop_requested) < 0) {
+    while (run.stage != ST_DONE && !cli_stop && mono_ns() < end_ns) {
+        if (tty_runner_run_until(&runner, tty_now_us() + 5000u, &cli_stop) < 0) {
             fail = tty_runner_error(&runner);
             break;
         }
@@ -785,7 +772,7 @@ int cmd_param(int argc, char **argv)
     if (run.stage != ST_DONE) {
         if (fail != NULL) {
             set_result_error("failed", "%s", fail);
-        } else if (stop_requested) {
+        } else if (cli_stop) {
             set_result_error("failed", "interrupted");
         } else {
             timeout_text(timeout_s);

@@ -1,6 +1,5 @@
 /* dfp-sim replay: a bus capture played against the emulated card, optionally checking every
  * reply (docs/replay.md); dfp-sim record: a capture made on the simulated bus. */
-#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -14,14 +13,6 @@
 #include "replay/generator.h"
 #include "replay/replay.h"
 #include "report.h"
-
-static volatile int stop_requested;
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    stop_requested = 1;
-}
 
 static uint64_t mono_ns(void)
 {
@@ -233,11 +224,7 @@ int cmd_replay(int argc, char **argv)
         cli_error("replay: --inverter-delay belongs to the emulated inverter (--inverter sim)");
         return EXIT_USAGE;
     }
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    cli_catch_stop_signals();
 
     progress_t prog;
     replay_file_status_t st;
@@ -262,7 +249,7 @@ int cmd_replay(int argc, char **argv)
         static replay_scan_t scan;
         replay_scan_init(&scan);
         progress_begin(&prog, "looking at the capture");
-        int rc = replay_scan_file(&scan, file, format, &stop_requested, progress_show, &prog,
+        int rc = replay_scan_file(&scan, file, format, &cli_stop, progress_show, &prog,
                                   &st);
         progress_end(&prog);
         if (rc != 0) {
@@ -347,7 +334,7 @@ int cmd_replay(int argc, char **argv)
     replay_options_t ro = {.address = (uint8_t)address, .check = check, .baud = baud,
                            .baud_override = baud_given, .fixed_card_baud = fixed, .inverter = inverter,
                            .inverter_delay_us = delay_us, .speed = speed,
-                           .stop = &stop_requested,
+                           .stop = &cli_stop,
                            .on_telegram = on_telegram, .on_card_event = on_card_event,
                            .ctx = &rc_state};
     char err[400];
@@ -372,7 +359,7 @@ int cmd_replay(int argc, char **argv)
     if (rc_state.verbose) {
         prog.on = false; /* the trace is on stdout; keep the terminal readable */
     }
-    int rc = replay_run_file(&replay, file, format, &stop_requested, progress_show, &prog, &st);
+    int rc = replay_run_file(&replay, file, format, &cli_stop, progress_show, &prog, &st);
     progress_end(&prog);
     if (rc != 0) {
         cli_error("%s", st.error);

@@ -1,7 +1,6 @@
 /* dfp-sim slave / master: the card or the built-in master on a real tty or a PTY, or on a
  * virtual segment over LCM (--bus lcm:CHANNEL), in wall-clock time. Timing on a PC is relaxed
  * (see fdl_rx.h): the OS delivers bytes in chunks. */
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,23 +17,6 @@
 #include "sim_hal/tty_port.h"
 #include "sim_stations/stations.h"
 #include <sys/stat.h>
-
-static volatile int stop_requested;
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    stop_requested = 1;
-}
-
-static void install_signals(void)
-{
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
-}
 
 static uint64_t mono_ns(void)
 {
@@ -173,7 +155,7 @@ static bool session_open(const medium_opts_t *m, int16_t station_address, uint32
         session_close();
         return false;
     }
-    install_signals();
+    cli_catch_stop_signals();
     return true;
 }
 
@@ -417,8 +399,8 @@ int cmd_slave(int argc, char **argv)
         return rc;
     }
     uint64_t end_ns = duration_s != 0u ? mono_ns() + (uint64_t)duration_s * 1000000000ull : 0u;
-    while (!stop_requested && (end_ns == 0u || mono_ns() < end_ns)) {
-        if (rig_run_until(&rig, tty_now_us() + 200000u, &stop_requested) < 0) {
+    while (!cli_stop && (end_ns == 0u || mono_ns() < end_ns)) {
+        if (rig_run_until(&rig, tty_now_us() + 200000u, &cli_stop) < 0) {
             cli_error("%s", rig_error(&rig));
             rc = 1;
             break;
@@ -426,7 +408,7 @@ int cmd_slave(int argc, char **argv)
     }
     for (size_t k = 0; k < num_cards; k++) {
         rig_log(&in.log, RIG_LOG_INFO, num_cards > 1u ? "sim" : "card", "dp_state",
-                "stopping (%s); card %u state %s", stop_requested ? "signal" : "end",
+                "stopping (%s); card %u state %s", cli_stop ? "signal" : "end",
                 rig.cards[k].cs.card.address,
                 dp_state_name(dp_slave_state(&rig.cards[k].cs.card.dp)));
     }
@@ -657,8 +639,8 @@ int cmd_master(int argc, char **argv)
     uint64_t cycles_at_all = 0;
     rc = 1;
     const char *why = "timeout";
-    while (!stop_requested && mono_ns() < end_ns) {
-        if (rig_run_until(&rig, tty_now_us() + 20000u, &stop_requested) < 0) {
+    while (!cli_stop && mono_ns() < end_ns) {
+        if (rig_run_until(&rig, tty_now_us() + 20000u, &cli_stop) < 0) {
             why = rig_error(&rig);
             break;
         }
@@ -675,7 +657,7 @@ int cmd_master(int argc, char **argv)
             break;
         }
     }
-    if (cycles == 0u && stop_requested) {
+    if (cycles == 0u && cli_stop) {
         rig_log(&in.log, RIG_LOG_INFO, "master", "master", "stopping (signal)");
         rc = 0;
         session_close();
@@ -684,7 +666,7 @@ int cmd_master(int argc, char **argv)
     if (rc == 0) {
         report_done(t_start, t_all != 0u ? t_all : mono_ns(), cycles_at_all);
     } else {
-        report_missing(cycles, stop_requested ? "interrupted" : why);
+        report_missing(cycles, cli_stop ? "interrupted" : why);
     }
     session_close();
     return report_close_capture(&rep) != 0 ? 1 : rc;
