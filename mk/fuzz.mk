@@ -9,7 +9,7 @@
 #   make fuzz-known   each reproducer in tests/fuzz/known/ with its own property named
 #                     (FUZZ_KNOWN=name, which includes the opt-in strict forms); fails if any does
 #   make fuzz-seeds   seed corpora from `dfp-sim demo --capture`, tests/fuzz/captures/*.pcap and
-#                     profibus-dp.md §1.6
+#                     protocol.md §A1.6
 
 APT_PACKAGES += clang-14 libclang-rt-14-dev libpcap-dev
 EXTRA_TEST_TARGETS += fuzz-smoke

@@ -217,7 +217,7 @@ static size_t do_write(dpv1_t *d, dpv1_conn_t *c, const uint8_t *pdu, size_t len
 }
 
 /* Initiate.res: our limits. A slave mirrors the Profile_Ident_Number only if it supports the
- * requested profile (profibus-dp.md §4.4); the DFP21B's profile ident is 0 (manual §6.5), so a
+ * requested profile (protocol.md §A4.4); the DFP21B's profile ident is 0 (manual §6.5), so a
  * master asking for PROFIdrive (3A 00) must not be told it is there: ident and profile features
  * are answered 0 whatever was asked. */
 static size_t do_initiate(uint8_t *rsp)

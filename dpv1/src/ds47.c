@@ -229,7 +229,7 @@ uint8_t ds47_write(ds47_t *d, const uint8_t *req, size_t len, hal_time_us_t now)
     }
     uint8_t id = req[1];
     uint8_t n = req[3];
-    /* Request Reference 0x01..0xFF (dfp21b.md §7): 0 cannot tell two requests apart. */
+    /* Request Reference 0x01..0xFF (protocol.md §B7): 0 cannot tell two requests apart. */
     if (req[0] == 0u ||
         (id != DS47_ID_REQUEST && id != DS47_ID_CHANGE && id != DS47_ID_MOVILINK) || n == 0u ||
         n > DS47_MAX_PARAMS) {

@@ -4,7 +4,7 @@
  *
  * 1. The saturated bus, computed: back-to-back Data_Exchange cycles with the card's usual
  *    configuration (Param + 3 PD: 14 octets each way, SD2 request and response), min TSDR 11
- *    and TID1 37 bit times (profibus-dp.md §2.1).
+ *    and TID1 37 bit times (protocol.md §A2.1).
  * 2. Two captures written by dfp-sim's generator (`dfp-sim record --baud 12M`): N/10 and N
  *    telegrams (default N = 1 000 000).
  * 3. Each replayed with the check in a child process (the replay library, as dfp-sim replay

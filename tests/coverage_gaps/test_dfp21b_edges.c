@@ -1,4 +1,4 @@
-/* The DFP21B's own Chk_Cfg and Set_Prm rules (dfp21b.md §3, §4) through the public checks,
+/* The DFP21B's own Chk_Cfg and Set_Prm rules (protocol.md §B3, §B4) through the public checks,
  * every refusal the card tests do not reach: universal modules with separate output and input
  * identifiers, wrong directions and lengths, DPV1_Status bits the card does not support, the
  * structured block and its flag; and the P090 text cut to short buffers. */

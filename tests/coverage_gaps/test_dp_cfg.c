@@ -1,5 +1,5 @@
 /* dp_cfg_io_lengths (dp_slave/dp_cfg.h): the I/O lengths of a Chk_Cfg configuration in the
- * general and the special identifier format (profibus-dp.md §3.3). The card's own Chk_Cfg tests
+ * general and the special identifier format (protocol.md §A3.3). The card's own Chk_Cfg tests
  * only use the general format; masters size Data_Exchange with this function for any slave.
  *
  * General identifier: b7 consistency, b6 word units, b5-4 01 in / 10 out / 11 in+out,

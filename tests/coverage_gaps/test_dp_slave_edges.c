@@ -76,7 +76,7 @@ static bool set_prm(uint8_t status, const uint8_t *tail, size_t tail_len)
         }                                                                                      \
     } while (0)
 
-/* DPV1_Status_1 bits 4-3 are reserved (profibus-dp.md §3.2): Prm_Fault, stay in Wait_Prm. */
+/* DPV1_Status_1 bits 4-3 are reserved (protocol.md §A3.2): Prm_Fault, stay in Wait_Prm. */
 static void test_dpv1_status_reserved_bits(void)
 {
     static const uint8_t reserved[] = {0x08, 0x10, 0x18, 0x98};

@@ -3,10 +3,10 @@
  * character at exact times (1.5 Mbit/s fixed, strict timing, 100 bit idle before each request);
  * a recording UART keeps every frame it transmits; the station's poll (the card's main loop) runs
  * only where a test calls it, so "before the main loop ran" is exact. Station 4, class-1 master
- * 2 (so the frames of profibus-dp.md §1.6 apply literally), class-2 masters 3, 5 and 6 with SSAP
+ * 2 (so the frames of protocol.md §A1.6 apply literally), class-2 masters 3, 5 and 6 with SSAP
  * 50.
  *
- * Covered: the SC/poll convention, the manual's data set 47 examples (dfp21b.md §7), 0xB5
+ * Covered: the SC/poll convention, the manual's data set 47 examples (protocol.md §B7), 0xB5
  * polling with a slow inverter, DP-V1 error codes and the MOVILINK/PROFIdrive error mapping,
  * MSAC1 availability, MSAC2 resource manager (and the contract's "smaller decisions"),
  * connections, supervision, Idle and Abort, C1 + two C2 + Data_Exchange interleaved, I&M with
@@ -161,7 +161,7 @@ static void send_sap(uint8_t ma, uint8_t dsap, uint8_t ssap, const uint8_t *d, s
     send_sap_fc(ma, tm_fc(&R.m[ma], FDL_REQ_SRD_HIGH), dsap, ssap, d, n);
 }
 
-/* A telegram printed in profibus-dp.md §1.6, sent as printed: its FC must be the one the FCB
+/* A telegram printed in protocol.md §A1.6, sent as printed: its FC must be the one the FCB
  * tracker of its master gives next. */
 static void send_literal(int line, const uint8_t *f, size_t n)
 {
@@ -331,8 +331,8 @@ static void chk_cfg(uint8_t ma)
 }
 
 /* Slave_Diag, Set_Prm (watchdog 1 s) with the given user parameters, Chk_Cfg Param + 3 PD, one
- * Data_Exchange with zero outputs, the main loop. Master 2's FCs were 6D 5D 7D 5D, as in §1.6:
- * the next is 7D, the one of §1.6's C1 Write. */
+ * Data_Exchange with zero outputs, the main loop. Master 2's FCs were 6D 5D 7D 5D, as in §A1.6:
+ * the next is 7D, the one of §A1.6's C1 Write. */
 static void startup(const uint8_t user[9])
 {
     send_sap(M1, DP_SAP_SLAVE_DIAG, DP_SAP_MASTER, NULL, 0);
@@ -356,14 +356,14 @@ static void expect_inputs(int line)
 
 /* ---- the request/poll convention ---------------------------------------------------------- */
 
-/* §1.6: C1 Write DS47 (MOVILINK read of 8300) from master 2 to slave 4, FC 7D. */
+/* §A1.6: C1 Write DS47 (MOVILINK read of 8300) from master 2 to slave 4, FC 7D. */
 static const uint8_t F_C1_WRITE[] = {0x68, 0x13, 0x13, 0x68, 0x84, 0x82, 0x7D, 0x33, 0x33,
                                      0x5F, 0x00, 0x2F, 0x0A, 0x01, 0x40, 0x00, 0x01, 0x10,
                                      0x00, 0x20, 0x6C, 0x00, 0x00, 0x5F, 0x16};
-/* §1.6: C1 Read DS47, FC 5D. */
+/* §A1.6: C1 Read DS47, FC 5D. */
 static const uint8_t F_C1_READ[] = {0x68, 0x09, 0x09, 0x68, 0x84, 0x82, 0x5D,
                                     0x33, 0x33, 0x5E, 0x00, 0x2F, 0xF0, 0x46, 0x16};
-/* §1.6: the negative Read response B5, and RS. */
+/* §A1.6: the negative Read response B5, and RS. */
 #define F_C1_READ_B5                                                                           \
     0x68, 0x09, 0x09, 0x68, 0x82, 0x84, 0x08, 0x33, 0x33, 0xDE, 0x80, 0xB5, 0x00, 0x87, 0x16
 #define F_RS_2 0x10, 0x02, 0x04, 0x03, 0x09, 0x16
@@ -437,7 +437,7 @@ static void test_request_retry_and_replacement(void)
     EXPECT_SC();
 }
 
-/* ---- data set 47: the manual's examples (dfp21b.md §7) ------------------------------------ */
+/* ---- data set 47: the manual's examples (protocol.md §B7) ------------------------------------ */
 
 static void test_manual_examples(void)
 {
@@ -490,7 +490,7 @@ static void test_manual_examples(void)
     DS47_C1(B(0x09, 0x02, 0x00, 0x01, 0x10, 0x00, 0x21, 0x45, 0x00, 0x00, 0x43, 0x01, 0x05,
               0xE6, 0xA4, 0xC0),
             0x09, 0x82, 0x00, 0x01, 0x44, 0x01, 0x00, 0x02);
-    /* The slot is not evaluated (dfp21b.md §1): slot 5 works and is echoed. */
+    /* The slot is not evaluated (protocol.md §B1): slot 5 works and is echoed. */
     TRANSACT(M1, C1, C1,
              B(0x5F, 0x05, 0x2F, 0x0A, 0x0A, 0x40, 0x00, 0x01, 0x10, 0x00, 0x20, 0x6C, 0x00,
                0x00),
@@ -518,7 +518,7 @@ static void test_b5_polling(void)
     hal_time_us_t due = line_now_us(&R.l) + 20000u; /* the service started in this round */
     send_sap(M1, C1, C1, NULL, 0);
     EXPECT_DU(M1, C1, C1, 0x5F, 0x00, 0x2F, 0x0A);
-    /* Read right after the Write: B5, the frame of §1.6. */
+    /* Read right after the Write: B5, the frame of §A1.6. */
     send_literal(__LINE__, F_C1_READ, sizeof F_C1_READ);
     EXPECT_SC();
     main_loop();
@@ -804,7 +804,7 @@ static void test_msac1_closed_without_dpv1_enable(void)
     /* Before any parameterisation: RS. */
     send_b(M1, C1, C1, B(0x5E, 0x00, 0x2F, 0xF0));
     EXPECT_FRAME(F_RS_2);
-    /* §1.6 start-up literally (user prm 00 00 00 ...: no DPV1_Enable). */
+    /* §A1.6 start-up literally (user prm 00 00 00 ...: no DPV1_Enable). */
     send_literal(__LINE__, F_SET_PRM, sizeof F_SET_PRM);
     EXPECT_SC();
     send_literal(__LINE__, F_CHK_CFG, sizeof F_CHK_CFG);

@@ -1,6 +1,6 @@
 /* The master's DP-V1 clients against the real card (with the emulated MOVIDRIVE) on the
  * in-memory bus: class 1 and class 2, data set 47 and I&M0, with the telegrams on the wire
- * checked byte for byte (docs/dpv1.md, profibus-dp.md §1.6), the SC/poll sequence, the rule of
+ * checked byte for byte (docs/dpv1.md, protocol.md §A1.6), the SC/poll sequence, the rule of
  * one acyclic telegram between two Data_Exchange, FCB toggling across cyclic, class-1 and
  * class-2 telegrams, and the faults: negative responses, refusal of a third connection, RS,
  * timeouts, a slave that falls silent. */
@@ -199,7 +199,7 @@ static long find_request(size_t from, uint8_t da, uint8_t sa, uint8_t dsap, int 
 }
 
 /* Compares a request telegram with expected bytes in which FC carries FCB = 1 (as the
- * profibus-dp.md §1.6 examples do): an FCB of 0 on the wire is accepted with FC and FCS
+ * protocol.md §A1.6 examples do): an FCB of 0 on the wire is accepted with FC and FCS
  * adjusted, every other octet must match. */
 static void check_request(const frame_t *f, const uint8_t *exp, size_t n, const char *what)
 {
@@ -300,7 +300,7 @@ static void test_c1_ds47_read_8300_on_the_wire(void)
     CHECK_EQ(rsp.p[0].value, 0x311C7289u);
     CHECK_BYTES(call.data, call.len, 0x01, 0x40, 0x00, 0x01, 0x43, 0x01, 0x31, 0x1C, 0x72, 0x89);
 
-    /* Write.req exactly as profibus-dp.md §1.6 prints it, answered SC. */
+    /* Write.req exactly as protocol.md §A1.6 prints it, answered SC. */
     long w = find_request(0, SLAVE, MASTER, DPMV1_SAP_C1, DPMV1_FN_WRITE);
     CHECK(w >= 0);
     if (w < 0) return;
@@ -330,7 +330,7 @@ static void test_c1_ds47_read_8300_on_the_wire(void)
         CHECK_BYTES(rig.frames[rsp_at].b, rig.frames[rsp_at].len, 0x68, 0x09, 0x09, 0x68, 0x82,
                     0x84, 0x08, 0x33, 0x33, 0x5F, 0x00, 0x2F, 0x0A, 0x0C, 0x16);
     }
-    /* Read.req index 47, length 240, as §1.6 prints it. */
+    /* Read.req index 47, length 240, as §A1.6 prints it. */
     long r = find_request(0, SLAVE, MASTER, DPMV1_SAP_C1, DPMV1_FN_READ);
     CHECK(r > rsp_at);
     if (r < 0) return;
@@ -514,7 +514,7 @@ static void test_c1_slow_inverter_b5_and_exchange_goes_on(void)
     CHECK_EQ(call.reads, call.busy + 1u);
     /* Data_Exchange went on: one before every acyclic telegram of the call. */
     CHECK(rig.master.slaves[0].cycles - cycles0 + 1u >= call.telegrams);
-    /* One B5 telegram as §1.6 prints it (from slave 4 to master 2). */
+    /* One B5 telegram as §A1.6 prints it (from slave 4 to master 2). */
     bool b5 = false;
     for (size_t i = 0; i < rig.nframes && !b5; i++) {
         const frame_t *f = &rig.frames[i];

@@ -107,7 +107,7 @@ static inline size_t fz_frame_len_for(const uint8_t *b, size_t avail)
     }
 }
 
-/* An independent statement of what a valid telegram is (profibus-dp.md §1.2), written without
+/* An independent statement of what a valid telegram is (protocol.md §A1.2), written without
  * looking at fdl_rx's state machine: used to judge what fdl_rx accepts. */
 static inline bool fz_frame_valid(const uint8_t *b, size_t n)
 {

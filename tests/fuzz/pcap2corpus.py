@@ -3,7 +3,7 @@
 
 Reads pcap files of bus telegrams (LINKTYPE_PROFIBUS_DL = 257, as `dfp-sim demo --capture`
 and `dfp-sim slave/master/param --capture` write them; micro- or nanosecond pcap) plus the
-worked frames of profibus-dp.md section 1.6, and writes one input file per seed in each
+worked frames of protocol.md §A1.6, and writes one input file per seed in each
 target's input format (tests/fuzz/README.md):
 
     pcap2corpus.py OUT_DIR [CAPTURE.pcap ...]
@@ -15,7 +15,7 @@ import os
 import struct
 import sys
 
-# profibus-dp.md section 1.6 (master 2, slave 4).
+# protocol.md §A1.6 (master 2, slave 4).
 SPEC_FRAMES = [
     "10 04 02 49 4F 16",
     "10 02 04 00 06 16",

@@ -8,11 +8,11 @@ For SEW_6003.GSD (DP-V0) and SEWA6003.GSD (DP-V1):
   - the file is ASCII with CRLF line ends and pyprofibus.gsd.interp.GsdInterp loads it;
   - ident 0x6003, vendor, model, GSD revision, DP-V1 flag, the ten baud rates with the
     MaxTsdr table, the DP service flags and the length limits;
-  - the module list is exactly the ten predefined configurations of dfp21b.md 3 and the ten
+  - the module list is exactly the ten predefined configurations of protocol.md §B3 and the ten
     4/5/7/8/9-word ones the manual builds as universal modules, in order, with their identifier
     bytes, and selecting each module by name makes pyprofibus put exactly those bytes into
     Chk_Cfg; Max_Module is 1 (each module is a whole configuration);
-  - the User_Prm_Data pyprofibus builds is 00 00 00 06 81 00 00 01 01 (dfp21b.md 4);
+  - the User_Prm_Data pyprofibus builds is 00 00 00 06 81 00 00 01 01 (protocol.md §B4);
   - SEWA6003.GSD carries the DP-V1 keys (pyprofibus ignores them, so they are read from the text).
 With --dfp-sim (the card's own configuration check, `dfp-sim check-cfg HEX`):
   - every module's Chk_Cfg bytes are accepted (exit 0) with the expected in/out lengths;
@@ -36,7 +36,7 @@ SKIP = 77
 IDENT = 0x6003
 USER_PRM = bytes.fromhex("000000068100000101")
 
-# dfp21b.md 3: name, Chk_Cfg bytes, parameter channel, process data words
+# protocol.md §B3: name, Chk_Cfg bytes, parameter channel, process data words
 MODULES = [
     ("1 PD", "F0", False, 1),
     ("2 PD", "F1", False, 2),

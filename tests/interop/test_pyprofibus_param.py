@@ -6,14 +6,14 @@ usage: test_pyprofibus_param.py --dfp-sim PATH --gsd-dir DIR [--baud 19200] [--v
 Module "Param + 3 PD" (Chk_Cfg F3 F2, 14 bytes each way: the 8-byte channel, then PO1..PO3 /
 PI1..PI3) against `dfp-sim slave --inverter sim --eeprom TMP/ee.bin --capture TMP/sN.pcap` on a
 socat PTY pair (plumbing shared with test_pyprofibus_interop.py). The master side follows
-dfp21b.md §6: every new service toggles the handshake bit 6 of the management byte; a service is
+protocol.md §B6: every new service toggles the handshake bit 6 of the management byte; a service is
 done when a reply carries the sent handshake value AND the sent index (every wait is bounded).
 The card starts with handshake 0 and the master first sends eight 00 bytes ("no service"), so
 the first service goes out with bit 6 = 1.
 
 Session 1 (fresh EEPROM file):
   1. read index 8300 (P076 firmware), management 0x41 -> reply bytes 0..7 exactly
-     41 00 20 6C 31 1C 72 89 (movidrive.md §1.5);
+     41 00 20 6C 31 1C 72 89 (protocol.md §C1.5);
   2. write (service 2, non-volatile) P160 n11 (8489 = 0x2129) = 300000 (300 rpm) -> the write's
      reply echoes the value; read 8489 -> 300000;
   3. write volatile (service 3) H0 (11000 = 0x2AF8) = 3000 -> read 11000 -> 3000;
@@ -36,7 +36,7 @@ Session 1 (fresh EEPROM file):
   SIGTERM -> dfp-sim exits 0.
 Session 2 (same EEPROM file, a new dfp-sim, a new pyprofibus master):
   - P160 reads 300000 (the non-volatile write survived), H1 reads the held write's value, H0
-    reads 0 again (the volatile write did not survive, movidrive.md §1.2);
+    reads 0 again (the volatile write did not survive, protocol.md §C1.2);
   6. write P100 = 3 FIELDBUS (8461) and P101 = 2 FIELDBUS (8462) through the channel, then
      PO1 = 0x0006, PO2 = 1500 -> PI1 (status word) low byte has bits 0..2 set within
      ENABLE_TIME, PI2 (speed, 0.2 rpm/digit) rises monotonically to 1500 and not beyond.
@@ -197,7 +197,7 @@ class Session:
         raise Timeout("no Data_Exchange reply within %.1f s (%d exchanges so far)"
                       % (timeout, self.exchanges))
 
-    # ---- the parameter channel, master side (dfp21b.md §6) ------------------------------
+    # ---- the parameter channel, master side (protocol.md §B6) ------------------------------
 
     def send(self, service, index, value=0):
         """Put a new service into the outputs, handshake toggled; returns the request."""

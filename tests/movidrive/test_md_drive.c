@@ -20,7 +20,7 @@ static void fresh(void)
     movidrive_tick(&md, now);
 }
 
-/* Commissioning per dfp21b.md §9: P100 = P101 = FIELDBUS (P876 is YES by default). */
+/* Commissioning per protocol.md §B9: P100 = P101 = FIELDBUS (P876 is YES by default). */
 static void fieldbus_mode(void)
 {
     fresh();
@@ -59,7 +59,7 @@ static void test_enable_and_ramp(void)
     CHECK_EQ(md_pi(&md, 0), 0x0106); /* PI1 = STATUS WORD1 */
     run_ms(50);
     CHECK_EQ(speed(), 0);
-    /* enable 0x0006, speed 1500 = 300 rpm (dfp21b.md §5 example) */
+    /* enable 0x0006, speed 1500 = 300 rpm (protocol.md §B5 example) */
     md_po3(&md, 0x0006, 1500, 0);
     CHECK_EQ(sw(), 0x0407); /* output stage, ready, PO enabled; unit status 4 enabled */
     CHECK_EQ(md.speed_setpoint_mrpm, 300000);

@@ -1,5 +1,5 @@
 /* Emulated MOVIDRIVE, parameter services: byte-exact telegrams for every service and every
- * class 8 code the emulation produces (movidrive.md §1, dfp21b.md §6). */
+ * class 8 code the emulation produces (protocol.md §C1, protocol.md §B6). */
 #include <limits.h>
 #include <stdio.h>
 #include <string.h>
@@ -28,7 +28,7 @@ static void fresh(void)
 static void test_read(void)
 {
     fresh();
-    /* movidrive.md §7: SBus read of index 8300, firmware 823 947 9.13 */
+    /* protocol.md §C7: SBus read of index 8300, firmware 823 947 9.13 */
     XCHG(0x01, 0x00, 0x20, 0x6C, 0x00, 0x00, 0x00, 0x00, 0x01, 0x00, 0x20, 0x6C, 0x31, 0x1C,
          0x72, 0x89);
     /* handshake bit ignored and not echoed; request data ignored */
@@ -73,12 +73,12 @@ static void test_write(void)
     XCHG(0x72, 0x00, 0x21, 0x16, 0x00, 0x00, 0x0F, 0xA0, 0x32, 0x00, 0x21, 0x16, 0x00, 0x00,
          0x0F, 0xA0);
     CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 4000);
-    /* S1 §6.3: write volatile H0 (11000 = 0x2AF8) = 0x0BB8 */
+    /* DFP21B manual §6.3: write volatile H0 (11000 = 0x2AF8) = 0x0BB8 */
     XCHG(0x33, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x0B, 0xB8, 0x33, 0x00, 0x2A, 0xF8, 0x00, 0x00,
          0x0B, 0xB8);
     XCHG(0x01, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x00, 0x00, 0x01, 0x00, 0x2A, 0xF8, 0x00, 0x00,
          0x0B, 0xB8);
-    /* movidrive.md §7: write volatile n11 = 300000 (300 rpm) */
+    /* protocol.md §C7: write volatile n11 = 300000 (300 rpm) */
     XCHG(0x73, 0x00, 0x21, 0x29, 0x00, 0x04, 0x93, 0xE0, 0x33, 0x00, 0x21, 0x29, 0x00, 0x04,
          0x93, 0xE0);
     CHECK_EQ(md_read(&md, MD_IDX_P160_N11), 300000);
@@ -101,7 +101,7 @@ static void test_write(void)
     /* limits themselves are accepted */
     CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 2000000, 1), 0);
     CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 0, 1), 0);
-    /* P831 = 6 EMERG. STOP/WARNG: the A list's typo fixed (movidrive.md §3.6) */
+    /* P831 = 6 EMERG. STOP/WARNG: the A list's typo fixed (protocol.md §C3.6) */
     CHECK_EQ(md_write(&md, MD_IDX_P831_FIELDBUS_REACTION, 6, 1), 0);
     CHECK_EQ(md_read(&md, MD_IDX_P831_FIELDBUS_REACTION), 6);
     /* commands read back 0 */
@@ -155,7 +155,7 @@ static void test_min_max_default(void)
 static void test_scale(void)
 {
     fresh();
-    /* movidrive.md §1.3 example: P131 ramp t11 down -> quantity 4 (time), conversion -3 */
+    /* protocol.md §C1.3 example: P131 ramp t11 down -> quantity 4 (time), conversion -3 */
     XCHG(0x07, 0x00, 0x21, 0x17, 0x00, 0x00, 0x00, 0x00, 0x07, 0x00, 0x21, 0x17, 0x00, 0x00,
          0x04, 0xFD);
     /* P000 speed: rps / 11 / 66 (1 digit = 0.001 rpm) */

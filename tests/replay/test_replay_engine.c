@@ -94,7 +94,7 @@ static size_t enc(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps, u
     return fdl_encode(out, da, sa, fc, saps, dsap, ssap, du, n);
 }
 
-/* Frames used throughout (profibus-dp.md §1.6 and what the card answers). */
+/* Frames used throughout (protocol.md §A1.6 and what the card answers). */
 static const uint8_t fdl_status_req[] = {0x10, 0x04, 0x02, 0x49, 0x4F, 0x16};
 static const uint8_t fdl_status_rsp[] = {0x10, 0x02, 0x04, 0x00, 0x06, 0x16};
 static const uint8_t rs_rsp[] = {0x10, 0x02, 0x04, 0x03, 0x09, 0x16};

@@ -181,7 +181,7 @@ static const uint8_t read_h0[8] = {0x01, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x00, 0x0
 
 static void test_identifiers(void)
 {
-    /* movidrive.md §2.1 worked examples: PO, PI, PO sync, parameter request, response. */
+    /* protocol.md §C2.1 worked examples: PO, PI, PO sync, parameter request, response. */
     static const uint16_t ex[][6] = {
         {33, 267, 268, 269, 779, 780}, {17, 139, 140, 141, 651, 652},
         {11, 91, 92, 93, 603, 604},    {7, 59, 60, 61, 571, 572},
@@ -210,7 +210,7 @@ static void test_identifiers(void)
     CHECK(sbus_id_param_rsp(63) <= HAL_CAN_ID_MASK);
 }
 
-/* §7: ID 523 01 00 20 6C 00 00 00 00 -> ID 524 01 00 20 6C 31 1C 72 89, both on the wire. */
+/* protocol.md §C7: ID 523 01 00 20 6C 00 00 00 00 -> ID 524 01 00 20 6C 31 1C 72 89, both on the wire. */
 static void test_worked_parameter_read(void)
 {
     setup(1, 1, false, true);
@@ -250,7 +250,7 @@ static void test_card_link_by_hand(void)
     CHECK_EQ(t.card.pi_calls, 0);
 }
 
-/* §7: ID 11 00 06 05 DC 00 00 -> ID 12 with PI1..PI3; big-endian words. */
+/* protocol.md §C7: ID 11 00 06 05 DC 00 00 -> ID 12 with PI1..PI3; big-endian words. */
 static void test_worked_process_data(void)
 {
     setup(1, 1, false, true);

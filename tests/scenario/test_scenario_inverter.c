@@ -258,7 +258,7 @@ static int32_t drive_value(uint16_t index)
 
 static int32_t p819(void) { return drive_value(MD_IDX_P819_FIELDBUS_TIMEOUT); }
 
-/* dfp21b.md §5: P819 shows the master's watchdog time; written through another interface it is
+/* protocol.md §B5: P819 shows the master's watchdog time; written through another interface it is
  * shown until the next parameterisation. Global_Control and the other DP events in between also
  * reach the drive as fieldbus status (P090..P093) and must not bring the old value back. */
 static void test_p819_written_elsewhere_stays_until_next_set_prm(void)
@@ -282,7 +282,7 @@ static void test_p819_written_elsewhere_stays_until_next_set_prm(void)
     CHECK_EQ(p819(), 50);
 }
 
-/* dfp21b.md §9: with the DIP switches above 125 the card stays off the bus, and the manual's
+/* protocol.md §B9: with the DIP switches above 125 the card stays off the bus, and the manual's
  * first diagnosis step is to read P093 on the drive: it must show that address. */
 static void test_address_above_125_shown_in_p093(void)
 {

@@ -1,4 +1,4 @@
-/* Request telegrams of profibus-dp.md §1.6 (master 2, slave 4), byte for byte as the spec
+/* Request telegrams of protocol.md §A1.6 (master 2, slave 4), byte for byte as the spec
  * prints them, shared by the unit tests. Not every test uses every frame. */
 #ifndef TESTS_UNIT_SPEC_FRAMES_H
 #define TESTS_UNIT_SPEC_FRAMES_H

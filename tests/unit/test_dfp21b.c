@@ -1,5 +1,5 @@
 /* The DFP21B personality (dfp21b), driven on the wire like the generic slave: accepted and
- * refused configurations (dfp21b.md §3), user parameters (§4), DIP address and LEDs (§1, §2),
+ * refused configurations (protocol.md §B3), user parameters (§B4), DIP address and LEDs (§B1, §B2),
  * fieldbus monitor values P090/P092/P093/P819, PO -> PI loopback and the DP-V0 external
  * diagnosis for inverter faults. Station 4 (DIP), master 2, 1.5 Mbit/s unless searching. */
 #include <stdint.h>
@@ -166,7 +166,7 @@ static void p090_is(const char *expect)
     CHECK_EQ(n, strlen(expect));
 }
 
-/* ---- configurations (§3) ------------------------------------------------------------------ */
+/* ---- configurations (§B3) ------------------------------------------------------------------ */
 
 typedef struct cfg_case {
     uint8_t bytes[4];
@@ -323,7 +323,7 @@ static void test_cfg_refused(void)
     p090_is("0PD");
 }
 
-/* ---- user parameters (§4) ----------------------------------------------------------------- */
+/* ---- user parameters (§B4) ----------------------------------------------------------------- */
 
 static void test_user_prm(void)
 {
@@ -404,7 +404,7 @@ static void test_set_prm_spec_frame(void)
             0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x0E, 0x16);
 }
 
-/* ---- address and LEDs (§1, §2) ------------------------------------------------------------ */
+/* ---- address and LEDs (§B1, §B2) ------------------------------------------------------------ */
 
 static void test_dip_address(void)
 {
@@ -512,7 +512,7 @@ static void test_led_sequence(void)
     }
 }
 
-/* dfp21b.md §2: BUS FAULT on when the bus is interrupted or the master stopped, also without a
+/* protocol.md §B2: BUS FAULT on when the bus is interrupted or the master stopped, also without a
  * DP watchdog (baud control runs out), and off again once the master's telegrams return; RUN
  * stays on throughout. */
 static void test_led_bus_interrupted_without_watchdog(void)
@@ -544,7 +544,7 @@ static void test_led_bus_interrupted_without_watchdog(void)
     CHECK_EQ(C.leds.now[HAL_LED_BUS_FAULT], HAL_LED_OFF);
 }
 
-/* dfp21b.md §1: the address is read at power-up only; moving the switches later changes
+/* protocol.md §B1: the address is read at power-up only; moving the switches later changes
  * nothing until the next start. */
 static void test_dip_read_at_power_up_only(void)
 {
@@ -772,7 +772,7 @@ static void test_ext_diag_alarm_off(void)
     CHECK_EQ(C.u.last[6], FDL_RSP_DL);
 }
 
-/* dfp21b.md §4: with user prm octet 8 = 01 the card does not report inverter faults, with 00
+/* protocol.md §B4: with user prm octet 8 = 01 the card does not report inverter faults, with 00
  * every inverter fault is signalled; a new Set_Prm re-evaluates the fault that is active. */
 
 /* Re-parameterised from 00 to 01 while a fault is reported: the master must not keep seeing
@@ -805,7 +805,7 @@ static void test_ext_diag_alarm_switched_on(void)
     DIAG_IS(0x08, 0x0C, 0x00, 0x02, 0x60, 0x03, 0x02, 0x11);
 }
 
-/* dfp21b.md §4: the external diagnosis is DP-V0 only. A DP-V1 master that asks for it with
+/* protocol.md §B4: the external diagnosis is DP-V0 only. A DP-V1 master that asks for it with
  * octet 8 = 00 gets its Set_Prm accepted and a diagnosis without Ext_Diag and without the
  * 2-octet block (a DP-V1 master would parse it as a malformed alarm/status block). */
 static void test_ext_diag_not_in_dpv1_mode(void)

@@ -1,7 +1,7 @@
 /* The generic DP-V0 slave (dp_slave), driven character by character with exact timestamps:
  * replies byte for byte, DP states, diagnosis octets, events, timers and the baud search, held
- * against profibus-dp.md §1-§3. The device behind it is a simple hooks struct that records
- * what it is given. Station 4, ident 0x6003 (so the §1.6 frames apply), masters 2 and 3. */
+ * against protocol.md §A1-§A3. The device behind it is a simple hooks struct that records
+ * what it is given. Station 4, ident 0x6003 (so the §A1.6 frames apply), masters 2 and 3. */
 #include <stdint.h>
 #include <string.h>
 
@@ -15,10 +15,10 @@
 
 static const uint8_t DEFAULT_CFG[] = {0xF3, 0xF2};
 static const uint8_t CFG_P3PD[] = {0xF3, 0xF2};
-/* DP-V1 status octets + DFP21B user parameters, as in the §1.6 Set_Prm. */
+/* DP-V1 status octets + DFP21B user parameters, as in the §A1.6 Set_Prm. */
 static const uint8_t PRM_TAIL[] = {0x00, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x01};
 
-/* §1.6 frames, literally. */
+/* §A1.6 frames, literally. */
 static const uint8_t DX14[] = {0x01, 0x00, 0x20, 0x6C, 0x00, 0x00, 0x00,
                                0x00, 0x00, 0x06, 0x05, 0xDC, 0x12, 0x34};
 static const uint8_t DX8[] = {0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88};
@@ -334,7 +334,7 @@ static void test_diag_wait_prm(void)
 {
     rig_init(BAUD, 0);
     CHECK(REQ(F_DIAG_REQ));
-    /* 02 05 00 FF + ident, as the 8-octet DU SD3 form of §1.6. */
+    /* 02 05 00 FF + ident, as the 8-octet DU SD3 form of §A1.6. */
     LAST_IS(0xA2, 0x82, 0x84, 0x08, 0x3E, 0x3C, 0x02, 0x05, 0x00, 0xFF, 0x60, 0x03, 0xF1, 0x16);
     size_t n;
     uint8_t d[64];
@@ -553,7 +553,7 @@ static void test_dx_sd3(void)
     bring_up(0x88, 1, 100, 0, cfg8, sizeof cfg8);
     const uint8_t in8[] = {0xA1, 0xA2, 0xA3, 0xA4, 0xA5, 0xA6, 0xA7, 0xA8};
     dp_slave_set_inputs(&R.s, in8, sizeof in8);
-    /* The request builder makes the SD3 of §1.2 for 8 output octets. */
+    /* The request builder makes the SD3 of §A1.2 for 8 output octets. */
     uint8_t fc = tm_fc(&R.m2, FDL_REQ_SRD_HIGH);
     CHECK_EQ(fc, 0x5D);
     size_t n = mk_dx_req(R.f, SLAVE, 2, fc, DX8, sizeof DX8);
@@ -802,7 +802,7 @@ static void test_gc_sync(void)
     }
     CHECK(dx(&R.m2, o[0], 14));
     CHECK_EQ(R.a.outputs_calls, 1u);
-    /* The §1.6 Sync frame. */
+    /* The §A1.6 Sync frame. */
     CHECK(!REQ(F_GC_SYNC));
     CHECK_EQ(R.a.outputs_calls, 1u);
     DIAG_IS(&R.m2, 0x00, 0x24, 0x00, 0x02, 0x60, 0x03); /* Sync_Mode */
@@ -904,7 +904,7 @@ static void test_gc_reserved_bits(void)
     CHECK_EQ(R.a.outputs_calls, outputs);
 }
 
-/* profibus-dp.md §3.5: "Freeze/Sync must be enabled via Set_Prm Freeze_Req/Sync_Req (and
+/* protocol.md §A3.5: "Freeze/Sync must be enabled via Set_Prm Freeze_Req/Sync_Req (and
  * supported)". Without the request bits a Sync|Freeze command changes nothing (before the fix
  * the diagnosis read 00 34 00 02 60 03 and the outputs were held). */
 static void test_gc_sync_freeze_not_requested(void)

@@ -1,8 +1,8 @@
-/* FDL receiver, parser and encoder, byte for byte against profibus-dp.md §1.
+/* FDL receiver, parser and encoder, byte for byte against protocol.md §A1.
  *
  * The receiver is fed character by character at exact character times (1.5 Mbit/s unless a
- * test says otherwise); every check of §1.1 "Receiver checks" is made to fail once. The
- * encoder is held against the worked frames of §1.6, which are written out literally here. */
+ * test says otherwise); every check of §A1.1 "Receiver checks" is made to fail once. The
+ * encoder is held against the worked frames of §A1.6, which are written out literally here. */
 #include <stdint.h>
 #include <string.h>
 
@@ -15,7 +15,7 @@
 
 #define BAUD 1500000u
 
-/* ---- §1.6 worked frames (master 2, slave 4) ----------------------------------------------- */
+/* ---- §A1.6 worked frames (master 2, slave 4) ----------------------------------------------- */
 static const uint8_t F_FDL_REP[] = {0x10, 0x02, 0x04, 0x00, 0x06, 0x16};
 static const uint8_t F_DIAG_REP_SD2[] = {0x68, 0x0B, 0x0B, 0x68, 0x82, 0x84, 0x08, 0x3E, 0x3C,
                                          0x02, 0x05, 0x00, 0xFF, 0x60, 0x03, 0xF1, 0x16};
@@ -624,7 +624,7 @@ static void test_parse_segment(void)
     CHECK_EQ(m.ssap, 62);
 }
 
-/* ---- fdl_encode against §1.6 --------------------------------------------------------------- */
+/* ---- fdl_encode against §A1.6 --------------------------------------------------------------- */
 
 static void test_encode_spec_frames(void)
 {
@@ -642,7 +642,7 @@ static void test_encode_spec_frames(void)
     n = fdl_encode(out, 4, 2, 0x6D, true, 60, 62, NULL, 0);
     CHECK(n == sizeof F_DIAG_REQ && memcmp(out, F_DIAG_REQ, n) == 0);
 
-    /* 6 diag octets + 2 SAP octets = 8: the encoder picks SD3, the §1.6 alternative form. */
+    /* 6 diag octets + 2 SAP octets = 8: the encoder picks SD3, the §A1.6 alternative form. */
     const uint8_t diag[] = {0x02, 0x05, 0x00, 0xFF, 0x60, 0x03};
     n = fdl_encode(out, 2, 4, 0x08, true, 62, 60, diag, sizeof diag);
     CHECK(n == sizeof F_DIAG_REP_SD3 && memcmp(out, F_DIAG_REP_SD3, n) == 0);

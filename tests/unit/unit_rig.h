@@ -199,7 +199,7 @@ static inline bool line_request(line_t *l, const uint8_t *p, size_t n)
     return line_request_idle(l, p, n, LINE_IDLE_BITS);
 }
 
-/* ---- a master's frame-control bookkeeping (§1.5) ------------------------------------------ */
+/* ---- a master's frame-control bookkeeping (§A1.5) ------------------------------------------ */
 
 typedef struct tmaster {
     uint8_t addr;
@@ -225,7 +225,7 @@ static inline uint8_t tm_fc_retry(const tmaster_t *m, uint8_t code)
     return (uint8_t)(FDL_FC_REQUEST | FDL_FC_FCV | (m->fcb ? FDL_FC_FCB : 0u) | code);
 }
 
-/* Request builders on top of fdl_encode (checked against profibus-dp.md §1.6 in test_fdl_rx). */
+/* Request builders on top of fdl_encode (checked against protocol.md §A1.6 in test_fdl_rx). */
 static inline size_t mk_sap_req(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, uint8_t dsap,
                                 const uint8_t *data, size_t len)
 {

@@ -208,7 +208,7 @@ eq "I&M0 over MSAC2" "$(first | sed 's/ *\t/\t/g')" "65000${tab}0x010a${tab}824 
 
 # ---- hand-written capture, link type 147 (frame numbers in the comments)
 python3 "$here/mkpcap.py" "$tmp/hand.pcap" >/dev/null <<'EOF'
-raw 10 04 02 49 4F 16                                   # 1 FDL status request (profibus-dp.md 1.6)
+raw 10 04 02 49 4F 16                                   # 1 FDL status request (protocol.md §A1.6)
 raw 10 02 04 00 06 16                                   # 2 its reply: OK, slave
 raw DC 04 02                                            # 3 token SD4
 raw 68 05 05 68 84 82 6D 3C 3E ED 16                    # 4 Slave_Diag request (FCV=0 FCB=1)

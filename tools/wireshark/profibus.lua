@@ -3,8 +3,8 @@
 -- Wireshark has no PROFIBUS dissector and wiretap does not map LINKTYPE_PROFIBUS_DL (257), so
 -- this registers for LINKTYPE_USER0 (147): each record is one telegram, raw octets from the
 -- start delimiter to the end delimiter (SC: one octet, SD4: three), no pseudo-header.
--- Usage: tools/wireshark/README.md. Layouts: the protocol notes profibus-dp.md §1, §3, §4, §5,
--- dfp21b.md §6, §7 and docs/dpv1.md.
+-- Usage: tools/wireshark/README.md. Layouts: the protocol notes protocol.md §A1, §A3, §A4, §A5,
+-- protocol.md §B6, §B7 and docs/dpv1.md.
 --
 -- A telegram that is too short, inconsistent or carries an unknown code gets an expert info
 -- ("malformed") and decoding stops there; no record may raise a Lua error.
@@ -95,7 +95,7 @@ local ml_error_classes = {
     [1] = "vfd state", [2] = "application reference", [3] = "definition", [4] = "resource",
     [5] = "service", [6] = "access", [7] = "ov", [8] = "other",
 }
--- Class 8 additional codes (dfp21b.md §6).
+-- Class 8 additional codes (protocol.md §B6).
 local ml_class8_codes = {
     [0x10] = "illegal parameter index", [0x11] = "function/parameter not implemented",
     [0x12] = "read access only", [0x13] = "parameter lock active",
@@ -656,7 +656,7 @@ local function decode_set_prm(st, tree, c)
     if c:left() > 0 then
         local ru = c:rest()
         local uit = tree:add(F.prm_user, ru)
-        -- The DFP21B's own block (dfp21b.md §4): 06 81 00 00 01 flag.
+        -- The DFP21B's own block (protocol.md §B4): 06 81 00 00 01 flag.
         if ri:uint() == 0x6003 and ru:len() == 6 and ru(0, 1):uint() == 0x06
                 and ru(1, 1):uint() == 0x81 then
             uit:append_text(" (DFP21B: structured block len 6, type 0x81 user, slot 0, version "
@@ -750,7 +750,7 @@ local function decode_set_slave_add(st, tree, c)
     note(st, string.format("new address %d ident 0x%04X", rn:uint(), ri:uint()))
 end
 
--- The DFP21B's 8-octet parameter channel (dfp21b.md §6), request or reply.
+-- The DFP21B's 8-octet parameter channel (protocol.md §B6), request or reply.
 local function decode_movilink_channel(st, tree, c, is_request, source)
     local all = c.tvb(c.off, 8)
     local mt = tree:add(proto, all, "MOVILINK parameter channel")
@@ -1202,7 +1202,7 @@ local function add_address(tree, range, field, ext_field)
     return range:uint() % 128, has(range:uint(), 0x80)
 end
 
--- Address extension octets: DAE octets first, then SAE octets (profibus-dp.md §1.3).
+-- Address extension octets: DAE octets first, then SAE octets (protocol.md §A1.3).
 local function decode_extensions(st, tree, c, present, ae_field, sap_field)
     if not present then return nil end
     local sap

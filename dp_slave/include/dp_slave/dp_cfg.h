@@ -1,5 +1,5 @@
 /* Lengths of the I/O data a Chk_Cfg configuration describes (general and special identifier
- * formats, profibus-dp.md §3.3). Used by masters to size Data_Exchange telegrams. */
+ * formats, protocol.md §A3.3). Used by masters to size Data_Exchange telegrams. */
 #ifndef DP_SLAVE_DP_CFG_H
 #define DP_SLAVE_DP_CFG_H
 

@@ -1,4 +1,4 @@
-/* DP-V0 service access points and PDU layouts (profibus-dp.md §3). */
+/* DP-V0 service access points and PDU layouts (protocol.md §A3). */
 #ifndef DP_SLAVE_DP_WIRE_H
 #define DP_SLAVE_DP_WIRE_H
 

@@ -1,6 +1,6 @@
 /* PROFIBUS FDL (layer 2) wire format: delimiters, frame-control bits, function and response
- * codes. Values and names follow IEC 61158-4-3 as summarised in docs/protocol-sources.md
- * (profibus-dp.md §1). Kept apart from the code so a reader can hold it against the standard. */
+ * codes. Values and names follow IEC 61158-4-3 as summarised in docs/protocol.md
+ * (protocol.md §A1). Kept apart from the code so a reader can hold it against the standard. */
 #ifndef DP_SLAVE_FDL_WIRE_H
 #define DP_SLAVE_FDL_WIRE_H
 

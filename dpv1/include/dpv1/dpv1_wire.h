@@ -1,4 +1,4 @@
-/* DP-V1 PDU layouts and codes (profibus-dp.md §4, dfp21b.md §7-§8, docs/dpv1.md). */
+/* DP-V1 PDU layouts and codes (protocol.md §A4, protocol.md §B7-§B8, docs/dpv1.md). */
 #ifndef DPV1_DPV1_WIRE_H
 #define DPV1_DPV1_WIRE_H
 

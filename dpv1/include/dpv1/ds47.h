@@ -1,4 +1,4 @@
-/* Data set 47: PROFIdrive parameter access and SEW MOVILINK requests (dfp21b.md §7,
+/* Data set 47: PROFIdrive parameter access and SEW MOVILINK requests (protocol.md §B7,
  * docs/dpv1.md). One context per DP-V1 connection (C1, two C2). A request is checked and
  * accepted at once; its parameters then run one MOVILINK service each through the card's
  * service client, asynchronously; the response is built when the last one completes. */

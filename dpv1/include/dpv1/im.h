@@ -1,4 +1,4 @@
-/* Identification & Maintenance through the DP-V1 call service on index 255 (profibus-dp.md §7,
+/* Identification & Maintenance through the DP-V1 call service on index 255 (protocol.md §A7,
  * docs/dpv1.md). I&M0 comes from the card's identity; I&M1..I&M4 are written by the master and
  * kept in the card's non-volatile storage. */
 #ifndef DPV1_IM_H

@@ -6,7 +6,7 @@
 
 const uint8_t dfp21b_default_cfg[2] = {0xF3u, 0xF2u};
 
-/* ---- configuration (manual §4.1, §8.1; dfp21b.md §3) -------------------------------------- */
+/* ---- configuration (manual §4.1, §8.1; protocol.md §B3) -------------------------------------- */
 
 typedef struct ident_info {
     uint8_t dir;   /* DP_CFG_DIR_* */
@@ -94,7 +94,7 @@ bool dfp21b_check_cfg(const uint8_t *cfg, size_t len, dfp21b_pd_cfg_t *pd)
     return true;
 }
 
-/* ---- user parameters (manual §4.2; dfp21b.md §4) ------------------------------------------- */
+/* ---- user parameters (manual §4.2; protocol.md §B4) ------------------------------------------- */
 
 bool dfp21b_check_user_prm(const uint8_t *prm, size_t len, bool *diag_alarm)
 {
@@ -156,7 +156,7 @@ size_t dfp21b_p090_text(const dfp21b_pd_cfg_t *pd, char *out, size_t max)
     return n;
 }
 
-/* ---- LEDs (manual §3.7; dfp21b.md §2) ------------------------------------------------------ */
+/* ---- LEDs (manual §3.7; protocol.md §B2) ------------------------------------------------------ */
 
 static void led_set(dfp21b_t *c, hal_led_id_t id, hal_led_mode_t mode)
 {
@@ -351,7 +351,7 @@ void dfp21b_rx_char(dfp21b_t *c, uint8_t byte, uint8_t flags, hal_time_us_t t)
     }
 }
 
-/* P090 codes of the predefined configurations (movidrive.md §4); a universal module that is
+/* P090 codes of the predefined configurations (protocol.md §C4); a universal module that is
  * not one of them shows 254, no valid configuration 255 ("0PD"). */
 static uint8_t p090_code(const dfp21b_pd_cfg_t *pd)
 {

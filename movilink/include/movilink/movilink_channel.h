@@ -1,4 +1,4 @@
-/* The cyclic 8-byte parameter channel of the PROFIBUS process data (dfp21b.md §6).
+/* The cyclic 8-byte parameter channel of the PROFIBUS process data (protocol.md §B6).
  *
  * A service starts on an edge of the handshake bit (bit 6 of the management byte), never on the
  * content: a request that arrives again and again with unchanged handshake is executed once.

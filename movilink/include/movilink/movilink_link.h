@@ -34,7 +34,7 @@ typedef struct ml_fieldbus_status {
     uint32_t watchdog_ms;    /* P819 */
     uint8_t prm_count;       /* accepted Set_Prm so far, 0 = none yet, wraps 255 -> 1: P819 can be
                                 written elsewhere and is overwritten only at the next
-                                parameterisation (dfp21b.md §5), so the inverter takes
+                                parameterisation (protocol.md §B5), so the inverter takes
                                 watchdog_ms only when this is non-zero and changed */
     bool data_exchange;      /* the master exchanges process data */
     bool timeout;            /* DP watchdog expired: perform the P831 reaction */

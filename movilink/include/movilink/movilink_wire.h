@@ -1,4 +1,4 @@
-/* The 8-byte MOVILINK parameter telegram (dfp21b.md §6, movidrive.md §1): management byte,
+/* The 8-byte MOVILINK parameter telegram (protocol.md §B6, protocol.md §C1): management byte,
  * reserved/subindex byte, index high/low, 4 data octets big-endian. The same 8 octets travel in
  * the PROFIBUS cyclic channel, in SBus parameter frames and (field by field) in data set 47. */
 #ifndef MOVILINK_MOVILINK_WIRE_H

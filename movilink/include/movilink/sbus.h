@@ -1,11 +1,11 @@
-/* SBus: MOVILINK over CAN (movidrive.md §2.1). Freestanding: no OS, no allocation.
+/* SBus: MOVILINK over CAN (protocol.md §C2.1). Freestanding: no OS, no allocation.
  *
  * Identifiers (11 bit): bits 0..2 function, bits 3..8 address 0..63, bit 9 = parameter data.
  *   8·a + 3        process output data PO, master -> inverter, 6 octets PO1..PO3
  *   8·a + 4        process input data PI, inverter -> master, 6 octets PI1..PI3
  *   8·a + 512 + 3  parameter request, channel 1, the 8-octet MOVILINK telegram
  *   8·a + 512 + 4  parameter response, channel 1
- *   8·a + 512 + 5  parameter request, channel 2 (MOVIDRIVE B only; direction inferred, §6 item 5)
+ *   8·a + 512 + 5  parameter request, channel 2 (MOVIDRIVE B only; direction inferred, docs/protocol.md §C6 item 5)
  *   8·a + 512 + 7  parameter response, channel 2
  * Words are big-endian (PO1 high octet first). Example, address 33: PO 267, PI 268, PO sync 269,
  * request 779, response 780.

@@ -1,5 +1,5 @@
 /* Is a record exactly one FDL telegram? Replay hands damaged records to the card all the same, so
- * this only produces the reason shown next to them. It is written against profibus-dp.md §1.2
+ * this only produces the reason shown next to them. It is written against protocol.md §A1.2
  * rather than reusing the core's fdl_rx, which assembles a byte stream with timing and would
  * have to be fed octet by octet to learn what is wrong with a finished record. */
 #include <stdarg.h>

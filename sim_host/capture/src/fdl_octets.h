@@ -1,5 +1,5 @@
 /* The FDL delimiters under the short names the capture parsers use, from the core's wire
- * definitions (profibus-dp.md §1.2), so the two can never disagree. */
+ * definitions (protocol.md §A1.2), so the two can never disagree. */
 #ifndef CAPTURE_FDL_OCTETS_H
 #define CAPTURE_FDL_OCTETS_H
 

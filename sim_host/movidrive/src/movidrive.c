@@ -44,7 +44,7 @@
 #define IDX_P840_MANUAL_RESET 8617u
 #define IDX_P873_PI1 8307u
 
-/* P870..P872 setpoint descriptions (movidrive.md 3.4). */
+/* P870..P872 setpoint descriptions (protocol.md §C3.4). */
 #define PO_NO_FUNCTION 0
 #define PO_SPEED 1
 #define PO_MAX_SPEED 5
@@ -65,7 +65,7 @@
 #define PI_IPOS 9
 #define PI_STATUS_WORD_3 11
 
-/* P83x reactions (movidrive.md 3.6). */
+/* P83x reactions (protocol.md §C3.6). */
 #define REACT_NONE 0
 #define REACT_DISPLAY 1
 #define REACT_IMM_ERROR 2
@@ -833,7 +833,7 @@ static void load_defaults(movidrive_t *md, bool keep_read_only)
 }
 
 /* P819 is the exception: written through another interface it is shown until the master's
- * next parameterisation (dfp21b.md §5), so it is taken only when that happened. */
+ * next parameterisation (protocol.md §B5), so it is taken only when that happened. */
 static void apply_fieldbus_values(movidrive_t *md, bool take_p819)
 {
     if (!md->have_fieldbus) {

@@ -64,7 +64,7 @@ void replay_frame_parse(const uint8_t *f, size_t len, replay_frame_t *out)
     out->fc = f[hdr + 2u];
     out->kind = (out->fc & FDL_FC_REQUEST) != 0u ? REPLAY_KIND_REQUEST : REPLAY_KIND_RESPONSE;
     size_t p = hdr + 3u;
-    /* Address extensions: DAE octets first, then SAE (profibus-dp.md §1.3); only the first of
+    /* Address extensions: DAE octets first, then SAE (protocol.md §A1.3); only the first of
      * each is a SAP, further ones (bit 7 set) are skipped. */
     if ((f[hdr] & FDL_ADDR_EXT) != 0u && p < end) {
         out->has_dsap = true;

@@ -40,7 +40,7 @@ void board_leds_tick(board_leds_t *l)
     for (unsigned i = 0; i < HAL_LED_COUNT; i++) {
         bool on;
         /* The crash indication is BUS FAULT alone: RUN blinking means an address above 125
-         * (dfp21b.md §2), and a card that restarted after a fault is not that. */
+         * (protocol.md §B2), and a card that restarted after a fault is not that. */
         if (l->fault_pattern && i == HAL_LED_BUS_FAULT) {
             on = fast_on;
         } else if (l->mode[i] == HAL_LED_BLINK) {

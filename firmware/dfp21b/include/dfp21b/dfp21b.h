@@ -1,5 +1,5 @@
-/* The DFP21B personality: what makes the generic DP slave a DFP21B (manual 03/2004, digested in
- * shared/spec/dfp21b.md): ident 0x6003, the accepted configurations, the 9-byte user
+/* The DFP21B personality: what makes the generic DP slave a DFP21B (DFP21B manual, edition 03/2004;
+ * docs/protocol.md part B): ident 0x6003, the accepted configurations, the 9-byte user
  * parameters, the DIP-switch address, the RUN / BUS FAULT LEDs and the fieldbus monitor values
  * the inverter shows in P090..P099. What the process data and the parameter channel mean is the
  * inverter's business and reaches it through dfp21b_app_t. */

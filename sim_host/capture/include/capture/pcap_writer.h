@@ -1,5 +1,5 @@
 /* pcap files of bus telegrams. LINKTYPE_PROFIBUS_DL (257) stores each telegram from its start
- * delimiter to its end delimiter with no pseudo-header (profibus-dp.md §6); an SC is stored as
+ * delimiter to its end delimiter with no pseudo-header (protocol.md §A6); an SC is stored as
  * its single octet and a token (SD4) as its three octets, as they are on the wire. */
 #ifndef CAPTURE_PCAP_WRITER_H
 #define CAPTURE_PCAP_WRITER_H

@@ -1,5 +1,5 @@
 /* A DP-V1 class-2 (MSAC2) connection from our master station to one slave (docs/dpv1.md,
- * profibus-dp.md §4.4). It needs no Set_Prm: a class-2 master does not parameterise.
+ * protocol.md §A4.4). It needs no Set_Prm: a class-2 master does not parameterise.
  *
  *   open:    SRD DSAP 49 / SSAP ssap  Initiate.req (20 octets)  ->  DL  56 SAP 00 00
  *            SRD DSAP SAP / SSAP ssap (no data), repeated      ->  SC ... DL  Initiate.res (57 ...)
@@ -22,9 +22,9 @@
 #include "dp_master/dpv1_xfer.h"
 
 #define DPM_C2_SEND_TIMEOUT_DEFAULT 200u          /* 10 ms units: 2 s */
-#define DPM_C2_RESPONSE_TIMEOUT_US_DEFAULT 1000000u /* dfp21b.md §1: C2 response timeout 1 s */
+#define DPM_C2_RESPONSE_TIMEOUT_US_DEFAULT 1000000u /* protocol.md §B1: C2 response timeout 1 s */
 #define DPM_C2_INITIATE_LEN 20u
-#define DPM_C2_ABORT_USER 0x20u                   /* Instance "user" (profibus-dp.md §4.4) */
+#define DPM_C2_ABORT_USER 0x20u                   /* Instance "user" (protocol.md §A4.4) */
 
 typedef enum dpm_c2_state {
     DPM_C2_CLOSED = 0,

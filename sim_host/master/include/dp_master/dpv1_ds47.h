@@ -1,6 +1,6 @@
 /* Parameter access through DP-V1 data set 47 and the I&M call service (index 255), on top of
  * either acyclic path (class-1 slave or class-2 connection, dpm_acyc_port_t). docs/dpv1.md
- * fixes the formats; dfp21b.md §7 the DFP21B's ids and error values.
+ * fixes the formats; protocol.md §B7 the DFP21B's ids and error values.
  *
  * A record call is a Write.req of the request, then Read.req of the same index (length 240)
  * repeated while the card answers the negative "state conflict" (DE 80 B5 00), bounded by

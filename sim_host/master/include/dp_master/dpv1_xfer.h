@@ -18,12 +18,12 @@
 #include "dp_slave/fdl_frame.h"
 #include "hal/hal_time.h"
 
-/* SAPs (profibus-dp.md §3.1, docs/dpv1.md). */
+/* SAPs (protocol.md §A3.1, docs/dpv1.md). */
 #define DPMV1_SAP_C2_RM 49u  /* MSAC2 resource manager: Initiate.req only */
 #define DPMV1_SAP_C2_MASTER 50u /* the SSAP our class-2 client uses by default */
 #define DPMV1_SAP_C1 51u     /* MSAC1 Read/Write, on both sides */
 
-/* Function numbers (profibus-dp.md §4.1). */
+/* Function numbers (protocol.md §A4.1). */
 #define DPMV1_FN_IDLE 0x48u
 #define DPMV1_FN_DATA_TRANSPORT 0x51u
 #define DPMV1_FN_RM 0x56u
@@ -126,7 +126,7 @@ void dpm_xfer_fail(dpm_xfer_t *x, hal_time_us_t now, const char *fmt, ...)
  * now + HAL_TIME_NO_DEADLINE_US when none runs). */
 hal_time_us_t dpm_xfer_check_timeout(dpm_xfer_t *x, hal_time_us_t now);
 
-/* "invalid index", "state conflict" ... for Error_Code_1 (dfp21b.md §8). */
+/* "invalid index", "state conflict" ... for Error_Code_1 (protocol.md §B8). */
 const char *dpm_v1_error_text(uint8_t code1);
 /* True when pdu is a negative response (fn | 0x80); *code1 gets Error_Code_1. */
 bool dpm_v1_is_negative(const uint8_t *pdu, size_t len, uint8_t *code1);

@@ -2,7 +2,7 @@
  *
  * It speaks what the real unit speaks to an option card or on SBus: 8-byte MOVILINK parameter
  * telegrams (movidrive_param) and process-data words (movidrive_process_outputs/_inputs). The
- * parameter table comes from shared/spec/movidrive-parameters.csv; non-volatile values live in an
+ * parameter table is generated from sim_host/movidrive/data/parameters.csv; non-volatile values live in an
  * EEPROM image file that survives restarts, written so that a crash leaves the old or the new
  * value. Time is passed in (movidrive_tick) so ramps and timeouts run in simulated time too.
  *
@@ -40,7 +40,7 @@
 #define MD_SOURCE_FIELDBUS_SETPOINT 3u /* P100 = FIELDBUS */
 #define MD_SOURCE_FIELDBUS_CONTROL 2u  /* P101 = FIELDBUS */
 
-/* Status word 1, low byte (movidrive.md §3.3). */
+/* Status word 1, low byte (protocol.md §C3.3). */
 #define MD_SW_OUTPUT_STAGE_ENABLED 0x0001u
 #define MD_SW_READY 0x0002u
 #define MD_SW_PO_DATA_ENABLED 0x0004u
@@ -48,7 +48,7 @@
 #define MD_SW_PARAM_SET_2 0x0010u
 #define MD_SW_FAULT 0x0020u
 
-/* Control word 1, basic block (movidrive.md §3.1). */
+/* Control word 1, basic block (protocol.md §C3.1). */
 #define MD_CW_CONTROLLER_INHIBIT 0x0001u
 #define MD_CW_ENABLE_RAPID_STOP 0x0002u /* 1 = enable, 0 = rapid stop */
 #define MD_CW_ENABLE_STOP 0x0004u       /* 1 = enable, 0 = stop */
@@ -58,7 +58,7 @@
 #define MD_CW_RESET 0x0040u /* fault reset on the rising edge */
 
 /* Fault numbers the emulation raises. F28 for the fieldbus timeout is an assumption
- * (movidrive.md §3.3 lists it as inferred). */
+ * (protocol.md §C3.3 lists it as inferred). */
 #define MD_FAULT_FIELDBUS_TIMEOUT 28u
 
 #define MD_MAX_PARAMS 512u
@@ -89,7 +89,7 @@ typedef struct md_param_def {
 #define MD_UNIT_ENABLED 4u
 #define MD_UNIT_WAITING_FOR_DATA 16u
 
-/* Read attribute, bytes 6..7 (MOVITRAC B coding, movidrive.md 1.3; assumed for MOVIDRIVE). */
+/* Read attribute, bytes 6..7 (MOVITRAC B coding, protocol.md §C1.3; assumed for MOVIDRIVE). */
 #define MD_ATTR_WRITE_ALLOWED 0x0001u
 #define MD_ATTR_EEPROM 0x0002u
 #define MD_ATTR_FACTORY_RAM 0x0004u
