@@ -675,8 +675,8 @@ hal_time_us_t dp_slave_poll(dp_slave_t *s, hal_time_us_t now)
             emit(s, DP_EV_WD_EXPIRED, now, s->wd_time_ms, s->master_add);
             s->master_add = DP_MASTER_ADD_NONE;
             set_state(s, DP_STATE_WAIT_PRM, now);
-        } else if (hal_time_diff(s->wd_deadline, next) < 0) {
-            next = s->wd_deadline;
+        } else {
+            next = hal_time_earlier(next, s->wd_deadline);
         }
     }
     if (s->baud_state == DP_BAUD_SEARCH || s->baud_state == DP_BAUD_CONTROL) {
@@ -693,9 +693,7 @@ hal_time_us_t dp_slave_poll(dp_slave_t *s, hal_time_us_t now)
             s->baud_deadline = now + dp_baud_search_dwell_us(s->baud);
             emit(s, DP_EV_BAUD_SET, now, s->baud, 0);
         }
-        if (hal_time_diff(s->baud_deadline, next) < 0) {
-            next = s->baud_deadline;
-        }
+        next = hal_time_earlier(next, s->baud_deadline);
     }
     return next;
 }

@@ -274,9 +274,7 @@ hal_time_us_t dpv1_poll(dpv1_t *d, hal_time_us_t now)
             d->c2_timeouts++;
             continue;
         }
-        if (hal_time_diff(deadline, next) < 0) {
-            next = deadline;
-        }
+        next = hal_time_earlier(next, deadline);
         serve(d, c, true, now);
     }
     return next;

@@ -1,4 +1,5 @@
 #include "dpv1/ds47.h"
+#include "hal/hal_byte_order.h"
 
 #include <string.h>
 
@@ -16,17 +17,6 @@ void ds47_reset(ds47_t *d)
     d->state = DS47_IDLE;
     d->rsp_len = 0;
     d->generation++;
-}
-
-static uint16_t get16(const uint8_t *p)
-{
-    return (uint16_t)((p[0] << 8) | p[1]);
-}
-
-static void put16(uint8_t *p, uint16_t v)
-{
-    p[0] = (uint8_t)(v >> 8);
-    p[1] = (uint8_t)v;
 }
 
 /* PROFIdrive error number for a MOVILINK class-8 additional code (docs/dpv1.md). */
@@ -70,10 +60,10 @@ static bool parse_addresses(ds47_t *d, const uint8_t *req, size_t len, size_t *p
         const uint8_t *a = &req[*pos];
         *pos += 6u;
         ds47_param_t *p = &d->p[i];
-        *p = (ds47_param_t){.number = get16(&a[2]), .ok = true};
+        *p = (ds47_param_t){.number = hal_get_be16(&a[2]), .ok = true};
         uint8_t attr = a[0];
         if (d->id == DS47_ID_MOVILINK) {
-            uint8_t svc = (uint8_t)(attr >> 4);
+            uint8_t svc = (uint8_t)(attr >> DS47_ATTR_ML_SERVICE_SHIFT);
             p->service = svc;
             if (svc != ML_SVC_READ && svc != ML_SVC_WRITE && svc != ML_SVC_WRITE_VOLATILE) {
                 fail(d, i, 0, 0x0505u);
@@ -86,7 +76,7 @@ static bool parse_addresses(ds47_t *d, const uint8_t *req, size_t len, size_t *p
                 p->service = d->id == DS47_ID_CHANGE ? ML_SVC_WRITE : ML_SVC_NONE;
             }
         }
-        if (p->ok && get16(&a[4]) != 0u) {
+        if (p->ok && hal_get_be16(&a[4]) != 0u) {
             fail(d, i, 0x03u, 0x0810u);
         } else if (p->ok && a[1] > 1u) {
             fail(d, i, 0x04u, 0x0810u);
@@ -120,7 +110,7 @@ static bool parse_values(ds47_t *d, const uint8_t *req, size_t len, size_t *pos)
             fail(d, i, 0x18u, 0x0810u);
         } else if (d->p[i].ok) {
             const uint8_t *v = &req[*pos];
-            d->p[i].value = ((uint32_t)get16(v) << 16) | get16(&v[2]);
+            d->p[i].value = ((uint32_t)hal_get_be16(v) << 16) | hal_get_be16(&v[2]);
         }
         *pos += bytes;
     }
@@ -146,13 +136,13 @@ static void build_response(ds47_t *d)
         if (!p->ok) {
             r[n++] = DS47_FORMAT_ERROR;
             r[n++] = 1;
-            put16(&r[n], p->error);
+            hal_put_be16(&r[n], p->error);
             n += 2u;
         } else if (!wrote) {
             r[n++] = DS47_FORMAT_DWORD;
             r[n++] = 1;
-            put16(&r[n], (uint16_t)(p->value >> 16));
-            put16(&r[n + 2u], (uint16_t)p->value);
+            hal_put_be16(&r[n], (uint16_t)(p->value >> 16));
+            hal_put_be16(&r[n + 2u], (uint16_t)p->value);
             n += 4u;
         } else if (!all_ok) {
             r[n++] = DS47_FORMAT_ZERO;

@@ -3,12 +3,7 @@
 #include <string.h>
 
 #include "dpv1/dpv1_wire.h"
-
-static void put16(uint8_t *p, uint16_t v)
-{
-    p[0] = (uint8_t)(v >> 8);
-    p[1] = (uint8_t)v;
-}
+#include "hal/hal_byte_order.h"
 
 static void put_text(uint8_t *p, const char *s, size_t width)
 {
@@ -24,25 +19,25 @@ void im_build_record0(const im_identity_t *id, uint8_t out[IM_RECORD_LEN])
 {
     memset(out, 0, IM_RECORD_LEN); /* 10-octet manufacturer header: unused */
     size_t n = 10;
-    put16(&out[n], id->manufacturer_id);
+    hal_put_be16(&out[n], id->manufacturer_id);
     n += 2u;
     put_text(&out[n], id->order_id, 20u);
     n += 20u;
     put_text(&out[n], id->serial, 16u);
     n += 16u;
-    put16(&out[n], id->hardware_revision);
+    hal_put_be16(&out[n], id->hardware_revision);
     n += 2u;
     memcpy(&out[n], id->software_revision, 4u);
     n += 4u;
-    put16(&out[n], id->revision_counter);
+    hal_put_be16(&out[n], id->revision_counter);
     n += 2u;
-    put16(&out[n], id->profile_id);
+    hal_put_be16(&out[n], id->profile_id);
     n += 2u;
-    put16(&out[n], id->profile_specific_type);
+    hal_put_be16(&out[n], id->profile_specific_type);
     n += 2u;
     out[n++] = 0x01; /* IM_VERSION 1.1 */
     out[n++] = 0x01;
-    put16(&out[n], 0x001Eu); /* IM_SUPPORTED: I&M1..I&M4 */
+    hal_put_be16(&out[n], 0x001Eu); /* IM_SUPPORTED: I&M1..I&M4 */
 }
 
 void im_init(im_t *im, const im_identity_t *id, hal_nvm_t nvm, size_t nvm_offset)

@@ -92,12 +92,8 @@ hal_time_us_t ml_client_poll(ml_client_t *c, hal_time_us_t now)
             p->quarantine = true;
             p->deadline = now + c->timeout_us;
             fail_hardware(c, i);
-            if (hal_time_diff(p->deadline, next) < 0) {
-                next = p->deadline;
-            }
-        } else if (hal_time_diff(p->deadline, next) < 0) {
-            next = p->deadline;
         }
+        next = hal_time_earlier(next, p->deadline);
     }
     return next;
 }

@@ -246,8 +246,8 @@ hal_time_us_t sbus_card_link_poll(sbus_card_link_t *l, hal_time_us_t now)
             send_next(l, (uint8_t)(i + 1u));
             arm(l, now);
         }
-        if (o->busy && hal_time_diff(o->deadline, next) < 0) {
-            next = o->deadline;
+        if (o->busy) {
+            next = hal_time_earlier(next, o->deadline);
         }
     }
     return next;

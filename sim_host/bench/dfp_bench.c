@@ -26,15 +26,9 @@
 #include "sim_hal/membus.h"
 #include "sim_hal/tty_port.h"
 #include "sim_stations/stations.h"
+#include "sim_hal/host_clock.h"
 
 #define BAUD 12000000u
-
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
 
 /* ---- 1. reply path ------------------------------------------------------------------------ */
 
@@ -180,9 +174,9 @@ static uint64_t run_case(const case_spec_t *c, unsigned iterations, bool *replie
             dfp21b_rx_char(&card, fr[k], 0, (hal_time_us_t)(t_ns / 1000u));
         }
         t_ns += char_ns;
-        uint64_t a = mono_ns();
+        uint64_t a = host_clock_mono_ns();
         bench_last_octet(fr[len - 1u], (hal_time_us_t)(t_ns / 1000u));
-        uint64_t b = mono_ns();
+        uint64_t b = host_clock_mono_ns();
         samples[i] = b - a;
         now_us = (hal_time_us_t)(t_ns / 1000u) + 1u;
     }
@@ -191,8 +185,8 @@ static uint64_t run_case(const case_spec_t *c, unsigned iterations, bool *replie
                                : sink.transmits == before;
     uint64_t overhead[1000];
     for (unsigned i = 0; i < 1000u; i++) {
-        uint64_t a = mono_ns();
-        uint64_t b = mono_ns();
+        uint64_t a = host_clock_mono_ns();
+        uint64_t b = host_clock_mono_ns();
         overhead[i] = b - a;
     }
     qsort(overhead, 1000, sizeof overhead[0], cmp_u64);
@@ -265,7 +259,7 @@ static void bench_rig(uint32_t baud, card_inverter_t inverter, uint32_t inverter
 static void bench_membus(unsigned cycles, uint32_t baud)
 {
     bench_rig(baud, CARD_INVERTER_NONE, 0, 100);
-    uint64_t w0 = mono_ns();
+    uint64_t w0 = host_clock_mono_ns();
     uint64_t startup_ns = 0;
     while (bmaster.slaves[0].cycles < cycles && bus.now_ns < 600000000000ull) {
         membus_run_for_us(&bus, startup_ns == 0u ? 50u : 1000u);
@@ -273,7 +267,7 @@ static void bench_membus(unsigned cycles, uint32_t baud)
             startup_ns = bus.now_ns;
         }
     }
-    uint64_t wall = mono_ns() - w0;
+    uint64_t wall = host_clock_mono_ns() - w0;
     double sim_ms = (double)bus.now_ns / 1e6;
     printf("  %-12s start-up %8.3f ms, %u cycles in %9.1f ms bus time = %7.0f cycles/s on "
            "the bus; simulated in %6.1f ms wall (%.0fx real time)\n",
@@ -381,10 +375,10 @@ static void bench_dpv1(uint32_t baud, uint32_t inverter_us, unsigned n)
             open_us = membus_now_us(&bus) - t0;
             port = dpm_c2_port(&c2);
         }
-        for (unsigned params = 1; params <= DPM_DS47_MAX_PARAMS; params += 18u) {
-            dpm_ds47_req_t req = {.ref = 1, .id = DPM_DS47_ID_MOVILINK, .n = (uint8_t)params};
+        for (unsigned params = 1; params <= DS47_MAX_PARAMS; params += 18u) {
+            dpm_ds47_req_t req = {.ref = 1, .id = DS47_ID_MOVILINK, .n = (uint8_t)params};
             for (unsigned i = 0; i < params; i++) {
-                req.p[i] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_READ, .number = 8300};
+                req.p[i] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
             }
             uint64_t sum_us = 0;
             uint32_t max_us = 0;
@@ -453,20 +447,20 @@ static int bench_pty(unsigned cycles)
     memcpy(sc.cfg, cfg_3pd, 2);
     sc.cfg_len = 2;
     dp_master_add_slave(&bmaster, &sc);
-    uint64_t t0 = mono_ns();
+    uint64_t t0 = host_clock_mono_ns();
     uint64_t startup = 0;
     uint64_t dx0 = 0;
-    while (bmaster.slaves[0].cycles < cycles && mono_ns() - t0 < 30000000000ull) {
+    while (bmaster.slaves[0].cycles < cycles && host_clock_mono_ns() - t0 < 30000000000ull) {
         if (tty_runner_run_until(&runner, tty_now_us() + 10000u, NULL) < 0) {
             printf("  PTY: %s\n", tty_runner_error(&runner));
             break;
         }
         if (startup == 0u && bmaster.slaves[0].phase == DPM_PHASE_DATA_EXCH) {
-            startup = mono_ns() - t0;
-            dx0 = mono_ns();
+            startup = host_clock_mono_ns() - t0;
+            dx0 = host_clock_mono_ns();
         }
     }
-    double dx_s = (double)(mono_ns() - dx0) / 1e9;
+    double dx_s = (double)(host_clock_mono_ns() - dx0) / 1e9;
     printf("  PTY pair    start-up %8.3f ms, %u cycles in %9.1f ms wall = %7.0f cycles/s "
            "(card and master in one process)\n",
            (double)startup / 1e6, bmaster.slaves[0].cycles, dx_s * 1000.0,

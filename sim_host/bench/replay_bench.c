@@ -24,15 +24,9 @@
 
 #include "replay/generator.h"
 #include "replay/replay.h"
+#include "sim_hal/host_clock.h"
 
 #define BENCH_BAUD 12000000u
-
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
 
 /* ---- 1. the saturated bus ------------------------------------------------------------------ */
 
@@ -71,12 +65,12 @@ static int make_capture(const char *path, uint64_t telegrams, gen_result_t *res)
                        .inverter = CARD_INVERTER_SIM,
                        .inverter_delay_us = REPLAY_INVERTER_DELAY_US_DEFAULT};
     char err[512];
-    uint64_t t0 = mono_ns();
+    uint64_t t0 = host_clock_mono_ns();
     if (gen_run(&o, res, err, sizeof err) != 0) {
         fprintf(stderr, "dfp-replay-bench: %s\n", err);
         return -1;
     }
-    double s = (double)(mono_ns() - t0) / 1e9;
+    double s = (double)(host_clock_mono_ns() - t0) / 1e9;
     struct stat st;
     long long size = stat(path, &st) == 0 ? (long long)st.st_size : -1;
     printf("  %s: %llu telegrams, %llu octets, %lld bytes on disk, %.1f s of bus time; "
@@ -109,9 +103,9 @@ static void child_replay(const char *path, int fd)
     char err[256];
     if (replay_init(&rp, &o, err, sizeof err) == 0) {
         replay_file_status_t st;
-        uint64_t t0 = mono_ns();
+        uint64_t t0 = host_clock_mono_ns();
         int rc = replay_run_file(&rp, path, CAP_FORMAT_AUTO, NULL, NULL, NULL, &st);
-        out.wall_ns = mono_ns() - t0;
+        out.wall_ns = host_clock_mono_ns() - t0;
         out.file_ok = rc == 0 && !st.read_error;
         out.records = rp.records;
         out.octets = rp.octets;

@@ -163,9 +163,7 @@ static hal_time_us_t on_timer(void *ctx, hal_time_us_t now)
     }
     hal_time_us_t next = movidrive_tick(&inv.md, now);
     hal_time_us_t t = sbus_inverter_poll(&inv.sbus, now);
-    if (hal_time_diff(t, next) < 0) {
-        next = t;
-    }
+    next = hal_time_earlier(next, t);
     if (!inv.quiet) {
         report_state(now);
     }

@@ -25,6 +25,7 @@
 #include "report.h"
 #include "sim_hal/tty_port.h"
 #include "sim_stations/stations.h"
+#include "sim_hal/host_clock.h"
 
 typedef enum via { VIA_CHANNEL = 0, VIA_MOVILINK, VIA_PROFIDRIVE, VIA_C2 } via_t;
 typedef enum op { OP_READ = 0, OP_WRITE, OP_IM0 } op_t;
@@ -55,15 +56,15 @@ typedef struct param_result {
 typedef struct run {
     op_t op;
     via_t via;
-    uint8_t n;  /* parameters: 1, or up to DPM_DS47_MAX_PARAMS for a data set 47 read */
-    uint16_t index[DPM_DS47_MAX_PARAMS];
+    uint8_t n;  /* parameters: 1, or up to DS47_MAX_PARAMS for a data set 47 read */
+    uint16_t index[DS47_MAX_PARAMS];
     uint32_t value;
     bool volatile_write;
     bool json;
     stage_t stage;
     /* result: the whole run's (ok only if every parameter's is), then each parameter's */
     bool ok;
-    param_result_t r[DPM_DS47_MAX_PARAMS];
+    param_result_t r[DS47_MAX_PARAMS];
     dpm_im0_t im0;
     /* paths */
     dp_master_t master;
@@ -374,17 +375,17 @@ static dpm_ds47_req_t build_request(void)
         q.p[i].number = run.index[i];
         q.p[i].value = run.value;
         if (run.via == VIA_PROFIDRIVE) {
-            q.p[i].attribute = DPM_DS47_ATTR_VALUE;
+            q.p[i].attribute = DS47_ATTR_VALUE;
         } else {
-            q.p[i].attribute = run.op == OP_READ ? DPM_DS47_ATTR_ML_READ
-                               : run.volatile_write ? DPM_DS47_ATTR_ML_WRITE_VOLATILE
-                                                    : DPM_DS47_ATTR_ML_WRITE;
+            q.p[i].attribute = run.op == OP_READ ? DS47_ATTR_ML_READ
+                               : run.volatile_write ? DS47_ATTR_ML_WRITE_VOLATILE
+                                                    : DS47_ATTR_ML_WRITE;
         }
     }
     if (run.via == VIA_PROFIDRIVE) {
-        q.id = run.op == OP_WRITE ? DPM_DS47_ID_CHANGE : DPM_DS47_ID_READ;
+        q.id = run.op == OP_WRITE ? DS47_ID_CHANGE : DS47_ID_REQUEST;
     } else {
-        q.id = DPM_DS47_ID_MOVILINK;
+        q.id = DS47_ID_MOVILINK;
     }
     return q;
 }
@@ -563,16 +564,9 @@ static bool parse_index(const char *text, uint16_t *index)
     return true;
 }
 
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
 static uint64_t clock_now(void *ctx)
 {
-    return mono_ns() - *(uint64_t *)ctx;
+    return host_clock_mono_ns() - *(uint64_t *)ctx;
 }
 
 int cmd_param(int argc, char **argv)
@@ -588,7 +582,7 @@ int cmd_param(int argc, char **argv)
     uint32_t timeout_s = 10;
     bool via_given = false;
     bool verbose = false;
-    const char *pos[1 + DPM_DS47_MAX_PARAMS]; /* read and its indices, or write INDEX VALUE */
+    const char *pos[1 + DS47_MAX_PARAMS]; /* read and its indices, or write INDEX VALUE */
     int npos = 0;
     memset(&run, 0, sizeof run);
     for (int i = 2; i < argc; i++) {
@@ -635,7 +629,7 @@ int cmd_param(int argc, char **argv)
             if (npos == (int)(sizeof pos / sizeof pos[0])) {
                 cli_error("param: too many arguments ('%s'%s)", o,
                           strcmp(pos[0], "read") == 0 ? "; a read takes up to 19 indices" : "");
-                _Static_assert(DPM_DS47_MAX_PARAMS == 19u, "the message above names 19");
+                _Static_assert(DS47_MAX_PARAMS == 19u, "the message above names 19");
                 return EXIT_USAGE;
             }
             pos[npos++] = o;
@@ -655,7 +649,7 @@ int cmd_param(int argc, char **argv)
             cli_error("param: read takes the parameter INDEX, or up to %u of them for one data "
                       "set 47 request (e.g. read 8300, read P100, read 8318 8319 8320 --via "
                       "movilink)",
-                      DPM_DS47_MAX_PARAMS);
+                      DS47_MAX_PARAMS);
             return EXIT_USAGE;
         }
     } else if (strcmp(pos[0], "write") == 0) {
@@ -714,7 +708,7 @@ int cmd_param(int argc, char **argv)
         return 1;
     }
     static uint64_t t0;
-    t0 = mono_ns();
+    t0 = host_clock_mono_ns();
     rep.now_ns = clock_now;
     rep.now_ctx = &t0;
     {
@@ -760,9 +754,9 @@ int cmd_param(int argc, char **argv)
     tty_runner_add(&runner, &port, &st);
     tty_runner_add_timer(&runner, master_timer, &run.master); /* so a new request goes at once */
 
-    uint64_t end_ns = mono_ns() + (uint64_t)timeout_s * 1000000000ull;
+    uint64_t end_ns = host_clock_mono_ns() + (uint64_t)timeout_s * 1000000000ull;
     const char *fail = NULL;
-    while (run.stage != ST_DONE && !cli_stop && mono_ns() < end_ns) {
+    while (run.stage != ST_DONE && !cli_stop && host_clock_mono_ns() < end_ns) {
         if (tty_runner_run_until(&runner, tty_now_us() + 5000u, &cli_stop) < 0) {
             fail = tty_runner_error(&runner);
             break;

@@ -13,13 +13,7 @@
 #include "replay/generator.h"
 #include "replay/replay.h"
 #include "report.h"
-
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
+#include "sim_hal/host_clock.h"
 
 /* ---- progress on a terminal ---------------------------------------------------------------- */
 
@@ -37,7 +31,7 @@ static void progress_show(void *ctx, uint64_t records, uint64_t pos, uint64_t si
     if (!p->on) {
         return;
     }
-    uint64_t now = mono_ns();
+    uint64_t now = host_clock_mono_ns();
     if (p->shown && now - p->last < 200000000u) {
         return; /* the first call shows at once, then five times a second */
     }
@@ -66,7 +60,7 @@ static void progress_begin(progress_t *p, const char *what)
 {
     p->on = isatty(STDERR_FILENO) != 0;
     p->what = what;
-    p->t0 = mono_ns();
+    p->t0 = host_clock_mono_ns();
     p->last = p->t0;
     p->shown = false;
 }
@@ -403,7 +397,7 @@ static void record_progress(void *ctx, uint32_t cycles, uint64_t telegrams)
     if (!p->on) {
         return;
     }
-    uint64_t now = mono_ns();
+    uint64_t now = host_clock_mono_ns();
     if (now - p->last < 200000000u) {
         return;
     }

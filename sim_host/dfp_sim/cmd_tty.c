@@ -17,13 +17,7 @@
 #include "sim_hal/tty_port.h"
 #include "sim_stations/stations.h"
 #include <sys/stat.h>
-
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
+#include "sim_hal/host_clock.h"
 
 static bool open_capture(report_t *rep, const capture_opts_t *capture)
 {
@@ -398,8 +392,8 @@ int cmd_slave(int argc, char **argv)
         report_close_capture(&rep);
         return rc;
     }
-    uint64_t end_ns = duration_s != 0u ? mono_ns() + (uint64_t)duration_s * 1000000000ull : 0u;
-    while (!cli_stop && (end_ns == 0u || mono_ns() < end_ns)) {
+    uint64_t end_ns = duration_s != 0u ? host_clock_mono_ns() + (uint64_t)duration_s * 1000000000ull : 0u;
+    while (!cli_stop && (end_ns == 0u || host_clock_mono_ns() < end_ns)) {
         if (rig_run_until(&rig, tty_now_us() + 200000u, &cli_stop) < 0) {
             cli_error("%s", rig_error(&rig));
             rc = 1;
@@ -466,7 +460,7 @@ static void report_done(uint64_t t_start_ns, uint64_t t_all_ns, uint64_t cycles_
                 s->cycles, n > 0 ? hex : "(none)");
         return;
     }
-    uint64_t now = mono_ns();
+    uint64_t now = host_clock_mono_ns();
     double span = (double)(now - t_all_ns) / 1e9;
     uint64_t dx = total_cycles() - cycles_at_all;
     rig_log(&in.log, RIG_LOG_INFO, "master", "master",
@@ -631,7 +625,7 @@ int cmd_master(int argc, char **argv)
         report_close_capture(&rep);
         return rc;
     }
-    uint64_t t_start = mono_ns();
+    uint64_t t_start = host_clock_mono_ns();
     uint64_t end_ns = timeout_given || cycles != 0u
                           ? t_start + (uint64_t)timeout_s * 1000000000ull
                           : UINT64_MAX;
@@ -639,13 +633,13 @@ int cmd_master(int argc, char **argv)
     uint64_t cycles_at_all = 0;
     rc = 1;
     const char *why = "timeout";
-    while (!cli_stop && mono_ns() < end_ns) {
+    while (!cli_stop && host_clock_mono_ns() < end_ns) {
         if (rig_run_until(&rig, tty_now_us() + 20000u, &cli_stop) < 0) {
             why = rig_error(&rig);
             break;
         }
         if (t_all == 0u && all_in_data_exchange()) {
-            t_all = mono_ns();
+            t_all = host_clock_mono_ns();
             cycles_at_all = total_cycles();
             if (num_slaves > 1u) {
                 rig_log(&in.log, RIG_LOG_INFO, "master", "master", "all %zu slaves in data "
@@ -664,7 +658,7 @@ int cmd_master(int argc, char **argv)
         return report_close_capture(&rep) != 0 ? 1 : rc;
     }
     if (rc == 0) {
-        report_done(t_start, t_all != 0u ? t_all : mono_ns(), cycles_at_all);
+        report_done(t_start, t_all != 0u ? t_all : host_clock_mono_ns(), cycles_at_all);
     } else {
         report_missing(cycles, cli_stop ? "interrupted" : why);
     }

@@ -51,7 +51,7 @@ static void tap(void *ctx, uint64_t t, const uint8_t *f, size_t len, bool local,
     (void)local;
     (void)baud;
     if (rig.drop_read_res && len > 10u && f[0] == FDL_SD2 && f[4] == (MASTER | 0x80u) &&
-        f[6] == FDL_RSP_DL && f[7] == DPMV1_SAP_C1 && f[9] == DPMV1_FN_READ) {
+        f[6] == FDL_RSP_DL && f[7] == DPV1_SAP_C1 && f[9] == DPV1_FN_READ) {
         rig.master_port->silenced = true; /* deaf (and mute) until the test lifts it */
         rig.drop_read_res = false;
         rig.dropped_at_ns = rig.bus.now_ns;
@@ -115,7 +115,7 @@ static bool run_until_call(const dpm_call_t *c, uint32_t limit_us)
 typedef struct acyc_result {
     bool done;
     bool ok;
-    uint8_t pdu[DPMV1_PDU_MAX];
+    uint8_t pdu[DPV1_MAX_PDU];
     size_t len;
     char error[200];
     uint32_t polls;
@@ -145,7 +145,7 @@ static bool run_until_result(const acyc_result_t *a, uint32_t limit_us)
 
 static dpm_ds47_req_t ml_request(uint8_t attr, uint16_t index, uint32_t value)
 {
-    dpm_ds47_req_t r = {.ref = 1, .id = DPM_DS47_ID_MOVILINK, .axis = 0, .n = 1};
+    dpm_ds47_req_t r = {.ref = 1, .id = DS47_ID_MOVILINK, .axis = 0, .n = 1};
     r.p[0] = (dpm_ds47_param_t){.attribute = attr, .number = index, .value = value};
     return r;
 }
@@ -244,7 +244,7 @@ static unsigned check_c1_discipline(void)
         prev = f;
         if (retry) {
             repeats++;
-            c1 += m.has_dsap && m.dsap == DPMV1_SAP_C1;
+            c1 += m.has_dsap && m.dsap == DPV1_SAP_C1;
             continue;
         }
         if ((m.fc & FDL_FC_FCV) != 0u) {
@@ -257,7 +257,7 @@ static unsigned check_c1_discipline(void)
         }
         if (!m.has_dsap) {
             since_dx = 0;
-        } else if (m.dsap == DPMV1_SAP_C1) {
+        } else if (m.dsap == DPV1_SAP_C1) {
             c1++;
             if (since_dx != 0u) {
                 interleave_ok = false;
@@ -293,7 +293,7 @@ static void test_c1_ds47_read_8300_on_the_wire(void)
     rig.recording = true;
     dpm_call_t call;
     dpm_ds47_rsp_t rsp;
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     CHECK(ds47(dp_master_c1_port(&rig.master, 0), &req, &call, &rsp));
     CHECK(!rsp.negative);
     CHECK(rsp.p[0].ok && rsp.p[0].has_value);
@@ -301,7 +301,7 @@ static void test_c1_ds47_read_8300_on_the_wire(void)
     CHECK_BYTES(call.data, call.len, 0x01, 0x40, 0x00, 0x01, 0x43, 0x01, 0x31, 0x1C, 0x72, 0x89);
 
     /* Write.req exactly as protocol.md §A1.6 prints it, answered SC. */
-    long w = find_request(0, SLAVE, MASTER, DPMV1_SAP_C1, DPMV1_FN_WRITE);
+    long w = find_request(0, SLAVE, MASTER, DPV1_SAP_C1, DPV1_FN_WRITE);
     CHECK(w >= 0);
     if (w < 0) return;
     const uint8_t write_req[] = {0x68, 0x13, 0x13, 0x68, 0x84, 0x82, 0x7D, 0x33, 0x33, 0x5F,
@@ -312,7 +312,7 @@ static void test_c1_ds47_read_8300_on_the_wire(void)
     /* Next telegram to the slave: a Data_Exchange, then the first poll (empty SRD, 51/51). */
     fdl_msg_t m;
     CHECK(is_request_to(&rig.frames[w + 2], SLAVE, MASTER, &m) && !m.has_dsap);
-    long p = find_request((size_t)w + 1u, SLAVE, MASTER, DPMV1_SAP_C1, -1);
+    long p = find_request((size_t)w + 1u, SLAVE, MASTER, DPV1_SAP_C1, -1);
     CHECK_EQ(p, w + 4);
     if (p < 0) return;
     const uint8_t poll[] = {0x68, 0x05, 0x05, 0x68, 0x84, 0x82, 0x7D, 0x33, 0x33, 0xE9, 0x16};
@@ -331,7 +331,7 @@ static void test_c1_ds47_read_8300_on_the_wire(void)
                     0x84, 0x08, 0x33, 0x33, 0x5F, 0x00, 0x2F, 0x0A, 0x0C, 0x16);
     }
     /* Read.req index 47, length 240, as §A1.6 prints it. */
-    long r = find_request(0, SLAVE, MASTER, DPMV1_SAP_C1, DPMV1_FN_READ);
+    long r = find_request(0, SLAVE, MASTER, DPV1_SAP_C1, DPV1_FN_READ);
     CHECK(r > rsp_at);
     if (r < 0) return;
     const uint8_t read_req[] = {0x68, 0x09, 0x09, 0x68, 0x84, 0x82, 0x7D, 0x33, 0x33, 0x5E,
@@ -365,7 +365,7 @@ static void test_c1_manual_examples_and_writes(void)
     dpm_call_t call;
     dpm_ds47_rsp_t rsp;
     /* MOVILINK write volatile H0 = 3000: the manual's request, answered 01 40 00 01. */
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_WRITE_VOLATILE, 11000, 3000);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_WRITE_VOLATILE, 11000, 3000);
     uint8_t built[64];
     CHECK_BYTES(built, dpm_ds47_build(&req, built, sizeof built), 0x01, 0x40, 0x00, 0x01, 0x30, 0x00,
                 0x2A, 0xF8, 0x00, 0x00, 0x43, 0x01, 0x00, 0x00, 0x0B, 0xB8);
@@ -375,22 +375,22 @@ static void test_c1_manual_examples_and_writes(void)
     CHECK(movidrive_read_value(&rig.card.md, 11000, &v));
     CHECK_EQ(v, 3000);
     /* PROFIdrive request parameter 8300. */
-    req = (dpm_ds47_req_t){.ref = 1, .id = DPM_DS47_ID_READ, .n = 1};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_VALUE, .number = 8300};
+    req = (dpm_ds47_req_t){.ref = 1, .id = DS47_ID_REQUEST, .n = 1};
+    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8300};
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x01, 0x01, 0x00, 0x01, 0x43, 0x01, 0x31, 0x1C, 0x72, 0x89);
     /* PROFIdrive change parameter P160 n11 (8489 = 0x2129, axis 0), then read back. */
-    req = (dpm_ds47_req_t){.ref = 0x22, .id = DPM_DS47_ID_CHANGE, .n = 1};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_VALUE, .number = 8489, .value = 250000};
+    req = (dpm_ds47_req_t){.ref = 0x22, .id = DS47_ID_CHANGE, .n = 1};
+    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489, .value = 250000};
     CHECK_BYTES(built, dpm_ds47_build(&req, built, sizeof built), 0x22, 0x02, 0x00, 0x01, 0x10, 0x00,
                 0x21, 0x29, 0x00, 0x00, 0x43, 0x01, 0x00, 0x03, 0xD0, 0x90);
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x22, 0x02, 0x00, 0x01);
-    req = ml_request(DPM_DS47_ATTR_ML_READ, 8489, 0);
+    req = ml_request(DS47_ATTR_ML_READ, 8489, 0);
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].value, 250000);
     /* MOVILINK write (non-volatile) of P160 through 0x40 / 0x20. */
-    req = ml_request(DPM_DS47_ATTR_ML_WRITE, 8489, 123000);
+    req = ml_request(DS47_ATTR_ML_WRITE, 8489, 123000);
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK(movidrive_read_value(&rig.card.md, 8489, &v));
     CHECK_EQ(v, 123000);
@@ -405,7 +405,7 @@ static void test_c1_negative_parameter_results(void)
     dpm_ds47_rsp_t rsp;
     char text[160];
     /* P302 above its maximum: MOVILINK 0x0815 ... */
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_WRITE_VOLATILE, 8517, 99000000u);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_WRITE_VOLATILE, 8517, 99000000u);
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK(rsp.negative);
     CHECK_BYTES(call.data, call.len, 0x01, 0xC0, 0x00, 0x01, 0x44, 0x01, 0x08, 0x15);
@@ -414,16 +414,16 @@ static void test_c1_negative_parameter_results(void)
     dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
     CHECK_STR(text, "class 8, additional code 0x15: value too high");
     /* ... and PROFIdrive 0x02 through request id 0x02. */
-    req = (dpm_ds47_req_t){.ref = 7, .id = DPM_DS47_ID_CHANGE, .n = 1};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_VALUE, .number = 8517, .value = 99000000u};
+    req = (dpm_ds47_req_t){.ref = 7, .id = DS47_ID_CHANGE, .n = 1};
+    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8517, .value = 99000000u};
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x07, 0x82, 0x00, 0x01, 0x44, 0x01, 0x00, 0x02);
     dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
     CHECK_STR(text, "PROFIdrive error 0x02: low or high limit exceeded");
     /* Index that does not exist: 0x0810 / PROFIdrive 0x00; mixed with a good read. */
-    req = (dpm_ds47_req_t){.ref = 9, .id = DPM_DS47_ID_MOVILINK, .n = 2};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_READ, .number = 1};
-    req.p[1] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_READ, .number = 8300};
+    req = (dpm_ds47_req_t){.ref = 9, .id = DS47_ID_MOVILINK, .n = 2};
+    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 1};
+    req.p[1] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x09, 0xC0, 0x00, 0x02, 0x44, 0x01, 0x08, 0x10, 0x43, 0x01,
                 0x31, 0x1C, 0x72, 0x89);
@@ -431,16 +431,16 @@ static void test_c1_negative_parameter_results(void)
     dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
     CHECK_STR(text, "class 8, additional code 0x10: illegal parameter index");
     /* A failed and a good write: the good one answers 40 00. */
-    req = (dpm_ds47_req_t){.ref = 10, .id = DPM_DS47_ID_MOVILINK, .n = 2};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_WRITE_VOLATILE, .number = 8517,
+    req = (dpm_ds47_req_t){.ref = 10, .id = DS47_ID_MOVILINK, .n = 2};
+    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE, .number = 8517,
                               .value = 99000000u};
-    req.p[1] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_WRITE_VOLATILE, .number = 11000,
+    req.p[1] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE, .number = 11000,
                               .value = 5};
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x0A, 0xC0, 0x00, 0x02, 0x44, 0x01, 0x08, 0x15, 0x40, 0x00);
     CHECK(!rsp.p[0].ok && rsp.p[1].ok && !rsp.p[1].has_value);
     /* Axis 1: every parameter 0x0019. */
-    req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     req.axis = 1;
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].error, 0x0019);
@@ -467,19 +467,19 @@ static void test_c1_negative_parameter_results(void)
 static void test_c1_nineteen_parameters(void)
 {
     setup(true, true, 0);
-    dpm_ds47_req_t req = {.ref = 0x55, .id = DPM_DS47_ID_MOVILINK, .n = DPM_DS47_MAX_PARAMS};
-    for (unsigned i = 0; i < DPM_DS47_MAX_PARAMS; i++) {
-        req.p[i] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_READ, .number = 8300};
+    dpm_ds47_req_t req = {.ref = 0x55, .id = DS47_ID_MOVILINK, .n = DS47_MAX_PARAMS};
+    for (unsigned i = 0; i < DS47_MAX_PARAMS; i++) {
+        req.p[i] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
     }
     req.p[5].number = 8489;
-    uint8_t built[DPMV1_DATA_MAX];
+    uint8_t built[DPV1_MAX_DATA];
     CHECK_EQ(dpm_ds47_build(&req, built, sizeof built), 4 + 6 * 19);
     dpm_call_t call;
     dpm_ds47_rsp_t rsp;
     CHECK(ds47(dp_master_c1_port(&rig.master, 0), &req, &call, &rsp));
     CHECK_EQ(call.len, 4 + 6 * 19);
     unsigned good = 0;
-    for (unsigned i = 0; i < DPM_DS47_MAX_PARAMS; i++) {
+    for (unsigned i = 0; i < DS47_MAX_PARAMS; i++) {
         good += rsp.p[i].ok && rsp.p[i].value == (i == 5 ? 150000u : 0x311C7289u);
     }
     CHECK_EQ(good, 19);
@@ -487,9 +487,9 @@ static void test_c1_nineteen_parameters(void)
     req.n = 20;
     CHECK_EQ(dpm_ds47_build(&req, built, sizeof built), 0);
     /* 19 writes: 4 + 19 * 12 = 232 octets. */
-    req = (dpm_ds47_req_t){.ref = 0x56, .id = DPM_DS47_ID_MOVILINK, .n = DPM_DS47_MAX_PARAMS};
-    for (unsigned i = 0; i < DPM_DS47_MAX_PARAMS; i++) {
-        req.p[i] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_WRITE_VOLATILE,
+    req = (dpm_ds47_req_t){.ref = 0x56, .id = DS47_ID_MOVILINK, .n = DS47_MAX_PARAMS};
+    for (unsigned i = 0; i < DS47_MAX_PARAMS; i++) {
+        req.p[i] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE,
                                   .number = (uint16_t)(11000 + i), .value = 100u + i};
     }
     CHECK_EQ(dpm_ds47_build(&req, built, sizeof built), 232);
@@ -505,7 +505,7 @@ static void test_c1_slow_inverter_b5_and_exchange_goes_on(void)
     setup(true, true, 20000); /* 20 ms per MOVILINK service */
     rig.recording = true;
     uint32_t cycles0 = rig.master.slaves[0].cycles;
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     dpm_call_t call;
     dpm_ds47_rsp_t rsp;
     CHECK(ds47(dp_master_c1_port(&rig.master, 0), &req, &call, &rsp));
@@ -595,7 +595,7 @@ static void test_c1_refusals_and_timeouts(void)
     setup(true, true, 0);
     rig.master.cfg.c1_timeout_us = DPM_C1_TIMEOUT_US_DEFAULT;
     dpm_call_t call = {0};
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     CHECK_EQ(dpm_ds47_start(&call, dp_master_c1_port(&rig.master, 0), &req, NULL, NULL,
                             membus_now_us(&rig.bus)), 0);
     while (rig.master.slaves[0].c1.state == DPM_XFER_REQUEST ||
@@ -619,7 +619,7 @@ static void test_c1_lost_response_is_repeated_by_the_card(void)
     rig.recording = true;
     rig.drop_read_res = true;
     dpm_call_t call = {0};
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     CHECK_EQ(dpm_ds47_start(&call, dp_master_c1_port(&rig.master, 0), &req, NULL, NULL,
                             membus_now_us(&rig.bus)), 0);
     for (int i = 0; i < 100000 && !dpm_call_done(&call); i++) {
@@ -637,7 +637,7 @@ static void test_c1_lost_response_is_repeated_by_the_card(void)
     long first = -1;
     for (size_t i = 0; i + 3u < rig.nframes; i++) {
         const frame_t *f = &rig.frames[i + 1u];
-        if (f->len > 10u && f->b[6] == FDL_RSP_DL && f->b[9] == DPMV1_FN_READ) {
+        if (f->len > 10u && f->b[6] == FDL_RSP_DL && f->b[9] == DPV1_FN_READ) {
             first = (long)i;
             break;
         }
@@ -664,15 +664,15 @@ static void test_c1_inverter_timeout_texts(void)
     dpm_call_t call;
     dpm_ds47_rsp_t rsp;
     char text[200];
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].error, 0x0602);
     dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
     CHECK_STR(text, "class 6 code 2: card <-> inverter communication fault");
     CHECK(call.busy > 10u);
     membus_run_for_us(&rig.bus, 600000); /* let the late answer pass */
-    req = (dpm_ds47_req_t){.ref = 3, .id = DPM_DS47_ID_READ, .n = 1};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_VALUE, .number = 8300};
+    req = (dpm_ds47_req_t){.ref = 3, .id = DS47_ID_REQUEST, .n = 1};
+    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8300};
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].error, 0x0082);
     dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
@@ -728,10 +728,10 @@ static void test_c2_open_read_abort_on_the_wire(void)
     size_t before = rig.nframes;
     dpm_call_t call;
     dpm_ds47_rsp_t rsp;
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     CHECK(ds47(dpm_c2_port(&c), &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].value, 0x311C7289u);
-    long w = find_request(before, SLAVE, 1, 0, DPMV1_FN_WRITE);
+    long w = find_request(before, SLAVE, 1, 0, DPV1_FN_WRITE);
     CHECK(w >= 0);
     if (w >= 0) {
         const uint8_t write_req[] = {0x68, 0x13, 0x13, 0x68, 0x84, 0x81, 0x7D, 0x00, 0x32, 0x5F,
@@ -747,7 +747,7 @@ static void test_c2_open_read_abort_on_the_wire(void)
     CHECK(run_until_result(&ab, 100000));
     CHECK(ab.ok);
     CHECK_EQ(dpm_c2_state(&c), DPM_C2_CLOSED);
-    long abort_at = find_request(before, SLAVE, 1, 0, DPMV1_FN_ABORT);
+    long abort_at = find_request(before, SLAVE, 1, 0, DPV1_FN_ABORT);
     CHECK(abort_at >= 0);
     if (abort_at >= 0) {
         const uint8_t abort_req[] = {0x68, 0x09, 0x09, 0x68, 0x84, 0x81, 0x7D, 0x00, 0x32, 0x58,
@@ -790,7 +790,7 @@ static void test_c2_im0_and_negative(void)
     CHECK_EQ(call.neg_code1, 0xB6);
     CHECK_EQ(dpm_c2_state(&c), DPM_C2_OPEN); /* a negative response keeps the connection */
     /* A MOVILINK error through class 2. */
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_WRITE_VOLATILE, 8517, 99000000u);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_WRITE_VOLATILE, 8517, 99000000u);
     dpm_ds47_rsp_t rsp;
     CHECK(ds47(dpm_c2_port(&c), &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].error, 0x0815);
@@ -821,7 +821,7 @@ static void test_c2_third_connection_refused(void)
     CHECK_BYTES(rig.frames[1].b, rig.frames[1].len, 0x68, 0x09, 0x09, 0x68, 0x81, 0x84, 0x08,
                 0x28, 0x31, 0x58, 0x00, 0x1F, 0x00, 0xDD, 0x16);
     /* Both others still work; the FCB sequence of address 1 is shared by c1 and c3. */
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     dpm_call_t call;
     dpm_ds47_rsp_t rsp;
     CHECK(ds47(dpm_c2_port(&c1), &req, &call, &rsp));
@@ -852,7 +852,7 @@ static void test_c2_idle_keeps_the_connection(void)
     CHECK_EQ(dpm_c2_state(&c), DPM_C2_OPEN);
     CHECK(c.idles >= 8u && c.idles <= 11u); /* one per 50 ms */
     CHECK_EQ(rig.card.card.dpv1.c2_timeouts, 0);
-    long i = find_request(0, SLAVE, 1, 0, DPMV1_FN_IDLE);
+    long i = find_request(0, SLAVE, 1, 0, DPV1_FN_IDLE);
     CHECK(i >= 0);
     if (i >= 0) {
         const uint8_t idle[] = {0x68, 0x09, 0x09, 0x68, 0x84, 0x81, 0x7D, 0x00, 0x32, 0x48,
@@ -862,7 +862,7 @@ static void test_c2_idle_keeps_the_connection(void)
                     0x84, 0x08, 0x32, 0x00, 0x48, 0x00, 0x00, 0x00, 0x87, 0x16);
     }
     /* A request right after an Idle still goes through. */
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     dpm_call_t call;
     dpm_ds47_rsp_t rsp;
     CHECK(ds47(dpm_c2_port(&c), &req, &call, &rsp));
@@ -891,8 +891,8 @@ static void test_c2_and_c1_together_with_cyclic_exchange(void)
     c2_setup(&c, MASTER, 0); /* same address as the class-1 master: one FCB sequence */
     acyc_result_t a;
     CHECK(c2_open(&c, &a));
-    dpm_ds47_req_t r1 = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
-    dpm_ds47_req_t r2 = ml_request(DPM_DS47_ATTR_ML_READ, 8489, 0);
+    dpm_ds47_req_t r1 = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    dpm_ds47_req_t r2 = ml_request(DS47_ATTR_ML_READ, 8489, 0);
     r2.ref = 2;
     dpm_call_t k1 = {0};
     dpm_call_t k2 = {0};
@@ -922,7 +922,7 @@ static void test_c2_slave_falls_silent(void)
     CHECK(c2_open(&c, &a));
     rig.card_port->silenced = true;
     dpm_call_t call = {0};
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     CHECK_EQ(dpm_ds47_start(&call, dpm_c2_port(&c), &req, NULL, NULL, membus_now_us(&rig.bus)),
              0);
     membus_wake(rig.master_port);
@@ -940,7 +940,7 @@ static void test_c2_slave_falls_silent(void)
 
 static void test_ds47_parse_and_texts(void)
 {
-    dpm_ds47_req_t req = ml_request(DPM_DS47_ATTR_ML_READ, 8300, 0);
+    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     dpm_ds47_rsp_t rsp;
     char err[128];
     const uint8_t good[] = {0x01, 0x40, 0x00, 0x01, 0x43, 0x01, 0x31, 0x1C, 0x72, 0x89};

@@ -325,8 +325,8 @@ static void drive_ds47(path_t *p, dpm_call_t *call, dpm_ds47_req_t *req, dpm_acy
     }
     /* Request Reference 1..255: 0 is refused as a header error (B7). */
     *req = (dpm_ds47_req_t){.ref = (uint8_t)(1u + p->next_value % 255u),
-                            .id = DPM_DS47_ID_MOVILINK, .n = 1};
-    req->p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_WRITE_VOLATILE,
+                            .id = DS47_ID_MOVILINK, .n = 1};
+    req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE,
                                    .number = p->index, .value = p->next_value + 1u};
     if (dpm_ds47_start(call, port, req, call_done, p, now()) == 0) {
         issue(p);

@@ -1,4 +1,7 @@
-/* DP-V1 PDU layouts and codes (protocol.md §A4, protocol.md §B7-§B8, docs/dpv1.md). */
+/* DP-V1 PDU layouts and codes, and the layouts of the two records the card serves through them:
+ * data set 47 and I&M (protocol.md §A4, §A5, §A7, §B7-§B8, docs/dpv1.md). Constants only: the
+ * card (dpv1/), the host master, replay and the dissector's checks all take their numbers from
+ * here. */
 #ifndef DPV1_DPV1_WIRE_H
 #define DPV1_DPV1_WIRE_H
 
@@ -36,5 +39,28 @@
 #define DPV1_ABORT_INSTANCE_C2 0x10u
 #define DPV1_ABORT_REASON_TIMEOUT 0x03u
 #define DPV1_ABORT_REASON_RESOURCE 0x0Fu
+
+/* Data set 47 (protocol.md §A5.2, §B7): request/response ids, attributes, formats. */
+#define DS47_MAX_PARAMS 19u
+#define DS47_ID_REQUEST 0x01u
+#define DS47_ID_CHANGE 0x02u
+#define DS47_ID_MOVILINK 0x40u
+#define DS47_ID_ERROR 0x80u
+#define DS47_ATTR_VALUE 0x10u
+/* In a MOVILINK request (id 0x40) the attribute's high nibble is the MOVILINK service. */
+#define DS47_ATTR_ML_SERVICE_SHIFT 4u
+#define DS47_ATTR_ML_READ 0x10u
+#define DS47_ATTR_ML_WRITE 0x20u
+#define DS47_ATTR_ML_WRITE_VOLATILE 0x30u
+#define DS47_FORMAT_ZERO 0x40u
+#define DS47_FORMAT_DWORD 0x43u
+#define DS47_FORMAT_ERROR 0x44u
+
+/* I&M through the call service on index 255 (protocol.md §A7). */
+#define IM_RECORD_LEN 64u
+#define IM_CALL_HEADER_LEN 4u /* 08 00 FI_Index(u16) */
+#define IM_FN_CALL 0x08u
+#define IM_INDEX_0 65000u
+#define IM_INDEX_LAST 65004u
 
 #endif

@@ -12,17 +12,6 @@
 #include "dpv1/dpv1_wire.h"
 #include "movilink/movilink_client.h"
 
-#define DS47_MAX_PARAMS 19u
-
-#define DS47_ID_REQUEST 0x01u
-#define DS47_ID_CHANGE 0x02u
-#define DS47_ID_MOVILINK 0x40u
-#define DS47_ID_ERROR 0x80u
-#define DS47_ATTR_VALUE 0x10u
-#define DS47_FORMAT_ZERO 0x40u
-#define DS47_FORMAT_DWORD 0x43u
-#define DS47_FORMAT_ERROR 0x44u
-
 typedef enum ds47_state { DS47_IDLE = 0, DS47_BUSY, DS47_DONE } ds47_state_t;
 
 typedef struct ds47_param {

@@ -10,11 +10,8 @@
 
 #include "hal/hal_nvm.h"
 
-#define IM_RECORD_LEN 64u
-#define IM_CALL_HEADER_LEN 4u /* 08 00 FI_Index(u16) */
-#define IM_FN_CALL 0x08u
-#define IM_INDEX_0 65000u
-#define IM_INDEX_LAST 65004u
+#include "dpv1/dpv1_wire.h"
+
 #define IM_WRITABLE 4u
 #define IM_NVM_MAGIC 0x494D3031u /* "IM01" */
 #define IM_NVM_SIZE (4u + IM_WRITABLE * IM_RECORD_LEN)

@@ -1,4 +1,5 @@
 #include "dfp21b/dfp21b.h"
+#include "hal/hal_byte_order.h"
 
 #include <string.h>
 
@@ -387,12 +388,6 @@ static void push_fieldbus_status(dfp21b_t *c)
     c->cfg.inverter.ops->fieldbus_status(c->cfg.inverter.ctx, &st);
 }
 
-static void put_be16(uint8_t *p, uint16_t v)
-{
-    p[0] = (uint8_t)(v >> 8);
-    p[1] = (uint8_t)(v & 0xFFu);
-}
-
 static bool have_inverter(const dfp21b_t *c)
 {
     return c->cfg.inverter.ops != NULL;
@@ -447,7 +442,7 @@ static void build_inputs(dfp21b_t *c)
                have_inverter(c) ? ml_channel_reply(&c->param) : c->param_rsp, DFP21B_PARAM_LEN);
     }
     for (uint8_t i = 0; i < n; i++) {
-        put_be16(&c->in_image[off + 2u * (size_t)i], c->pi[i]);
+        hal_put_be16(&c->in_image[off + 2u * (size_t)i], c->pi[i]);
     }
     dp_slave_set_inputs(&c->dp, c->in_image, off + 2u * (size_t)n);
     c->inputs_dirty = false;
@@ -515,16 +510,12 @@ hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now)
         take_outputs(c, now);
     }
     hal_time_us_t ml_next = ml_client_poll(&c->ml, now);
-    if (hal_time_diff(ml_next, next) < 0) {
-        next = ml_next;
-    }
+    next = hal_time_earlier(next, ml_next);
     hal_time_us_t v1_next = dpv1_poll(&c->dpv1, now);
-    if (hal_time_diff(v1_next, next) < 0) {
-        next = v1_next;
-    }
+    next = hal_time_earlier(next, v1_next);
     poll_inverter_status(c, now);
-    if (have_inverter(c) && c->diag_alarm && hal_time_diff(c->next_status_poll, next) < 0) {
-        next = c->next_status_poll;
+    if (have_inverter(c) && c->diag_alarm) {
+        next = hal_time_earlier(next, c->next_status_poll);
     }
     if (c->status_dirty) {
         push_fieldbus_status(c);

@@ -23,6 +23,13 @@ static inline bool hal_time_reached(hal_time_us_t now, hal_time_us_t deadline)
     return hal_time_diff(now, deadline) >= 0;
 }
 
+/* The earlier of two deadlines: how every poll function merges the deadlines of its parts into
+ * the one it returns. */
+static inline hal_time_us_t hal_time_earlier(hal_time_us_t a, hal_time_us_t b)
+{
+    return hal_time_diff(a, b) <= 0 ? a : b;
+}
+
 /* Returned by poll functions that have no pending deadline. */
 #define HAL_TIME_NO_DEADLINE_US 0x7FFFFFFFu
 

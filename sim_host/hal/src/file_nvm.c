@@ -1,7 +1,7 @@
 #define _POSIX_C_SOURCE 200809L // NOLINT(bugprone-reserved-identifier,cert-dcl37-c,cert-dcl51-cpp): feature-test macro
 
 #include "sim_hal/file_nvm.h"
-#include "sim_hal/be_bytes.h"
+#include "hal/hal_byte_order.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -66,15 +66,15 @@ static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
                  (unsigned)FILE_NVM_HEADER);
         return -2;
     }
-    uint32_t magic = get_u32(h);
+    uint32_t magic = hal_get_be32(h);
     if (magic != FILE_NVM_MAGIC) {
         snprintf(err, errlen, "%s: not an EEPROM image (magic 0x%08X, expected 0x%08X)", path,
                  (unsigned)magic, (unsigned)FILE_NVM_MAGIC);
         return -2;
     }
-    uint32_t version = get_u16(h + 4);
-    uint32_t hlen = get_u16(h + 6);
-    uint32_t len = get_u32(h + 8);
+    uint32_t version = hal_get_be16(h + 4);
+    uint32_t hlen = hal_get_be16(h + 6);
+    uint32_t len = hal_get_be32(h + 8);
     if (version != FILE_NVM_VERSION || hlen != FILE_NVM_HEADER) {
         snprintf(err, errlen, "%s: image version %u / header length %u not supported", path,
                  (unsigned)version, (unsigned)hlen);
@@ -87,7 +87,7 @@ static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
                  path, (unsigned)len, got - FILE_NVM_HEADER);
         return -2;
     }
-    uint32_t stored = get_u32(h + 16);
+    uint32_t stored = hal_get_be32(h + 16);
     uint32_t crc = file_nvm_crc32(0, h, 16);
     crc = file_nvm_crc32(crc, h + FILE_NVM_HEADER, len);
     if (crc != stored) {
@@ -97,7 +97,7 @@ static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
     }
     memset(f->data, 0xFF, f->size);
     memcpy(f->data, h + FILE_NVM_HEADER, len < f->size ? len : f->size);
-    f->seq = get_u32(h + 12);
+    f->seq = hal_get_be32(h + 12);
     return 0;
 }
 
@@ -226,13 +226,13 @@ static int nvm_write(void *ctx, size_t offset, const uint8_t *data, size_t len)
     }
     memcpy(payload + offset, data, len);
     uint32_t seq = f->seq + 1u;
-    put_u32(img, FILE_NVM_MAGIC);
-    put_u16(img + 4, FILE_NVM_VERSION);
-    put_u16(img + 6, FILE_NVM_HEADER);
-    put_u32(img + 8, (uint32_t)f->size);
-    put_u32(img + 12, seq);
+    hal_put_be32(img, FILE_NVM_MAGIC);
+    hal_put_be16(img + 4, FILE_NVM_VERSION);
+    hal_put_be16(img + 6, FILE_NVM_HEADER);
+    hal_put_be32(img + 8, (uint32_t)f->size);
+    hal_put_be32(img + 12, seq);
     uint32_t crc = file_nvm_crc32(0, img, 16);
-    put_u32(img + 16, file_nvm_crc32(crc, payload, f->size));
+    hal_put_be32(img + 16, file_nvm_crc32(crc, payload, f->size));
 
     char tmp[FILE_NVM_PATH_MAX + 8];
     char bak[FILE_NVM_PATH_MAX + 8];

@@ -13,6 +13,7 @@
 #include <termios.h>
 #include <time.h>
 #include <unistd.h>
+#include "sim_hal/host_clock.h"
 
 /* struct termios2 is declared by <asm/termbits.h>, which redefines struct termios and clashes
  * with glibc's <termios.h>. The layout is stable kernel ABI, so it is declared here under its own
@@ -52,16 +53,9 @@ enum { MARK_NONE = 0, MARK_FF = 1, MARK_FF00 = 2 };
 /* ---------------------------------------------------------------------------------------------
  * Clock */
 
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
-}
-
 hal_time_us_t tty_now_us(void)
 {
-    return (hal_time_us_t)(mono_ns() / 1000u);
+    return (hal_time_us_t)(host_clock_mono_ns() / 1000u);
 }
 
 static void sleep_us(int32_t us)
@@ -516,7 +510,7 @@ static int tty_uart_transmit(void *ctx, const uint8_t *frame, size_t len, hal_ti
         return -1;
     }
     wait_until(not_before);
-    uint64_t t_ns = mono_ns();
+    uint64_t t_ns = host_clock_mono_ns();
     if (write_all(p->fd, frame, len) != 0) {
         runner_tx_failed(p, strerror(errno));
         return -1;
@@ -561,7 +555,7 @@ static int runner_fail(tty_runner_t *r, const char *fmt, ...)
 void tty_runner_init(tty_runner_t *r)
 {
     memset(r, 0, sizeof *r);
-    r->t0_ns = mono_ns();
+    r->t0_ns = host_clock_mono_ns();
 }
 
 int tty_runner_add(tty_runner_t *r, tty_port_t *p, const sim_station_t *st)
@@ -708,7 +702,7 @@ static void deliver_chunk(tty_runner_t *r, tty_runner_slot_t *s, const uint8_t *
 {
     uint8_t bytes[TTY_READ_CHUNK + 1u];
     uint8_t flags[TTY_READ_CHUNK + 1u];
-    uint64_t t_ns = mono_ns();
+    uint64_t t_ns = host_clock_mono_ns();
     hal_time_us_t t = (hal_time_us_t)(t_ns / 1000u);
     tty_port_t *p = s->port;
     size_t m = tty_port_decode(p, raw, n, bytes, flags);

@@ -11,6 +11,7 @@
 #include "dfp_lcm/dfp_lcm_telegram_t.h"
 #include "dfp_lcm_bridge/lcm_bridge.h"
 #include "dfp_lcm_types/telegram_decode.h"
+#include "sim_hal/host_clock.h"
 
 /* One readable() call handles at most this many messages, so a flood cannot starve the
  * station's timers; the descriptor stays readable and the runner comes back. */
@@ -18,13 +19,6 @@
 
 /* More than this ahead is a clock mix-up, as on a tty. */
 #define SEGMENT_MAX_TX_WAIT_US 10000000
-
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
 
 const char *dfp_lcm_segment_channel(const char *text)
 {
@@ -57,7 +51,7 @@ static void on_telegram(dfp_lcm_segment_t *s, const dfp_lcm_telegram_t *msg)
         return;
     }
     s->frames_received++;
-    uint64_t t_ns = mono_ns();
+    uint64_t t_ns = host_clock_mono_ns();
     hal_time_us_t t = (hal_time_us_t)(t_ns / 1000u);
     uint8_t flags = (uint8_t)((uint16_t)msg->error_flags &
                               (HAL_UART_RX_PARITY_ERR | HAL_UART_RX_FRAMING_ERR |
@@ -160,7 +154,7 @@ static int segment_transmit(void *ctx, const uint8_t *frame, size_t len, hal_tim
     wait_until(not_before);
     uint8_t copy[512];
     memcpy(copy, frame, len);
-    uint64_t t_ns = mono_ns();
+    uint64_t t_ns = host_clock_mono_ns();
     dfp_lcm_telegram_t m = {
         .utime = dfp_lcm_wall_us(),
         .source_id = s->source_id,
@@ -224,7 +218,7 @@ int dfp_lcm_segment_open(dfp_lcm_segment_t *s, const char *url, const char *chan
     s->process_id = (int32_t)getpid();
     s->station_address = station_address;
     s->baud = baud;
-    s->t0_ns = mono_ns();
+    s->t0_ns = host_clock_mono_ns();
     return 0;
 }
 

@@ -250,7 +250,7 @@ int dp_master_c1_submit(dp_master_t *m, unsigned idx, const uint8_t *pdu, size_t
     if (!dpm_prm_is_dpv1(s->cfg.prm, s->cfg.prm_len)) {
         return -1;
     }
-    return dpm_xfer_start(&s->c1, DPMV1_SAP_C1, DPMV1_SAP_C1, pdu, len, m->cfg.c1_timeout_us, done,
+    return dpm_xfer_start(&s->c1, DPV1_SAP_C1, DPV1_SAP_C1, pdu, len, m->cfg.c1_timeout_us, done,
                           ctx);
 }
 
@@ -681,19 +681,13 @@ hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
         }
         hal_time_us_t next = idle_deadline;
         for (unsigned i = 0; i < m->num_slaves; i++) {
-            if (hal_time_diff(m->slaves[i].due, next) < 0) {
-                next = m->slaves[i].due;
-            }
+            next = hal_time_earlier(next, m->slaves[i].due);
             hal_time_us_t d = dpm_xfer_check_timeout(&m->slaves[i].c1, now);
-            if (hal_time_diff(d, next) < 0) {
-                next = d;
-            }
+            next = hal_time_earlier(next, d);
         }
         for (unsigned i = 0; i < m->num_c2; i++) {
             hal_time_us_t d = dpm_c2_next_deadline(m->c2[i], now);
-            if (hal_time_diff(d, next) < 0) {
-                next = d;
-            }
+            next = hal_time_earlier(next, d);
         }
         return next;
     }
@@ -704,7 +698,7 @@ hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
         const uint8_t *du = NULL;
         size_t n = dpm_xfer_telegram(&s->c1, now, &du);
         m->request_len = (uint16_t)fdl_encode(m->request, s->cfg.address, m->cfg.address,
-                                              next_fc(s, true), true, DPMV1_SAP_C1, DPMV1_SAP_C1,
+                                              next_fc(s, true), true, DPV1_SAP_C1, DPV1_SAP_C1,
                                               du, n);
         s->c1_turn = false;
         m->waiting_kind = DPM_WAIT_C1;

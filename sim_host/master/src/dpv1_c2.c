@@ -20,7 +20,7 @@ void dpm_c2_init(dpm_c2_t *c, const dpm_c2_cfg_t *cfg)
 {
     memset(c, 0, sizeof *c);
     c->cfg = *cfg;
-    if (c->cfg.ssap == 0u) c->cfg.ssap = DPMV1_SAP_C2_MASTER;
+    if (c->cfg.ssap == 0u) c->cfg.ssap = DPM_C2_SSAP_DEFAULT;
     if (c->cfg.send_timeout == 0u) c->cfg.send_timeout = DPM_C2_SEND_TIMEOUT_DEFAULT;
     if (c->cfg.response_timeout_us == 0u) {
         c->cfg.response_timeout_us = DPM_C2_RESPONSE_TIMEOUT_US_DEFAULT;
@@ -30,7 +30,7 @@ void dpm_c2_init(dpm_c2_t *c, const dpm_c2_cfg_t *cfg)
 size_t dpm_c2_build_initiate(uint8_t *out, uint16_t send_timeout)
 {
     const uint8_t pdu[DPM_C2_INITIATE_LEN] = {
-        DPMV1_FN_INITIATE, 0x00, 0x00, 0x00,
+        DPV1_FN_INITIATE, 0x00, 0x00, 0x00,
         (uint8_t)(send_timeout >> 8), (uint8_t)send_timeout,
         0x01, 0x00, /* Features_Supported_1: DPMV1_RW (Read/Write); _2: none */
         0x00, 0x00, /* Profile_Features_Supported_1/2 */
@@ -102,7 +102,7 @@ static void abort_text(char *out, size_t max, const uint8_t *pdu, size_t len)
 
 static bool is_abort(const dpm_acyc_result_t *r)
 {
-    return r->ok && r->len >= 1u && r->pdu[0] == DPMV1_FN_ABORT;
+    return r->ok && r->len >= 1u && r->pdu[0] == DPV1_FN_ABORT;
 }
 
 static void start_queued(dpm_c2_t *c, hal_time_us_t now);
@@ -126,12 +126,12 @@ static void xfer_done(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
             abort_text(text, sizeof text, r->pdu, r->len);
             set_error(c, "connection refused (%s SAP %u): %s",
                       c->state == DPM_C2_RM ? "resource manager" : "connection",
-                      c->state == DPM_C2_RM ? DPMV1_SAP_C2_RM : c->sap, text);
+                      c->state == DPM_C2_RM ? DPV1_SAP_RM : c->sap, text);
             close_with(c, r, now);
             return;
         }
         if (c->state == DPM_C2_RM) {
-            if (r->len < 2u || r->pdu[0] != DPMV1_FN_RM || r->pdu[1] > 48u) {
+            if (r->len < 2u || r->pdu[0] != DPV1_FN_RM || r->pdu[1] > 48u) {
                 set_error(c, "resource manager: unexpected answer (%zu octets, first 0x%02X)",
                           r->len, r->len > 0u ? r->pdu[0] : 0u);
                 close_with(c, r, now);
@@ -143,7 +143,7 @@ static void xfer_done(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
                                          xfer_done, c);
             return;
         }
-        if (r->pdu[0] == DPMV1_FN_INITIATE && r->len >= 12u) {
+        if (r->pdu[0] == DPV1_FN_INITIATE && r->len >= 12u) {
             c->state = DPM_C2_OPEN;
             c->op = DPM_C2_OP_NONE;
             c->opens++;
@@ -154,7 +154,7 @@ static void xfer_done(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
             start_queued(c, now);
             return;
         }
-        if (r->pdu[0] == (DPMV1_FN_INITIATE | DPMV1_FN_ERROR)) {
+        if (r->pdu[0] == (DPV1_FN_INITIATE | DPV1_FN_ERROR)) {
             set_error(c, "Initiate refused: %s (Error_Code_1 0x%02X)",
                       dpm_v1_error_text(r->len > 2u ? r->pdu[2] : 0u),
                       r->len > 2u ? r->pdu[2] : 0u);
@@ -179,7 +179,7 @@ static void xfer_done(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
         }
         c->op = DPM_C2_OP_NONE;
         if (idle) {
-            if (r->len < 1u || r->pdu[0] != DPMV1_FN_IDLE) {
+            if (r->len < 1u || r->pdu[0] != DPV1_FN_IDLE) {
                 set_error(c, "Idle answered with 0x%02X (expected 0x48)",
                           r->len > 0u ? r->pdu[0] : 0u);
             }
@@ -208,7 +208,7 @@ int dpm_c2_open(dpm_c2_t *c, dpm_acyc_done_t done, void *ctx, hal_time_us_t now)
     }
     uint8_t pdu[DPM_C2_INITIATE_LEN];
     size_t n = dpm_c2_build_initiate(pdu, c->cfg.send_timeout);
-    if (dpm_xfer_start(&c->x, DPMV1_SAP_C2_RM, c->cfg.ssap, pdu, n, c->cfg.response_timeout_us,
+    if (dpm_xfer_start(&c->x, DPV1_SAP_RM, c->cfg.ssap, pdu, n, c->cfg.response_timeout_us,
                        xfer_done, c) != 0) {
         return -1;
     }
@@ -251,7 +251,7 @@ int dpm_c2_submit(dpm_c2_t *c, const uint8_t *pdu, size_t len, dpm_acyc_done_t d
                   hal_time_us_t now)
 {
     (void)now;
-    if (c->state != DPM_C2_OPEN || c->queued || len == 0u || len > DPMV1_PDU_MAX) {
+    if (c->state != DPM_C2_OPEN || c->queued || len == 0u || len > DPV1_MAX_PDU) {
         return -1;
     }
     if (c->op == DPM_C2_OP_IDLE) {
@@ -270,7 +270,7 @@ int dpm_c2_submit(dpm_c2_t *c, const uint8_t *pdu, size_t len, dpm_acyc_done_t d
 
 static void start_abort(dpm_c2_t *c)
 {
-    const uint8_t pdu[4] = {DPMV1_FN_ABORT, 0x00, c->abort_code, 0x00};
+    const uint8_t pdu[4] = {DPV1_FN_ABORT, 0x00, c->abort_code, 0x00};
     (void)dpm_xfer_start(&c->x, c->sap, c->cfg.ssap, pdu, sizeof pdu, c->cfg.response_timeout_us,
                          xfer_done, c);
     c->x.no_response = true;
@@ -344,7 +344,7 @@ bool dpm_c2_ready(dpm_c2_t *c, hal_time_us_t now)
     (void)dpm_xfer_check_timeout(&c->x, now); /* may close the connection */
     if (c->state == DPM_C2_OPEN && c->op == DPM_C2_OP_NONE && !c->queued && !c->cfg.no_idle &&
         c->last_tx_valid && hal_time_reached(now, idle_due(c))) {
-        const uint8_t pdu[4] = {DPMV1_FN_IDLE, 0x00, 0x00, 0x00};
+        const uint8_t pdu[4] = {DPV1_FN_IDLE, 0x00, 0x00, 0x00};
         if (dpm_xfer_start(&c->x, c->sap, c->cfg.ssap, pdu, sizeof pdu,
                            c->cfg.response_timeout_us, xfer_done, c) == 0) {
             c->op = DPM_C2_OP_IDLE;
@@ -397,8 +397,8 @@ hal_time_us_t dpm_c2_next_deadline(const dpm_c2_t *c, hal_time_us_t now)
         next = c->x.deadline;
     }
     if (c->state == DPM_C2_OPEN && c->op == DPM_C2_OP_NONE && !c->cfg.no_idle &&
-        c->last_tx_valid && hal_time_diff(idle_due(c), next) < 0) {
-        next = idle_due(c);
+        c->last_tx_valid) {
+        next = hal_time_earlier(next, idle_due(c));
     }
     return next;
 }

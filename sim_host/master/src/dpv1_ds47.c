@@ -10,19 +10,19 @@
 
 bool dpm_ds47_param_writes(const dpm_ds47_req_t *r, unsigned i)
 {
-    if (r->id == DPM_DS47_ID_CHANGE) {
+    if (r->id == DS47_ID_CHANGE) {
         return true;
     }
-    if (r->id == DPM_DS47_ID_MOVILINK) {
+    if (r->id == DS47_ID_MOVILINK) {
         uint8_t svc = (uint8_t)(r->p[i].attribute & 0xF0u);
-        return svc == DPM_DS47_ATTR_ML_WRITE || svc == DPM_DS47_ATTR_ML_WRITE_VOLATILE;
+        return svc == DS47_ATTR_ML_WRITE || svc == DS47_ATTR_ML_WRITE_VOLATILE;
     }
     return false;
 }
 
 size_t dpm_ds47_build(const dpm_ds47_req_t *r, uint8_t *out, size_t max)
 {
-    if (r->n == 0u || r->n > DPM_DS47_MAX_PARAMS) {
+    if (r->n == 0u || r->n > DS47_MAX_PARAMS) {
         return 0;
     }
     size_t need = 4u + 6u * r->n;
@@ -51,7 +51,7 @@ size_t dpm_ds47_build(const dpm_ds47_req_t *r, uint8_t *out, size_t max)
             continue;
         }
         uint32_t v = r->p[i].value;
-        out[n++] = DPM_DS47_FMT_DWORD;
+        out[n++] = DS47_FORMAT_DWORD;
         out[n++] = 1u;
         out[n++] = (uint8_t)(v >> 24);
         out[n++] = (uint8_t)(v >> 16);
@@ -96,11 +96,11 @@ static bool parse_block(const uint8_t *d, size_t len, size_t *pos, dpm_ds47_resu
     uint8_t count = d[*pos + 1u];
     *pos += 2u;
     res->format = fmt;
-    if (fmt == DPM_DS47_FMT_ZERO) {
+    if (fmt == DS47_FORMAT_ZERO) {
         res->ok = true;
         return true;
     }
-    if (fmt == DPM_DS47_FMT_ERROR) {
+    if (fmt == DS47_FORMAT_ERROR) {
         if (count < 1u || *pos + 2u * (size_t)count > len) {
             errf(err, errlen, "parameter %u: error block with %u values truncated", i + 1u,
                  count);
@@ -146,16 +146,16 @@ bool dpm_ds47_parse(const dpm_ds47_req_t *req, const uint8_t *d, size_t len, dpm
     rsp->id = d[1];
     rsp->axis = d[2];
     rsp->n = d[3];
-    rsp->negative = (d[1] & DPM_DS47_ID_ERROR) != 0u;
+    rsp->negative = (d[1] & DS47_ID_ERROR) != 0u;
     if (rsp->ref != req->ref) {
         errf(err, errlen, "response reference 0x%02X, request 0x%02X", rsp->ref, req->ref);
         return false;
     }
-    if ((uint8_t)(rsp->id & (uint8_t)~DPM_DS47_ID_ERROR) != req->id) {
+    if ((uint8_t)(rsp->id & (uint8_t)~DS47_ID_ERROR) != req->id) {
         errf(err, errlen, "response id 0x%02X to request id 0x%02X", rsp->id, req->id);
         return false;
     }
-    if (rsp->axis != req->axis || rsp->n != req->n || rsp->n > DPM_DS47_MAX_PARAMS) {
+    if (rsp->axis != req->axis || rsp->n != req->n || rsp->n > DS47_MAX_PARAMS) {
         errf(err, errlen, "response axis %u / %u parameters, request axis %u / %u", rsp->axis,
              rsp->n, req->axis, req->n);
         return false;
@@ -230,7 +230,7 @@ size_t dpm_ds47_error_text(uint8_t id, uint16_t error, char *out, size_t max)
 {
     int n;
     const char *pd = profidrive_text(error);
-    if ((id & 0x7Fu) == DPM_DS47_ID_MOVILINK && error >= 0x0100u) {
+    if ((id & 0x7Fu) == DS47_ID_MOVILINK && error >= 0x0100u) {
         return dpm_ml_error_value_text(error, out, max);
     }
     if (pd != NULL) {
@@ -262,11 +262,11 @@ static uint16_t be16(const uint8_t *p) { return (uint16_t)((p[0] << 8) | p[1]); 
 bool dpm_im0_decode(const uint8_t *d, size_t len, dpm_im0_t *o, char *err, size_t errlen)
 {
     memset(o, 0, sizeof *o);
-    if (len < 4u || d[0] != DPM_IM_CALL || be16(&d[2]) != DPM_IM_FI_IM0) {
+    if (len < 4u || d[0] != IM_FN_CALL || be16(&d[2]) != IM_INDEX_0) {
         errf(err, errlen, "I&M answer does not start 08 00 FD E8 (%zu octets)", len);
         return false;
     }
-    if (len != 4u + DPM_IM_RECORD_LEN) {
+    if (len != 4u + IM_RECORD_LEN) {
         errf(err, errlen, "I&M0 record of %zu octets (64 expected)", len - 4u);
         return false;
     }
@@ -316,7 +316,7 @@ static void call_answer(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now
 
 static int submit_read(dpm_call_t *c, hal_time_us_t now)
 {
-    const uint8_t pdu[4] = {DPMV1_FN_READ, c->slot, c->index, c->read_len};
+    const uint8_t pdu[4] = {DPV1_FN_READ, c->slot, c->index, c->read_len};
     c->reads++;
     return dpm_acyc_submit(&c->port, pdu, sizeof pdu, call_answer, c, now);
 }
@@ -333,7 +333,7 @@ static void call_answer(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now
     }
     uint8_t code1 = 0;
     if (dpm_v1_is_negative(r->pdu, r->len, &code1)) {
-        if (c->state == DPM_CALL_READ && code1 == DPMV1_ERR_STATE_CONFLICT) {
+        if (c->state == DPM_CALL_READ && code1 == DPV1_ERR_STATE_CONFLICT) {
             c->busy++;
             if (c->reads >= c->max_reads || hal_time_reached(now, c->deadline)) {
                 call_fail(c, now, "no answer to the request: Read.req index %u still answered "
@@ -354,7 +354,7 @@ static void call_answer(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now
         return;
     }
     if (c->state == DPM_CALL_WRITE) {
-        if (r->len < 4u || r->pdu[0] != DPMV1_FN_WRITE || r->pdu[2] != c->index) {
+        if (r->len < 4u || r->pdu[0] != DPV1_FN_WRITE || r->pdu[2] != c->index) {
             call_fail(c, now, "Write.req index %u: unexpected answer (%zu octets, first 0x%02X)",
                       c->index, r->len, r->len > 0u ? r->pdu[0] : 0u);
             return;
@@ -365,7 +365,7 @@ static void call_answer(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now
         }
         return;
     }
-    if (r->len < 4u || r->pdu[0] != DPMV1_FN_READ || r->pdu[2] != c->index ||
+    if (r->len < 4u || r->pdu[0] != DPV1_FN_READ || r->pdu[2] != c->index ||
         r->pdu[3] != r->len - 4u) {
         call_fail(c, now, "Read.req index %u: unexpected answer (%zu octets, first 0x%02X, "
                   "length octet %u)", c->index, r->len, r->len > 0u ? r->pdu[0] : 0u,
@@ -381,7 +381,7 @@ int dpm_call_start(dpm_call_t *c, dpm_acyc_port_t port, uint8_t index, const uin
                    size_t len, uint8_t read_len, dpm_call_done_t done, void *ctx,
                    hal_time_us_t now)
 {
-    if (c->state == DPM_CALL_WRITE || c->state == DPM_CALL_READ || len > DPMV1_DATA_MAX ||
+    if (c->state == DPM_CALL_WRITE || c->state == DPM_CALL_READ || len > DPV1_MAX_DATA ||
         len == 0u) {
         return -1;
     }
@@ -401,8 +401,8 @@ int dpm_call_start(dpm_call_t *c, dpm_acyc_port_t port, uint8_t index, const uin
     c->ctx = ctx;
     memcpy(c->wdata, data, len);
     c->wlen = (uint8_t)len;
-    uint8_t pdu[DPMV1_PDU_MAX];
-    pdu[0] = DPMV1_FN_WRITE;
+    uint8_t pdu[DPV1_MAX_PDU];
+    pdu[0] = DPV1_FN_WRITE;
     pdu[1] = c->slot;
     pdu[2] = index;
     pdu[3] = (uint8_t)len;
@@ -418,17 +418,17 @@ int dpm_call_start(dpm_call_t *c, dpm_acyc_port_t port, uint8_t index, const uin
 int dpm_ds47_start(dpm_call_t *c, dpm_acyc_port_t port, const dpm_ds47_req_t *req,
                    dpm_call_done_t done, void *ctx, hal_time_us_t now)
 {
-    uint8_t buf[DPMV1_DATA_MAX];
+    uint8_t buf[DPV1_MAX_DATA];
     size_t n = dpm_ds47_build(req, buf, sizeof buf);
     if (n == 0u) {
         return -1;
     }
-    return dpm_call_start(c, port, DPM_DS47_INDEX, buf, n, DPMV1_DATA_MAX, done, ctx, now);
+    return dpm_call_start(c, port, DPV1_INDEX_DS47, buf, n, DPV1_MAX_DATA, done, ctx, now);
 }
 
 int dpm_im0_start(dpm_call_t *c, dpm_acyc_port_t port, dpm_call_done_t done, void *ctx,
                   hal_time_us_t now)
 {
-    const uint8_t sel[4] = {DPM_IM_CALL, 0x00, (uint8_t)(DPM_IM_FI_IM0 >> 8), (uint8_t)DPM_IM_FI_IM0};
-    return dpm_call_start(c, port, DPM_IM_INDEX, sel, sizeof sel, DPMV1_DATA_MAX, done, ctx, now);
+    const uint8_t sel[4] = {IM_FN_CALL, 0x00, (uint8_t)(IM_INDEX_0 >> 8), (uint8_t)IM_INDEX_0};
+    return dpm_call_start(c, port, DPV1_INDEX_IM, sel, sizeof sel, DPV1_MAX_DATA, done, ctx, now);
 }

@@ -28,7 +28,7 @@ static int begin(dpm_xfer_t *x, uint8_t dsap, uint8_t ssap, uint32_t timeout_us,
 int dpm_xfer_start(dpm_xfer_t *x, uint8_t dsap, uint8_t ssap, const uint8_t *pdu, size_t len,
                    uint32_t timeout_us, dpm_acyc_done_t done, void *ctx)
 {
-    if (len == 0u || len > DPMV1_PDU_MAX || begin(x, dsap, ssap, timeout_us, done, ctx) != 0) {
+    if (len == 0u || len > DPV1_MAX_PDU || begin(x, dsap, ssap, timeout_us, done, ctx) != 0) {
         return -1;
     }
     memcpy(x->pdu, pdu, len);
@@ -68,7 +68,7 @@ size_t dpm_xfer_telegram(dpm_xfer_t *x, hal_time_us_t now, const uint8_t **du)
 static void finish(dpm_xfer_t *x, bool ok, const uint8_t *pdu, size_t len, hal_time_us_t t)
 {
     /* Copy what the callback needs: it may start the next exchange in this struct. */
-    uint8_t rsp[DPMV1_PDU_MAX];
+    uint8_t rsp[DPV1_MAX_PDU];
     char err[sizeof x->error];
     size_t n = len > sizeof rsp ? sizeof rsp : len;
     /* cppcheck 2.10 only sees the len == 0 callers (a response PDU comes with len > 0). */
@@ -214,7 +214,7 @@ const char *dpm_v1_error_text(uint8_t code1)
 
 bool dpm_v1_is_negative(const uint8_t *pdu, size_t len, uint8_t *code1)
 {
-    if (len < 1u || (pdu[0] & DPMV1_FN_ERROR) == 0u) {
+    if (len < 1u || (pdu[0] & DPV1_FN_ERROR) == 0u) {
         return false;
     }
     if (code1 != NULL) {

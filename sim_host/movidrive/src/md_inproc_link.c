@@ -72,8 +72,8 @@ hal_time_us_t md_inproc_link_poll(md_inproc_link_t *l, hal_time_us_t now)
                 l->param_response(l->card, c, rsp);
             }
         }
-        if (l->ch[c].pending && hal_time_diff(l->ch[c].due, next) < 0) {
-            next = l->ch[c].due;
+        if (l->ch[c].pending) {
+            next = hal_time_earlier(next, l->ch[c].due);
         }
     }
     push_inputs(l);

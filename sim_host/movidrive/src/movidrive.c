@@ -1,7 +1,7 @@
 /* The emulated MOVIDRIVE: parameter services, EEPROM image, process data, drive model.
  * Sources and assumptions: sim_host/movidrive/README.md. */
 #include "movidrive/movidrive.h"
-#include "sim_hal/be_bytes.h"
+#include "hal/hal_byte_order.h"
 
 #include <limits.h>
 #include <stdio.h>
@@ -192,21 +192,21 @@ static int ee_save_all(movidrive_t *md)
     }
     static uint8_t img[EE_MAX_IMAGE];
     uint32_t nrec = ee_records(md);
-    put_u32(img, MD_EE_MAGIC);
-    put_u16(img + 4, MD_EE_VERSION);
-    put_u16(img + 6, (uint16_t)nrec);
-    put_u16(img + 8, MD_IPOS_VARS);
-    put_u16(img + 10, 0);
+    hal_put_be32(img, MD_EE_MAGIC);
+    hal_put_be16(img + 4, MD_EE_VERSION);
+    hal_put_be16(img + 6, (uint16_t)nrec);
+    hal_put_be16(img + 8, MD_IPOS_VARS);
+    hal_put_be16(img + 10, 0);
     uint8_t *p = img + MD_EE_HEADER;
     for (size_t k = 0; k < md->num_defs; k++) {
         if (md->defs[k].flags & MD_PF_NON_VOLATILE) {
-            put_u16(p, md->defs[k].index);
-            put_u32(p + 2, (uint32_t)md->ee[k]);
+            hal_put_be16(p, md->defs[k].index);
+            hal_put_be32(p + 2, (uint32_t)md->ee[k]);
             p += MD_EE_RECORD;
         }
     }
     for (size_t i = 0; i < MD_IPOS_VARS; i++) {
-        put_u32(p, (uint32_t)md->ee_ipos[i]);
+        hal_put_be32(p, (uint32_t)md->ee_ipos[i]);
         p += 4;
     }
     if (ee_write(md, 0, img, (size_t)(p - img)) != 0) {
@@ -233,8 +233,8 @@ static int ee_save_params(movidrive_t *md, size_t first, size_t last)
     size_t n = 0;
     for (size_t k = first; k <= last; k++) {
         if (md->defs[k].flags & MD_PF_NON_VOLATILE) {
-            put_u16(buf + n, md->defs[k].index);
-            put_u32(buf + n + 2, (uint32_t)md->ee[k]);
+            hal_put_be16(buf + n, md->defs[k].index);
+            hal_put_be32(buf + n + 2, (uint32_t)md->ee[k]);
             n += MD_EE_RECORD;
         }
     }
@@ -253,7 +253,7 @@ static int ee_save_ipos(movidrive_t *md, size_t i)
         return ee_save_all(md);
     }
     uint8_t buf[4];
-    put_u32(buf, (uint32_t)md->ee_ipos[i]);
+    hal_put_be32(buf, (uint32_t)md->ee_ipos[i]);
     return ee_write(md, MD_EE_HEADER + ee_records(md) * MD_EE_RECORD + i * 4u, buf, 4);
 }
 
@@ -290,7 +290,7 @@ static int ee_load(movidrive_t *md, char *err, size_t errlen)
     if (all_bytes(img, MD_EE_HEADER, 0xFFu) || all_bytes(img, MD_EE_HEADER, 0x00u)) {
         return 0; /* blank: first start */
     }
-    uint32_t magic = get_u32(img);
+    uint32_t magic = hal_get_be32(img);
     if (magic != MD_EE_MAGIC) {
         snprintf(err, errlen,
                  "EEPROM holds no MOVIDRIVE image (magic 0x%08X, expected 0x%08X): factory "
@@ -298,9 +298,9 @@ static int ee_load(movidrive_t *md, char *err, size_t errlen)
                  (unsigned)magic, (unsigned)MD_EE_MAGIC);
         return -1;
     }
-    unsigned version = get_u16(img + 4);
-    unsigned nrec = get_u16(img + 6);
-    unsigned nipos = get_u16(img + 8);
+    unsigned version = hal_get_be16(img + 4);
+    unsigned nrec = hal_get_be16(img + 6);
+    unsigned nipos = hal_get_be16(img + 8);
     if (version != MD_EE_VERSION) {
         snprintf(err, errlen, "EEPROM image version %u not supported (%u): factory defaults used",
                  version, (unsigned)MD_EE_VERSION);
@@ -323,8 +323,8 @@ static int ee_load(movidrive_t *md, char *err, size_t errlen)
     size_t slot_k = 0;
     const uint8_t *p = img + MD_EE_HEADER;
     for (unsigned r = 0; r < nrec; r++, p += MD_EE_RECORD) {
-        uint16_t index = get_u16(p);
-        int32_t v = (int32_t)get_u32(p + 2);
+        uint16_t index = hal_get_be16(p);
+        int32_t v = (int32_t)hal_get_be32(p + 2);
         while (slot_k < md->num_defs && !(md->defs[slot_k].flags & MD_PF_NON_VOLATILE)) {
             slot_k++;
         }
@@ -344,7 +344,7 @@ static int ee_load(movidrive_t *md, char *err, size_t errlen)
         md->ee[k] = v;
     }
     for (size_t i = 0; i < MD_IPOS_VARS; i++, p += 4) {
-        md->ipos[i] = md->ee_ipos[i] = (int32_t)get_u32(p);
+        md->ipos[i] = md->ee_ipos[i] = (int32_t)hal_get_be32(p);
     }
     md->ee_layout_ok = layout;
     if (bad != 0) {
@@ -1037,8 +1037,8 @@ static void put_attribute(const movidrive_t *md, uint16_t index, const md_param_
     if (!(d->flags & MD_PF_INHIBIT_REQUIRED)) {
         a |= MD_ATTR_NO_INHIBIT_REQUIRED;
     }
-    put_u16(rsp + 4, next);
-    put_u16(rsp + 6, a);
+    hal_put_be16(rsp + 4, next);
+    hal_put_be16(rsp + 6, a);
 }
 
 void movidrive_param(movidrive_t *md, const uint8_t req[ML_TELEGRAM_LEN],

@@ -114,13 +114,13 @@ static replay_service_t acyclic_service(bool c1, const replay_frame_t *q)
         return c1 ? REPLAY_SVC_MSAC1_POLL : REPLAY_SVC_MSAC2_POLL;
     }
     switch (q->du[0]) {
-    case DPMV1_FN_READ: return c1 ? REPLAY_SVC_MSAC1_READ : REPLAY_SVC_MSAC2_READ;
-    case DPMV1_FN_WRITE: return c1 ? REPLAY_SVC_MSAC1_WRITE : REPLAY_SVC_MSAC2_WRITE;
-    case DPMV1_FN_ALARM_ACK: return c1 ? REPLAY_SVC_MSAC1_ALARM_ACK : REPLAY_SVC_MSAC2_OTHER;
-    case DPMV1_FN_INITIATE: return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_INITIATE;
-    case DPMV1_FN_ABORT: return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_ABORT;
-    case DPMV1_FN_IDLE: return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_IDLE;
-    case DPMV1_FN_DATA_TRANSPORT:
+    case DPV1_FN_READ: return c1 ? REPLAY_SVC_MSAC1_READ : REPLAY_SVC_MSAC2_READ;
+    case DPV1_FN_WRITE: return c1 ? REPLAY_SVC_MSAC1_WRITE : REPLAY_SVC_MSAC2_WRITE;
+    case DPV1_FN_ALARM_ACK: return c1 ? REPLAY_SVC_MSAC1_ALARM_ACK : REPLAY_SVC_MSAC2_OTHER;
+    case DPV1_FN_INITIATE: return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_INITIATE;
+    case DPV1_FN_ABORT: return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_ABORT;
+    case DPV1_FN_IDLE: return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_IDLE;
+    case DPV1_FN_DATA_TRANSPORT:
         return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_TRANSPORT;
     default: return c1 ? REPLAY_SVC_MSAC1_OTHER : REPLAY_SVC_MSAC2_OTHER;
     }
@@ -149,10 +149,10 @@ replay_service_t replay_service_of(const replay_frame_t *q)
     case DP_SAP_SET_PRM: return REPLAY_SVC_SET_PRM;
     case DP_SAP_CHK_CFG: return REPLAY_SVC_CHK_CFG;
     case 53u: return REPLAY_SVC_SET_EXT_PRM;
-    case DPMV1_SAP_C1: return acyclic_service(true, q);
+    case DPV1_SAP_C1: return acyclic_service(true, q);
     case 50u: return REPLAY_SVC_ALARM_SAP;
-    case DPMV1_SAP_C2_RM:
-        return q->du_len > 0u && q->du[0] == DPMV1_FN_INITIATE ? REPLAY_SVC_MSAC2_INITIATE
+    case DPV1_SAP_RM:
+        return q->du_len > 0u && q->du[0] == DPV1_FN_INITIATE ? REPLAY_SVC_MSAC2_INITIATE
                                                                : REPLAY_SVC_MSAC2_OTHER;
     default:
         return q->dsap <= 48u ? acyclic_service(false, q) : REPLAY_SVC_OTHER_SAP;
@@ -356,14 +356,14 @@ static void gc_text(sbuf_t *b, const uint8_t *d, size_t len)
 static const char *fn_name(uint8_t fn)
 {
     switch (fn & 0x7Fu) {
-    case DPMV1_FN_IDLE: return "Idle";
-    case DPMV1_FN_DATA_TRANSPORT: return "Data_Transport";
-    case DPMV1_FN_RM: return "RM";
-    case DPMV1_FN_INITIATE: return "Initiate";
-    case DPMV1_FN_ABORT: return "Abort";
-    case DPMV1_FN_ALARM_ACK: return "Alarm_Ack";
-    case DPMV1_FN_READ: return "Read";
-    case DPMV1_FN_WRITE: return "Write";
+    case DPV1_FN_IDLE: return "Idle";
+    case DPV1_FN_DATA_TRANSPORT: return "Data_Transport";
+    case DPV1_FN_RM: return "RM";
+    case DPV1_FN_INITIATE: return "Initiate";
+    case DPV1_FN_ABORT: return "Abort";
+    case DPV1_FN_ALARM_ACK: return "Alarm_Ack";
+    case DPV1_FN_READ: return "Read";
+    case DPV1_FN_WRITE: return "Write";
     default: return NULL;
     }
 }
@@ -382,7 +382,7 @@ static void dpv1_text(sbuf_t *b, const uint8_t *d, size_t len, bool reply)
         return;
     }
     const char *dir = reply ? ".res" : ".req";
-    if ((d[0] & DPMV1_FN_ERROR) != 0u && d[0] != DPMV1_FN_ERROR) {
+    if ((d[0] & DPV1_FN_ERROR) != 0u && d[0] != DPV1_FN_ERROR) {
         put(b, "%s negative", name);
         if (len >= 4u) {
             put(b, ": decode 0x%02X, code 0x%02X (%s), 0x%02X", d[1], d[2],
@@ -391,8 +391,8 @@ static void dpv1_text(sbuf_t *b, const uint8_t *d, size_t len, bool reply)
         return;
     }
     switch (d[0]) {
-    case DPMV1_FN_READ:
-    case DPMV1_FN_WRITE:
+    case DPV1_FN_READ:
+    case DPV1_FN_WRITE:
         put(b, "%s%s", name, dir);
         if (len >= 4u) {
             put(b, " slot %u index %u length %u", d[1], d[2], d[3]);
@@ -402,10 +402,10 @@ static void dpv1_text(sbuf_t *b, const uint8_t *d, size_t len, bool reply)
             }
         }
         return;
-    case DPMV1_FN_RM:
+    case DPV1_FN_RM:
         put(b, "resource manager: connection SAP %u", len > 1u ? d[1] : 0u);
         return;
-    case DPMV1_FN_INITIATE:
+    case DPV1_FN_INITIATE:
         put(b, "Initiate%s", dir);
         if (!reply && len >= 6u) {
             put(b, " Send_Timeout %u", (unsigned)d[4] << 8 | d[5]);
@@ -413,7 +413,7 @@ static void dpv1_text(sbuf_t *b, const uint8_t *d, size_t len, bool reply)
             put(b, " Max_Len_Data_Unit %u", d[1]);
         }
         return;
-    case DPMV1_FN_ABORT:
+    case DPV1_FN_ABORT:
         put(b, "Abort");
         if (len >= 3u) {
             put(b, " subnet %u, instance 0x%02X, reason %u", d[1], d[2] & 0xF0u, d[2] & 0x0Fu);
@@ -527,9 +527,9 @@ size_t replay_describe(const uint8_t *f, size_t len, const replay_dx_layout_t *l
             put_hex(&b, m.du, m.du_len);
             break;
         default:
-            if (m.ssap == DPMV1_SAP_C1 || m.ssap <= DPMV1_SAP_C2_RM) {
+            if (m.ssap == DPV1_SAP_C1 || m.ssap <= DPV1_SAP_RM) {
                 put(&b, "%s reply %u -> %u (%s, SAPs %u/%u): ",
-                    m.ssap == DPMV1_SAP_C1 ? "MSAC1" : "MSAC2", m.sa, m.da, fc,
+                    m.ssap == DPV1_SAP_C1 ? "MSAC1" : "MSAC2", m.sa, m.da, fc,
                     m.has_dsap ? m.dsap : 0u, m.ssap);
                 dpv1_text(&b, m.du, m.du_len, true);
             } else {

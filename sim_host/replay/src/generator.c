@@ -324,26 +324,26 @@ static void dpv1_class1(void)
     int rc;
     switch (g.ds47_step % 6u) {
     case 0:
-        g.req.id = DPM_DS47_ID_MOVILINK;
-        g.req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_READ, .number = 8300};
+        g.req.id = DS47_ID_MOVILINK;
+        g.req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
         break;
     case 1:
-        g.req.id = DPM_DS47_ID_READ;
-        g.req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_VALUE, .number = 8489};
+        g.req.id = DS47_ID_REQUEST;
+        g.req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489};
         break;
     case 2:
-        g.req.id = DPM_DS47_ID_MOVILINK;
-        g.req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_WRITE_VOLATILE,
+        g.req.id = DS47_ID_MOVILINK;
+        g.req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE,
                                         .number = 11000, .value = 500u + k};
         break;
     case 3:
-        g.req.id = DPM_DS47_ID_CHANGE;
-        g.req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_VALUE, .number = 8489,
+        g.req.id = DS47_ID_CHANGE;
+        g.req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489,
                                         .value = 2000u + k};
         break;
     case 4: /* a parameter that does not exist: a negative data set 47 response */
-        g.req.id = DPM_DS47_ID_MOVILINK;
-        g.req.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_READ, .number = 1};
+        g.req.id = DS47_ID_MOVILINK;
+        g.req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 1};
         break;
     default:
         break;
@@ -398,8 +398,8 @@ static void dpv1_class2(void)
         g.res->c2_connections++;
         memset(&g.c2_call, 0, sizeof g.c2_call);
         {
-            dpm_ds47_req_t q = {.ref = 0x42, .id = DPM_DS47_ID_MOVILINK, .n = 1};
-            q.p[0] = (dpm_ds47_param_t){.attribute = DPM_DS47_ATTR_ML_READ, .number = 8300};
+            dpm_ds47_req_t q = {.ref = 0x42, .id = DS47_ID_MOVILINK, .n = 1};
+            q.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
             if (dpm_ds47_start(&g.c2_call, dpm_c2_port(&g.c2), &q, NULL, NULL, now_us()) != 0) {
                 g.c2_stage = 4;
                 return;

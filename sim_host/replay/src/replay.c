@@ -4,17 +4,11 @@
 #include <time.h>
 
 #include "dp_slave/fdl_wire.h"
+#include "sim_hal/host_clock.h"
 
 /* The ring keeps a few more than REPLAY_CONTEXT telegrams: when a request's window closes, the
  * request and the card's answer are the newest entries, and the context lies before them. */
 #define RING_SIZE (sizeof(((replay_t *)0)->ring) / sizeof(((replay_t *)0)->ring[0]))
-
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
 
 static uint64_t bits_ns(uint32_t baud, uint32_t bits)
 {
@@ -166,7 +160,7 @@ static bool stop_requested(const replay_t *r)
 static bool wait_wall(const replay_t *r, uint64_t t)
 {
     uint64_t due = r->wall_start_ns + t;
-    if (due <= mono_ns()) {
+    if (due <= host_clock_mono_ns()) {
         return true;
     }
     struct timespec ts = {.tv_sec = (time_t)(due / 1000000000u),
@@ -484,7 +478,7 @@ void replay_feed(replay_t *r, const cap_record_t *rec)
 {
     if (!r->started) {
         r->started = true;
-        r->wall_start_ns = mono_ns();
+        r->wall_start_ns = host_clock_mono_ns();
     }
     if (r->interrupted) {
         return; /* the bus has stopped: nothing more goes on it */

@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
+#include "sim_hal/host_clock.h"
 
 /* ---- fan-out to the taps ------------------------------------------------------------------ */
 
@@ -413,22 +414,15 @@ hal_time_us_t rig_now_us(const rig_t *r)
     return wall_clock(r) ? tty_now_us() : membus_now_us(&r->bus);
 }
 
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
 uint64_t rig_elapsed_ns(const rig_t *r)
 {
     switch (r->cfg.medium) {
     case RIG_MEDIUM_MEMBUS:
         return r->bus.now_ns;
     case RIG_MEDIUM_TTY:
-        return mono_ns() - r->runner.t0_ns;
+        return host_clock_mono_ns() - r->runner.t0_ns;
     case RIG_MEDIUM_LCM:
-        return mono_ns() - r->segment.t0_ns;
+        return host_clock_mono_ns() - r->segment.t0_ns;
     }
     return 0;
 }

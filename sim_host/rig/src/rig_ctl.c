@@ -10,15 +10,9 @@
 
 #include "dp_master/param_channel.h"
 #include "dp_slave/dp_wire.h"
+#include "sim_hal/host_clock.h"
 
 #define SERVICE_TIMEOUT_US 5000000u
-
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
 
 int rig_ctl_init(rig_ctl_t *c, rig_t *r, const char *mode, bool read_only)
 {
@@ -417,11 +411,11 @@ static bool start_master_param(rig_ctl_t *c, rig_cmd_t *cmd, unsigned idx)
     memset(&c->ds47, 0, sizeof c->ds47);
     c->ds47_ref = (uint8_t)(c->ds47_ref % 255u + 1u); /* 1..255: reference 0 is refused */
     c->ds47.ref = c->ds47_ref;
-    c->ds47.id = DPM_DS47_ID_MOVILINK;
+    c->ds47.id = DS47_ID_MOVILINK;
     c->ds47.n = 1;
-    c->ds47.p[0].attribute = !cmd->write ? DPM_DS47_ATTR_ML_READ
-                             : cmd->flag ? DPM_DS47_ATTR_ML_WRITE_VOLATILE
-                                         : DPM_DS47_ATTR_ML_WRITE;
+    c->ds47.p[0].attribute = !cmd->write ? DS47_ATTR_ML_READ
+                             : cmd->flag ? DS47_ATTR_ML_WRITE_VOLATILE
+                                         : DS47_ATTR_ML_WRITE;
     c->ds47.p[0].number = cmd->index;
     c->ds47.p[0].value = (uint32_t)cmd->value;
     memset(&c->call, 0, sizeof c->call);
@@ -637,7 +631,7 @@ void rig_ctl_service(rig_ctl_t *c, uint64_t publish_every_ns)
             finish(c, k);
         }
     }
-    uint64_t now = mono_ns();
+    uint64_t now = host_clock_mono_ns();
     if (publish_every_ns == 0u || now - c->last_publish_ns >= publish_every_ns) {
         c->last_publish_ns = now;
         publish(c);

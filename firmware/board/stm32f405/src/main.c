@@ -332,9 +332,7 @@ int main(void)
 #endif
         if (sbus_up) {
             hal_time_us_t n2 = sbus_card_link_poll(&sbus, now);
-            if (hal_time_diff(n2, next) < 0) {
-                next = n2;
-            }
+            next = hal_time_earlier(next, n2);
         }
         board_basepri(0);
         if (had_fault && dp_slave_state(&card.dp) == DP_STATE_DATA_EXCH) {

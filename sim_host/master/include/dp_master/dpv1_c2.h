@@ -61,7 +61,7 @@ typedef struct dpm_c2 {
     void *user_ctx;
     /* A user request that waits for an Idle exchange to end (depth 1). */
     bool queued;
-    uint8_t queued_pdu[DPMV1_PDU_MAX];
+    uint8_t queued_pdu[DPV1_MAX_PDU];
     uint16_t queued_len;
     dpm_acyc_done_t queued_done;
     void *queued_ctx;
@@ -70,7 +70,7 @@ typedef struct dpm_c2 {
     bool on_wire;       /* the master waits for the answer to our telegram */
     bool last_tx_valid;
     hal_time_us_t last_tx; /* last telegram to the slave on this connection */
-    uint8_t initiate_res[DPMV1_PDU_MAX];
+    uint8_t initiate_res[DPV1_MAX_PDU];
     uint8_t initiate_res_len;
     char error[160];
     /* Counters. */

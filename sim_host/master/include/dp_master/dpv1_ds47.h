@@ -15,28 +15,6 @@
 
 #include "dp_master/dpv1_xfer.h"
 
-#define DPM_DS47_INDEX 47u
-#define DPM_DS47_MAX_PARAMS 19u
-/* Request / response ids. */
-#define DPM_DS47_ID_READ 0x01u     /* PROFIdrive request parameter */
-#define DPM_DS47_ID_CHANGE 0x02u   /* PROFIdrive change parameter (non-volatile) */
-#define DPM_DS47_ID_MOVILINK 0x40u /* SEW MOVILINK service */
-#define DPM_DS47_ID_ERROR 0x80u    /* in the response id: some parameter failed */
-/* Attributes; for id 0x40 the high nibble is the MOVILINK service. */
-#define DPM_DS47_ATTR_VALUE 0x10u
-#define DPM_DS47_ATTR_ML_READ 0x10u
-#define DPM_DS47_ATTR_ML_WRITE 0x20u
-#define DPM_DS47_ATTR_ML_WRITE_VOLATILE 0x30u
-/* Formats. */
-#define DPM_DS47_FMT_ZERO 0x40u
-#define DPM_DS47_FMT_DWORD 0x43u
-#define DPM_DS47_FMT_ERROR 0x44u
-
-#define DPM_IM_INDEX 255u
-#define DPM_IM_CALL 0x08u
-#define DPM_IM_FI_IM0 0xFDE8u
-#define DPM_IM_RECORD_LEN 64u
-
 typedef struct dpm_ds47_param {
     uint8_t attribute;
     uint8_t elements;  /* 0: non-indexed */
@@ -50,7 +28,7 @@ typedef struct dpm_ds47_request {
     uint8_t id;
     uint8_t axis;
     uint8_t n;
-    dpm_ds47_param_t p[DPM_DS47_MAX_PARAMS];
+    dpm_ds47_param_t p[DS47_MAX_PARAMS];
 } dpm_ds47_req_t;
 
 /* Does parameter i of this request carry a value block (id 0x02, or 0x40 with a write)? */
@@ -72,7 +50,7 @@ typedef struct dpm_ds47_response {
     uint8_t axis;
     uint8_t n;
     bool negative;
-    dpm_ds47_result_t p[DPM_DS47_MAX_PARAMS];
+    dpm_ds47_result_t p[DS47_MAX_PARAMS];
 } dpm_ds47_rsp_t;
 
 /* Parses a DS47 response to req. Returns true when the octets are a well-formed answer to it
@@ -122,7 +100,7 @@ struct dpm_call {
     uint8_t slot;
     uint8_t index;
     uint8_t read_len;
-    uint8_t wdata[DPMV1_DATA_MAX];
+    uint8_t wdata[DPV1_MAX_DATA];
     uint8_t wlen;
     uint32_t max_reads;  /* 0: 10000 */
     uint32_t timeout_us; /* whole call; 0: 5 s */
@@ -133,7 +111,7 @@ struct dpm_call {
     bool dpv1_negative;  /* a negative Write.res/Read.res ended it: fn, code1 */
     uint8_t neg_fn;
     uint8_t neg_code1;
-    uint8_t data[DPMV1_DATA_MAX];
+    uint8_t data[DPV1_MAX_DATA];
     uint8_t len;
     char error[200];
     /* Statistics. */

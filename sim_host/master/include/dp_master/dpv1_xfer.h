@@ -16,36 +16,12 @@
 #include <stdint.h>
 
 #include "dp_slave/fdl_frame.h"
+#include "dpv1/dpv1_wire.h"
 #include "hal/hal_time.h"
 
-/* SAPs (protocol.md §A3.1, docs/dpv1.md). */
-#define DPMV1_SAP_C2_RM 49u  /* MSAC2 resource manager: Initiate.req only */
-#define DPMV1_SAP_C2_MASTER 50u /* the SSAP our class-2 client uses by default */
-#define DPMV1_SAP_C1 51u     /* MSAC1 Read/Write, on both sides */
-
-/* Function numbers (protocol.md §A4.1). */
-#define DPMV1_FN_IDLE 0x48u
-#define DPMV1_FN_DATA_TRANSPORT 0x51u
-#define DPMV1_FN_RM 0x56u
-#define DPMV1_FN_INITIATE 0x57u
-#define DPMV1_FN_ABORT 0x58u
-#define DPMV1_FN_ALARM_ACK 0x5Cu
-#define DPMV1_FN_READ 0x5Eu
-#define DPMV1_FN_WRITE 0x5Fu
-#define DPMV1_FN_ERROR 0x80u       /* set in the function number of a negative response */
-#define DPMV1_ERROR_DECODE_DPV1 0x80u
-
-/* Error_Code_1 values (class high nibble, code low nibble) the card uses (docs/dpv1.md). */
-#define DPMV1_ERR_INVALID_INDEX 0xB0u
-#define DPMV1_ERR_WRITE_LENGTH 0xB1u
-#define DPMV1_ERR_STATE_CONFLICT 0xB5u
-#define DPMV1_ERR_ACCESS_DENIED 0xB6u
-#define DPMV1_ERR_INVALID_RANGE 0xB7u
-#define DPMV1_ERR_FEATURE_NOT_SUPPORTED 0xA9u
-
-#define DPMV1_HEADER_LEN 4u  /* fn slot index length */
-#define DPMV1_DATA_MAX 240u
-#define DPMV1_PDU_MAX (DPMV1_HEADER_LEN + DPMV1_DATA_MAX)
+/* The SSAP our class-2 client uses by default (any free SAP would do; 50 is what real class-2
+ * tools use). The wire codes themselves are the core's (dpv1/dpv1_wire.h). */
+#define DPM_C2_SSAP_DEFAULT 50u
 
 /* How an exchange ended. ok: a response PDU came back (it may be a negative DP-V1 response;
  * the layer above judges it). !ok: error says why (timeout, RS, no answer ...). */
@@ -90,7 +66,7 @@ typedef struct dpm_xfer {
     bool started;     /* the response timer runs (first telegram sent) */
     uint8_t dsap;
     uint8_t ssap;
-    uint8_t pdu[DPMV1_PDU_MAX];
+    uint8_t pdu[DPV1_MAX_PDU];
     uint16_t len;
     uint32_t timeout_us;
     hal_time_us_t t_start;
@@ -105,7 +81,7 @@ typedef struct dpm_xfer {
     uint32_t failed;
 } dpm_xfer_t;
 
-/* A request PDU to DSAP/SSAP. -1 if busy or len is 0 or above DPMV1_PDU_MAX. */
+/* A request PDU to DSAP/SSAP. -1 if busy or len is 0 or above DPV1_MAX_PDU. */
 int dpm_xfer_start(dpm_xfer_t *x, uint8_t dsap, uint8_t ssap, const uint8_t *pdu, size_t len,
                    uint32_t timeout_us, dpm_acyc_done_t done, void *ctx);
 /* Only polls: the request reached the slave another way (an Initiate.req handed from the
