@@ -38,14 +38,15 @@ deps-apt:
 	fi
 
 # pyprofibus is the independent DP master of the interoperability tests; pytest runs the Python
-# client's tests (python/, installed editable), selenium drives chromium for the panel test. The
+# client's tests (python/, installed editable), selenium drives chromium for the panel test,
+# lizard measures function lengths for the repository's size limits (tests/repo). The
 # stamp's number goes up whenever this list changes, so an older venv is topped up.
-VENV_STAMP := $(VENV)/.deps-2
+VENV_STAMP := $(VENV)/.deps-3
 $(VENV_STAMP):
 	@mkdir -p build
 	[ -x $(PYTHON) ] || python3 -m venv $(VENV) || { apt-get install -y -qq python3-venv && python3 -m venv $(VENV); }
 	$(VENV)/bin/pip install -q --disable-pip-version-check pyprofibus==1.13 pyserial \
-	  pytest==8.3.4 selenium==4.27.1
+	  pytest==8.3.4 selenium==4.27.1 lizard==1.17.13
 	$(VENV)/bin/pip install -q --disable-pip-version-check -e ./python
 	touch $@
 
