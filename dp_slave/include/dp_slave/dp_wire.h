@@ -2,7 +2,10 @@
 #ifndef DP_SLAVE_DP_WIRE_H
 #define DP_SLAVE_DP_WIRE_H
 
-/* Slave-side SAPs. Data_Exchange uses no SAP (the "default SAP"). */
+/* Slave-side SAPs (protocol.md §A3.1). Data_Exchange uses no SAP (the "default SAP"). Below 55
+ * DP-V1: MSAC1 on 51, the MSAC2 resource manager on 49, MSAC2 connections on SAPs 0..48. */
+#define DP_SAP_MSAC2_RM 49u
+#define DP_SAP_MSAC1 51u
 #define DP_SAP_SET_SLAVE_ADD 55u
 #define DP_SAP_RD_INP 56u
 #define DP_SAP_RD_OUTP 57u

@@ -5,8 +5,10 @@
 #ifndef DPV1_DPV1_WIRE_H
 #define DPV1_DPV1_WIRE_H
 
-#define DPV1_SAP_C1 51u
-#define DPV1_SAP_RM 49u
+#include "dp_slave/dp_wire.h"
+
+#define DPV1_SAP_C1 DP_SAP_MSAC1
+#define DPV1_SAP_RM DP_SAP_MSAC2_RM
 #define DPV1_C2_FIRST_SAP 0u
 
 #define DPV1_FN_IDLE 0x48u

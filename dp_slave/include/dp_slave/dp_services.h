@@ -1,0 +1,60 @@
+/* The DP slave machine as one table: for every DDLM service (IEC 61158-6-3 names) which DP
+ * state lets it run, what the slave answers otherwise, and whether another master may use it
+ * while a master holds the lock (protocol.md §A3.1 SAP map, §A3.6 state machine).
+ *
+ * The slave (dp_slave.c) routes every request through dp_service_rule(); host tools (master,
+ * replay decoder, logs) name services with dp_service_of() and dp_service_name(), so a rule and
+ * its name are found in one place. */
+#ifndef DP_SLAVE_DP_SERVICES_H
+#define DP_SLAVE_DP_SERVICES_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+typedef enum dp_service {
+    DDLM_DATA_EXCHANGE = 0, /* no SAP ("default SAP") */
+    DDLM_SET_PRM,           /* SAP 61 */
+    DDLM_CHK_CFG,           /* SAP 62 */
+    DDLM_SLAVE_DIAG,        /* SAP 60 */
+    DDLM_GET_CFG,           /* SAP 59 */
+    DDLM_GLOBAL_CONTROL,    /* SAP 58, SDN (broadcast or multicast allowed) */
+    DDLM_RD_OUTP,           /* SAP 57 */
+    DDLM_RD_INP,            /* SAP 56 */
+    DDLM_SET_SLAVE_ADD,     /* SAP 55 */
+    MSAC1S,                 /* SAP 51: DP-V1 class-1 acyclic (Read/Write/Alarm_Ack) */
+    MSAC2S,                 /* the other SAPs below 55: 49 the MSAC2 resource manager, 0..48
+                             * connections; the DP-V1 layer refuses the ones it did not assign */
+    DP_SERVICE_UNKNOWN,     /* SAP 63: nothing is served there */
+    DP_SERVICE_COUNT
+} dp_service_t;
+
+/* What the slave does with a request its state does not allow. */
+typedef enum dp_state_rule {
+    DP_RULE_EXECUTE = 0, /* the service runs */
+    DP_RULE_RS,          /* FDL RS: "service not activated" */
+    DP_RULE_SC,          /* acknowledged with SC, otherwise ignored */
+    DP_RULE_IGNORE,      /* nothing at all (services sent without reply) */
+} dp_state_rule_t;
+
+/* Who may use a service while a master has parameterised the slave (Lock_Req). */
+typedef enum dp_lock_rule {
+    DP_LOCK_ANY = 0,        /* any master (diagnosis, configuration and I/O reads) */
+    DP_LOCK_OWNER_OR_RS,    /* only the owner; others get RS and a DP_EV_LOCKED_OUT event */
+    DP_LOCK_OWNER_OR_IGNORE /* only the owner; others are ignored silently (no reply exists) */
+} dp_lock_rule_t;
+
+#define DP_STATE_COUNT 3u /* Wait_Prm, Wait_Cfg, Data_Exch: indexes of in_state[] */
+
+typedef struct dp_service_rule {
+    const char *name;    /* the standard's name, e.g. "DDLM_Set_Prm" */
+    bool sdn;            /* sent as SDN (send data with no acknowledge) rather than SRD */
+    dp_lock_rule_t lock;
+    dp_state_rule_t in_state[DP_STATE_COUNT];
+} dp_service_rule_t;
+
+/* The service a request addresses: by its DSAP, or Data_Exchange when it has none. */
+dp_service_t dp_service_of(bool has_dsap, uint8_t dsap);
+const dp_service_rule_t *dp_service_rule(dp_service_t svc);
+const char *dp_service_name(dp_service_t svc);
+
+#endif

@@ -1,0 +1,34 @@
+/* What the two halves of the slave share: the FDL station (fdl_station.c: baud, address filter,
+ * function codes, FCB retry cache, reply encoding and timing) and the DP slave machine
+ * (dp_slave.c: the service table applied, the DDLM services, watchdog). Not installed. */
+#ifndef DP_SLAVE_INTERNAL_H
+#define DP_SLAVE_INTERNAL_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "dp_slave/dp_slave.h"
+#include "dp_slave/fdl_frame.h"
+
+void dp_slave_emit(dp_slave_t *s, dp_event_type_t type, hal_time_us_t t, uint32_t value,
+                   uint8_t master);
+
+/* DP slave machine: one request that passed the FDL station (addressed to this station, or a
+ * broadcast SDN). sdn = sent without reply. Leaves the reply, if any, in s->reply. */
+void dp_slave_request(dp_slave_t *s, const fdl_msg_t *m, bool sdn, hal_time_us_t t);
+
+/* FDL station: replies encoded into s->reply. */
+void fdl_station_reply_sc(dp_slave_t *s);
+void fdl_station_reply_plain(dp_slave_t *s, const fdl_msg_t *m, uint8_t code,
+                             const uint8_t *data, size_t len);
+void fdl_station_reply_sap(dp_slave_t *s, const fdl_msg_t *m, const uint8_t *data, size_t len);
+void fdl_station_reply_rs(dp_slave_t *s, const fdl_msg_t *m);
+
+/* FDL station: a complete telegram is in s->rx. */
+void fdl_station_frame(dp_slave_t *s);
+/* FDL station: baud search start and its timers; returns the merged next deadline. */
+void fdl_station_start_baud(dp_slave_t *s, hal_time_us_t now);
+hal_time_us_t fdl_station_poll(dp_slave_t *s, hal_time_us_t now);
+
+#endif

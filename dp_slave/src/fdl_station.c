@@ -1,0 +1,253 @@
+/* The FDL station: everything layer 2 does before and after the DP slave machine. A telegram's
+ * way: character -> fdl_rx -> baud found -> address and FC checks (TSYN) -> FDL status / SDN /
+ * SRD -> FCB retry cache -> dp_slave_request() -> reply encoding -> HAL transmit at end of
+ * request + min TSDR (protocol.md §A1.4, §A1.5, §A2.1, §A2.3). */
+#include <string.h>
+
+#include "dp_slave/fdl_wire.h"
+#include "dp_slave_internal.h"
+
+uint32_t dp_baud_search_dwell_us(uint32_t baud)
+{
+    /* Two telegrams of the maximum 255 characters, but never below 20 ms, so a master that
+     * repeats its requests every few milliseconds is heard on every rate it might use. */
+    uint64_t us = (2ull * FDL_FRAME_MAX * FDL_CHAR_BITS * 1000000ull) / baud;
+    return us < 20000u ? 20000u : (uint32_t)us;
+}
+
+static void select_baud(dp_slave_t *s, uint32_t baud)
+{
+    s->baud = baud;
+    fdl_rx_set_baud(&s->rx, baud);
+    if (s->cfg.uart.ops != NULL && s->cfg.uart.ops->set_baud != NULL) {
+        (void)s->cfg.uart.ops->set_baud(s->cfg.uart.ctx, baud);
+    }
+}
+
+static uint32_t baud_control_us(const dp_slave_t *s)
+{
+    uint32_t ms = s->cfg.baud_control_ms != 0u ? s->cfg.baud_control_ms : DP_BAUD_CONTROL_MS_DEFAULT;
+    if (s->wd_on && s->wd_time_ms * 2u > ms) {
+        ms = s->wd_time_ms * 2u; /* never lose the rate before the DP watchdog could expire */
+    }
+    return ms * 1000u;
+}
+
+void fdl_station_start_baud(dp_slave_t *s, hal_time_us_t now)
+{
+    if (s->cfg.fixed_baud != 0u) {
+        s->baud_state = DP_BAUD_FIXED;
+        select_baud(s, s->cfg.fixed_baud);
+    } else {
+        s->baud_state = DP_BAUD_SEARCH;
+        s->baud_index = 0;
+        select_baud(s, hal_uart_bauds[0]);
+        s->baud_deadline = now + dp_baud_search_dwell_us(s->baud);
+        dp_slave_emit(s, DP_EV_BAUD_SET, now, s->baud, 0);
+    }
+}
+
+hal_time_us_t fdl_station_poll(dp_slave_t *s, hal_time_us_t now)
+{
+    hal_time_us_t next = fdl_rx_poll(&s->rx, now);
+    if (s->baud_state != DP_BAUD_SEARCH && s->baud_state != DP_BAUD_CONTROL) {
+        return next;
+    }
+    if (hal_time_reached(now, s->baud_deadline)) {
+        if (s->baud_state == DP_BAUD_CONTROL) {
+            s->baud_state = DP_BAUD_SEARCH;
+            s->baud_index = 0;
+            s->line_active = false;
+            dp_slave_emit(s, DP_EV_BAUD_LOST, now, s->baud, 0);
+        } else {
+            s->baud_index = (uint8_t)((s->baud_index + 1u) % HAL_UART_NUM_BAUDS);
+        }
+        select_baud(s, hal_uart_bauds[s->baud_index]);
+        s->baud_deadline = now + dp_baud_search_dwell_us(s->baud);
+        dp_slave_emit(s, DP_EV_BAUD_SET, now, s->baud, 0);
+    }
+    return hal_time_earlier(next, s->baud_deadline);
+}
+
+/* ---- replies ------------------------------------------------------------------------------ */
+
+void fdl_station_reply_sc(dp_slave_t *s)
+{
+    s->reply[0] = FDL_SC;
+    s->reply_len = 1;
+}
+
+/* A reply without SAP octets: RS/RR/UE status or Data_Exchange data. */
+void fdl_station_reply_plain(dp_slave_t *s, const fdl_msg_t *m, uint8_t code,
+                             const uint8_t *data, size_t len)
+{
+    s->reply_len = (uint16_t)fdl_encode(s->reply, m->sa, s->cfg.address, code, false, 0, 0, data,
+                                        len);
+}
+
+/* A reply to a SAP request: SAPs swapped. */
+void fdl_station_reply_sap(dp_slave_t *s, const fdl_msg_t *m, const uint8_t *data, size_t len)
+{
+    s->reply_len = (uint16_t)fdl_encode(s->reply, m->sa, s->cfg.address, FDL_RSP_DL, true,
+                                        m->ssap, m->dsap, data, len);
+}
+
+void fdl_station_reply_rs(dp_slave_t *s, const fdl_msg_t *m)
+{
+    fdl_station_reply_plain(s, m, FDL_RSP_RS, NULL, 0);
+}
+
+/* ---- FCB retry cache (protocol.md §A1.5) -------------------------------------------------- */
+
+static fdl_fcb_slot_t *fcb_slot(dp_slave_t *s, uint8_t master, bool create)
+{
+    fdl_fcb_slot_t *oldest = &s->fcb[0];
+    for (size_t i = 0; i < FDL_FCB_SLOTS; i++) {
+        fdl_fcb_slot_t *e = &s->fcb[i];
+        if (e->used && e->master == master) {
+            return e;
+        }
+        if (!e->used || (oldest->used && e->age > oldest->age)) {
+            oldest = e;
+        }
+    }
+    if (!create) {
+        return NULL;
+    }
+    *oldest = (fdl_fcb_slot_t){.used = true, .master = master};
+    return oldest;
+}
+
+static void fcb_touch(dp_slave_t *s, fdl_fcb_slot_t *e)
+{
+    for (size_t i = 0; i < FDL_FCB_SLOTS; i++) {
+        if (s->fcb[i].used && s->fcb[i].age < UINT8_MAX) {
+            s->fcb[i].age++;
+        }
+    }
+    e->age = 0;
+}
+
+/* ---- receive path ------------------------------------------------------------------------- */
+
+static void transmit(dp_slave_t *s, const uint8_t *frame, size_t len, hal_time_us_t request_end)
+{
+    if (len == 0u || s->cfg.uart.ops == NULL || s->cfg.uart.ops->transmit == NULL) {
+        return;
+    }
+    hal_time_us_t not_before = request_end + hal_uart_bits_us(s->baud, s->min_tsdr_bits);
+    (void)s->cfg.uart.ops->transmit(s->cfg.uart.ctx, frame, len, not_before);
+}
+
+/* Any error-free data telegram, for whomever, proves the rate: the baud search ends. */
+static void note_line_activity(dp_slave_t *s, uint8_t sd, hal_time_us_t t)
+{
+    if (sd != FDL_SD1 && sd != FDL_SD2 && sd != FDL_SD3) {
+        return;
+    }
+    s->line_active = true;
+    if (s->baud_state == DP_BAUD_SEARCH) {
+        s->baud_state = DP_BAUD_CONTROL;
+        s->baud_deadline = t + baud_control_us(s);
+        dp_slave_emit(s, DP_EV_BAUD_FOUND, t, s->baud, 0);
+    }
+}
+
+/* TSYN: a request must follow at least 33 idle bits (protocol.md §A2.1), checked only where the
+ * medium lets the receiver measure the gap (strict timing). */
+static bool tsyn_violated(const dp_slave_t *s)
+{
+    return s->rx.strict && s->rx.idle_before_ns != UINT32_MAX &&
+           (uint64_t)s->rx.idle_before_ns + FDL_RX_GAP_TOLERANCE_NS <
+               (uint64_t)FDL_TSYN_BITS * s->rx.char_ns / FDL_CHAR_BITS;
+}
+
+/* Parses the telegram and keeps it if it is a request for this station or a broadcast. */
+static bool accept_request(dp_slave_t *s, fdl_msg_t *m, hal_time_us_t t)
+{
+    if (fdl_parse(s->rx.buf, s->rx.frame_len, m) != FDL_PARSE_OK) {
+        return false;
+    }
+    if ((m->fc & FDL_FC_REQUEST) == 0u) {
+        return false; /* a response between other stations */
+    }
+    bool broadcast = m->da == FDL_ADDR_BROADCAST;
+    if (m->da != s->cfg.address && !broadcast) {
+        return false;
+    }
+    if (tsyn_violated(s)) {
+        s->rx.error_count[FDL_RX_ERR_TSYN]++;
+        dp_slave_emit(s, DP_EV_RX_ERROR, t, FDL_RX_ERR_TSYN, m->sa);
+        return false;
+    }
+    if (!broadcast) {
+        s->telegrams_for_me++;
+        if (s->baud_state == DP_BAUD_CONTROL) {
+            s->baud_deadline = t + baud_control_us(s);
+        }
+        dp_slave_emit(s, DP_EV_ADDRESSED, t, m->fc, m->sa);
+    }
+    /* The DP watchdog counts any telegram of the owning master, whatever its service. */
+    if (s->wd_on && s->state != DP_STATE_WAIT_PRM && m->sa == s->master_add) {
+        s->wd_deadline = t + s->wd_time_ms * 1000u;
+    }
+    return true;
+}
+
+/* SRD: a retry (same FCB, FCV set) gets the cached reply and is not executed again; anything
+ * else runs and its reply is cached for the next retry. */
+static void serve_srd(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
+{
+    bool fcv = (m->fc & FDL_FC_FCV) != 0u;
+    uint8_t fcb = (m->fc & FDL_FC_FCB) != 0u ? 1u : 0u;
+    fdl_fcb_slot_t *slot = fcb_slot(s, m->sa, false);
+    if (fcv && slot != NULL && slot->fcb_valid && slot->fcb == fcb && slot->reply_len > 0u) {
+        fcb_touch(s, slot);
+        dp_slave_emit(s, DP_EV_FCB_REPEAT, t, m->fc, m->sa);
+        transmit(s, slot->reply, slot->reply_len, t);
+        return;
+    }
+    dp_slave_request(s, m, false, t);
+    slot = fcb_slot(s, m->sa, true);
+    fcb_touch(s, slot);
+    slot->fcb_valid = fcv || fcb != 0u;
+    slot->fcb = fcb;
+    slot->reply_len = s->reply_len;
+    memcpy(slot->reply, s->reply, s->reply_len);
+    transmit(s, s->reply, s->reply_len, t);
+}
+
+void fdl_station_frame(dp_slave_t *s)
+{
+    hal_time_us_t t = s->rx.frame_end_t;
+    note_line_activity(s, s->rx.buf[0], t);
+    fdl_msg_t m;
+    if (!accept_request(s, &m, t)) {
+        return;
+    }
+    bool broadcast = m.da == FDL_ADDR_BROADCAST;
+    switch ((uint8_t)(m.fc & FDL_FC_CODE_MASK)) {
+    case FDL_REQ_FDL_STATUS:
+        if (!broadcast) {
+            fdl_station_reply_plain(s, &m, FDL_RSP_OK, NULL, 0);
+            transmit(s, s->reply, s->reply_len, t);
+        }
+        return;
+    case FDL_REQ_SDN_LOW:
+    case FDL_REQ_SDN_HIGH:
+        dp_slave_request(s, &m, true, t);
+        return;
+    case FDL_REQ_SRD_LOW:
+    case FDL_REQ_SRD_HIGH:
+        if (!broadcast) { /* a request with reply cannot go to everybody */
+            serve_srd(s, &m, t);
+        }
+        return;
+    default:
+        if (!broadcast) {
+            fdl_station_reply_rs(s, &m);
+            transmit(s, s->reply, s->reply_len, t);
+        }
+        return;
+    }
+}
