@@ -341,6 +341,12 @@ static void test_prosoft(void)
     CHECK_BYTES(rec.data, rec.len, 0xE5);
     check_prosoft("22: a 2.000 e5", 2000000000u);
     CHECK_BYTES(rec.data, rec.len, 0xE5);
+}
+
+/* ShowFcs, the detailed status columns and the '*' of a bad frame. */
+static void test_prosoft_fcs_and_status(void)
+{
+    text_import_init(&st);
     /* ShowFcs restores FCB/FCV: the written FCS is 0x30 above the one with FC 0x4D. */
     check_prosoft("23: a 2.000 4<2 SRDH 00 [83]", 2000000000u);
     CHECK_BYTES(rec.data, rec.len, 0x68, 0x04, 0x04, 0x68, 0x04, 0x02, 0x7D, 0x00, 0x83, 0x16);
@@ -364,7 +370,11 @@ static void test_prosoft(void)
     CHECK(!rec.has_time);
     CHECK_BYTES(rec.data, rec.len, 0x68, 0x04, 0x04, 0x68, 0x04, 0x02, 0x4D, 0x00, 0x53, 0x16);
     CHECK_EQ(st.shape_seen, TEXT_SHAPE_PROSOFT);
+}
 
+static void test_prosoft_bad_lines(void)
+{
+    text_import_init(&st);
     /* These two manual lines (also in the AN-X-AMX manual) have no PROFIBUS addresses. */
     CHECK_BAD("2: a 0:00:00.002,975 d 0.002,975 g 0.001,054 255< 05^ 1- 0000 0000 0000",
               "destination '255' is not a station address (0..127)");
@@ -391,6 +401,68 @@ static void test_prosoft(void)
     CHECK_BAD("5: a 1.000 3<2 SRDH 1 127 128 255", "odd number of hex digits: '1'");
     CHECK_BAD("5: a 99999999999.000 3<2 SRDH", "time beyond 10^10 s: '99999999999.000'");
     CHECK_BAD("5: a x", "not a time: 'x'");
+}
+
+/* head, then count times " 11", then tail: a data unit of count octets 0x11. */
+static const char *line_with_octets(char *buf, size_t max, const char *head, size_t count,
+                                    const char *tail)
+{
+    size_t n = strlen(head);
+    CHECK(n + 3u * count + strlen(tail) < max);
+    memcpy(buf, head, n);
+    for (size_t i = 0; i < count; i++) {
+        memcpy(&buf[n], " 11", 3);
+        n += 3u;
+    }
+    memcpy(&buf[n], tail, strlen(tail) + 1u);
+    return buf;
+}
+
+/* Frame 68 F9 F9 68 DA SA FC, then 246 octets 0x11, the FCS and 16. */
+static void check_le_249(uint8_t da, uint8_t sa, uint8_t fc, uint8_t fcs)
+{
+    CHECK_EQ(rec.len, 255);
+    CHECK_EQ(rec.orig_len, 255);
+    CHECK_BYTES(rec.data, 7, 0x68, 0xF9, 0xF9, 0x68, da, sa, fc);
+    size_t elevens = 0;
+    for (size_t i = 7; i < 253; i++) {
+        elevens += rec.data[i] == 0x11 ? 1u : 0u;
+    }
+    CHECK_EQ(elevens, 246);
+    CHECK_BYTES(&rec.data[253], 2, fcs, 0x16);
+    CHECK_STR(rec.problem, "");
+}
+
+/* The encoders stop where the core's FDL_LE_MAX does: LE 249 is the longest telegram rebuilt,
+ * a line that would need LE 250 is a bad line. */
+static void test_rebuilt_length_limit(void)
+{
+    char line[1024];
+    text_import_init(&st);
+    /* ProSoft: DA 3, SA 2, SRDH (0x4D), FCS 03 + 02 + 4D + 246 * 11 = 0xA8. */
+    CHECK_EQ(import(line_with_octets(line, sizeof line, "5: a 1.000 3<2 SRDH", 246, "")),
+             TEXT_LINE_RECORD);
+    check_le_249(0x03, 0x02, 0x4D, 0xA8);
+    CHECK_BAD(line_with_octets(line, sizeof line, "5: a 1.000 3<2 SRDH", 247, ""),
+              "247 data octets, more than an SD2 holds");
+    CHECK_BAD(line_with_octets(line, sizeof line, "5: a 1.000 3<2 60^ 62- SRDH", 245, ""),
+              "247 data octets, more than an SD2 holds");
+
+    /* profisniff: DA 4, SA 2, FC 0x5D, FCS 04 + 02 + 5D + 246 * 11 = 0xB9. */
+    const char *head = "FdlTelegram(sd=SD2, haveLE=True, da=0x04, sa=0x02, fc=0x5D, dae=Empty, "
+                       "sae=Empty, du=";
+    const char *tail = ", haveFCS=True, ed=0x16)";
+    CHECK_EQ(import(line_with_octets(line, sizeof line, head, 246, tail)), TEXT_LINE_RECORD);
+    check_le_249(0x04, 0x02, 0x5D, 0xB9);
+    CHECK_BAD(line_with_octets(line, sizeof line, head, 247, tail),
+              "LE would be 250, more than 249");
+    /* The extension octets count towards LE as well. */
+    CHECK_BAD(line_with_octets(line, sizeof line,
+                               "FdlTelegram(sd=SD2, haveLE=True, da=0x04, sa=0x02, fc=0x5D, "
+                               "dae=3E, sae=3C, du=",
+                               245, tail),
+              "LE would be 250, more than 249");
+    CHECK_EQ(st.shape_seen, TEXT_SHAPE_PROSOFT | TEXT_SHAPE_PROFISNIFF);
 }
 
 static void test_skipped_lines(void)
@@ -566,6 +638,9 @@ int main(void)
     RUN_TEST(test_pyprofibus_phy);
     RUN_TEST(test_profisniff_repr);
     RUN_TEST(test_prosoft);
+    RUN_TEST(test_prosoft_fcs_and_status);
+    RUN_TEST(test_prosoft_bad_lines);
+    RUN_TEST(test_rebuilt_length_limit);
     RUN_TEST(test_skipped_lines);
     RUN_TEST(test_byte_order_mark_on_first_line_only);
     RUN_TEST(test_bad_lines);
