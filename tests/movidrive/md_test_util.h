@@ -5,14 +5,14 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "hal/hal_byte_order.h"
 #include "movidrive/movidrive.h"
 
 static inline void md_req(uint8_t t[ML_TELEGRAM_LEN], uint8_t mgmt, uint16_t index, uint32_t data)
 {
     memset(t, 0, ML_TELEGRAM_LEN);
     t[0] = mgmt;
-    t[2] = (uint8_t)(index >> 8);
-    t[3] = (uint8_t)index;
+    hal_put_be16(t + 2, index);
     ml_put_data(t, data);
 }
 

@@ -294,14 +294,14 @@ static void test_bad_movidrive_image(void)
     CHECK(md.ee_layout_ok);
     uint8_t hdr[12];
     CHECK_EQ(h.ops->read(h.ctx, 0, hdr, 12), 0);
-    CHECK_EQ((hdr[0] << 24) | (hdr[1] << 16) | (hdr[2] << 8) | hdr[3], MD_EE_MAGIC);
+    CHECK_EQ(hal_get_be32(hdr), MD_EE_MAGIC);
     /* find P130's record */
-    size_t nrec = (size_t)((hdr[6] << 8) | hdr[7]);
+    size_t nrec = hal_get_be16(hdr + 6);
     int found = 0;
     for (size_t r = 0; r < nrec; r++) {
         uint8_t rec[6];
         h.ops->read(h.ctx, MD_EE_HEADER + r * 6, rec, 6);
-        uint16_t idx = (uint16_t)((rec[0] << 8) | rec[1]);
+        uint16_t idx = hal_get_be16(rec);
         if (idx == MD_IDX_P130_RAMP_UP) {
             const uint8_t bad[6] = {rec[0], rec[1], 0x7F, 0x00, 0x00, 0x00};
             h.ops->write(h.ctx, MD_EE_HEADER + r * 6, bad, 6);
@@ -506,8 +506,7 @@ static void test_file_nvm(void)
     CHECK_EQ(read_file(path, f, sizeof f), (long)sizeof f);
     CHECK_BYTES(f, 16, 'D', 'F', 'P', 'E', 0, 1, 0, 20, 0, 0, 0, 64, 0, 0, 0, 1);
     uint32_t crc = file_nvm_crc32(file_nvm_crc32(0, f, 16), f + 20, 64);
-    CHECK_EQ(((uint32_t)f[16] << 24) | ((uint32_t)f[17] << 16) | ((uint32_t)f[18] << 8) | f[19],
-             crc);
+    CHECK_EQ(hal_get_be32(f + 16), crc);
     const uint8_t check[9] = {'1', '2', '3', '4', '5', '6', '7', '8', '9'};
     CHECK_EQ(file_nvm_crc32(0, check, 9), 0xCBF43926u);
     /* a write into a directory that vanished fails cleanly */
@@ -529,6 +528,75 @@ typedef struct {
     volatile uint32_t p130_done;
 } progress_t;
 
+/* The child: opens the image the last round left and writes H0 = value + 1, + 2, ... (and now
+ * and then P130) until it is killed; reports its progress through pg. */
+static void writer_child(progress_t *pg, uint32_t value) __attribute__((noreturn));
+static void writer_child(progress_t *pg, uint32_t value)
+{
+    file_nvm_t cn;
+    movidrive_t cm;
+    char e[256];
+    if (file_nvm_open(&cn, path, EE_SIZE, e, sizeof e) != 0) {
+        _exit(3);
+    }
+    movidrive_cfg_t cfg = {.eeprom = file_nvm_hal(&cn), .terminal_enable = true};
+    if (movidrive_init(&cm, &cfg, e, sizeof e) != 0) {
+        _exit(4);
+    }
+    for (uint32_t v = value + 1;; v++) {
+        pg->started = v;
+        uint8_t req[8], rsp[8];
+        md_req(req, 0x32, MD_IDX_IPOS_H0, v);
+        movidrive_param(&cm, req, rsp);
+        if (rsp[0] & 0x80) {
+            _exit(5);
+        }
+        pg->done = v;
+        if ((v & 7u) == 0) { /* now and then a second parameter */
+            pg->p130_started = (v * 10u) % 2000000u;
+            md_req(req, 0x32, MD_IDX_P130_RAMP_UP, pg->p130_started);
+            movidrive_param(&cm, req, rsp);
+            pg->p130_done = pg->p130_started;
+        }
+    }
+}
+
+typedef struct {
+    int kills;
+    int mid_write; /* kills between the start and the end of a write */
+    int bad;
+} kill_tally_t;
+
+/* After a kill: the file opens without complaint, H0 and P130 are each the value last written
+ * or the one being written. Returns H0, *p130 = P130. */
+static uint32_t check_after_kill(int round, const progress_t *pg, uint32_t *p130,
+                                 kill_tally_t *t)
+{
+    t->kills++;
+    uint32_t started = pg->started;
+    uint32_t done = pg->done;
+    if (started != done) {
+        t->mid_write++;
+    }
+    int nrc;
+    int mrc = open_md(&nrc);
+    CHECK_EQ(nrc, 0);
+    CHECK_EQ(mrc, 0);
+    uint32_t got = md_read(&md, MD_IDX_IPOS_H0);
+    if (got != done && got != started) {
+        t->bad++;
+        fprintf(stderr, "round %d: H0 = %u, child had done %u, started %u\n", round,
+                (unsigned)got, (unsigned)done, (unsigned)started);
+    }
+    *p130 = md_read(&md, MD_IDX_P130_RAMP_UP);
+    if (*p130 != pg->p130_done && *p130 != pg->p130_started) {
+        t->bad++;
+        fprintf(stderr, "round %d: P130 = %u, child had done %u, started %u\n", round,
+                (unsigned)*p130, (unsigned)pg->p130_done, (unsigned)pg->p130_started);
+    }
+    return got;
+}
+
 static void test_kill_writer(void)
 {
     use_file("kill.ee");
@@ -541,7 +609,7 @@ static void test_kill_writer(void)
     srand((unsigned)time(NULL));
     uint32_t value = 0;
     uint32_t p130 = 2000;
-    int kills = 0, mid_write = 0, bad = 0;
+    kill_tally_t tally = {0, 0, 0};
     const int rounds = 60;
     for (int round = 0; round < rounds; round++) {
         pg->started = value;
@@ -551,32 +619,7 @@ static void test_kill_writer(void)
         fflush(NULL);
         pid_t pid = fork();
         if (pid == 0) {
-            file_nvm_t cn;
-            movidrive_t cm;
-            char e[256];
-            if (file_nvm_open(&cn, path, EE_SIZE, e, sizeof e) != 0) {
-                _exit(3);
-            }
-            movidrive_cfg_t cfg = {.eeprom = file_nvm_hal(&cn), .terminal_enable = true};
-            if (movidrive_init(&cm, &cfg, e, sizeof e) != 0) {
-                _exit(4);
-            }
-            for (uint32_t v = value + 1;; v++) {
-                pg->started = v;
-                uint8_t req[8], rsp[8];
-                md_req(req, 0x32, MD_IDX_IPOS_H0, v);
-                movidrive_param(&cm, req, rsp);
-                if (rsp[0] & 0x80) {
-                    _exit(5);
-                }
-                pg->done = v;
-                if ((v & 7u) == 0) { /* now and then a second parameter */
-                    pg->p130_started = (v * 10u) % 2000000u;
-                    md_req(req, 0x32, MD_IDX_P130_RAMP_UP, pg->p130_started);
-                    movidrive_param(&cm, req, rsp);
-                    pg->p130_done = pg->p130_started;
-                }
-            }
+            writer_child(pg, value);
         }
         CHECK(pid > 0);
         if (pid <= 0) {
@@ -591,39 +634,17 @@ static void test_kill_writer(void)
         int status = 0;
         waitpid(pid, &status, 0);
         if (!WIFSIGNALED(status)) {
-            bad++;
+            tally.bad++;
             fprintf(stderr, "child exited with %d\n", WEXITSTATUS(status));
             continue;
         }
-        kills++;
-        uint32_t started = pg->started;
-        uint32_t done = pg->done;
-        if (started != done) {
-            mid_write++;
-        }
-        int nrc;
-        int mrc = open_md(&nrc);
-        CHECK_EQ(nrc, 0);
-        CHECK_EQ(mrc, 0);
-        uint32_t got = md_read(&md, MD_IDX_IPOS_H0);
-        if (got != done && got != started) {
-            bad++;
-            fprintf(stderr, "round %d: H0 = %u, child had done %u, started %u\n", round,
-                    (unsigned)got, (unsigned)done, (unsigned)started);
-        }
-        p130 = md_read(&md, MD_IDX_P130_RAMP_UP);
-        if (p130 != pg->p130_done && p130 != pg->p130_started) {
-            bad++;
-            fprintf(stderr, "round %d: P130 = %u, child had done %u, started %u\n", round,
-                    (unsigned)p130, (unsigned)pg->p130_done, (unsigned)pg->p130_started);
-        }
-        value = got;
+        value = check_after_kill(round, pg, &p130, &tally);
     }
-    CHECK_EQ(bad, 0);
-    CHECK_EQ(kills, rounds);
+    CHECK_EQ(tally.bad, 0);
+    CHECK_EQ(tally.kills, rounds);
     CHECK(value > 0); /* the writer made progress */
     printf("killed the writer %d times (%d between start and end of a write), H0 reached %u\n",
-           kills, mid_write, (unsigned)value);
+           tally.kills, tally.mid_write, (unsigned)value);
     munmap(pg, sizeof *pg);
 }
 

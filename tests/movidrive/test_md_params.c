@@ -216,12 +216,13 @@ static void test_attribute(void)
         uint8_t rsp[8];
         md_svc(&md, 0x08, idx, 0, rsp);
         CHECK_EQ(rsp[0] & 0x80, 0);
-        idx = (uint16_t)((rsp[4] << 8) | rsp[5]);
+        idx = hal_get_be16(rsp + 4);
         visited++;
     }
     CHECK_EQ(visited, md.num_defs + MD_IPOS_VARS);
 }
 
+/* Errors whatever the drive does: illegal index, read only, range, enumeration, P803 lock. */
 static void test_errors(void)
 {
     fresh();
@@ -275,8 +276,11 @@ static void test_errors(void)
     CHECK_EQ(md_write(&md, MD_IDX_P803_PARAM_LOCK, 1, 1), 0);
     CHECK_EQ(md_write(&md, MD_IDX_FIRMWARE, 0, 1), ML_ADD_READ_ONLY);
     CHECK_EQ(md_write(&md, MD_IDX_P803_PARAM_LOCK, 0, 1), 0);
+}
 
-    /* 0x1C controller inhibit required / 0x20 output stage enabled: a running drive */
+/* 0x1C controller inhibit required / 0x20 output stage enabled: a running drive */
+static void test_errors_running(void)
+{
     fresh();
     CHECK_EQ(md_write(&md, MD_IDX_P100_SETPOINT_SOURCE, 3, 0), 0);
     CHECK_EQ(md_write(&md, MD_IDX_P101_CONTROL_SOURCE, 2, 0), 0);
@@ -306,8 +310,11 @@ static void test_errors(void)
     CHECK_EQ(md_write(&md, MD_IDX_P100_SETPOINT_SOURCE, 3, 0), ML_ADD_CONTROLLER_INHIBIT_REQUIRED);
     movidrive_set_terminal_enable(&md, false);
     CHECK_EQ(md_write(&md, MD_IDX_P100_SETPOINT_SOURCE, 3, 0), 0);
+}
 
-    /* bytes of the other classes */
+/* Errors of classes other than 8: illegal service, type conflict. */
+static void test_errors_other_classes(void)
+{
     fresh();
     /* service 9..15: class 5 "illegal service" */
     XCHG(0x09, 0x00, 0x20, 0x6C, 0x00, 0x00, 0x00, 0x00, 0x89, 0x00, 0x20, 0x6C, 0x05, 0x00,
@@ -345,7 +352,7 @@ static void test_no_volatile(void)
     /* walking: 8470 -> 8471 -> H0 */
     uint8_t rsp[8];
     md_svc(&md, 0x08, 8471, 0, rsp);
-    CHECK_EQ((rsp[4] << 8) | rsp[5], MD_IDX_IPOS_H0);
+    CHECK_EQ(hal_get_be16(rsp + 4), MD_IDX_IPOS_H0);
 }
 
 /* The generated table: sorted, unique, the facts the brief names. */
@@ -386,6 +393,8 @@ int main(void)
     RUN_TEST(test_scale);
     RUN_TEST(test_attribute);
     RUN_TEST(test_errors);
+    RUN_TEST(test_errors_running);
+    RUN_TEST(test_errors_other_classes);
     RUN_TEST(test_no_volatile);
     RUN_TEST(test_table);
     return check_report();

@@ -210,6 +210,90 @@ static bool all_digits(const char *s, size_t len)
     return len > 0u;
 }
 
+/* "P100", or an error memory sub-entry "P080.Speed"; aliases (P031 = P600) included. */
+static const md_param_info_t *find_by_p_number(const char *s, size_t len, char *err,
+                                               size_t errlen)
+{
+    for (size_t i = 0; i < md_param_infos_count; i++) {
+        if (ci_equal(s, len, md_param_infos[i].p_number)) {
+            return &md_param_infos[i];
+        }
+    }
+    for (size_t i = 0; i < md_param_aliases_count; i++) {
+        if (ci_equal(s, len, md_param_aliases[i].p_number)) {
+            return md_param_info(md_param_aliases[i].index);
+        }
+    }
+    set_err(err, errlen, "no parameter '%.*s'", (int)len, s);
+    return NULL;
+}
+
+/* "H12": never a table parameter, but the reason says what it is. */
+static void explain_ipos_variable(const char *s, size_t len, char *err, size_t errlen)
+{
+    long n = strtol(s + 1, NULL, 10);
+    if (n >= 0 && n <= 511) {
+        set_err(err, errlen, "'%.*s' is IPOS variable H%ld (index %ld), not a table parameter",
+                (int)len, s, n, 11000 + n);
+    } else {
+        set_err(err, errlen, "no parameter '%.*s' (IPOS variables are H0..H511)", (int)len, s);
+    }
+}
+
+/* An index, decimal or 0xHEX. False when the text is no number after all ("4-quadrant
+ * operation 1" is a name); true with *found (NULL and a reason when no parameter has it). */
+static bool find_by_index(const char *s, size_t len, const md_param_info_t **found, char *err,
+                          size_t errlen)
+{
+    char num[24];
+    if (len >= sizeof num) {
+        return false;
+    }
+    memcpy(num, s, len);
+    num[len] = '\0';
+    char *end = NULL;
+    errno = 0;
+    unsigned long v = strtoul(num, &end, 0);
+    if (*end != '\0' || errno != 0) {
+        return false;
+    }
+    *found = NULL;
+    if (v > 65535u) {
+        set_err(err, errlen, "index %s is out of 0..65535", num);
+        return true;
+    }
+    *found = md_param_info((uint16_t)v);
+    if (*found == NULL) {
+        set_err(err, errlen, "no parameter with index %lu", v);
+    }
+    return true;
+}
+
+/* The one parameter whose name equals the text, or else the one whose name contains it. */
+static const md_param_info_t *find_by_name(const char *s, size_t len, char *err, size_t errlen)
+{
+    for (int exact = 1; exact >= 0; exact--) {
+        const md_param_info_t *hit = NULL;
+        size_t hits = 0;
+        for (size_t i = 0; i < md_param_infos_count; i++) {
+            const char *name = md_param_infos[i].name;
+            if (exact ? ci_equal(s, len, name) : ci_contains(name, s, len)) {
+                hit = &md_param_infos[i];
+                hits++;
+            }
+        }
+        if (hits == 1u) {
+            return hit;
+        }
+        if (hits > 1u) {
+            ambiguous(s, len, exact != 0, err, errlen);
+            return NULL;
+        }
+    }
+    set_err(err, errlen, "no parameter '%.*s'", (int)len, s);
+    return NULL;
+}
+
 const md_param_info_t *md_param_find(const char *text, char *err, size_t errlen)
 {
     size_t len = 0;
@@ -222,83 +306,18 @@ const md_param_info_t *md_param_find(const char *text, char *err, size_t errlen)
         set_err(err, errlen, "no parameter '%.40s...'", s);
         return NULL;
     }
-    /* P-number: "P100", or an error memory sub-entry "P080.Speed" */
     if ((s[0] == 'P' || s[0] == 'p') && len >= 2u && isdigit((unsigned char)s[1])) {
-        for (size_t i = 0; i < md_param_infos_count; i++) {
-            if (ci_equal(s, len, md_param_infos[i].p_number)) {
-                return &md_param_infos[i];
-            }
-        }
-        for (size_t i = 0; i < md_param_aliases_count; i++) {
-            if (ci_equal(s, len, md_param_aliases[i].p_number)) {
-                return md_param_info(md_param_aliases[i].index);
-            }
-        }
-        set_err(err, errlen, "no parameter '%.*s'", (int)len, s);
-        return NULL;
+        return find_by_p_number(s, len, err, errlen);
     }
     if ((s[0] == 'H' || s[0] == 'h') && all_digits(s + 1, len - 1u)) {
-        long n = strtol(s + 1, NULL, 10);
-        if (n >= 0 && n <= 511) {
-            set_err(err, errlen, "'%.*s' is IPOS variable H%ld (index %ld), not a table parameter",
-                    (int)len, s, n, 11000 + n);
-        } else {
-            set_err(err, errlen, "no parameter '%.*s' (IPOS variables are H0..H511)", (int)len, s);
-        }
+        explain_ipos_variable(s, len, err, errlen);
         return NULL;
     }
-    if (isdigit((unsigned char)s[0])) {
-        char num[24];
-        if (len < sizeof num) {
-            memcpy(num, s, len);
-            num[len] = '\0';
-            char *end = NULL;
-            errno = 0;
-            unsigned long v = strtoul(num, &end, 0);
-            if (*end == '\0' && errno == 0) {
-                if (v > 65535u) {
-                    set_err(err, errlen, "index %s is out of 0..65535", num);
-                    return NULL;
-                }
-                const md_param_info_t *p = md_param_info((uint16_t)v);
-                if (p == NULL) {
-                    set_err(err, errlen, "no parameter with index %lu", v);
-                }
-                return p;
-            }
-        }
-        /* not a number after all ("4-quadrant operation 1"): a name */
+    const md_param_info_t *found = NULL;
+    if (isdigit((unsigned char)s[0]) && find_by_index(s, len, &found, err, errlen)) {
+        return found;
     }
-    const md_param_info_t *hit = NULL;
-    size_t hits = 0;
-    for (size_t i = 0; i < md_param_infos_count; i++) {
-        if (ci_equal(s, len, md_param_infos[i].name)) {
-            hit = &md_param_infos[i];
-            hits++;
-        }
-    }
-    if (hits == 1u) {
-        return hit;
-    }
-    if (hits > 1u) {
-        ambiguous(s, len, true, err, errlen);
-        return NULL;
-    }
-    for (size_t i = 0; i < md_param_infos_count; i++) {
-        if (ci_contains(md_param_infos[i].name, s, len)) {
-            hit = &md_param_infos[i];
-            hits++;
-        }
-    }
-    if (hits == 1u) {
-        return hit;
-    }
-    if (hits > 1u) {
-        ambiguous(s, len, false, err, errlen);
-        return NULL;
-    }
-    set_err(err, errlen, "no parameter '%.*s'", (int)len, s);
-    return NULL;
+    return find_by_name(s, len, err, errlen);
 }
 
 /* ---- values ---------------------------------------------------------------------------- */
@@ -342,141 +361,153 @@ int md_value_text(const md_param_info_t *p, int32_t raw, char *out, size_t n)
     return app_result(&a);
 }
 
+/* A decimal number as read from the text: sign, whole part, fraction digits (no more than the
+ * parameter's decimals), whether a point or the unit was there. */
+typedef struct decimal {
+    bool neg;
+    uint64_t whole;
+    size_t wdigits;
+    uint64_t frac;
+    size_t fdigits;
+    bool point;
+    bool unit;
+} decimal_t;
+
+/* Sign and whole part from s[*i]; false with a reason when it is beyond any 32-bit value. */
+static bool read_whole(const char *s, size_t len, size_t *i, decimal_t *d, char *err,
+                       size_t errlen)
+{
+    if (*i < len && (s[*i] == '-' || s[*i] == '+')) {
+        d->neg = s[*i] == '-';
+        (*i)++;
+    }
+    while (*i < len && isdigit((unsigned char)s[*i])) {
+        if (d->whole > 1000000000000ull) {
+            set_err(err, errlen, "'%.*s' is out of the 32-bit range", (int)len, s);
+            return false;
+        }
+        d->whole = d->whole * 10u + (uint64_t)(s[*i] - '0');
+        d->wdigits++;
+        (*i)++;
+    }
+    return true;
+}
+
+/* ".25" from s[*i]; false with a reason when it has more non-zero decimals than allowed. */
+static bool read_fraction(const md_param_info_t *p, const char *s, size_t len, size_t *i,
+                          int32_t decimals, decimal_t *d, char *err, size_t errlen)
+{
+    if (*i >= len || s[*i] != '.') {
+        return true;
+    }
+    d->point = true;
+    (*i)++;
+    while (*i < len && isdigit((unsigned char)s[*i])) {
+        if ((int32_t)d->fdigits < decimals) {
+            d->frac = d->frac * 10u + (uint64_t)(s[*i] - '0');
+            d->fdigits++;
+        } else if (s[*i] != '0') {
+            set_err(err, errlen, "'%.*s' has more than %ld decimal%s for %s", (int)len, s,
+                    (long)decimals, decimals == 1 ? "" : "s",
+                    p != NULL && p->unit[0] != '\0' ? p->unit : "this parameter");
+            return false;
+        }
+        (*i)++;
+    }
+    return true;
+}
+
+/* A value in the unit to the raw magnitude: × 10^decimals, or ÷ 10^scale_exp for a positive
+ * scale (false with a reason when it is no multiple of that). */
+static bool unit_to_raw(const md_param_info_t *p, const char *s, size_t len, decimal_t *d,
+                        int32_t decimals, uint64_t *mag, char *err, size_t errlen)
+{
+    while ((int32_t)d->fdigits < decimals) {
+        d->frac *= 10u;
+        d->fdigits++;
+    }
+    if (p != NULL && p->scale_exp > 0) {
+        uint64_t div = (uint64_t)pow10_i64(p->scale_exp);
+        if (d->whole % div != 0u) {
+            set_err(err, errlen, "'%.*s' is not a multiple of %llu %s", (int)len, s,
+                    (unsigned long long)div, p->unit);
+            return false;
+        }
+        *mag = d->whole / div;
+        return true;
+    }
+    *mag = d->whole * (uint64_t)pow10_i64(decimals) + d->frac;
+    return true;
+}
+
 /* "300.5", "-1.25 rpm", "2000 ms": sign, digits, optional fraction, optional unit. Raw value
  * in *raw; false with a reason. *scaled tells whether it was a value in the unit (a fraction or
  * a unit given) rather than a raw integer. */
 static bool parse_number(const md_param_info_t *p, const char *s, size_t len, int64_t *raw,
                          bool *scaled, char *err, size_t errlen)
 {
+    decimal_t d = {0};
     size_t i = 0;
-    bool neg = false;
-    if (i < len && (s[i] == '-' || s[i] == '+')) {
-        neg = s[i] == '-';
-        i++;
-    }
-    uint64_t whole = 0;
-    size_t wdigits = 0;
-    while (i < len && isdigit((unsigned char)s[i])) {
-        if (whole > 1000000000000ull) {
-            set_err(err, errlen, "'%.*s' is out of the 32-bit range", (int)len, s);
-            return false;
-        }
-        whole = whole * 10u + (uint64_t)(s[i] - '0');
-        wdigits++;
-        i++;
-    }
-    uint64_t frac = 0;
-    size_t fdigits = 0;
-    bool point = false;
     int32_t decimals = p != NULL && p->scale_exp < 0 ? -p->scale_exp : 0;
-    if (i < len && s[i] == '.') {
-        point = true;
-        i++;
-        while (i < len && isdigit((unsigned char)s[i])) {
-            if ((int32_t)fdigits < decimals) {
-                frac = frac * 10u + (uint64_t)(s[i] - '0');
-                fdigits++;
-            } else if (s[i] != '0') {
-                set_err(err, errlen, "'%.*s' has more than %ld decimal%s for %s", (int)len, s,
-                        (long)decimals, decimals == 1 ? "" : "s",
-                        p != NULL && p->unit[0] != '\0' ? p->unit : "this parameter");
-                return false;
-            }
-            i++;
-        }
+    if (!read_whole(s, len, &i, &d, err, errlen) ||
+        !read_fraction(p, s, len, &i, decimals, &d, err, errlen)) {
+        return false;
     }
-    if (wdigits == 0u && !(point && fdigits > 0u)) {
+    if (d.wdigits == 0u && !(d.point && d.fdigits > 0u)) {
         return false;
     }
     while (i < len && s[i] == ' ') {
         i++;
     }
-    bool unit = false;
     if (i < len) {
         if (p == NULL || p->unit[0] == '\0' || !ci_equal(s + i, len - i, p->unit)) {
             return false;
         }
-        unit = true;
+        d.unit = true;
     }
-    *scaled = point || unit;
-    if (!*scaled) {
-        *raw = neg ? -(int64_t)whole : (int64_t)whole;
-        return true;
+    *scaled = d.point || d.unit;
+    uint64_t mag = d.whole;
+    if (*scaled && !unit_to_raw(p, s, len, &d, decimals, &mag, err, errlen)) {
+        return false;
     }
-    while ((int32_t)fdigits < decimals) {
-        frac *= 10u;
-        fdigits++;
-    }
-    uint64_t mag;
-    if (p != NULL && p->scale_exp > 0) {
-        uint64_t d = (uint64_t)pow10_i64(p->scale_exp);
-        if (whole % d != 0u) {
-            set_err(err, errlen, "'%.*s' is not a multiple of %llu %s", (int)len, s,
-                    (unsigned long long)d, p->unit);
-            return false;
-        }
-        mag = whole / d;
-    } else {
-        mag = whole * (uint64_t)pow10_i64(decimals) + frac;
-    }
-    *raw = neg ? -(int64_t)mag : (int64_t)mag;
+    *raw = d.neg ? -(int64_t)mag : (int64_t)mag;
     return true;
 }
 
-bool md_value_parse(const md_param_info_t *p, const char *text, int32_t *raw, char *err,
-                    size_t errlen)
+/* A raw integer as strtoll reads it, so the hexadecimal and octal forms work too ("0x10").
+ * False when the text is no such integer; true with *ok false and a reason when it is beyond
+ * 32 bits. */
+static bool parse_raw_integer(const char *s, size_t len, int32_t *raw, bool *ok, char *err,
+                              size_t errlen)
 {
-    size_t len = 0;
-    const char *s = text != NULL ? trim(text, &len) : "";
-    if (len == 0u) {
-        set_err(err, errlen, "no value given");
+    char num[32];
+    if (len >= sizeof num) {
         return false;
     }
-    if (p != NULL) {
-        for (uint16_t i = 0; i < p->num_enums; i++) {
-            if (ci_equal(s, len, p->enums[i].text)) {
-                *raw = p->enums[i].value;
-                return true;
-            }
-        }
+    memcpy(num, s, len);
+    num[len] = '\0';
+    char *end = NULL;
+    errno = 0;
+    long long v = strtoll(num, &end, 0);
+    if (*end != '\0' || end == num) {
+        return false;
     }
-    /* strtoll takes the hexadecimal and octal forms a raw integer may have ("0x10") */
-    char num[32];
-    if (len < sizeof num) {
-        memcpy(num, s, len);
-        num[len] = '\0';
-        char *end = NULL;
-        errno = 0;
-        long long v = strtoll(num, &end, 0);
-        if (*end == '\0' && end != num) {
-            if (errno != 0 || v < INT32_MIN || v > (long long)UINT32_MAX) {
-                set_err(err, errlen, "'%s' is out of the 32-bit range", num);
-                return false;
-            }
-            *raw = (int32_t)(uint32_t)(uint64_t)v;
-            return true;
-        }
-    }
-    int64_t v = 0;
-    bool scaled = false;
-    char why[160] = "";
-    if (parse_number(p, s, len, &v, &scaled, why, sizeof why)) {
-        bool uns = p != NULL && is_unsigned(p);
-        if (v < (uns ? 0 : INT32_MIN) || v > (uns ? (int64_t)UINT32_MAX : INT32_MAX)) {
-            set_err(err, errlen, "'%.*s' is out of %s range", (int)len, s,
-                    uns ? "the unsigned 32-bit" : "the 32-bit");
-            return false;
-        }
-        *raw = (int32_t)(uint32_t)(uint64_t)v;
+    *ok = errno == 0 && v >= INT32_MIN && v <= (long long)UINT32_MAX;
+    if (!*ok) {
+        set_err(err, errlen, "'%s' is out of the 32-bit range", num);
         return true;
     }
-    if (why[0] != '\0') {
-        set_err(err, errlen, "%s", why);
-        return false;
-    }
+    *raw = (int32_t)(uint32_t)(uint64_t)v;
+    return true;
+}
+
+/* The reason a text is no value of p: the enumeration texts, or the number forms it takes. */
+static void explain_not_a_value(const md_param_info_t *p, const char *s, size_t len, char *err,
+                                size_t errlen)
+{
     if (p == NULL) {
         set_err(err, errlen, "'%.*s' is not a number (decimal, -N or 0xHEX)", (int)len, s);
-        return false;
+        return;
     }
     appender_t a = app_init(err, errlen);
     if (p->num_enums > 0u) {
@@ -495,6 +526,45 @@ bool md_value_parse(const md_param_info_t *p, const char *text, int32_t *raw, ch
             p->p_number, p->name);
     }
     (void)app_result(&a);
+}
+
+bool md_value_parse(const md_param_info_t *p, const char *text, int32_t *raw, char *err,
+                    size_t errlen)
+{
+    size_t len = 0;
+    const char *s = text != NULL ? trim(text, &len) : "";
+    if (len == 0u) {
+        set_err(err, errlen, "no value given");
+        return false;
+    }
+    for (uint16_t i = 0; p != NULL && i < p->num_enums; i++) {
+        if (ci_equal(s, len, p->enums[i].text)) {
+            *raw = p->enums[i].value;
+            return true;
+        }
+    }
+    bool ok = false;
+    if (parse_raw_integer(s, len, raw, &ok, err, errlen)) {
+        return ok;
+    }
+    int64_t v = 0;
+    bool scaled = false;
+    char why[160] = "";
+    if (parse_number(p, s, len, &v, &scaled, why, sizeof why)) {
+        bool uns = p != NULL && is_unsigned(p);
+        if (v < (uns ? 0 : INT32_MIN) || v > (uns ? (int64_t)UINT32_MAX : INT32_MAX)) {
+            set_err(err, errlen, "'%.*s' is out of %s range", (int)len, s,
+                    uns ? "the unsigned 32-bit" : "the 32-bit");
+            return false;
+        }
+        *raw = (int32_t)(uint32_t)(uint64_t)v;
+        return true;
+    }
+    if (why[0] != '\0') {
+        set_err(err, errlen, "%s", why);
+        return false;
+    }
+    explain_not_a_value(p, s, len, err, errlen);
     return false;
 }
 
