@@ -1,4 +1,4 @@
-# The STM32F405 firmware image (issue 6): cross build with reports, and the QEMU test.
+# The STM32F405 firmware image: cross build with reports, and the QEMU test.
 #   make firmware        .elf/.bin/.hex/.map of every image, size report by module, stack report
 #   make test-firmware   board driver unit tests (host) + the images under QEMU driven by dfp-sim
 APT_PACKAGES += qemu-system-arm gcc-arm-none-eabi libnewlib-arm-none-eabi

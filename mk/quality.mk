@@ -1,4 +1,4 @@
-# Static analysis, warnings, coverage (issue 7; docs/quality.md "Static analysis, warnings,
+# Static analysis, warnings, coverage (docs/quality.md "Static analysis, warnings,
 # coverage"). The warning flags themselves are DFP_WARNINGS in CMakeLists.txt (-Werror in every
 # build). Both targets run in `make test` and so in CI.
 #
