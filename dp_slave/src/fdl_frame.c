@@ -14,73 +14,212 @@ uint8_t fdl_fcs(const uint8_t *p, size_t n)
 }
 
 /* One address extension: the first octet carries the SAP; further octets (bit 7 chain) are
- * segment/network addresses a DP slave does not route on, so they are skipped. */
+ * segment/network addresses a DP slave does not route on, so they are skipped. The SAP is
+ * recorded even when the chain then proves bad, so a damaged record still shows it. */
 static fdl_parse_result_t take_extension(const uint8_t *du, size_t du_len, size_t *pos,
-                                         uint8_t *sap)
+                                         bool *has_sap, uint8_t *sap)
 {
     if (*pos >= du_len) {
         return FDL_PARSE_SHORT;
     }
     uint8_t ae = du[(*pos)++];
-    if ((ae & FDL_AE_SEGMENT) != 0u) {
-        return FDL_PARSE_SEGMENT;
-    }
+    *has_sap = true;
     *sap = (uint8_t)(ae & FDL_AE_SAP_MASK);
+    fdl_parse_result_t r = (ae & FDL_AE_SEGMENT) != 0u ? FDL_PARSE_SEGMENT : FDL_PARSE_OK;
     while ((ae & FDL_AE_MORE) != 0u) {
         if (*pos >= du_len) {
-            return FDL_PARSE_SHORT;
+            return r == FDL_PARSE_OK ? FDL_PARSE_SHORT : r;
         }
         ae = du[(*pos)++];
     }
-    return FDL_PARSE_OK;
+    return r;
+}
+
+/* DA SA FC at addr[0..2] and the du_len octets after them: DAE octets come first, then SAE
+ * octets (protocol.md §A1.3). The first error found is returned. */
+static fdl_parse_result_t parse_addressing(const uint8_t *addr, size_t du_len, fdl_msg_t *msg)
+{
+    uint8_t da = addr[0];
+    uint8_t sa = addr[1];
+    msg->da = (uint8_t)(da & FDL_ADDR_MASK);
+    msg->sa = (uint8_t)(sa & FDL_ADDR_MASK);
+    msg->fc = addr[2];
+    const uint8_t *du = &addr[FDL_ADDR_FC_LEN];
+    size_t pos = 0;
+    fdl_parse_result_t r = FDL_PARSE_OK;
+    if ((da & FDL_ADDR_EXT) != 0u) {
+        r = take_extension(du, du_len, &pos, &msg->has_dsap, &msg->dsap);
+    }
+    if ((sa & FDL_ADDR_EXT) != 0u) {
+        fdl_parse_result_t rs = take_extension(du, du_len, &pos, &msg->has_ssap, &msg->ssap);
+        if (r == FDL_PARSE_OK) {
+            r = rs;
+        }
+    }
+    msg->data = &du[pos];
+    msg->data_len = (uint8_t)(du_len - pos);
+    return r;
+}
+
+/* Where DA sits behind a data telegram's delimiter; 0 for SD4, SC and unknown octets. */
+static size_t da_offset(uint8_t sd)
+{
+    switch (sd) {
+    case FDL_SD1:
+    case FDL_SD3: return FDL_SD1_SD3_HEADER_LEN;
+    case FDL_SD2: return FDL_SD2_HEADER_LEN;
+    default: return 0u;
+    }
+}
+
+/* DA..DU as the delimiter (and for SD2 the LE octet) announces it. */
+static size_t addressed_len(const uint8_t *frame)
+{
+    switch (frame[0]) {
+    case FDL_SD1: return FDL_ADDR_FC_LEN;
+    case FDL_SD3: return FDL_ADDR_FC_LEN + FDL_SD3_DU_LEN;
+    default: return frame[1];
+    }
 }
 
 fdl_parse_result_t fdl_parse(const uint8_t *frame, size_t len, fdl_msg_t *msg)
 {
     *msg = (fdl_msg_t){0};
     msg->sd = frame[0];
-    size_t hdr;
-    size_t du_len;
-    switch (frame[0]) {
-    case FDL_SD1:
-        hdr = 1u;
-        du_len = 0u;
-        break;
-    case FDL_SD3:
-        hdr = 1u;
-        du_len = FDL_SD3_DU_LEN;
-        break;
-    case FDL_SD2:
-        hdr = 4u;
-        du_len = (size_t)frame[1] - 3u;
-        break;
-    default:
+    (void)len;
+    size_t da_at = da_offset(frame[0]);
+    if (da_at == 0u) {
         return FDL_PARSE_NOT_DATA;
     }
-    (void)len;
-    uint8_t da = frame[hdr];
-    uint8_t sa = frame[hdr + 1u];
-    msg->da = (uint8_t)(da & FDL_ADDR_MASK);
-    msg->sa = (uint8_t)(sa & FDL_ADDR_MASK);
-    msg->fc = frame[hdr + 2u];
-    const uint8_t *du = &frame[hdr + 3u];
-    size_t pos = 0;
-    /* DAE octets come first, then SAE octets. */
-    fdl_parse_result_t r = FDL_PARSE_OK;
-    if ((da & FDL_ADDR_EXT) != 0u) {
-        r = take_extension(du, du_len, &pos, &msg->dsap);
-        msg->has_dsap = r == FDL_PARSE_OK;
+    return parse_addressing(&frame[da_at], addressed_len(frame) - FDL_ADDR_FC_LEN, msg);
+}
+
+/* ---- records that did not come through fdl_rx ----------------------------------------------- */
+
+/* A telegram of frame_len octets ending in FCS (over [fcs_from, frame_len - 2)) and ED. */
+static fdl_check_result_t check_framed(const uint8_t *octets, size_t len, size_t frame_len,
+                                       size_t fcs_from, fdl_check_info_t *info)
+{
+    info->frame_len = frame_len;
+    if (len < frame_len) {
+        return FDL_CHECK_SHORT;
     }
-    if (r == FDL_PARSE_OK && (sa & FDL_ADDR_EXT) != 0u) {
-        r = take_extension(du, du_len, &pos, &msg->ssap);
-        msg->has_ssap = r == FDL_PARSE_OK;
+    uint8_t ed = octets[frame_len - 1u];
+    if (ed != FDL_ED) {
+        info->found = ed;
+        info->expected = FDL_ED;
+        return FDL_CHECK_ED;
     }
-    if (r != FDL_PARSE_OK) {
-        return r;
+    size_t fcs_at = frame_len - FDL_TRAILER_LEN;
+    uint8_t fcs = fdl_fcs(&octets[fcs_from], fcs_at - fcs_from);
+    if (octets[fcs_at] != fcs) {
+        info->found = octets[fcs_at];
+        info->expected = fcs;
+        return FDL_CHECK_FCS;
     }
-    msg->data = &du[pos];
-    msg->data_len = (uint8_t)(du_len - pos);
-    return FDL_PARSE_OK;
+    return len > frame_len ? FDL_CHECK_LONG : FDL_CHECK_OK;
+}
+
+/* SD4 and SC: no FCS, no ED. */
+static fdl_check_result_t check_unframed(size_t len, size_t frame_len, fdl_check_info_t *info)
+{
+    info->frame_len = frame_len;
+    if (len < frame_len) {
+        return FDL_CHECK_SHORT;
+    }
+    return len > frame_len ? FDL_CHECK_LONG : FDL_CHECK_OK;
+}
+
+static fdl_check_result_t check_sd2(const uint8_t *octets, size_t len, fdl_check_info_t *info)
+{
+    if (len < FDL_SD2_HEADER_LEN) {
+        info->frame_len = FDL_SD2_MIN_LEN;
+        info->frame_len_min = true;
+        return FDL_CHECK_SHORT;
+    }
+    uint8_t le = octets[1];
+    if (octets[2] != le) {
+        info->found = octets[2];
+        info->expected = le;
+        return FDL_CHECK_LE_MISMATCH;
+    }
+    if (le < FDL_LE_MIN || le > FDL_LE_MAX) {
+        info->found = le;
+        return FDL_CHECK_LE_RANGE;
+    }
+    if (octets[3] != FDL_SD2) {
+        info->found = octets[3];
+        info->expected = FDL_SD2;
+        return FDL_CHECK_SD2_REPEAT;
+    }
+    return check_framed(octets, len, (size_t)le + FDL_SD2_OVERHEAD, FDL_SD2_HEADER_LEN, info);
+}
+
+static fdl_check_result_t check_framing(const uint8_t *octets, size_t len,
+                                        fdl_check_info_t *info)
+{
+    switch (octets[0]) {
+    case FDL_SD1:
+        return check_framed(octets, len, FDL_SD1_LEN, FDL_SD1_SD3_HEADER_LEN, info);
+    case FDL_SD3:
+        return check_framed(octets, len, FDL_SD3_LEN, FDL_SD1_SD3_HEADER_LEN, info);
+    case FDL_SD2: return check_sd2(octets, len, info);
+    case FDL_SD4: return check_unframed(len, FDL_SD4_LEN, info);
+    case FDL_SC: return check_unframed(len, FDL_SC_LEN, info);
+    default: return FDL_CHECK_UNKNOWN_SD;
+    }
+}
+
+fdl_check_result_t fdl_check(const uint8_t *octets, size_t len, fdl_check_info_t *info,
+                             fdl_msg_t *msg)
+{
+    fdl_check_info_t unused_info;
+    fdl_msg_t unused_msg;
+    if (info == NULL) {
+        info = &unused_info;
+    }
+    if (msg == NULL) {
+        msg = &unused_msg;
+    }
+    *info = (fdl_check_info_t){.parse = FDL_PARSE_NOT_DATA};
+    *msg = (fdl_msg_t){0};
+    if (octets == NULL || len == 0u) {
+        return FDL_CHECK_EMPTY;
+    }
+    fdl_check_result_t r = check_framing(octets, len, info);
+    if (r == FDL_CHECK_OK) {
+        info->parse = fdl_parse(octets, len, msg);
+    }
+    return r;
+}
+
+bool fdl_parse_damaged(const uint8_t *octets, size_t len, fdl_msg_t *msg)
+{
+    *msg = (fdl_msg_t){0};
+    if (len == 0u) {
+        return false;
+    }
+    msg->sd = octets[0];
+    if (octets[0] == FDL_SD4) {
+        if (len < FDL_SD4_LEN) {
+            return false;
+        }
+        msg->da = (uint8_t)(octets[1] & FDL_ADDR_MASK);
+        msg->sa = (uint8_t)(octets[2] & FDL_ADDR_MASK);
+        return true;
+    }
+    size_t da_at = da_offset(octets[0]);
+    size_t du_at = da_at + FDL_ADDR_FC_LEN;
+    if (da_at == 0u || len < du_at) {
+        return false;
+    }
+    size_t end = da_at + addressed_len(octets);
+    size_t present = len >= du_at + FDL_TRAILER_LEN ? len - FDL_TRAILER_LEN : len;
+    if (present < end) {
+        end = present;
+    }
+    (void)parse_addressing(&octets[da_at], end > du_at ? end - du_at : 0u, msg);
+    return true;
 }
 
 size_t fdl_encode(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps, uint8_t dsap,

@@ -354,8 +354,9 @@ python3 "$here/mutate.py" "$tmp/fuzz.pcap" 5 "$hand" "$tmp/c2.pcap" "$tmp/ml.pca
 no_lua_errors "damaged and random telegrams ($(cat "$tmp/fuzz.n"))" "$tmp/fuzz.pcap"
 
 # ---- installed as a plugin (README): no -X needed
+# (profibus.lua and its parts profibus_*.lua, as the README says; not movidrive_params.lua)
 mkdir -p "$tmp/home/.local/lib/wireshark/plugins"
-cp "$lua" "$tmp/home/.local/lib/wireshark/plugins/profibus.lua"
+cp "$lua" "$(dirname "$lua")"/profibus_*.lua "$tmp/home/.local/lib/wireshark/plugins/"
 HOME="$tmp/home" XDG_CONFIG_HOME="$tmp/home/.config" "$tshark" -r "$hand" -Y 'frame.number==6' \
   -T fields -e profibus.dp.ident >"$tmp/plugin.out" 2>"$tmp/plugin.err"
 eq "from the personal plugin folder" "$(cat "$tmp/plugin.out")" 0x6003

@@ -16,11 +16,17 @@
 #define FDL_SD3_LEN 14u
 #define FDL_SD3_DU_LEN 8u
 #define FDL_SD4_LEN 3u
+#define FDL_SC_LEN 1u
+#define FDL_SD1_SD3_HEADER_LEN 1u /* the delimiter: DA follows at offset 1 */
+#define FDL_SD2_HEADER_LEN 4u     /* 68 LE LEr 68: DA follows at offset 4 */
+#define FDL_ADDR_FC_LEN 3u        /* DA SA FC */
+#define FDL_TRAILER_LEN 2u        /* FCS ED */
 #define FDL_SD2_OVERHEAD 6u /* 68 LE LEr 68 ... FCS 16 */
 #define FDL_LE_MIN 4u       /* DA SA FC + at least one DU octet (LE counts DA..DU) */
 #define FDL_LE_MAX 249u
 #define FDL_FRAME_MAX (FDL_LE_MAX + FDL_SD2_OVERHEAD) /* 255 */
 #define FDL_DU_MAX (FDL_LE_MAX - 3u)                  /* 246, SAP bytes included */
+#define FDL_SD2_MIN_LEN (FDL_LE_MIN + FDL_SD2_OVERHEAD) /* 10 */
 
 /* Addresses. */
 #define FDL_ADDR_MASK 0x7Fu

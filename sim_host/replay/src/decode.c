@@ -7,83 +7,39 @@
 #include "dp_master/dpv1_xfer.h"
 #include "dp_master/param_channel.h"
 #include "dp_slave/dp_wire.h"
+#include "dp_slave/fdl_frame.h"
 #include "dp_slave/fdl_wire.h"
 
 /* ---- parsing ------------------------------------------------------------------------------ */
 
+/* The core reads the record (fdl_parse_damaged, protocol.md §A1.2/§A1.3); only the kind is
+ * replay's own. */
 void replay_frame_parse(const uint8_t *f, size_t len, replay_frame_t *out)
 {
     memset(out, 0, sizeof *out);
-    if (len == 0u) {
+    fdl_msg_t m;
+    bool has_header = fdl_parse_damaged(f, len, &m);
+    out->sd = m.sd;
+    if (len == 0u || m.sd == FDL_SC) {
+        out->kind = len == 0u ? REPLAY_KIND_GARBAGE : REPLAY_KIND_SC;
         return;
     }
-    out->sd = f[0];
-    size_t hdr;  /* index of DA */
-    size_t end;  /* one past the last DU octet */
-    switch (f[0]) {
-    case FDL_SC:
-        out->kind = REPLAY_KIND_SC;
-        return;
-    case FDL_SD4:
+    if (m.sd == FDL_SD4) {
         out->kind = REPLAY_KIND_TOKEN;
-        if (len >= 3u) {
-            out->has_header = true;
-            out->da = f[1] & FDL_ADDR_MASK;
-            out->sa = f[2] & FDL_ADDR_MASK;
-        }
-        return;
-    case FDL_SD1:
-    case FDL_SD3:
-        if (len < 4u) {
-            return;
-        }
-        hdr = 1;
-        end = len >= 6u ? len - 2u : len;
-        if (f[0] == FDL_SD1) {
-            end = 4; /* SD1 has no DU, whatever follows */
-        } else if (end > 12u) {
-            end = 12; /* SD3: exactly 8 DU octets */
-        }
-        break;
-    case FDL_SD2:
-        if (len < 7u) {
-            return;
-        }
-        hdr = 4;
-        end = len >= 9u ? len - 2u : len;
-        if ((size_t)f[1] + 4u < end) {
-            end = (size_t)f[1] + 4u; /* LE counts DA..DU */
-        }
-        break;
-    default:
-        return;
+    } else if (has_header) {
+        out->kind = (m.fc & FDL_FC_REQUEST) != 0u ? REPLAY_KIND_REQUEST : REPLAY_KIND_RESPONSE;
     }
-    out->has_header = true;
-    out->da = f[hdr] & FDL_ADDR_MASK;
-    out->sa = f[hdr + 1u] & FDL_ADDR_MASK;
-    out->fc = f[hdr + 2u];
-    out->kind = (out->fc & FDL_FC_REQUEST) != 0u ? REPLAY_KIND_REQUEST : REPLAY_KIND_RESPONSE;
-    size_t p = hdr + 3u;
-    /* Address extensions: DAE octets first, then SAE (protocol.md §A1.3); only the first of
-     * each is a SAP, further ones (bit 7 set) are skipped. */
-    if ((f[hdr] & FDL_ADDR_EXT) != 0u && p < end) {
-        out->has_dsap = true;
-        out->dsap = f[p] & FDL_AE_SAP_MASK;
-        while (p < end && (f[p] & FDL_AE_MORE) != 0u) p++;
-        p++;
-    }
-    if ((f[hdr + 1u] & FDL_ADDR_EXT) != 0u && p < end) {
-        out->has_ssap = true;
-        out->ssap = f[p] & FDL_AE_SAP_MASK;
-        while (p < end && (f[p] & FDL_AE_MORE) != 0u) p++;
-        p++;
-    }
-    if (p < end) {
-        out->du = f + p;
-        out->du_len = end - p;
-    } else {
-        out->du = f + (end < len ? end : len);
-        out->du_len = 0;
+    out->has_header = has_header;
+    out->da = m.da;
+    out->sa = m.sa;
+    out->fc = m.fc;
+    out->has_dsap = m.has_dsap;
+    out->has_ssap = m.has_ssap;
+    out->dsap = m.dsap;
+    out->ssap = m.ssap;
+    if (has_header && m.sd != FDL_SD4) {
+        out->du = m.data;
+        out->du_len = m.data_len;
     }
 }
 
@@ -426,6 +382,124 @@ static void dpv1_text(sbuf_t *b, const uint8_t *d, size_t len, bool reply)
     }
 }
 
+/* What follows the header of a request, by its service. */
+static void request_data_text(sbuf_t *b, replay_service_t s, const replay_frame_t *m,
+                              const replay_dx_layout_t *lay)
+{
+    switch (s) {
+    case REPLAY_SVC_DATA_EXCHANGE:
+        put(b, ": ");
+        io_text(b, m->du, m->du_len, lay, false, "outputs");
+        break;
+    case REPLAY_SVC_SET_PRM:
+        put(b, ": ");
+        prm_text(b, m->du, m->du_len);
+        break;
+    case REPLAY_SVC_CHK_CFG:
+    case REPLAY_SVC_SET_SLAVE_ADD:
+    case REPLAY_SVC_SET_EXT_PRM:
+    case REPLAY_SVC_OTHER_SAP:
+    case REPLAY_SVC_OTHER_FUNCTION:
+        if (m->du_len > 0u) {
+            put(b, ": ");
+            put_hex(b, m->du, m->du_len);
+        }
+        break;
+    case REPLAY_SVC_GLOBAL_CONTROL:
+        put(b, ": ");
+        gc_text(b, m->du, m->du_len);
+        break;
+    case REPLAY_SVC_FDL_STATUS:
+    case REPLAY_SVC_SLAVE_DIAG:
+    case REPLAY_SVC_GET_CFG:
+    case REPLAY_SVC_RD_INP:
+    case REPLAY_SVC_RD_OUTP:
+        break;
+    default: /* DP-V1 */
+        put(b, ": ");
+        dpv1_text(b, m->du, m->du_len, false);
+        break;
+    }
+}
+
+static void request_text(sbuf_t *b, const replay_frame_t *m, const replay_dx_layout_t *lay)
+{
+    char fc[64];
+    replay_service_t s = replay_service_of(m);
+    replay_fc_text(m->fc, fc, sizeof fc);
+    put(b, "%s %u -> %u (%s", replay_service_name(s), m->sa, m->da, fc);
+    if (m->has_dsap || m->has_ssap) {
+        put(b, ", SAPs %u/%u", m->has_dsap ? m->dsap : 0u, m->has_ssap ? m->ssap : 0u);
+    }
+    put(b, ")");
+    request_data_text(b, s, m, lay);
+}
+
+/* An answer without SAPs: FDL status, Data_Exchange data or a bare response code. */
+static void plain_response_text(sbuf_t *b, const replay_frame_t *m, const char *fc,
+                                const replay_dx_layout_t *lay)
+{
+    uint8_t code = m->fc & FDL_FC_CODE_MASK;
+    if (m->sd == FDL_SD1 && code == FDL_RSP_OK) {
+        put(b, "FDL status reply %u -> %u: %s", m->sa, m->da, fc);
+    } else if (code == FDL_RSP_DL || code == FDL_RSP_DH) {
+        put(b, "reply %u -> %u %s: ", m->sa, m->da, fc);
+        io_text(b, m->du, m->du_len, lay, true, "inputs");
+    } else {
+        put(b, "reply %u -> %u: %s", m->sa, m->da, fc);
+        if (m->du_len > 0u) {
+            put(b, ": ");
+            put_hex(b, m->du, m->du_len);
+        }
+    }
+}
+
+/* An answer from a service SAP (DP-V0 services, DP-V1 connections, anything else). */
+static void sap_response_text(sbuf_t *b, const replay_frame_t *m, const char *fc)
+{
+    unsigned dsap = m->has_dsap ? m->dsap : 0u;
+    switch (m->ssap) {
+    case DP_SAP_SLAVE_DIAG:
+        put(b, "Slave_Diag reply %u -> %u (%s): ", m->sa, m->da, fc);
+        diag_text(b, m->du, m->du_len);
+        break;
+    case DP_SAP_GET_CFG:
+        put(b, "Get_Cfg reply %u -> %u (%s): ", m->sa, m->da, fc);
+        put_hex(b, m->du, m->du_len);
+        break;
+    case DP_SAP_RD_INP:
+    case DP_SAP_RD_OUTP:
+        put(b, "%s reply %u -> %u (%s): ", m->ssap == DP_SAP_RD_INP ? "Rd_Inp" : "Rd_Outp",
+            m->sa, m->da, fc);
+        put_hex(b, m->du, m->du_len);
+        break;
+    default:
+        if (m->ssap == DPV1_SAP_C1 || m->ssap <= DPV1_SAP_RM) {
+            put(b, "%s reply %u -> %u (%s, SAPs %u/%u): ",
+                m->ssap == DPV1_SAP_C1 ? "MSAC1" : "MSAC2", m->sa, m->da, fc, dsap, m->ssap);
+            dpv1_text(b, m->du, m->du_len, true);
+        } else {
+            put(b, "reply %u -> %u (%s, SAPs %u/%u)", m->sa, m->da, fc, dsap, m->ssap);
+            if (m->du_len > 0u) {
+                put(b, ": ");
+                put_hex(b, m->du, m->du_len);
+            }
+        }
+        break;
+    }
+}
+
+static void response_text(sbuf_t *b, const replay_frame_t *m, const replay_dx_layout_t *lay)
+{
+    char fc[64];
+    replay_fc_text(m->fc, fc, sizeof fc);
+    if (m->has_ssap) {
+        sap_response_text(b, m, fc);
+    } else {
+        plain_response_text(b, m, fc, lay);
+    }
+}
+
 size_t replay_describe(const uint8_t *f, size_t len, const replay_dx_layout_t *lay, char *out,
                        size_t max)
 {
@@ -433,116 +507,21 @@ size_t replay_describe(const uint8_t *f, size_t len, const replay_dx_layout_t *l
     if (max > 0u) out[0] = '\0';
     replay_frame_t m;
     replay_frame_parse(f, len, &m);
-    char fc[64];
     switch (m.kind) {
     case REPLAY_KIND_SC:
         put(&b, len == 1u ? "SC (short acknowledgement)" : "SC followed by %zu octets",
             len - 1u);
-        return b.n;
+        break;
     case REPLAY_KIND_TOKEN:
         if (m.has_header) {
             put(&b, "token %u -> %u", m.sa, m.da);
         } else {
             put(&b, "token (cut: %zu octets)", len);
         }
-        return b.n;
-    case REPLAY_KIND_GARBAGE:
-        put(&b, "not a telegram (%zu octets)", len);
-        return b.n;
-    case REPLAY_KIND_REQUEST: {
-        replay_service_t s = replay_service_of(&m);
-        replay_fc_text(m.fc, fc, sizeof fc);
-        put(&b, "%s %u -> %u (%s", replay_service_name(s), m.sa, m.da, fc);
-        if (m.has_dsap || m.has_ssap) {
-            put(&b, ", SAPs %u/%u", m.has_dsap ? m.dsap : 0u, m.has_ssap ? m.ssap : 0u);
-        }
-        put(&b, ")");
-        switch (s) {
-        case REPLAY_SVC_DATA_EXCHANGE:
-            put(&b, ": ");
-            io_text(&b, m.du, m.du_len, lay, false, "outputs");
-            break;
-        case REPLAY_SVC_SET_PRM:
-            put(&b, ": ");
-            prm_text(&b, m.du, m.du_len);
-            break;
-        case REPLAY_SVC_CHK_CFG:
-        case REPLAY_SVC_SET_SLAVE_ADD:
-        case REPLAY_SVC_SET_EXT_PRM:
-        case REPLAY_SVC_OTHER_SAP:
-        case REPLAY_SVC_OTHER_FUNCTION:
-            if (m.du_len > 0u) {
-                put(&b, ": ");
-                put_hex(&b, m.du, m.du_len);
-            }
-            break;
-        case REPLAY_SVC_GLOBAL_CONTROL:
-            put(&b, ": ");
-            gc_text(&b, m.du, m.du_len);
-            break;
-        case REPLAY_SVC_FDL_STATUS:
-        case REPLAY_SVC_SLAVE_DIAG:
-        case REPLAY_SVC_GET_CFG:
-        case REPLAY_SVC_RD_INP:
-        case REPLAY_SVC_RD_OUTP:
-            break;
-        default: /* DP-V1 */
-            put(&b, ": ");
-            dpv1_text(&b, m.du, m.du_len, false);
-            break;
-        }
         break;
-    }
-    case REPLAY_KIND_RESPONSE:
-        replay_fc_text(m.fc, fc, sizeof fc);
-        if (!m.has_ssap) {
-            uint8_t code = m.fc & FDL_FC_CODE_MASK;
-            if (m.sd == FDL_SD1 && code == FDL_RSP_OK) {
-                put(&b, "FDL status reply %u -> %u: %s", m.sa, m.da, fc);
-            } else if (code == FDL_RSP_DL || code == FDL_RSP_DH) {
-                put(&b, "reply %u -> %u %s: ", m.sa, m.da, fc);
-                io_text(&b, m.du, m.du_len, lay, true, "inputs");
-            } else {
-                put(&b, "reply %u -> %u: %s", m.sa, m.da, fc);
-                if (m.du_len > 0u) {
-                    put(&b, ": ");
-                    put_hex(&b, m.du, m.du_len);
-                }
-            }
-            break;
-        }
-        switch (m.ssap) {
-        case DP_SAP_SLAVE_DIAG:
-            put(&b, "Slave_Diag reply %u -> %u (%s): ", m.sa, m.da, fc);
-            diag_text(&b, m.du, m.du_len);
-            break;
-        case DP_SAP_GET_CFG:
-            put(&b, "Get_Cfg reply %u -> %u (%s): ", m.sa, m.da, fc);
-            put_hex(&b, m.du, m.du_len);
-            break;
-        case DP_SAP_RD_INP:
-        case DP_SAP_RD_OUTP:
-            put(&b, "%s reply %u -> %u (%s): ", m.ssap == DP_SAP_RD_INP ? "Rd_Inp" : "Rd_Outp",
-                m.sa, m.da, fc);
-            put_hex(&b, m.du, m.du_len);
-            break;
-        default:
-            if (m.ssap == DPV1_SAP_C1 || m.ssap <= DPV1_SAP_RM) {
-                put(&b, "%s reply %u -> %u (%s, SAPs %u/%u): ",
-                    m.ssap == DPV1_SAP_C1 ? "MSAC1" : "MSAC2", m.sa, m.da, fc,
-                    m.has_dsap ? m.dsap : 0u, m.ssap);
-                dpv1_text(&b, m.du, m.du_len, true);
-            } else {
-                put(&b, "reply %u -> %u (%s, SAPs %u/%u)", m.sa, m.da, fc,
-                    m.has_dsap ? m.dsap : 0u, m.ssap);
-                if (m.du_len > 0u) {
-                    put(&b, ": ");
-                    put_hex(&b, m.du, m.du_len);
-                }
-            }
-            break;
-        }
-        break;
+    case REPLAY_KIND_GARBAGE: put(&b, "not a telegram (%zu octets)", len); break;
+    case REPLAY_KIND_REQUEST: request_text(&b, &m, lay); break;
+    case REPLAY_KIND_RESPONSE: response_text(&b, &m, lay); break;
     }
     return b.n;
 }
