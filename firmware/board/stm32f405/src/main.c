@@ -239,9 +239,9 @@ static void report_and_exit(void)
 }
 #endif
 
-int main(void)
+/* A fault handler's record from before the reset (RAM kept over it): print it under test. */
+static bool take_previous_fault(void)
 {
-    board_init();
     bool had_fault = board_fault.magic == BOARD_FAULT_MAGIC;
 #ifdef BOARD_SEMIHOSTING
     if (had_fault) {
@@ -257,15 +257,14 @@ int main(void)
     board_fault.magic = 0;
     (void)*(volatile uint32_t *)0xFFFFFFF0u;
 #endif
-    leds.fault_pattern = had_fault; /* BUS FAULT at 4 Hz until the card is in Data_Exch (below) */
+    return had_fault;
+}
 
-    rs485_uart_cfg_t ucfg = {.regs = USART1, .de_port = GPIOA, .de_pin = 8u,
-                             .pclk_hz = clocks.pclk2_hz,
-                             .baud = DFP_BOARD_FIXED_BAUD != 0u ? DFP_BOARD_FIXED_BAUD : 6000000u,
-                             .now = now_us, .rx = uart_rx, .rx_ctx = &card,
-                             .rx_pending = uart_rx_pending};
-    (void)rs485_uart_init(&uart, &ucfg);
-
+/* The card <-> inverter link: SBus on bxCAN, or the stand-in loop in test images. Without a
+ * CAN controller (QEMU) or transceiver the card runs without inverter: PI words echo PO words
+ * and parameter services answer "no response" (class 6 code 2). */
+static ml_link_t start_inverter_link(void)
+{
     bxcan_cfg_t ccfg = {.regs = CAN1, .pclk_hz = clocks.pclk1_hz,
                         .bitrate = DFP_BOARD_SBUS_BITRATE, .rx = can_rx, .rx_ctx = NULL};
     ml_link_t inverter = {0};
@@ -288,9 +287,17 @@ int main(void)
         sbus_card_link_init(&sbus, &scfg);
         inverter = sbus_card_link(&sbus);
     }
-    /* Without CAN controller (QEMU) or no transceiver: the card runs without inverter, PI
-     * words echo PO words and parameter services answer "no response" (class 6 code 2). */
+    return inverter;
+}
 
+static void start_card(ml_link_t inverter)
+{
+    rs485_uart_cfg_t ucfg = {.regs = USART1, .de_port = GPIOA, .de_pin = 8u,
+                             .pclk_hz = clocks.pclk2_hz,
+                             .baud = DFP_BOARD_FIXED_BAUD != 0u ? DFP_BOARD_FIXED_BAUD : 6000000u,
+                             .now = now_us, .rx = uart_rx, .rx_ctx = &card,
+                             .rx_pending = uart_rx_pending};
+    (void)rs485_uart_init(&uart, &ucfg);
     dfp21b_cfg_t cfg = {
         .uart = rs485_uart_hal(&uart),
         .led = board_leds_hal(&leds),
@@ -307,14 +314,48 @@ int main(void)
     dfp21b_init(&card, &cfg, now_us());
     board_basepri(0);
     nvic_enable(IRQ_USART1, BOARD_PRIO_USART);
+}
 
 #ifdef DFP_BOARD_EXIT_SILENCE_MS
-    uint32_t last_chars = 0;
-    hal_time_us_t last_activity = now_us();
+/* Test images end themselves once the master has gone quiet after Data_Exch. Returns the next
+ * deadline, no later than the next look at the silence (100 ms). */
+typedef struct silence_watch {
+    uint32_t last_chars;
+    hal_time_us_t last_activity;
+} silence_watch_t;
+
+static hal_time_us_t exit_on_silence(silence_watch_t *w, hal_time_us_t now, hal_time_us_t next)
+{
+    if (uart.rx_chars != w->last_chars) {
+        w->last_chars = uart.rx_chars;
+        w->last_activity = now;
+    } else if (data_exch_entries > 0u &&
+               hal_time_diff(now, w->last_activity) >
+                   (int32_t)(DFP_BOARD_EXIT_SILENCE_MS * 1000u)) {
+        report_and_exit();
+    }
+    if (hal_time_diff(next, now + 100000u) > 0) {
+        next = now + 100000u;
+    }
+    return next;
+}
 #endif
+
+int main(void)
+{
+    board_init();
+    bool had_fault = take_previous_fault();
+    leds.fault_pattern = had_fault; /* BUS FAULT at 4 Hz until the card is in Data_Exch (below) */
+    start_card(start_inverter_link());
+#ifdef DFP_BOARD_EXIT_SILENCE_MS
+    silence_watch_t silence = {.last_chars = 0, .last_activity = now_us()};
+#endif
+
     for (;;) {
         poll_request = false;
         hal_time_us_t now = now_us();
+        /* The one section that holds the USART's deferred work (PendSV) off: its length is the
+         * "main-loop pass" of docs/performance.md, counted by tools/reply_path_count.py. */
         board_basepri(BOARD_PRIO_CORE);
         if (can.up) {
             (void)bxcan_drain(&can);
@@ -331,24 +372,14 @@ int main(void)
         }
 #endif
         if (sbus_up) {
-            hal_time_us_t n2 = sbus_card_link_poll(&sbus, now);
-            next = hal_time_earlier(next, n2);
+            next = hal_time_earlier(next, sbus_card_link_poll(&sbus, now));
         }
         board_basepri(0);
         if (had_fault && dp_slave_state(&card.dp) == DP_STATE_DATA_EXCH) {
             leds.fault_pattern = false;
         }
 #ifdef DFP_BOARD_EXIT_SILENCE_MS
-        if (uart.rx_chars != last_chars) {
-            last_chars = uart.rx_chars;
-            last_activity = now;
-        } else if (data_exch_entries > 0u &&
-                   hal_time_diff(now, last_activity) > (int32_t)(DFP_BOARD_EXIT_SILENCE_MS * 1000u)) {
-            report_and_exit();
-        }
-        if (hal_time_diff(next, now + 100000u) > 0) {
-            next = now + 100000u; /* look at the silence every 100 ms */
-        }
+        next = exit_on_silence(&silence, now, next);
 #endif
         timebase_set_deadline(&tb, next);
         /* Sleep unless something is pending; masked, so a wake-up between the check and the
