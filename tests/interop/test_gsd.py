@@ -75,10 +75,10 @@ REFUSED = [
     ("FA", "11 PD words: more than 10"),
 ]
 
-# From the reference board's measured worst reply (63.2 us with margin, never below 15 bit
+# From the reference board's measured worst reply (63.8 us with margin, never below 15 bit
 # times); no 12 Mbit/s on that board, so no MaxTsdr_12M (pyprofibus answers None).
 MAXTSDR = {9600: 15, 19200: 15, 45450: 15, 93750: 15, 187500: 15, 500000: 32,
-           1500000: 95, 3000000: 190, 6000000: 380, 12000000: None}
+           1500000: 96, 3000000: 192, 6000000: 383, 12000000: None}
 BAUD_KEYS = ["9.6_supp", "19.2_supp", "45.45_supp", "93.75_supp", "187.5_supp", "500_supp",
              "1.5M_supp", "3M_supp", "6M_supp", "12M_supp"]
 

@@ -95,7 +95,7 @@ def classify_funcs(funcs):
     replies QEMU's pace made the firmware drop, which pairing with the captures is not)."""
     def ran(prefix):
         return any(f == prefix or f.startswith(prefix + ".") for f in funcs)
-    if ran("reply_rs"):
+    if ran("fdl_station_reply_rs"):
         return "refused (RS)"
     if "hook_prm_check" in funcs:
         return "Set_Prm (SC)"
@@ -106,15 +106,15 @@ def classify_funcs(funcs):
     if "hook_outputs" in funcs:
         return "Data_Exchange"
     if "dpv1_sap_request" in funcs:
-        if ran("reply_sap"):
+        if ran("fdl_station_reply_sap"):
             # the resource manager frees the slot it opens (conn_close) before an Initiate
             return "DP-V1 MSAC2 Initiate (RM)" if "conn_close" in funcs else "DP-V1 response with data"
         if "conn_close" in funcs:
             return "DP-V1 Abort (SC)"
         return "DP-V1 request taken (SC)"
-    if "dp_service" not in funcs and "fcb_touch" in funcs:
+    if "dp_slave_request" not in funcs and "fcb_touch" in funcs:
         return "repeat from the FCB cache"
-    if "dp_service" not in funcs and ran("reply_plain"):
+    if "dp_slave_request" not in funcs and ran("fdl_station_reply_plain"):
         return "FDL status (SD1)"
     return "other (Get_Cfg, Rd_Inp, Rd_Outp, ...)"
 
@@ -165,7 +165,7 @@ def pairs(paths):
 def main():
     elf, trace, caps = sys.argv[1], sys.argv[2], sys.argv[3:]
     s = symbols(elf)
-    for need in ("reply_plain", "reply_sap", "dp_slave_build_diag", "hook_prm_check",
+    for need in ("fdl_station_reply_plain", "fdl_station_reply_sap", "dp_slave_build_diag", "hook_prm_check",
                  "hook_cfg_check", "hook_outputs", "dpv1_sap_request", "conn_close", "fcb_touch"):
         if not any(n == need or n.startswith(need + ".") for n in s):
             sys.exit("reply_path_count: no function %s in the image; the labels need updating" % need)
