@@ -13,7 +13,7 @@ PROFIBUS-DP option card and its MOVIDRIVE, for test scripts and commissioning ch
 Standard library only.
 """
 
-from .client import API, Card, Client, Master, ParamResult, parse_sse
+from .client import API, PARAM_VIAS, Card, Client, Master, ParamResult, parse_sse
 from .errors import ApiError, DfpSimError, ParamError
 from .process import DfpSim, SlaveAndMaster, find_dfp_sim, free_port
 from .wait import wait_for, wait_until
@@ -21,7 +21,7 @@ from .wait import wait_for, wait_until
 __version__ = "0.1.0"
 
 __all__ = [
-    "API", "ApiError", "Card", "Client", "DfpSim", "DfpSimError", "Master", "ParamError",
-    "ParamResult", "SlaveAndMaster", "find_dfp_sim", "free_port", "parse_sse", "wait_for",
+    "API", "ApiError", "Card", "Client", "DfpSim", "DfpSimError", "Master", "PARAM_VIAS",
+    "ParamError", "ParamResult", "SlaveAndMaster", "find_dfp_sim", "free_port", "parse_sse", "wait_for",
     "wait_until",
 ]

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 from .errors import ApiError, DfpSimError, ParamError
 
 API = "/api/v1"
+# The paths of a master parameter service (docs/api.md, POST /api/v1/master/param).
+PARAM_VIAS = ("channel", "ds47", "c2")
 # The master's phase names for a slave in cyclic data exchange.
 DATA_EXCH_PHASES = ("DATA_EXCH", "Data_Exchange")
 
@@ -508,14 +510,22 @@ class Master:
     def read_param(self, slave, p, via="channel"):
         """A read service while cyclic exchange goes on -> ParamResult.
 
-        `via`: "channel" (cyclic 8-octet MOVILINK channel), "ds47" (DP-V1 data set 47) or "c2"
-        (a class-2 connection). A refusal raises ParamError with the MOVILINK text; no answer
-        within 5 s raises ApiError 504.
+        `via` (one of PARAM_VIAS): "channel" (cyclic 8-octet MOVILINK channel), "ds47" (DP-V1
+        class-1 data set 47) or "c2" (data set 47 over a class-2 connection the master opens
+        for the service and aborts after it). A refusal raises ParamError with the MOVILINK
+        text; a class-2 connection that does not open raises ApiError 502; no answer within
+        5 s raises ApiError 504.
         """
         return self._param({"slave": int(slave), "op": "read", "param": _param_ref(p),
-                            "via": via})
+                            "via": _via(via)})
 
     def write_param(self, slave, p, value, via="channel", volatile=False):
         """A write service (non-volatile unless volatile=True) -> ParamResult."""
         return self._param({"slave": int(slave), "op": "write", "param": _param_ref(p),
-                            "value": value, "via": via, "volatile": bool(volatile)})
+                            "value": value, "via": _via(via), "volatile": bool(volatile)})
+
+
+def _via(via):
+    if via not in PARAM_VIAS:
+        raise ValueError("via %r: use one of %s" % (via, ", ".join(PARAM_VIAS)))
+    return via

@@ -7,7 +7,7 @@ rules").
 
 import pytest
 
-from dfpsim import ApiError, DfpSimError, wait_until
+from dfpsim import ApiError, DfpSimError, ParamError, wait_until
 
 LOG_KINDS = {"dp_state", "baud", "watchdog", "prm", "cfg", "diag", "led", "param", "drive",
              "fault", "speed", "master", "action", "nvm", "lost"}
@@ -98,3 +98,26 @@ def test_master_stop_and_run(bus):
     plc.run()
     wait_until(lambda: card.dp_state == "Data_Exch", timeout=10, what="Data_Exch after RUN")
     assert plc.running is True
+
+
+def test_class2_parameter_services(bus):
+    card, plc = bus.card, bus.plc
+    wait_until(lambda: card.dp_state == "Data_Exch", timeout=10, what="Data_Exch")
+    # A class-2 read gives what a class-1 read (the cyclic channel) gives.
+    for p in ("P100", "control signal source", 8470):
+        assert plc.read_param(4, p, via="c2") == plc.read_param(4, p, via="channel")
+    # A class-2 write, then a read by either path, sees the value.
+    written = plc.write_param(4, "P160", 2250, via="c2")
+    assert (written.p_number, written.index, written.value) == ("P160", 8489, 2250)
+    assert plc.read_param(4, "P160", via="c2").value == 2250
+    assert plc.read_param(4, "P160", via="channel").value == 2250
+    assert card.read_param("P160").value == 2250
+    # A refusal is the drive's, as on the other paths.
+    with pytest.raises(ParamError, match="MOVILINK error"):
+        plc.write_param(4, "P302", 99000000, via="c2")
+    # No station at 9: the connection does not open.
+    with pytest.raises(ApiError) as e:
+        plc.read_param(9, "P100", via="c2")
+    assert e.value.status == 502
+    assert e.value.message.startswith("class-2 connection to slave 9 not opened: ")
+    assert card.dp_state == "Data_Exch"

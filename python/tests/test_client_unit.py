@@ -211,6 +211,18 @@ def test_master_parameter_service(api, client):
     m.write_param(4, "P100", "FIELDBUS", via="ds47")
     assert api.requests[-1][3] == {"slave": 4, "op": "write", "param": "P100",
                                    "value": "FIELDBUS", "via": "ds47", "volatile": False}
+    m.read_param(5, 8489, via="c2")
+    assert api.requests[-1][3] == {"slave": 5, "op": "read", "param": "8489", "via": "c2"}
+    m.write_param(5, "P160", 2250, via="c2", volatile=True)
+    assert api.requests[-1][3] == {"slave": 5, "op": "write", "param": "P160", "value": 2250,
+                                   "via": "c2", "volatile": True}
+
+
+def test_master_parameter_service_unknown_via_is_refused_before_sending(api, client):
+    sent = len(api.requests)
+    with pytest.raises(ValueError, match="via 'class2': use one of channel, ds47, c2"):
+        client.master().read_param(4, "P100", via="class2")
+    assert len(api.requests) == sent
 
 
 # ---- errors --------------------------------------------------------------------------------

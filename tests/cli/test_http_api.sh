@@ -45,6 +45,30 @@ expect_in "P101 by name" '"text":"2 (FIELDBUS)"' "$code $(cat "$tmp/body")"
 code=$(post "$pm" /api/v1/master/param '{"slave":5,"op":"write","param":"P302","value":99000000}')
 expect_in "a refused write is a MOVILINK error, HTTP 200" '200 {"ok":false' "$code $(cat "$tmp/body")"
 expect_in "its text" 'value too high' "$(cat "$tmp/body")"
+# The same parameters over a DP-V1 class-2 connection of the master station (opened for the
+# service, aborted after it) while cyclic exchange goes on.
+code=$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":"P100","via":"c2"}')
+expect_in "c2 read of P100 gives what the channel wrote" '200 {"ok":true,"p_number":"P100","index":8461,"name":"setpoint source","value":3,"text":"3 (FIELDBUS)"}' "$code $(cat "$tmp/body")"
+code=$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":"P101"}')
+c1=$(cat "$tmp/body")
+code2=$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":"control signal source","via":"c2"}')
+expect_in "c2 read by name equals the channel read" "200 $c1" "$code2 $(cat "$tmp/body")"
+code=$(post "$pm" /api/v1/master/param '{"slave":5,"op":"write","param":"P160","value":2250,"via":"c2"}')
+expect_in "c2 write P160" '200 {"ok":true,"p_number":"P160","index":8489' "$code $(cat "$tmp/body")"
+code=$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":"P160","via":"c2"}')
+expect_in "c2 read sees the written value" '"value":2250,' "$code $(cat "$tmp/body")"
+code=$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":"P160"}')
+expect_in "so does the channel" '200 {"ok":true,"p_number":"P160","index":8489,"name":"internal setpoint n11","value":2250,' "$code $(cat "$tmp/body")"
+code=$(post "$pm" /api/v1/master/param '{"slave":5,"op":"write","param":"P302","value":99000000,"via":"c2"}')
+expect_in "a refused c2 write is a MOVILINK error, HTTP 200" '200 {"ok":false' "$code $(cat "$tmp/body")"
+code=$(post "$pm" /api/v1/master/param '{"slave":9,"op":"read","param":"P100","via":"c2"}')
+expect_in "c2 to a station that is not there: 502" "502" "$code"
+expect_in "says the connection did not open" '"error":"class-2 connection to slave 9 not opened: ' "$(cat "$tmp/body")"
+code=$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":"P100","via":"c2"}')
+expect_in "the next c2 service works again" '"value":3,' "$code $(cat "$tmp/body")"
+code=$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":"P100","via":"class2"}')
+expect_in "an unknown via is 400" '400 {"error":"'"'"'via'"'"' must be \"channel\", \"ds47\" or \"c2\""}' "$code $(cat "$tmp/body")"
+expect_in "cards still in data exchange" "True" "$(all_dx)"
 code=$(post "$pm" /api/v1/master/slaves/5/outputs '{"po":[6,1500,0]}')
 expect_in "PO words set live" "200" "$code"
 speed5() { get "$ps" /api/v1/cards/5 | json 'd["drive"]["speed_actual_rpm"] == 300.0 and d["drive"]["enabled"]'; }
@@ -141,6 +165,11 @@ expect_exit 2 "bad --http value" -- "$sim" slave --port "$tmp/a" --http "localho
 
 # The panel is served.
 expect_in "panel served at /" "<html" "$(get "$ps" /)"
+for js in panel_util.js panel_plot.js panel_log.js panel_params.js panel.js; do
+  expect_in "index.html loads $js" "<script src=\"$js\"></script>" "$(get "$ps" /)"
+  expect_in "$js served as JavaScript" "200 text/javascript; charset=utf-8" \
+    "$(curl -s --max-time 5 -o /dev/null -w '%{http_code} %{content_type}' "http://127.0.0.1:$ps/$js")"
+done
 
 # PLC STOP from the API: the cards' watchdogs run out.
 post "$pm" /api/v1/master/run '{"running":false}' >/dev/null

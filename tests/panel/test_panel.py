@@ -27,6 +27,7 @@ os.environ.setdefault("SE_AVOID_STATS", "true")
 from selenium import webdriver  # noqa: E402  (after the environment above)
 from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.support.ui import Select  # noqa: E402
 
 STARTUP_S = 60        # dfp-sim answering and the demo's timeline over
 PAGE_S = 15           # the page loaded and showing the state
@@ -239,6 +240,28 @@ def test_page_shows_the_state(sim, page):
     assert page.find_element(By.ID, "di00").is_selected(), "DI00 switch off while DI00 = +24 V"
     assert page.find_elements(By.CSS_SELECTOR, "#log li"), "the log shows no line"
     assert not js_errors(page), js_errors(page)
+
+
+def test_parameter_service_over_class2(sim, page):
+    """The parameter-service box with via c2 shows what a class-1 read through the API gives."""
+    status, c1 = http(sim.base, "POST", "/api/v1/master/param",
+                      {"slave": 4, "op": "read", "param": "P100", "via": "channel"}, timeout=10)
+    assert status == 200 and c1["ok"] is True, (status, c1)
+    want = "P100 (8461) %s = %s" % (c1["name"], c1["text"])
+    slave = page.find_element(By.ID, "ps-slave")
+    slave.clear()
+    slave.send_keys("4")
+    Select(page.find_element(By.ID, "ps-via")).select_by_value("c2")
+    Select(page.find_element(By.ID, "ps-op")).select_by_value("read")
+    param = page.find_element(By.ID, "ps-param")
+    param.clear()
+    param.send_keys("P100")
+    page.find_element(By.ID, "ps-send").click()
+    wait_for(lambda: page_text(page, "ps-result") not in ("", "…"), PAGE_S,
+             "the class-2 service's answer on the panel")
+    assert page_text(page, "ps-result") == want
+    assert page.find_element(By.ID, "ps-result").get_attribute("data-ok") == "1"
+    assert "read P100 via c2: ok" in page_text(page, "status-line")
 
 
 def test_bad_input_answers_400_and_demo_runs_on(sim):

@@ -22,15 +22,6 @@ uint32_t file_nvm_crc32(uint32_t crc, const uint8_t *p, size_t n)
     return ~crc;
 }
 
-/* A file image being read: header + data, at most one byte more than the largest image so a
- * too-long file is noticed. */
-typedef struct {
-    uint8_t bytes[FILE_NVM_HEADER + FILE_NVM_MAX_SIZE + 1u];
-} image_buf_t;
-
-static image_buf_t rd_buf;
-static uint8_t wr_buf[FILE_NVM_HEADER + FILE_NVM_MAX_SIZE];
-
 /* 0 loaded into f->data; -1 missing (ENOENT, no message); -2 unusable, why in err. */
 static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
 {
@@ -44,7 +35,7 @@ static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
     }
     size_t got = 0;
     for (;;) {
-        ssize_t r = read(fd, rd_buf.bytes + got, sizeof rd_buf.bytes - got);
+        ssize_t r = read(fd, f->image + got, sizeof f->image - got);
         if (r < 0) {
             if (errno == EINTR) {
                 continue;
@@ -53,14 +44,14 @@ static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
             close(fd);
             return -2;
         }
-        if (r == 0 || got + (size_t)r == sizeof rd_buf.bytes) {
+        if (r == 0 || got + (size_t)r == sizeof f->image) {
             got += (size_t)r;
             break;
         }
         got += (size_t)r;
     }
     close(fd);
-    const uint8_t *h = rd_buf.bytes;
+    const uint8_t *h = f->image;
     if (got < FILE_NVM_HEADER) {
         snprintf(err, errlen, "%s: file too short (%zu bytes; the header alone has %u)", path, got,
                  (unsigned)FILE_NVM_HEADER);
@@ -217,7 +208,7 @@ static int nvm_write(void *ctx, size_t offset, const uint8_t *data, size_t len)
     if (offset > f->size || len > f->size - offset) {
         return -1;
     }
-    uint8_t *img = wr_buf;
+    uint8_t *img = f->image;
     uint8_t *payload = img + FILE_NVM_HEADER;
     if (f->readable) {
         memcpy(payload, f->data, f->size);

@@ -1,5 +1,6 @@
-/* Linux tty backend of the HAL UART, and a one-thread runner for up to eight ports.
- * See sim_hal/tty_port.h for the model. Built with _GNU_SOURCE (ppoll). */
+/* Linux tty backend of the HAL UART: line settings, open/close, the 0xFF parity marks, echo
+ * suppression and transmit. The runner that drives ports is tty_runner.c. See sim_hal/tty_port.h
+ * for the model. Built with _GNU_SOURCE. */
 #include "sim_hal/tty_port.h"
 
 #include <errno.h>
@@ -14,6 +15,7 @@
 #include <time.h>
 #include <unistd.h>
 #include "sim_hal/host_clock.h"
+#include "tty_internal.h"
 
 /* struct termios2 is declared by <asm/termbits.h>, which redefines struct termios and clashes
  * with glibc's <termios.h>. The layout is stable kernel ABI, so it is declared here under its own
@@ -39,14 +41,11 @@ _Static_assert(sizeof(struct tty_termios2) == 44u, "kernel struct termios2 is 44
 #define TTY_IBSHIFT 16u
 #endif
 
-#define TTY_READ_CHUNK 4096u
 /* Longest wait for not_before a transmit accepts (the longest PROFIBUS delays are slot times
  * of a few ms at 9.6 kbit/s). */
 #define TTY_MAX_TX_DELAY_US 10000000
 /* Sleep until this close to not_before, then spin: nanosleep overshoots by tens of µs. */
 #define TTY_SPIN_US 200
-/* Longest single wait in the runner, so a stop flag set from another thread is seen. */
-#define TTY_RUNNER_MAX_WAIT_US 50000
 
 enum { MARK_NONE = 0, MARK_FF = 1, MARK_FF00 = 2 };
 
@@ -359,7 +358,6 @@ void tty_port_close(tty_port_t *p)
     p->fd = -1;
 }
 
-static void runner_baud_changed(tty_port_t *p);
 
 int tty_port_set_baud(tty_port_t *p, uint32_t baud)
 {
@@ -369,7 +367,7 @@ int tty_port_set_baud(tty_port_t *p, uint32_t baud)
     p->baud = baud;
     p->echo_len = 0; /* an echo still in flight arrives garbled at the new rate */
     p->mark_state = MARK_NONE;
-    runner_baud_changed(p);
+    tty_runner_baud_changed(p);
     return 0;
 }
 
@@ -441,7 +439,7 @@ static void echo_expect(tty_port_t *p, const uint8_t *frame, size_t len)
 /* True when this character is the expected echo and must not reach the station. A mismatch,
  * an error flag or a late byte means the echo was lost or garbled: stop expecting it and hand
  * the character on, since it may be another station's. */
-static bool echo_swallow(tty_port_t *p, uint8_t b, uint8_t f, hal_time_us_t t)
+bool tty_port_echo_swallow(tty_port_t *p, uint8_t b, uint8_t f, hal_time_us_t t)
 {
     if (!p->echo_suppress || p->echo_len == 0u) {
         return false;
@@ -494,8 +492,6 @@ static int write_all(int fd, const uint8_t *buf, size_t len)
     return 0;
 }
 
-static void runner_transmitted(tty_port_t *p, uint64_t t_ns, const uint8_t *frame, size_t len);
-static void runner_tx_failed(tty_port_t *p, const char *why);
 
 static int tty_uart_transmit(void *ctx, const uint8_t *frame, size_t len, hal_time_us_t not_before)
 {
@@ -506,20 +502,20 @@ static int tty_uart_transmit(void *ctx, const uint8_t *frame, size_t len, hal_ti
     if (hal_time_diff(not_before, tty_now_us()) > TTY_MAX_TX_DELAY_US) {
         /* Far beyond any PROFIBUS delay: almost surely a time from another clock (e.g. the
          * simulated one); blocking the runner for minutes would hide that mistake. */
-        runner_tx_failed(p, "not_before more than 10 s ahead (a time from another clock?)");
+        tty_runner_tx_failed(p, "not_before more than 10 s ahead (a time from another clock?)");
         return -1;
     }
     wait_until(not_before);
     uint64_t t_ns = host_clock_mono_ns();
     if (write_all(p->fd, frame, len) != 0) {
-        runner_tx_failed(p, strerror(errno));
+        tty_runner_tx_failed(p, strerror(errno));
         return -1;
     }
     p->frames_sent++;
     if (p->echo_suppress) {
         echo_expect(p, frame, len);
     }
-    runner_transmitted(p, t_ns, frame, len);
+    tty_runner_transmitted(p, t_ns, frame, len);
     return 0;
 }
 
@@ -536,331 +532,4 @@ static const hal_uart_ops_t tty_uart_ops = {
 hal_uart_t tty_port_uart(tty_port_t *p)
 {
     return (hal_uart_t){.ops = &tty_uart_ops, .ctx = p};
-}
-
-/* ---------------------------------------------------------------------------------------------
- * Runner */
-
-static int runner_fail(tty_runner_t *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-
-static int runner_fail(tty_runner_t *r, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    (void)vsnprintf(r->error, sizeof r->error, fmt, ap);
-    va_end(ap);
-    return -1;
-}
-
-void tty_runner_init(tty_runner_t *r)
-{
-    memset(r, 0, sizeof *r);
-    r->t0_ns = host_clock_mono_ns();
-}
-
-int tty_runner_add(tty_runner_t *r, tty_port_t *p, const sim_station_t *st)
-{
-    if (r->num_slots >= TTY_RUNNER_MAX_PORTS || p->runner != NULL) {
-        return -1;
-    }
-    tty_runner_slot_t *s = &r->slots[r->num_slots];
-    memset(s, 0, sizeof *s);
-    s->port = p;
-    s->station = *st;
-    s->deadline = tty_now_us(); /* first poll as soon as the runner runs */
-    fdl_rx_init(&s->rx, p->baud, false);
-    p->runner = r;
-    p->slot = r->num_slots;
-    r->num_slots++;
-    return 0;
-}
-
-void tty_runner_set_tap(tty_runner_t *r, sim_frame_tap_t tap, void *ctx)
-{
-    r->tap = tap;
-    r->tap_ctx = ctx;
-}
-
-const char *tty_runner_error(const tty_runner_t *r)
-{
-    return r->error;
-}
-
-int tty_runner_add_fd(tty_runner_t *r, int fd, tty_fd_readable_fn readable, void *ctx)
-{
-    if (r->num_fds >= TTY_RUNNER_MAX_FDS || fd < 0 || readable == NULL) {
-        return -1;
-    }
-    r->fds[r->num_fds++] = (tty_runner_fd_t){.fd = fd, .readable = readable, .ctx = ctx};
-    return 0;
-}
-
-int tty_runner_remove_fd(tty_runner_t *r, int fd)
-{
-    for (uint8_t i = 0; i < r->num_fds; i++) {
-        if (r->fds[i].fd == fd) {
-            memmove(&r->fds[i], &r->fds[i + 1u], (size_t)(r->num_fds - i - 1u) * sizeof r->fds[0]);
-            r->num_fds--;
-            return 0;
-        }
-    }
-    return -1;
-}
-
-int tty_runner_add_timer(tty_runner_t *r, tty_timer_fn poll, void *ctx)
-{
-    if (r->num_timers >= TTY_RUNNER_MAX_TIMERS || poll == NULL) {
-        return -1;
-    }
-    r->timers[r->num_timers++] =
-        (tty_runner_timer_t){.poll = poll, .ctx = ctx, .deadline = tty_now_us()};
-    return 0;
-}
-
-void tty_runner_wake(tty_runner_t *r)
-{
-    hal_time_us_t now = tty_now_us();
-    for (uint8_t i = 0; i < r->num_timers; i++) {
-        r->timers[i].deadline = now;
-    }
-}
-
-int tty_runner_remove_timer(tty_runner_t *r, tty_timer_fn poll, const void *ctx)
-{
-    for (uint8_t i = 0; i < r->num_timers; i++) {
-        if (r->timers[i].poll == poll && r->timers[i].ctx == ctx) {
-            memmove(&r->timers[i], &r->timers[i + 1u],
-                    (size_t)(r->num_timers - i - 1u) * sizeof r->timers[0]);
-            r->num_timers--;
-            return 0;
-        }
-    }
-    return -1;
-}
-
-void tty_runner_set_error(tty_runner_t *r, const char *fmt, ...)
-{
-    if (r->error[0] != '\0') {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    (void)vsnprintf(r->error, sizeof r->error, fmt, ap);
-    va_end(ap);
-}
-
-static void runner_baud_changed(tty_port_t *p)
-{
-    if (p->runner != NULL) {
-        fdl_rx_set_baud(&p->runner->slots[p->slot].rx, p->baud);
-    }
-}
-
-static void runner_transmitted(tty_port_t *p, uint64_t t_ns, const uint8_t *frame, size_t len)
-{
-    tty_runner_t *r = p->runner;
-    if (r != NULL && r->tap != NULL) {
-        r->tap(r->tap_ctx, t_ns - r->t0_ns, frame, len, true, p->baud);
-    }
-}
-
-/* A failed write happens inside a station callback; the run ends at the next loop turn. */
-static void runner_tx_failed(tty_port_t *p, const char *why)
-{
-    if (p->runner != NULL && p->runner->error[0] == '\0') {
-        (void)runner_fail(p->runner, "transmit on %s: %s", p->name, why);
-    }
-}
-
-/* Feed the frame assembler for the tap; a frame's time is the arrival of its first byte. */
-static void tap_rx(tty_runner_t *r, tty_runner_slot_t *s, uint8_t b, uint8_t f, hal_time_us_t t,
-                   uint64_t t_ns)
-{
-    uint64_t rel_ns = t_ns - r->t0_ns;
-    fdl_rx_result_t res = fdl_rx_char(&s->rx, b, f, t);
-    if (s->rx.collecting && s->rx.len == 1u) {
-        s->rx_frame_start_ns = rel_ns;
-    }
-    if (res == FDL_RX_FRAME) {
-        uint64_t start = s->rx.frame_len == 1u ? rel_ns : s->rx_frame_start_ns;
-        r->tap(r->tap_ctx, start, s->rx.buf, s->rx.frame_len, false, s->port->baud);
-    }
-}
-
-static void poll_slot(tty_runner_slot_t *s)
-{
-    hal_time_us_t now = tty_now_us();
-    if (s->station.poll == NULL) {
-        s->deadline = now + HAL_TIME_NO_DEADLINE_US;
-        return;
-    }
-    s->deadline = s->station.poll(s->station.ctx, now);
-}
-
-/* Every character of one read() gets the time that read returned. */
-static void deliver_chunk(tty_runner_t *r, tty_runner_slot_t *s, const uint8_t *raw, size_t n)
-{
-    uint8_t bytes[TTY_READ_CHUNK + 1u];
-    uint8_t flags[TTY_READ_CHUNK + 1u];
-    uint64_t t_ns = host_clock_mono_ns();
-    hal_time_us_t t = (hal_time_us_t)(t_ns / 1000u);
-    tty_port_t *p = s->port;
-    size_t m = tty_port_decode(p, raw, n, bytes, flags);
-    for (size_t i = 0; i < m; i++) {
-        if (echo_swallow(p, bytes[i], flags[i], t)) {
-            continue;
-        }
-        p->chars_received++;
-        /* The tap first: the station may answer from inside rx_char, and a capture must show
-         * the request before its answer. */
-        if (r->tap != NULL) {
-            tap_rx(r, s, bytes[i], flags[i], t, t_ns);
-        }
-        if (s->station.rx_char != NULL) {
-            s->station.rx_char(s->station.ctx, bytes[i], flags[i], t);
-        }
-    }
-    poll_slot(s); /* let the station answer without waiting for its next deadline */
-}
-
-/* A PTY master whose slave closed reads EIO; a slave whose master closed reads 0. */
-static int read_port(tty_runner_t *r, tty_runner_slot_t *s, short revents)
-{
-    uint8_t raw[TTY_READ_CHUNK];
-    ssize_t n = read(s->port->fd, raw, sizeof raw);
-    if (n > 0) {
-        deliver_chunk(r, s, raw, (size_t)n);
-        return 0;
-    }
-    if (n == 0) {
-        return runner_fail(r, "%s: hang-up (end of file)", s->port->name);
-    }
-    int e = errno;
-    if (e == EAGAIN || e == EINTR) {
-        if ((revents & (POLLHUP | POLLERR | POLLNVAL)) != 0) {
-            return runner_fail(r, "%s: hang-up", s->port->name);
-        }
-        return 0;
-    }
-    return runner_fail(r, "read %s: %s%s", s->port->name, strerror(e),
-                       e == EIO ? " (device gone or PTY peer closed)" : "");
-}
-
-static void poll_timer(tty_runner_timer_t *t)
-{
-    t->deadline = t->poll(t->ctx, tty_now_us());
-}
-
-static void poll_due_stations(tty_runner_t *r)
-{
-    for (uint8_t i = 0; i < r->num_slots; i++) {
-        if (hal_time_reached(tty_now_us(), r->slots[i].deadline)) {
-            poll_slot(&r->slots[i]);
-        }
-    }
-    for (uint8_t i = 0; i < r->num_timers; i++) {
-        if (hal_time_reached(tty_now_us(), r->timers[i].deadline)) {
-            poll_timer(&r->timers[i]);
-        }
-    }
-}
-
-/* After an fd delivered something: everybody may have news. */
-static void poll_all(tty_runner_t *r)
-{
-    for (uint8_t i = 0; i < r->num_slots; i++) {
-        poll_slot(&r->slots[i]);
-    }
-    for (uint8_t i = 0; i < r->num_timers; i++) {
-        poll_timer(&r->timers[i]);
-    }
-}
-
-/* Until the earliest station deadline or t_end, capped so a stop flag is noticed. */
-static int32_t wait_budget_us(const tty_runner_t *r, hal_time_us_t t_end)
-{
-    hal_time_us_t now = tty_now_us();
-    int32_t w = hal_time_diff(t_end, now);
-    if (w > TTY_RUNNER_MAX_WAIT_US) {
-        w = TTY_RUNNER_MAX_WAIT_US;
-    }
-    for (uint8_t i = 0; i < r->num_slots; i++) {
-        int32_t d = hal_time_diff(r->slots[i].deadline, now);
-        if (d < w) {
-            w = d;
-        }
-    }
-    for (uint8_t i = 0; i < r->num_timers; i++) {
-        int32_t d = hal_time_diff(r->timers[i].deadline, now);
-        if (d < w) {
-            w = d;
-        }
-    }
-    return w < 0 ? 0 : w;
-}
-
-/* Ports first, then the other descriptors. A callback may remove its own descriptor, so the
- * fd entries are looked up by descriptor after the wait rather than by position. */
-static int wait_and_read(tty_runner_t *r, int32_t wait_us)
-{
-    struct pollfd pfd[TTY_RUNNER_MAX_PORTS + TTY_RUNNER_MAX_FDS];
-    nfds_t n = 0;
-    for (uint8_t i = 0; i < r->num_slots; i++) {
-        pfd[n++] = (struct pollfd){.fd = r->slots[i].port->fd, .events = POLLIN};
-    }
-    uint8_t num_fds = r->num_fds;
-    for (uint8_t i = 0; i < num_fds; i++) {
-        pfd[n++] = (struct pollfd){.fd = r->fds[i].fd, .events = POLLIN};
-    }
-    struct timespec ts = {.tv_sec = wait_us / 1000000,
-                          .tv_nsec = (long)(wait_us % 1000000) * 1000L};
-    int rc = ppoll(pfd, n, &ts, NULL);
-    if (rc < 0) {
-        return errno == EINTR ? 0 : runner_fail(r, "poll: %s", strerror(errno));
-    }
-    for (uint8_t i = 0; i < r->num_slots && rc > 0; i++) {
-        if (pfd[i].revents != 0 && read_port(r, &r->slots[i], pfd[i].revents) != 0) {
-            return -1;
-        }
-    }
-    bool delivered = false;
-    for (nfds_t k = r->num_slots; k < n && rc > 0; k++) {
-        if (pfd[k].revents == 0) {
-            continue;
-        }
-        if ((pfd[k].revents & POLLNVAL) != 0) {
-            return runner_fail(r, "fd %d: not an open descriptor", pfd[k].fd);
-        }
-        for (uint8_t i = 0; i < r->num_fds; i++) {
-            if (r->fds[i].fd == pfd[k].fd) {
-                r->fds[i].readable(r->fds[i].ctx, tty_now_us());
-                delivered = true;
-                break;
-            }
-        }
-    }
-    if (delivered && r->error[0] == '\0') {
-        poll_all(r);
-    }
-    return 0;
-}
-
-int tty_runner_run_until(tty_runner_t *r, hal_time_us_t t_end, volatile const int *stop)
-{
-    r->error[0] = '\0';
-    for (;;) {
-        if (stop != NULL && *stop != 0) {
-            return 0;
-        }
-        poll_due_stations(r);
-        if (r->error[0] != '\0') {
-            return -1; /* a transmit failed inside a station callback */
-        }
-        if (hal_time_reached(tty_now_us(), t_end)) {
-            return 0;
-        }
-        if (wait_and_read(r, wait_budget_us(r, t_end)) != 0 || r->error[0] != '\0') {
-            return -1;
-        }
-    }
 }

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "dp_master/param_channel.h"
+#include "rig_ctl_param.h"
 #include "dp_slave/dp_wire.h"
 #include "sim_hal/host_clock.h"
 
@@ -197,12 +198,6 @@ static void snap_card(const rig_card_t *rc, rig_snap_card_t *s)
     }
 }
 
-static bool has_param_channel(const dpm_slave_t *sl)
-{
-    dfp21b_pd_cfg_t pd;
-    return dfp21b_check_cfg(sl->cfg.cfg, sl->cfg.cfg_len, &pd) && pd.param_channel;
-}
-
 static void snap_slave(const dpm_slave_t *sl, rig_snap_slave_t *s)
 {
     memset(s, 0, sizeof *s);
@@ -213,7 +208,7 @@ static void snap_slave(const dpm_slave_t *sl, rig_snap_slave_t *s)
     memcpy(s->outputs, sl->outputs, s->out_len);
     s->in_len = sl->inputs_len < sizeof s->inputs ? sl->inputs_len : (uint16_t)sizeof s->inputs;
     memcpy(s->inputs, sl->inputs, s->in_len);
-    s->param_channel = has_param_channel(sl);
+    s->param_channel = rig_ctl_has_param_channel(sl);
     s->diag_len = sl->last_diag_len < sizeof s->diag ? sl->last_diag_len
                                                      : (uint8_t)sizeof s->diag;
     memcpy(s->diag, sl->last_diag, s->diag_len);
@@ -322,26 +317,10 @@ bool rig_ctl_submit(rig_ctl_t *c, rig_cmd_t *cmd, unsigned timeout_ms)
     return done;
 }
 
-static void fail(rig_cmd_t *cmd, int status, const char *fmt, const char *arg)
-{
-    cmd->status = status;
-    snprintf(cmd->error, sizeof cmd->error, fmt, arg);
-}
-
-static int slave_index(const rig_t *r, uint8_t address)
-{
-    for (unsigned i = 0; i < r->master.num_slaves; i++) {
-        if (r->master.slaves[i].cfg.address == address) {
-            return (int)i;
-        }
-    }
-    return -1;
-}
-
 static void run_card_param(rig_card_t *rc, rig_cmd_t *cmd)
 {
     if (rc->cs.inverter != CARD_INVERTER_SIM) {
-        fail(cmd, 409, "%s", "this card has no emulated drive (--inverter none or an SBus link)");
+        rig_cmd_fail(cmd, 409, "this card has no emulated drive (--inverter none or an SBus link)");
         return;
     }
     uint8_t req[ML_TELEGRAM_LEN] = {0};
@@ -367,7 +346,7 @@ static void set_slave_words(dp_master_t *m, unsigned idx, const rig_cmd_t *cmd)
     dpm_slave_t *sl = &m->slaves[idx];
     uint8_t out[DPM_MAX_IO];
     memcpy(out, sl->outputs, sl->out_len);
-    size_t base = has_param_channel(sl) ? ML_TELEGRAM_LEN : 0u;
+    size_t base = rig_ctl_has_param_channel(sl) ? ML_TELEGRAM_LEN : 0u;
     for (unsigned w = 0; w < cmd->num_words; w++) {
         size_t at = base + (size_t)2u * w;
         if (at + 1u < sl->out_len) {
@@ -378,159 +357,66 @@ static void set_slave_words(dp_master_t *m, unsigned idx, const rig_cmd_t *cmd)
     dp_master_set_outputs(m, idx, out, sl->out_len);
 }
 
-/* Starts a master parameter service; returns false when it finished at once (error). */
-static bool start_master_param(rig_ctl_t *c, rig_cmd_t *cmd, unsigned idx)
+static void run_master_outputs(dp_master_t *m, rig_cmd_t *cmd)
 {
-    rig_t *r = c->rig;
-    dpm_slave_t *sl = &r->master.slaves[idx];
-    hal_time_us_t now = rig_now_us(r);
-    if (sl->phase != DPM_PHASE_DATA_EXCH) {
-        cmd->status = 409;
-        snprintf(cmd->error, sizeof cmd->error, "slave %u is not in data exchange (%s)",
-                 sl->cfg.address, dpm_phase_name(sl->phase));
-        return false;
-    }
-    uint8_t service = !cmd->write ? ML_SVC_READ : cmd->flag ? ML_SVC_WRITE_VOLATILE
-                                                             : ML_SVC_WRITE;
-    if (cmd->via == RIG_VIA_CHANNEL) {
-        if (!has_param_channel(sl) || sl->out_len < ML_TELEGRAM_LEN) {
-            fail(cmd, 409, "%s", "the slave's configuration has no parameter channel (F3/B7)");
-            return false;
-        }
-        uint8_t out[DPM_MAX_IO];
-        memcpy(out, sl->outputs, sl->out_len);
-        dpm_param_sync(&c->param, sl->inputs);
-        dpm_param_start(&c->param, service, cmd->index, (uint32_t)cmd->value, out);
-        dp_master_set_outputs(&r->master, idx, out, sl->out_len);
-        return true;
-    }
-    if (!dpm_prm_is_dpv1(sl->cfg.prm, sl->cfg.prm_len)) {
-        fail(cmd, 409, "%s", "the slave is not parameterised for DP-V1 (data set 47 needs it)");
-        return false;
-    }
-    memset(&c->ds47, 0, sizeof c->ds47);
-    c->ds47_ref = (uint8_t)(c->ds47_ref % 255u + 1u); /* 1..255: reference 0 is refused */
-    c->ds47.ref = c->ds47_ref;
-    c->ds47.id = DS47_ID_MOVILINK;
-    c->ds47.n = 1;
-    c->ds47.p[0].attribute = !cmd->write ? DS47_ATTR_ML_READ
-                             : cmd->flag ? DS47_ATTR_ML_WRITE_VOLATILE
-                                         : DS47_ATTR_ML_WRITE;
-    c->ds47.p[0].number = cmd->index;
-    c->ds47.p[0].value = (uint32_t)cmd->value;
-    memset(&c->call, 0, sizeof c->call);
-    if (dpm_ds47_start(&c->call, dp_master_c1_port(&r->master, idx), &c->ds47, NULL, NULL, now) !=
-        0) {
-        fail(cmd, 409, "%s", "the class-1 channel is busy");
-        return false;
-    }
-    rig_wake(r);
-    return true;
-}
-
-/* A running master service: true when it finished (cmd has the result). */
-static bool advance_master_param(rig_ctl_t *c, rig_cmd_t *cmd)
-{
-    rig_t *r = c->rig;
-    int idx = slave_index(r, cmd->card);
+    int idx = rig_ctl_slave_index(m, cmd->card);
     if (idx < 0) {
-        fail(cmd, 404, "%s", "the slave left the master's list");
-        return true;
+        rig_cmd_fail(cmd, 404, "the master has no slave with that address");
+        return;
     }
-    dpm_slave_t *sl = &r->master.slaves[idx];
-    if (cmd->via == RIG_VIA_CHANNEL) {
-        if (!dpm_param_done(&c->param, sl->inputs)) {
-            return false;
+    dpm_slave_t *sl = &m->slaves[idx];
+    if (cmd->raw_given) {
+        if (cmd->raw_len != sl->out_len) {
+            cmd->status = 400;
+            (void)snprintf(cmd->error, sizeof cmd->error,
+                           "hex: %u octets given, the slave's outputs are %u octets",
+                           cmd->raw_len, sl->out_len);
+            return;
         }
-        cmd->status = 200;
-        if ((sl->inputs[0] & ML_MGMT_ERROR) != 0u) {
-            cmd->refused = true;
-            ml_error_text(sl->inputs, cmd->error, sizeof cmd->error);
-        } else {
-            cmd->result = (int32_t)ml_data(sl->inputs);
+        dp_master_set_outputs(m, (unsigned)idx, cmd->raw, cmd->raw_len);
+    } else {
+        size_t base = rig_ctl_has_param_channel(sl) ? ML_TELEGRAM_LEN : 0u;
+        if (base + (size_t)2u * cmd->num_words > sl->out_len) {
+            cmd->status = 400;
+            (void)snprintf(cmd->error, sizeof cmd->error,
+                           "po: %u words given, the slave takes %u PO words", cmd->num_words,
+                           (unsigned)((sl->out_len - base) / 2u));
+            return;
         }
-        return true;
-    }
-    if (!dpm_call_done(&c->call)) {
-        return false;
+        set_slave_words(m, (unsigned)idx, cmd);
     }
     cmd->status = 200;
-    if (!c->call.ok) {
-        cmd->status = 502;
-        snprintf(cmd->error, sizeof cmd->error, "data set 47: %.180s",
-                 c->call.error[0] != '\0' ? c->call.error : "negative DP-V1 response");
-        return true;
-    }
-    dpm_ds47_rsp_t rsp;
-    char err[160];
-    if (!dpm_ds47_parse(&c->ds47, c->call.data, c->call.len, &rsp, err, sizeof err)) {
-        cmd->status = 502;
-        snprintf(cmd->error, sizeof cmd->error, "data set 47: %.180s", err);
-        return true;
-    }
-    if (!rsp.p[0].ok) {
-        cmd->refused = true;
-        dpm_ml_error_value_text(rsp.p[0].error, cmd->error, sizeof cmd->error);
-        return true;
-    }
-    cmd->result = rsp.p[0].has_value ? (int32_t)rsp.p[0].value : cmd->value;
-    return true;
 }
 
 static void run_master_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
 {
     rig_t *r = c->rig;
     if (!r->has_master) {
-        fail(cmd, 409, "%s", "this process has no master (use dfp-sim master or demo)");
+        rig_cmd_fail(cmd, 409, "this process has no master (use dfp-sim master or demo)");
         return;
     }
-    hal_time_us_t now = rig_now_us(r);
-    if (cmd->type == RIG_CMD_MASTER_RUN) {
+    switch (cmd->type) {
+    case RIG_CMD_MASTER_RUN:
         if (cmd->flag && !r->master.running) {
-            dp_master_start(&r->master, now);
+            dp_master_start(&r->master, rig_now_us(r));
         } else if (!cmd->flag && r->master.running) {
             dp_master_stop(&r->master);
         }
         rig_wake(r);
         cmd->status = 200;
         return;
-    }
-    int idx = slave_index(r, cmd->card);
-    if (idx < 0) {
-        fail(cmd, 404, "%s", "the master has no slave with that address");
+    case RIG_CMD_MASTER_OUTPUTS:
+        run_master_outputs(&r->master, cmd);
         return;
-    }
-    if (cmd->type == RIG_CMD_MASTER_OUTPUTS) {
-        dpm_slave_t *sl = &r->master.slaves[idx];
-        if (cmd->raw_given) {
-            if (cmd->raw_len != sl->out_len) {
-                cmd->status = 400;
-                snprintf(cmd->error, sizeof cmd->error,
-                         "hex: %u octets given, the slave's outputs are %u octets", cmd->raw_len,
-                         sl->out_len);
-                return;
-            }
-            dp_master_set_outputs(&r->master, (unsigned)idx, cmd->raw, cmd->raw_len);
-        } else {
-            size_t base = has_param_channel(sl) ? ML_TELEGRAM_LEN : 0u;
-            if (base + (size_t)2u * cmd->num_words > sl->out_len) {
-                cmd->status = 400;
-                snprintf(cmd->error, sizeof cmd->error,
-                         "po: %u words given, the slave takes %u PO words", cmd->num_words,
-                         (unsigned)((sl->out_len - base) / 2u));
-                return;
-            }
-            set_slave_words(&r->master, (unsigned)idx, cmd);
-        }
-        cmd->status = 200;
-        return;
+    default:
+        break;
     }
     /* RIG_CMD_MASTER_PARAM: one at a time, like a PLC's parameter block */
     if (c->active_slot >= 0) {
-        fail(cmd, 409, "%s", "another parameter service is running; try again");
+        rig_cmd_fail(cmd, 409, "another parameter service is running; try again");
         return;
     }
-    if (start_master_param(c, cmd, (unsigned)idx)) {
+    if (rig_ctl_param_start(c, cmd)) {
         c->active_slot = k;
         c->slot_deadline_us[k] = rig_elapsed_ns(r) / 1000u + SERVICE_TIMEOUT_US;
     }
@@ -546,12 +432,12 @@ static void run_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
     }
     rig_card_t *rc = rig_card_by_address(r, cmd->card);
     if (rc == NULL) {
-        fail(cmd, 404, "%s", "no card with that address");
+        rig_cmd_fail(cmd, 404, "no card with that address");
         return;
     }
     bool needs_drive = cmd->type == RIG_CMD_INPUTS || cmd->type == RIG_CMD_FAULT;
     if (needs_drive && rc->cs.inverter != CARD_INVERTER_SIM) {
-        fail(cmd, 409, "%s", "this card has no emulated drive (--inverter none or an SBus link)");
+        rig_cmd_fail(cmd, 409, "this card has no emulated drive (--inverter none or an SBus link)");
         return;
     }
     switch (cmd->type) {
@@ -587,6 +473,32 @@ static void finish(rig_ctl_t *c, int k)
     pthread_mutex_unlock(&c->lock);
 }
 
+/* The running master parameter service. Its command goes back into the slot on every turn: a
+ * class-2 service has its answer before the connection is closed. */
+static void advance_active(rig_ctl_t *c)
+{
+    int k = c->active_slot;
+    rig_cmd_t cmd;
+    pthread_mutex_lock(&c->lock);
+    cmd = c->cmds[k];
+    pthread_mutex_unlock(&c->lock);
+    bool done = rig_ctl_param_advance(c, &cmd);
+    if (!done && rig_elapsed_ns(c->rig) / 1000u > c->slot_deadline_us[k]) {
+        cmd.status = 504;
+        (void)snprintf(cmd.error, sizeof cmd.error, "no answer from slave %u within 5 s",
+                       cmd.card);
+        rig_ctl_param_give_up(c);
+        done = true;
+    }
+    pthread_mutex_lock(&c->lock);
+    c->cmds[k] = cmd;
+    pthread_mutex_unlock(&c->lock);
+    if (done) {
+        c->active_slot = -1;
+        finish(c, k);
+    }
+}
+
 void rig_ctl_service(rig_ctl_t *c, uint64_t publish_every_ns)
 {
     /* The command is copied out of the slot under the lock and run outside it. */
@@ -611,25 +523,7 @@ void rig_ctl_service(rig_ctl_t *c, uint64_t publish_every_ns)
         }
     }
     if (c->active_slot >= 0) {
-        int k = c->active_slot;
-        rig_cmd_t cmd;
-        pthread_mutex_lock(&c->lock);
-        cmd = c->cmds[k];
-        pthread_mutex_unlock(&c->lock);
-        bool done = advance_master_param(c, &cmd);
-        if (!done && rig_elapsed_ns(c->rig) / 1000u > c->slot_deadline_us[k]) {
-            cmd.status = 504;
-            snprintf(cmd.error, sizeof cmd.error, "no answer from slave %u within 5 s",
-                     cmd.card);
-            done = true;
-        }
-        if (done) {
-            pthread_mutex_lock(&c->lock);
-            c->cmds[k] = cmd;
-            pthread_mutex_unlock(&c->lock);
-            c->active_slot = -1;
-            finish(c, k);
-        }
+        advance_active(c);
     }
     uint64_t now = host_clock_mono_ns();
     if (publish_every_ns == 0u || now - c->last_publish_ns >= publish_every_ns) {

@@ -31,6 +31,9 @@ typedef struct file_nvm {
     uint32_t seq;    /* sequence number of the current image */
     uint32_t writes;
     uint8_t data[FILE_NVM_MAX_SIZE];
+    /* Scratch for a whole file image being read or written: header + data, and one byte more
+     * so a too-long file is noticed. Here rather than shared, so images never meet. */
+    uint8_t image[FILE_NVM_HEADER + FILE_NVM_MAX_SIZE + 1u];
 } file_nvm_t;
 
 /* Opens (does not create) the image at path with `size` data bytes (<= FILE_NVM_MAX_SIZE).

@@ -17,6 +17,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "dp_master/dpv1_c2.h"
 #include "dp_master/dpv1_ds47.h"
 #include "dp_master/param_channel.h"
 #include "rig/rig.h"
@@ -131,7 +132,16 @@ typedef enum rig_cmd_type {
 typedef enum rig_param_via {
     RIG_VIA_CHANNEL = 0, /* the cyclic 8-octet MOVILINK channel */
     RIG_VIA_DS47,        /* DP-V1 class 1, data set 47 with a MOVILINK request */
+    RIG_VIA_C2,          /* a DP-V1 class-2 connection opened for the request, then aborted */
 } rig_param_via_t;
+
+/* Where a class-2 service stands (RIG_VIA_C2). */
+typedef enum rig_c2_stage {
+    RIG_C2_IDLE = 0,
+    RIG_C2_OPENING, /* Initiate sent; waiting for the connection */
+    RIG_C2_CALLING, /* data set 47 Write/Read on the open connection */
+    RIG_C2_CLOSING, /* Abort sent; the answer stays in the command until it is taken */
+} rig_c2_stage_t;
 
 typedef struct rig_cmd {
     rig_cmd_type_t type;
@@ -183,8 +193,14 @@ typedef struct rig_ctl {
     dpm_call_t call;
     dpm_ds47_req_t ds47;
     uint8_t ds47_ref;         /* request reference of the last data set 47 request */
-    bool call_started;
-    uint32_t wait_cycles;
+    /* The class-2 connection of the master station (its own address), attached to the master
+     * at the first class-2 service and opened for each one. */
+    dpm_c2_t c2;
+    bool c2_attached;
+    rig_c2_stage_t c2_stage;
+    bool c2_open_done;
+    bool c2_open_ok;
+    bool c2_abort_done;
     /* loop side */
     uint64_t last_publish_ns;
 } rig_ctl_t;

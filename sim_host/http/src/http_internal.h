@@ -1,0 +1,102 @@
+/* What the control API's source files share (private to dfp_http): the server, a request's
+ * body, replies, the JSON of the rig's state, request-body readers and the actions. Every
+ * handler runs in one of libmicrohttpd's connection threads and reaches the rig only through
+ * rig_ctl. */
+#ifndef DFP_HTTP_HTTP_INTERNAL_H
+#define DFP_HTTP_HTTP_INTERNAL_H
+
+#include <cjson/cJSON.h>
+#include <microhttpd.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "dfp_http/http_server.h"
+#include "movidrive/md_names.h"
+#include "rig/rig_ctl.h"
+
+#define BODY_MAX 16384u
+#define ACTION_TIMEOUT_MS 2000u
+#define SERVICE_TIMEOUT_MS 7000u
+
+struct http_server {
+    struct MHD_Daemon *daemon;
+    rig_ctl_t *ctl;
+    int listen_fd;
+    uint16_t port;
+    volatile int stopping;
+};
+
+typedef struct request {
+    char body[BODY_MAX + 1u];
+    size_t len;
+    bool too_large;
+} request_t;
+
+/* ---- replies (http_reply.c) ---------------------------------------------------------------- */
+
+/* copy: MHD copies text; otherwise text must outlive the response (the embedded files). */
+enum MHD_Result http_send_text(struct MHD_Connection *conn, unsigned status, const char *type,
+                               const char *text, size_t len, bool copy);
+/* Sends obj and frees it. */
+enum MHD_Result http_send_json(struct MHD_Connection *conn, unsigned status, cJSON *obj);
+/* {"error": "..."} */
+enum MHD_Result http_send_error(struct MHD_Connection *conn, unsigned status, const char *fmt,
+                                ...) __attribute__((format(printf, 3, 4)));
+
+/* ---- the rig's state as JSON (http_json.c) ------------------------------------------------- */
+
+/* A heap copy of the published snapshot (it is large); NULL when out of memory. */
+rig_snapshot_t *http_snapshot(rig_ctl_t *ctl);
+cJSON *http_json_state(rig_ctl_t *ctl, const rig_snapshot_t *s);
+cJSON *http_json_card(const rig_snap_card_t *c);
+cJSON *http_json_event(const rig_ctl_event_t *e);
+cJSON *http_json_param_info(const md_param_info_t *p);
+
+/* ---- the event stream (http_stream.c) ------------------------------------------------------ */
+
+enum MHD_Result http_serve_events(http_server_t *srv, struct MHD_Connection *conn);
+
+/* ---- request bodies (http_body.c) ---------------------------------------------------------- */
+
+/* The body as a JSON object whose keys are all in `allowed` (NULL-terminated); NULL with the
+ * error already sent (*rc). */
+cJSON *http_parse_body(struct MHD_Connection *conn, const request_t *req,
+                       const char *const *allowed, enum MHD_Result *rc);
+/* Optional fields leave *out as it is when absent. false with a message in err. */
+bool http_get_bool(const cJSON *o, const char *key, bool required, bool *out, char *err,
+                   size_t n);
+bool http_get_int(const cJSON *o, const char *key, bool required, long lo, long hi, long *out,
+                  char *err, size_t n);
+/* "value": a number, or a text the parameter knows ("FIELDBUS", "300.5"). */
+bool http_get_value(const cJSON *o, const md_param_info_t *p, int32_t *raw, char *err,
+                    size_t n);
+
+/* ---- actions (http_actions.c) -------------------------------------------------------------- */
+
+/* Runs cmd in the bus loop and answers {"ok": true} or its error. */
+enum MHD_Result http_submit(http_server_t *srv, struct MHD_Connection *conn, rig_cmd_t *cmd,
+                            unsigned timeout_ms);
+enum MHD_Result http_card_action(http_server_t *srv, struct MHD_Connection *conn,
+                                 uint8_t address, const char *what, const request_t *req);
+enum MHD_Result http_card_param(http_server_t *srv, struct MHD_Connection *conn,
+                                uint8_t address, const char *name, const char *method,
+                                const request_t *req);
+enum MHD_Result http_master_run(http_server_t *srv, struct MHD_Connection *conn,
+                                const request_t *req);
+enum MHD_Result http_master_param(http_server_t *srv, struct MHD_Connection *conn,
+                                  const request_t *req);
+enum MHD_Result http_master_outputs(http_server_t *srv, struct MHD_Connection *conn,
+                                    uint8_t address, const request_t *req);
+
+/* ---- routing (http_routes.c) --------------------------------------------------------------- */
+
+/* path: what follows /api/v1/. */
+enum MHD_Result http_route_api(http_server_t *srv, struct MHD_Connection *conn,
+                               const char *path, const char *method, const request_t *req);
+/* An embedded panel file ("/" is index.html). */
+enum MHD_Result http_serve_file(struct MHD_Connection *conn, const char *url);
+/* true and *rest after the prefix when s starts with it. */
+bool http_starts(const char *s, const char *prefix, const char **rest);
+
+#endif
