@@ -30,6 +30,54 @@ const char *cli_value(int argc, char **argv, int *i)
     return argv[*i];
 }
 
+/* One "N" or "N-M" of an address list at p; *end after it. False when it is neither. */
+static bool address_range(const char *p, unsigned long *lo, unsigned long *hi, char **end)
+{
+    *lo = strtoul(p, end, 10);
+    *hi = *lo;
+    bool ok = *end != p && *p >= '0' && *p <= '9';
+    if (ok && **end == '-') {
+        const char *q = *end + 1;
+        *hi = strtoul(q, end, 10);
+        ok = *end != q && *q >= '0' && *q <= '9';
+    }
+    return ok;
+}
+
+bool cli_address_list(const char *text, uint8_t *out, size_t max, size_t *n)
+{
+    bool seen[126] = {false};
+    *n = 0;
+    const char *p = text;
+    for (;;) {
+        char *end;
+        unsigned long lo;
+        unsigned long hi;
+        bool ok = address_range(p, &lo, &hi, &end);
+        if (!ok || (*end != ',' && *end != '\0') || lo > 125u || hi > 125u || hi < lo) {
+            cli_error("--address '%s': use addresses 0..125 as N, N-M or a comma list "
+                      "(3-34, 3,5,7-9)", text);
+            return false;
+        }
+        for (unsigned long a = lo; a <= hi; a++) {
+            if (seen[a]) {
+                cli_error("--address '%s': address %lu is given twice", text, a);
+                return false;
+            }
+            if (*n >= max) {
+                cli_error("--address '%s': more than %zu slaves", text, max);
+                return false;
+            }
+            seen[a] = true;
+            out[(*n)++] = (uint8_t)a;
+        }
+        if (*end == '\0') {
+            return true;
+        }
+        p = end + 1;
+    }
+}
+
 bool cli_u32(const char *opt, const char *text, uint32_t min, uint32_t max, uint32_t *out)
 {
     char *end = NULL;

@@ -34,55 +34,79 @@ static int write_untimed_text(cap_writer_t *w, const cap_record_t *rec)
     return 0;
 }
 
-int cmd_convert(int argc, char **argv)
+typedef struct convert_opts {
+    const char *in;
+    const char *out;
+    cap_format_t in_format;
+    cap_writer_options_t w;
+    bool quiet;
+} convert_opts_t;
+
+/* --format / --in-format VALUE: 0, or EXIT_USAGE after reporting. */
+static int format_option(convert_opts_t *o, const char *opt, const char *v)
 {
-    const char *in = NULL;
-    const char *out = NULL;
-    cap_format_t in_format = CAP_FORMAT_AUTO;
-    cap_writer_options_t w = {.format = CAP_FORMAT_AUTO, .linktype = 0};
-    bool quiet = false;
-    for (int i = 2; i < argc; i++) {
-        const char *o = argv[i];
-        if (strcmp(o, "--format") == 0 || strcmp(o, "--in-format") == 0) {
-            const char *v = cli_value(argc, argv, &i);
-            if (v == NULL) return EXIT_USAGE;
-            cap_format_t f;
-            bool out_side = strcmp(o, "--format") == 0;
-            if (!cap_format_parse(v, &f) || f == CAP_FORMAT_AUTO ||
-                (out_side && f == CAP_FORMAT_LCM)) {
-                cli_error("%s: '%s' is not one of %s", o, v,
-                          out_side ? "pcap, pcapng, text" : "pcap, pcapng, text, lcm");
-                return EXIT_USAGE;
-            }
-            *(out_side ? &w.format : &in_format) = f;
-        } else if (strcmp(o, "--linktype") == 0) {
-            const char *v = cli_value(argc, argv, &i);
-            if (v == NULL) return EXIT_USAGE;
-            if (strcmp(v, "profibus") == 0 || strcmp(v, "257") == 0) {
-                w.linktype = PCAP_LINKTYPE_PROFIBUS_DL;
-            } else if (strcmp(v, "user0") == 0 || strcmp(v, "147") == 0) {
-                w.linktype = PCAP_LINKTYPE_USER0;
-            } else {
-                cli_error("--linktype: '%s' is not profibus (257) or user0 (147)", v);
-                return EXIT_USAGE;
-            }
-        } else if (strcmp(o, "--ns") == 0) {
-            w.nanosecond = true;
-        } else if (strcmp(o, "--quiet") == 0) {
-            quiet = true;
-        } else if (o[0] == '-' && o[1] != '\0') {
-            cli_error("convert: unknown option '%s' (see dfp-sim --help)", o);
-            return EXIT_USAGE;
-        } else if (in == NULL) {
-            in = o;
-        } else if (out == NULL) {
-            out = o;
-        } else {
-            cli_error("convert takes two files, IN and OUT; '%s' is a third", o);
-            return EXIT_USAGE;
-        }
+    cap_format_t f;
+    bool out_side = strcmp(opt, "--format") == 0;
+    if (!cap_format_parse(v, &f) || f == CAP_FORMAT_AUTO || (out_side && f == CAP_FORMAT_LCM)) {
+        cli_error("%s: '%s' is not one of %s", opt, v,
+                  out_side ? "pcap, pcapng, text" : "pcap, pcapng, text, lcm");
+        return EXIT_USAGE;
     }
-    if (in == NULL || out == NULL) {
+    *(out_side ? &o->w.format : &o->in_format) = f;
+    return 0;
+}
+
+static int linktype_option(convert_opts_t *o, const char *v)
+{
+    if (strcmp(v, "profibus") == 0 || strcmp(v, "257") == 0) {
+        o->w.linktype = PCAP_LINKTYPE_PROFIBUS_DL;
+    } else if (strcmp(v, "user0") == 0 || strcmp(v, "147") == 0) {
+        o->w.linktype = PCAP_LINKTYPE_USER0;
+    } else {
+        cli_error("--linktype: '%s' is not profibus (257) or user0 (147)", v);
+        return EXIT_USAGE;
+    }
+    return 0;
+}
+
+/* One argument at argv[*i]: 0, or EXIT_USAGE after reporting. */
+static int convert_argument(convert_opts_t *o, int argc, char **argv, int *i)
+{
+    const char *arg = argv[*i];
+    if (strcmp(arg, "--format") == 0 || strcmp(arg, "--in-format") == 0 ||
+        strcmp(arg, "--linktype") == 0) {
+        const char *v = cli_value(argc, argv, i);
+        if (v == NULL) return EXIT_USAGE;
+        return strcmp(arg, "--linktype") == 0 ? linktype_option(o, v)
+                                              : format_option(o, arg, v);
+    }
+    if (strcmp(arg, "--ns") == 0) {
+        o->w.nanosecond = true;
+    } else if (strcmp(arg, "--quiet") == 0) {
+        o->quiet = true;
+    } else if (arg[0] == '-' && arg[1] != '\0') {
+        cli_error("convert: unknown option '%s' (see dfp-sim --help)", arg);
+        return EXIT_USAGE;
+    } else if (o->in == NULL) {
+        o->in = arg;
+    } else if (o->out == NULL) {
+        o->out = arg;
+    } else {
+        cli_error("convert takes two files, IN and OUT; '%s' is a third", arg);
+        return EXIT_USAGE;
+    }
+    return 0;
+}
+
+/* The command line into o: 0, or EXIT_USAGE after reporting. */
+static int convert_parse(convert_opts_t *o, int argc, char **argv)
+{
+    *o = (convert_opts_t){.in_format = CAP_FORMAT_AUTO,
+                          .w = {.format = CAP_FORMAT_AUTO, .linktype = 0}};
+    for (int i = 2; i < argc; i++) {
+        if (convert_argument(o, argc, argv, &i) != 0) return EXIT_USAGE;
+    }
+    if (o->in == NULL || o->out == NULL) {
         cli_error("convert needs an input and an output file: dfp-sim convert IN OUT");
         return EXIT_USAGE;
     }
@@ -90,74 +114,116 @@ int cmd_convert(int argc, char **argv)
      * writing would truncate the input under the reader. */
     struct stat in_st;
     struct stat out_st;
-    if (strcmp(in, out) == 0 || (stat(in, &in_st) == 0 && stat(out, &out_st) == 0 &&
-                                 in_st.st_dev == out_st.st_dev && in_st.st_ino == out_st.st_ino)) {
-        cli_error("convert: IN and OUT are the same file (%s, %s)", in, out);
+    if (strcmp(o->in, o->out) == 0 ||
+        (stat(o->in, &in_st) == 0 && stat(o->out, &out_st) == 0 &&
+         in_st.st_dev == out_st.st_dev && in_st.st_ino == out_st.st_ino)) {
+        cli_error("convert: IN and OUT are the same file (%s, %s)", o->in, o->out);
         return EXIT_USAGE;
     }
+    return 0;
+}
 
+/* What the copy met on its way. */
+typedef struct convert_counts {
+    uint64_t damaged;
+    uint64_t untimed;
+    uint64_t skipped_empty;
+    bool write_failed;
+    bool untimed_refused;
+} convert_counts_t;
+
+/* One record into the writer: 0 to go on, -1 to stop (c says why). */
+static int convert_record(const convert_opts_t *o, const cap_reader_t *reader,
+                          cap_writer_t *writer, const cap_record_t *rec, convert_counts_t *c)
+{
+    if (rec->problem[0] != '\0') {
+        c->damaged++;
+        if (c->damaged <= CONVERT_MAX_REPORTED && !o->quiet) {
+            (void)fprintf(stderr, "dfp-sim: %s: record %" PRIu64 " (%s %" PRIu64 "): %s\n",
+                          o->in, rec->index, cap_position_unit(reader->format), rec->position,
+                          rec->problem);
+        }
+    }
+    if (rec->len == 0 && (reader->format == CAP_FORMAT_TEXT || written_text(writer))) {
+        /* A text line that is no telegram, or an empty record text cannot show. */
+        c->skipped_empty++;
+        return 0;
+    }
+    if (!rec->has_time) {
+        /* A text dump without times: text keeps it untimed (a bare hex line reads back
+         * untimed); pcap and pcapng need a time, and an invented one would be taken for the
+         * bus's timing by every later reader (replay infers the rate from it). */
+        c->untimed++;
+        if (!written_text(writer)) {
+            c->untimed_refused = true;
+            cli_error("%s: record %" PRIu64 " (line %" PRIu64 ") has no time; %s needs one: "
+                      "give every line a time, or convert to text (dfp-sim replay reads "
+                      "untimed text directly)", o->in, rec->index, rec->position,
+                      cap_format_name(writer->opt.format));
+            return -1;
+        }
+        c->write_failed = write_untimed_text(writer, rec) != 0;
+        return c->write_failed ? -1 : 0;
+    }
+    c->write_failed = cap_writer_frame(writer, rec->t_ns, rec->data, rec->len, rec->dir) != 0;
+    return c->write_failed ? -1 : 0;
+}
+
+static void print_summary(const convert_opts_t *o, cap_format_t in_fmt,
+                          const cap_writer_options_t *written, uint64_t records,
+                          const convert_counts_t *c)
+{
+    printf("%s (%s) -> %s (%s", o->in, cap_format_name(in_fmt), o->out,
+           cap_format_name(written->format));
+    if (written->format != CAP_FORMAT_TEXT) {
+        printf(", link type %u, %s", written->linktype, written->nanosecond ? "ns" : "µs");
+    }
+    printf("): %" PRIu64 " records", records);
+    if (c->untimed > 0) {
+        printf(", %" PRIu64 " without a time (kept untimed)", c->untimed);
+    }
+    if (c->skipped_empty > 0) {
+        printf(", %" PRIu64 " without octets left out", c->skipped_empty);
+    }
+    if (c->damaged > 0) {
+        printf(", %" PRIu64 " damaged (reported above%s)", c->damaged,
+               c->damaged > CONVERT_MAX_REPORTED ? ", the first 10" : "");
+    }
+    printf("\n");
+}
+
+int cmd_convert(int argc, char **argv)
+{
+    static convert_opts_t o;
+    int rc = convert_parse(&o, argc, argv);
+    if (rc != 0) {
+        return rc;
+    }
     static cap_reader_t reader;
     static cap_record_t rec;
     char err[1100];
-    if (cap_reader_open(&reader, in, in_format, err, sizeof err) != 0) {
+    if (cap_reader_open(&reader, o.in, o.in_format, err, sizeof err) != 0) {
         cli_error("%s", err);
         return EXIT_USAGE;
     }
     /* The first record is read before the output is opened: its baud rate, when the input has
      * one, goes into the pcapng interface description. */
-    int rc = cap_reader_next(&reader, &rec);
+    rc = cap_reader_next(&reader, &rec);
     if (rc == 1) {
-        w.baud = rec.baud;
+        o.w.baud = rec.baud;
     }
-    if (w.linktype == 0 && reader.linktype != 0) {
-        w.linktype = reader.linktype;
+    if (o.w.linktype == 0 && reader.linktype != 0) {
+        o.w.linktype = reader.linktype;
     }
     static cap_writer_t writer;
-    if (cap_writer_open(&writer, out, &w, 0, err, sizeof err) != 0) {
+    if (cap_writer_open(&writer, o.out, &o.w, 0, err, sizeof err) != 0) {
         cli_error("%s", err);
         cap_reader_close(&reader);
         return 1;
     }
-    uint64_t damaged = 0;
-    uint64_t untimed = 0;
-    uint64_t skipped_empty = 0;
-    bool write_failed = false;
-    bool untimed_refused = false;
+    convert_counts_t c = {0};
     for (; rc == 1; rc = cap_reader_next(&reader, &rec)) {
-        if (rec.problem[0] != '\0') {
-            damaged++;
-            if (damaged <= CONVERT_MAX_REPORTED && !quiet) {
-                fprintf(stderr, "dfp-sim: %s: record %" PRIu64 " (%s %" PRIu64 "): %s\n", in,
-                        rec.index, cap_position_unit(reader.format), rec.position,
-                        rec.problem);
-            }
-        }
-        if (rec.len == 0 && (reader.format == CAP_FORMAT_TEXT || written_text(&writer))) {
-            /* A text line that is no telegram, or an empty record text cannot show. */
-            skipped_empty++;
-            continue;
-        }
-        if (!rec.has_time) {
-            /* A text dump without times: text keeps it untimed (a bare hex line reads back
-             * untimed); pcap and pcapng need a time, and an invented one would be taken for
-             * the bus's timing by every later reader (replay infers the rate from it). */
-            untimed++;
-            if (!written_text(&writer)) {
-                untimed_refused = true;
-                cli_error("%s: record %" PRIu64 " (line %" PRIu64 ") has no time; %s needs "
-                          "one: give every line a time, or convert to text (dfp-sim replay "
-                          "reads untimed text directly)", in, rec.index, rec.position,
-                          cap_format_name(writer.opt.format));
-                break;
-            }
-            if (write_untimed_text(&writer, &rec) != 0) {
-                write_failed = true;
-                break;
-            }
-            continue;
-        }
-        if (cap_writer_frame(&writer, rec.t_ns, rec.data, rec.len, rec.dir) != 0) {
-            write_failed = true;
+        if (convert_record(&o, &reader, &writer, &rec, &c) != 0) {
             break;
         }
     }
@@ -168,37 +234,20 @@ int cmd_convert(int argc, char **argv)
     cap_reader_close(&reader);
     cap_writer_options_t written = writer.opt;
     uint64_t records = writer.records;
-    if (cap_writer_close(&writer) != 0 || write_failed) {
-        cli_error("could not write the whole capture to %s", out);
+    if (cap_writer_close(&writer) != 0 || c.write_failed) {
+        cli_error("could not write the whole capture to %s", o.out);
         return 1;
     }
-    if (untimed_refused) {
-        (void)remove(out); /* nothing usable: no half-converted file is left behind */
+    if (c.untimed_refused) {
+        (void)remove(o.out); /* nothing usable: no half-converted file is left behind */
         return 1;
     }
-    if (records == 0 && damaged > 0) {
-        cli_error("%s: none of its %" PRIu64 " records is a telegram", in, damaged);
+    if (records == 0 && c.damaged > 0) {
+        cli_error("%s: none of its %" PRIu64 " records is a telegram", o.in, c.damaged);
         return 1;
     }
-    if (!quiet) {
-        printf("%s (%s) -> %s (%s", in, cap_format_name(in_fmt), out,
-               cap_format_name(written.format));
-        if (written.format != CAP_FORMAT_TEXT) {
-            printf(", link type %u, %s", written.linktype,
-                   written.nanosecond ? "ns" : "µs");
-        }
-        printf("): %" PRIu64 " records", records);
-        if (untimed > 0) {
-            printf(", %" PRIu64 " without a time (kept untimed)", untimed);
-        }
-        if (skipped_empty > 0) {
-            printf(", %" PRIu64 " without octets left out", skipped_empty);
-        }
-        if (damaged > 0) {
-            printf(", %" PRIu64 " damaged (reported above%s)", damaged,
-                   damaged > CONVERT_MAX_REPORTED ? ", the first 10" : "");
-        }
-        printf("\n");
+    if (!o.quiet) {
+        print_summary(&o, in_fmt, &written, records, &c);
     }
     return rc < 0 ? 1 : 0;
 }

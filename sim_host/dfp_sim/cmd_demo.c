@@ -248,23 +248,28 @@ static void reconfigure(const uint8_t *cfg, size_t len)
     rig_wake(&demo.rig);
 }
 
-int cmd_demo(int argc, char **argv)
-{
-    capture_opts_t capture = {.path = NULL};
-    const char *lcm_url = NULL;
+typedef struct demo_opts {
+    capture_opts_t capture;
+    const char *lcm_url;
     instrument_opts_t io;
-    instrument_defaults(&io, RIG_LOG_TIME_BUS);
+} demo_opts_t;
+
+/* The command line into o: 0, or EXIT_USAGE after reporting. */
+static int demo_parse(demo_opts_t *o, int argc, char **argv)
+{
+    *o = (demo_opts_t){.capture = {.path = NULL}};
+    instrument_defaults(&o->io, RIG_LOG_TIME_BUS);
     for (int i = 2; i < argc; i++) {
         if (strcmp(argv[i], "--lcm") == 0) {
-            if ((lcm_url = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+            if ((o->lcm_url = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
             continue;
         }
-        int iopt = instrument_option(argc, argv, &i, &io);
+        int iopt = instrument_option(argc, argv, &i, &o->io);
         if (iopt != 0) {
             if (iopt < 0) return EXIT_USAGE;
             continue;
         }
-        int copt = capture_option(argc, argv, &i, &capture);
+        int copt = capture_option(argc, argv, &i, &o->capture);
         if (copt < 0) {
             return EXIT_USAGE;
         }
@@ -273,51 +278,61 @@ int cmd_demo(int argc, char **argv)
             return EXIT_USAGE;
         }
     }
+    return 0;
+}
+
+/* The capture and the LCM telemetry. False after reporting. */
+static bool demo_open(demo_opts_t *o)
+{
     memset(&demo, 0, sizeof demo);
     demo.ok = true;
     demo.rep.now_ns = demo_now_ns;
     demo.rep.now_ctx = &demo;
     demo.rep.card = &demo.rig.cards[0].cs.card;
-    capture.w.baud = DEMO_BAUD;
+    o->capture.w.baud = DEMO_BAUD;
     struct timespec wall;
-    clock_gettime(CLOCK_REALTIME, &wall);
-    if (!report_open_capture(&demo.rep, &capture, (uint64_t)wall.tv_sec * 1000000000ull)) {
-        return 1;
+    (void)clock_gettime(CLOCK_REALTIME, &wall);
+    if (!report_open_capture(&demo.rep, &o->capture, (uint64_t)wall.tv_sec * 1000000000ull)) {
+        return false;
     }
-    if (lcm_url != NULL) {
+    if (o->lcm_url != NULL) {
         /* Simulated time 0 is now: utime = wall clock at start + simulated time. */
         int64_t start = dfp_lcm_wall_us();
-        if (lcm_cli_open(&demo.lcm, lcm_url, &demo.rig.cards[0].cs.card, DEMO_ADDRESS, &demo.rep, start,
-                         start) != 0) {
-            return 1;
+        if (lcm_cli_open(&demo.lcm, o->lcm_url, &demo.rig.cards[0].cs.card, DEMO_ADDRESS,
+                         &demo.rep, start, start) != 0) {
+            return false;
         }
     }
-    printf("dfp-sim demo: a DFP21B (DIP address %u, automatic baud rate) in an emulated MOVIDRIVE,\n"
-           "and a DP master (address %u, %s, watchdog %u ms) on a simulated RS-485 segment.\n"
-           "Times are simulated bus time%s.\n",
-           DEMO_ADDRESS, DEMO_MASTER, report_baud_text(DEMO_BAUD), DEMO_WATCHDOG_MS,
-           io.http != NULL ? ", running at wall-clock speed while the panel is open" : "");
+    return true;
+}
 
+static const uint8_t param_3pd[] = {0xF3, 0xF2};
+
+/* Scene 1, with the control API when asked. Returns 0, or instrument_start_http's code. */
+static int scene_startup(const demo_opts_t *o)
+{
     scene("1. Power-up, baud search and start-up with \"Param + 3 PD\" (F3 F2)");
-    setup(&io);
-    if (io.http != NULL) {
-        int rc = instrument_start_http(&demo.in, &demo.rig, &io, "demo", false);
+    setup(&o->io);
+    if (o->io.http != NULL) {
+        int rc = instrument_start_http(&demo.in, &demo.rig, &o->io, "demo", false);
         if (rc != 0) {
-            report_close_capture(&demo.rep);
             return rc;
         }
         cli_catch_stop_signals();
         demo.paced = true;
         demo.wall_start_ns = wall_ns();
     }
-    const uint8_t param_3pd[] = {0xF3, 0xF2};
     dpm_slave_cfg_t sc;
     slave_cfg(&sc, param_3pd, sizeof param_3pd);
     dp_master_add_slave(demo.master, &sc);
     expect(run_until(card_in_data_exchange, 2000000u), "start-up reaches Data_Exch");
     run_until(NULL, 10000u);
     show_pi("drive as delivered:");
+    return 0;
+}
 
+static void scene_commissioning(void)
+{
     scene("2. Commissioning through the parameter channel (manual 4.3)");
     uint32_t v = 0;
     expect(param(ML_SVC_READ, 8300, 0, "read index 8300 (P076 firmware)", &v) &&
@@ -333,7 +348,10 @@ int cmd_demo(int argc, char **argv)
     param(ML_SVC_READ, 8318, 0, "read P000 speed (0.001 rpm)", NULL);
     run_until(NULL, 10000u);
     show_pi("after P100/P101:");
+}
 
+static void scene_enable(void)
+{
     scene("3. Enable: control word 0006, PO2 = 1500 (300 rpm at 0.2 rpm/digit), ramp P130");
     set_po(0x0006, 1500);
     for (int i = 0; i < 4; i++) {
@@ -343,7 +361,10 @@ int cmd_demo(int argc, char **argv)
     expect(run_until(drive_at_300_rpm, 1000000u), "the drive reaches 300 rpm");
     show_pi("at speed:");
     print_monitor();
+}
 
+static void scene_watchdog(void)
+{
     scene("4. The master stops (PLC in STOP, cable pulled): DP watchdog, P831 reaction");
     dp_master_stop(demo.master);
     say("master", "stopped sending");
@@ -363,7 +384,10 @@ int cmd_demo(int argc, char **argv)
     run_until(NULL, 400000u);
     expect(!status_shows_fault(), "fault reset");
     show_pi("after the reset:");
+}
 
+static void scene_configuration(void)
+{
     scene("5. A wrong configuration: F3 E2 D1 (parameter channel, 3 PD out but 2 PD in)");
     reconfigure((const uint8_t[]){0xF3, 0xE2, 0xD1}, 3);
     run_until(NULL, 100000u);
@@ -376,18 +400,11 @@ int cmd_demo(int argc, char **argv)
     set_po(0x0006, 1500);
     run_until(NULL, 300000u);
     show_pi("running:");
+}
 
-    if (demo.paced) {
-        scene("The simulation goes on at wall-clock speed: the front panel stays up until Ctrl-C");
-        while (!cli_stop) {
-            step();
-        }
-        say("sim", "stopping (signal)");
-        instrument_stop(&demo.in);
-    }
-    if (demo.lcm.open) {
-        lcm_cli_close(&demo.lcm);
-    }
+/* The summary; 0 when every scene behaved, 1 when not or the capture could not be finished. */
+static int demo_summary(const demo_opts_t *o)
+{
     printf("\n--- Summary\n");
     printf("    %llu telegrams on the bus, %u Data_Exchange cycles, %u master timeouts, "
            "simulated %.1f ms\n",
@@ -399,10 +416,48 @@ int cmd_demo(int argc, char **argv)
             return 1;
         }
         printf("    capture: %llu telegrams written to %s (%s, link type %u)\n",
-               (unsigned long long)demo.rep.frames_captured, capture.path,
+               (unsigned long long)demo.rep.frames_captured, o->capture.path,
                cap_format_name(w.format), w.linktype);
     }
     printf("    result: %s\n", demo.ok ? "every scene behaved as the manual describes"
                                        : "UNEXPECTED: a scene did not reach its expected state");
     return demo.ok ? 0 : 1;
+}
+
+int cmd_demo(int argc, char **argv)
+{
+    static demo_opts_t o;
+    int rc = demo_parse(&o, argc, argv);
+    if (rc != 0) {
+        return rc;
+    }
+    if (!demo_open(&o)) {
+        return 1;
+    }
+    printf("dfp-sim demo: a DFP21B (DIP address %u, automatic baud rate) in an emulated MOVIDRIVE,\n"
+           "and a DP master (address %u, %s, watchdog %u ms) on a simulated RS-485 segment.\n"
+           "Times are simulated bus time%s.\n",
+           DEMO_ADDRESS, DEMO_MASTER, report_baud_text(DEMO_BAUD), DEMO_WATCHDOG_MS,
+           o.io.http != NULL ? ", running at wall-clock speed while the panel is open" : "");
+    rc = scene_startup(&o);
+    if (rc != 0) {
+        (void)report_close_capture(&demo.rep);
+        return rc;
+    }
+    scene_commissioning();
+    scene_enable();
+    scene_watchdog();
+    scene_configuration();
+    if (demo.paced) {
+        scene("The simulation goes on at wall-clock speed: the front panel stays up until Ctrl-C");
+        while (!cli_stop) {
+            step();
+        }
+        say("sim", "stopping (signal)");
+        instrument_stop(&demo.in);
+    }
+    if (demo.lcm.open) {
+        lcm_cli_close(&demo.lcm);
+    }
+    return demo_summary(&o);
 }

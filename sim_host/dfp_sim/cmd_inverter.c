@@ -174,80 +174,92 @@ static hal_time_us_t on_timer(void *ctx, hal_time_us_t now)
     return next;
 }
 
-int cmd_inverter(int argc, char **argv)
+typedef struct inverter_opts {
+    const char *ifname;
+    const char *eeprom;
+    uint32_t address;
+    uint32_t duration_s;
+    bool channel2;
+} inverter_opts_t;
+
+/* The command line into o (and --quiet into inv): 0, or EXIT_USAGE after reporting. */
+static int inverter_parse(inverter_opts_t *o, int argc, char **argv)
 {
-    const char *ifname = NULL;
-    const char *eeprom = NULL;
-    uint32_t address = 0;
-    uint32_t duration_s = 0;
-    bool channel2 = false;
+    *o = (inverter_opts_t){.ifname = NULL};
     for (int i = 2; i < argc; i++) {
         const char *v;
-        const char *o = argv[i];
-        if (strcmp(o, "--can") == 0) {
-            if ((ifname = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
-        } else if (strcmp(o, "--sbus-address") == 0) {
+        const char *opt = argv[i];
+        if (strcmp(opt, "--can") == 0) {
+            if ((o->ifname = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if (strcmp(opt, "--sbus-address") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL ||
-                !cli_u32(o, v, 0, SBUS_MAX_ADDRESS, &address)) return EXIT_USAGE;
-        } else if (strcmp(o, "--eeprom") == 0) {
-            if ((eeprom = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
-        } else if (strcmp(o, "--duration") == 0) {
+                !cli_u32(opt, v, 0, SBUS_MAX_ADDRESS, &o->address)) return EXIT_USAGE;
+        } else if (strcmp(opt, "--eeprom") == 0) {
+            if ((o->eeprom = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+        } else if (strcmp(opt, "--duration") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL ||
-                !cli_u32(o, v, 1, 86400u * 365u, &duration_s)) return EXIT_USAGE;
-        } else if (strcmp(o, "--channel2") == 0) {
-            channel2 = true;
-        } else if (strcmp(o, "--quiet") == 0) {
+                !cli_u32(opt, v, 1, 86400u * 365u, &o->duration_s)) return EXIT_USAGE;
+        } else if (strcmp(opt, "--channel2") == 0) {
+            o->channel2 = true;
+        } else if (strcmp(opt, "--quiet") == 0) {
             inv.quiet = true;
         } else {
-            cli_error("inverter: unknown option '%s' (see dfp-sim --help)", o);
+            cli_error("inverter: unknown option '%s' (see dfp-sim --help)", opt);
             return EXIT_USAGE;
         }
     }
-    if (ifname == NULL) {
+    if (o->ifname == NULL) {
         cli_error("inverter: --can IFACE is required (a SocketCAN interface such as can0 or vcan0)");
         return EXIT_USAGE;
     }
-    setvbuf(stdout, NULL, _IOLBF, 0);
+    return 0;
+}
+
+/* The emulated drive with its EEPROM; problems with either are reported, not fatal. */
+static void drive_init(const inverter_opts_t *o)
+{
     char err[256] = "";
-    movidrive_cfg_t cfg = {.sbus_address = (uint8_t)address, .terminal_enable = true};
-    if (eeprom != NULL) {
+    movidrive_cfg_t cfg = {.sbus_address = (uint8_t)o->address, .terminal_enable = true};
+    if (o->eeprom != NULL) {
         /* A missing file is a blank EEPROM; a damaged one is reported and replaced by the
          * previous generation or the factory settings (file_nvm.h). */
-        if (file_nvm_open(&inv.nvm, eeprom, movidrive_eeprom_size(), err, sizeof err) != 0) {
-            fprintf(stderr, "dfp-sim inverter: EEPROM %s: %s\n", eeprom, err);
+        if (file_nvm_open(&inv.nvm, o->eeprom, movidrive_eeprom_size(), err, sizeof err) != 0) {
+            (void)fprintf(stderr, "dfp-sim inverter: EEPROM %s: %s\n", o->eeprom, err);
         }
         cfg.eeprom = file_nvm_hal(&inv.nvm);
     }
     if (movidrive_init(&inv.md, &cfg, err, sizeof err) != 0) {
-        fprintf(stderr, "dfp-sim inverter: %s (factory settings in use)\n", err);
+        (void)fprintf(stderr, "dfp-sim inverter: %s (factory settings in use)\n", err);
     }
-    if (socketcan_open(&inv.sock, ifname, on_rx, NULL, err, sizeof err) != 0) {
+}
+
+/* The SBus side on the interface, in the runner. Returns 0, or 1 after reporting. */
+static int sbus_open(const inverter_opts_t *o)
+{
+    char err[256] = "";
+    if (socketcan_open(&inv.sock, o->ifname, on_rx, NULL, err, sizeof err) != 0) {
         cli_error("%s", err);
         return 1;
     }
     sbus_inverter_cfg_t sc = {
-        .can = socketcan_can(&inv.sock), .address = (uint8_t)address, .channel2 = channel2,
-        .param = on_param, .process_outputs = on_po, .process_inputs = on_pi,
-        .timeout = on_sbus_timeout,
+        .can = socketcan_can(&inv.sock), .address = (uint8_t)o->address,
+        .channel2 = o->channel2, .param = on_param, .process_outputs = on_po,
+        .process_inputs = on_pi, .timeout = on_sbus_timeout,
     };
     sbus_inverter_init(&inv.sbus, &sc);
     tty_runner_init(&inv.runner);
     if (socketcan_attach(&inv.sock, &inv.runner) != 0 ||
         tty_runner_add_timer(&inv.runner, on_timer, NULL) != 0) {
-        cli_error("inverter: cannot wait on %s", ifname);
+        cli_error("inverter: cannot wait on %s", o->ifname);
         socketcan_close(&inv.sock);
         return 1;
     }
-    cli_catch_stop_signals();
+    return 0;
+}
 
-    uint8_t a = (uint8_t)address;
-    inv.t0_ms = mono_ms();
-    inv.next_speed_report = tty_now_us(); /* not 0: on the wall clock 0 may lie in the future */
-    printf("dfp-sim inverter: emulated MOVIDRIVE at SBus address %u on %s: PO %u -> PI %u, "
-           "parameters %u -> %u%s; EEPROM %s\n",
-           a, ifname, sbus_id_po(a), sbus_id_pi(a), sbus_id_param_req(a), sbus_id_param_rsp(a),
-           channel2 ? " and channel 2" : "", eeprom != NULL ? eeprom : "none (RAM only)");
-    int rc = 0;
+/* Until SIGINT/SIGTERM or --duration: 0, or 1 when the interface failed. */
+static int inverter_run(uint32_t duration_s)
+{
     /* The duration on a 64-bit clock: hal_time_us_t wraps after 71 minutes. */
     uint64_t end_ms = mono_ms() + (uint64_t)duration_s * 1000u;
     while (!cli_stop && (duration_s == 0u || mono_ms() < end_ms)) {
@@ -257,10 +269,34 @@ int cmd_inverter(int argc, char **argv)
         }
         if (tty_runner_run_until(&inv.runner, until, &cli_stop) < 0) {
             cli_error("%s", tty_runner_error(&inv.runner));
-            rc = 1;
-            break;
+            return 1;
         }
     }
+    return 0;
+}
+
+int cmd_inverter(int argc, char **argv)
+{
+    inverter_opts_t o;
+    int rc = inverter_parse(&o, argc, argv);
+    if (rc != 0) {
+        return rc;
+    }
+    (void)setvbuf(stdout, NULL, _IOLBF, 0);
+    drive_init(&o);
+    if (sbus_open(&o) != 0) {
+        return 1;
+    }
+    cli_catch_stop_signals();
+
+    uint8_t a = (uint8_t)o.address;
+    inv.t0_ms = mono_ms();
+    inv.next_speed_report = tty_now_us(); /* not 0: on the wall clock 0 may lie in the future */
+    printf("dfp-sim inverter: emulated MOVIDRIVE at SBus address %u on %s: PO %u -> PI %u, "
+           "parameters %u -> %u%s; EEPROM %s\n",
+           a, o.ifname, sbus_id_po(a), sbus_id_pi(a), sbus_id_param_req(a), sbus_id_param_rsp(a),
+           o.channel2 ? " and channel 2" : "", o.eeprom != NULL ? o.eeprom : "none (RAM only)");
+    rc = inverter_run(o.duration_s);
     line("stopping (%s): %lu parameter services (%lu refused), %lu PO frames, %lu frames "
          "received, %lu send errors", cli_stop ? "signal" : rc != 0 ? "error" : "end",
          (unsigned long)inv.services, (unsigned long)inv.service_errors,

@@ -18,70 +18,18 @@
 
 #include "cli.h"
 #include "commands.h"
-#include "dp_master/dpv1_c2.h"
-#include "dp_master/dpv1_ds47.h"
-#include "dp_master/param_channel.h"
+#include "medium.h"
 #include "movidrive/md_names.h"
+#include "param_run.h"
 #include "report.h"
+#include "sim_hal/host_clock.h"
 #include "sim_hal/tty_port.h"
 #include "sim_stations/stations.h"
-#include "sim_hal/host_clock.h"
-
-typedef enum via { VIA_CHANNEL = 0, VIA_MOVILINK, VIA_PROFIDRIVE, VIA_C2 } via_t;
-typedef enum op { OP_READ = 0, OP_WRITE, OP_IM0 } op_t;
-
-static const char *const via_names[] = {"channel", "movilink", "profidrive", "c2"};
-static const char *const op_names[] = {"read", "write", "im0"};
 
 static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
 
-/* ---- the run ----------------------------------------------------------------------------- */
-
-typedef enum stage {
-    ST_START = 0,  /* waiting for data exchange / opening the connection */
-    ST_RUNNING,    /* the service is on its way */
-    ST_ABORTING,   /* class 2: closing the connection after the result */
-    ST_DONE,
-} stage_t;
-
-/* One parameter's outcome: a data set 47 answer fails or succeeds parameter by parameter. */
-typedef struct param_result {
-    bool ok;
-    bool have_value;
-    uint32_t value;
-    char error[32];  /* "0x0815", "DP-V1 0xB0", "timeout", "failed" */
-    char text[256];
-} param_result_t;
-
-typedef struct run {
-    op_t op;
-    via_t via;
-    uint8_t n;  /* parameters: 1, or up to DS47_MAX_PARAMS for a data set 47 read */
-    uint16_t index[DS47_MAX_PARAMS];
-    uint32_t value;
-    bool volatile_write;
-    bool json;
-    stage_t stage;
-    /* result: the whole run's (ok only if every parameter's is), then each parameter's */
-    bool ok;
-    param_result_t r[DS47_MAX_PARAMS];
-    dpm_im0_t im0;
-    /* paths */
-    dp_master_t master;
-    dpm_param_t pc;
-    uint8_t out[14];
-    dpm_call_t call;
-    dpm_ds47_req_t req;
-    dpm_c2_t c2;
-    bool c2_open_done;
-    bool c2_open_ok;
-    bool c2_abort_done;
-    uint32_t cycles_at_start;
-} run_t;
-
 static run_t run;
-static tty_port_t port;
-static tty_runner_t runner;
+static medium_link_t medium;
 static report_t rep;
 
 /* A failure of the whole request (no answer, a negative DP-V1 response, ...): every parameter
@@ -101,189 +49,6 @@ static void set_result_error(const char *code, const char *fmt, ...)
         snprintf(run.r[i].error, sizeof run.r[i].error, "%s", code);
         snprintf(run.r[i].text, sizeof run.r[i].text, "%s", text);
     }
-}
-
-/* ---- output ------------------------------------------------------------------------------ */
-
-static void json_str(const char *key, const char *s)
-{
-    printf(",\"%s\":\"", key);
-    for (; *s != '\0'; s++) {
-        unsigned char ch = (unsigned char)*s;
-        if (ch == '"' || ch == '\\') {
-            printf("\\%c", ch);
-        } else if (ch < 0x20u || ch >= 0x7Fu) {
-            printf("\\u%04x", ch);
-        } else {
-            putchar(ch);
-        }
-    }
-    putchar('"');
-}
-
-/* Copy without the blanks a fixed-width I&M text is padded with. */
-static void trimmed(char *out, size_t max, const char *in)
-{
-    snprintf(out, max, "%s", in);
-    size_t n = strlen(out);
-    while (n > 0u && (out[n - 1u] == ' ' || out[n - 1u] == '\0')) {
-        out[--n] = '\0';
-    }
-}
-
-#define IPOS_FIRST 11000u /* H0; H0..H511 are 11000 + n */
-#define IPOS_COUNT 512u
-
-/* "P100" and "setpoint source" for a table row, "H12" and "IPOS plus variable H12" for an IPOS
- * variable; false for an index the name table lacks. */
-static bool param_names(uint16_t index, const md_param_info_t **info, char *pnum, size_t pn,
-                        char *name, size_t nn)
-{
-    *info = md_param_info(index);
-    if (*info != NULL) {
-        snprintf(pnum, pn, "%s", (*info)->p_number);
-        snprintf(name, nn, "%s", (*info)->name);
-        return true;
-    }
-    if (index >= IPOS_FIRST && index < IPOS_FIRST + IPOS_COUNT) {
-        snprintf(pnum, pn, "H%u", index - IPOS_FIRST);
-        snprintf(name, nn, "IPOS plus variable H%u", index - IPOS_FIRST);
-        return true;
-    }
-    return false;
-}
-
-/* "P100 setpoint source = 3 (FIELDBUS)", "P076 firmware basic unit = 823947913 (0x311C7289)",
- * "P160 internal setpoint n11 = 1.500 rpm (raw 1500, 0x000005DC)": the raw value stays in
- * sight wherever the text does not show it. */
-static void value_line(const md_param_info_t *info, uint32_t value, char *out, size_t n)
-{
-    char text[96];
-    char raw[16];
-    md_value_text(info, (int32_t)value, text, sizeof text);
-    snprintf(raw, sizeof raw, "%d", (int32_t)value);
-    if (info->num_enums > 0u) {
-        snprintf(out, n, "%s %s = %s", info->p_number, info->name, text);
-    } else if (strcmp(text, raw) == 0) {
-        snprintf(out, n, "%s %s = %s (0x%08X)", info->p_number, info->name, text, value);
-    } else {
-        snprintf(out, n, "%s %s = %s (raw %s, 0x%08X)", info->p_number, info->name, text, raw,
-                 value);
-    }
-}
-
-/* One line (or JSON object) per parameter, in the order asked. */
-static void print_param_result(unsigned i)
-{
-    const param_result_t *r = &run.r[i];
-    const md_param_info_t *info = NULL;
-    char pnum[24] = "";
-    char pname[64] = "";
-    bool named = run.op != OP_IM0 &&
-                 param_names(run.index[i], &info, pnum, sizeof pnum, pname, sizeof pname);
-    char what[64];
-    if (run.op == OP_IM0) {
-        snprintf(what, sizeof what, "im0 via %s", via_names[run.via]);
-    } else if (run.op == OP_READ) {
-        snprintf(what, sizeof what, "read %u via %s", run.index[i], via_names[run.via]);
-    } else {
-        snprintf(what, sizeof what, "write%s %u = %d via %s", run.volatile_write ? " volatile" : "",
-                 run.index[i], (int32_t)run.value, via_names[run.via]);
-    }
-    char order[24];
-    char serial[20];
-    trimmed(order, sizeof order, run.im0.order_id);
-    trimmed(serial, sizeof serial, run.im0.serial_number);
-    char sw[24];
-    snprintf(sw, sizeof sw, "%c%u.%u.%u", run.im0.sw_prefix != '\0' ? run.im0.sw_prefix : '?',
-             run.im0.sw_major, run.im0.sw_minor, run.im0.sw_bugfix);
-    if (run.json) {
-        printf("{\"op\":\"%s\"", op_names[run.op]);
-        if (run.op != OP_IM0) {
-            printf(",\"index\":%u", run.index[i]);
-        }
-        if (named) {
-            json_str("p_number", pnum);
-            json_str("name", pname);
-        }
-        json_str("via", via_names[run.via]);
-        char vtext[96];
-        if (run.op == OP_WRITE) {
-            printf(",\"volatile\":%s,\"value\":%d", run.volatile_write ? "true" : "false",
-                   (int32_t)run.value);
-            if (r->ok && named) {
-                md_value_text(info, (int32_t)run.value, vtext, sizeof vtext);
-                json_str("text", vtext);
-            }
-        }
-        printf(",\"ok\":%s", r->ok ? "true" : "false");
-        if (r->ok && r->have_value) {
-            printf(",\"value\":%d,\"hex\":\"0x%08X\"", (int32_t)r->value, r->value);
-            if (named && run.op == OP_READ) {
-                md_value_text(info, (int32_t)r->value, vtext, sizeof vtext);
-                json_str("text", vtext);
-            }
-        }
-        if (r->ok && run.op == OP_IM0) {
-            printf(",\"manufacturer_id\":%u", run.im0.manufacturer_id);
-            char hex[8];
-            snprintf(hex, sizeof hex, "0x%04X", run.im0.manufacturer_id);
-            json_str("manufacturer", hex);
-            json_str("order_id", order);
-            json_str("serial_number", serial);
-            printf(",\"hardware_revision\":%u", run.im0.hardware_revision);
-            json_str("software_revision", sw);
-            printf(",\"rev_counter\":%u,\"profile_id\":%u,\"profile_specific_type\":%u",
-                   run.im0.rev_counter, run.im0.profile_id, run.im0.profile_specific_type);
-            snprintf(hex, sizeof hex, "%u.%u", run.im0.im_version_major,
-                     run.im0.im_version_minor);
-            json_str("im_version", hex);
-            snprintf(hex, sizeof hex, "0x%04X", run.im0.im_supported);
-            json_str("im_supported", hex);
-        }
-        if (!r->ok) {
-            json_str("error", r->error);
-            json_str("text", r->text);
-        }
-        printf("}\n");
-        return;
-    }
-    if (!r->ok) {
-        printf("%s: error %s: %s\n", what, r->error, r->text);
-    } else if (run.op == OP_IM0) {
-        printf("%s:\n"
-               "  manufacturer id    0x%04X\n"
-               "  order id           %s\n"
-               "  serial number      %s\n"
-               "  hardware revision  %u\n"
-               "  software revision  %s\n"
-               "  revision counter   %u\n"
-               "  profile id         0x%04X (specific type 0x%04X)\n"
-               "  I&M version        %u.%u, supported 0x%04X\n",
-               what, run.im0.manufacturer_id, order, serial, run.im0.hardware_revision, sw,
-               run.im0.rev_counter, run.im0.profile_id, run.im0.profile_specific_type,
-               run.im0.im_version_major, run.im0.im_version_minor, run.im0.im_supported);
-    } else if (r->have_value && info != NULL) {
-        char line[200];
-        value_line(info, r->value, line, sizeof line);
-        printf("%s: %s\n", what, line);
-    } else if (r->have_value) {
-        printf("%s: %d (0x%08X)\n", what, (int32_t)r->value, r->value);
-    } else if (info != NULL) {
-        char line[200];
-        value_line(info, run.value, line, sizeof line);
-        printf("%s: ok (%s)\n", what, line);
-    } else {
-        printf("%s: ok\n", what);
-    }
-}
-
-static void print_result(void)
-{
-    for (unsigned i = 0; i < run.n; i++) {
-        print_param_result(i);
-    }
-    fflush(stdout);
 }
 
 /* ---- results of the paths ------------------------------------------------------------------ */
@@ -404,7 +169,7 @@ static bool start_call(dpm_acyc_port_t p, hal_time_us_t now)
         set_result_error("failed", "the request could not be queued");
         return false;
     }
-    tty_runner_wake(&runner);
+    tty_runner_wake(&medium.runner);
     return true;
 }
 
@@ -427,7 +192,7 @@ static void step(void)
             run.stage = start_call(dpm_c2_port(&run.c2), now) ? ST_RUNNING : ST_ABORTING;
             if (run.stage == ST_ABORTING) {
                 (void)dpm_c2_abort(&run.c2, 0, c2_aborted, NULL, now);
-                tty_runner_wake(&runner);
+                tty_runner_wake(&medium.runner);
             }
             return;
         }
@@ -467,7 +232,7 @@ static void step(void)
         finish_call();
         if (run.via == VIA_C2 && dpm_c2_state(&run.c2) != DPM_C2_CLOSED &&
             dpm_c2_abort(&run.c2, 0, c2_aborted, NULL, now) == 0) {
-            tty_runner_wake(&runner);
+            tty_runner_wake(&medium.runner);
             run.stage = ST_ABORTING;
             return;
         }
@@ -569,167 +334,219 @@ static uint64_t clock_now(void *ctx)
     return host_clock_mono_ns() - *(uint64_t *)ctx;
 }
 
-int cmd_param(int argc, char **argv)
-{
-    const char *dev = NULL;
-    capture_opts_t capture = {.path = NULL};
-    int copt;
-    uint32_t address = 0;
-    bool have_address = false;
-    uint32_t own = 0;
-    bool have_own = false;
-    uint32_t baud = 19200;
-    uint32_t timeout_s = 10;
-    bool via_given = false;
-    bool verbose = false;
+/* The command line as given. */
+typedef struct param_opts {
+    medium_opts_t med;
+    capture_opts_t capture;
+    uint32_t address;
+    bool have_address;
+    uint32_t own;
+    bool have_own;
+    uint32_t baud;
+    uint32_t timeout_s;
+    bool via_given;
+    bool verbose;
     const char *pos[1 + DS47_MAX_PARAMS]; /* read and its indices, or write INDEX VALUE */
-    int npos = 0;
-    memset(&run, 0, sizeof run);
-    for (int i = 2; i < argc; i++) {
-        const char *v;
-        const char *o = argv[i];
-        if (strcmp(o, "--port") == 0) {
-            if ((dev = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
-        } else if (strcmp(o, "--address") == 0) {
-            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 0, 125, &address))
-                return EXIT_USAGE;
-            have_address = true;
-        } else if (strcmp(o, "--master-address") == 0) {
-            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 0, 126, &own))
-                return EXIT_USAGE;
-            have_own = true;
-        } else if (strcmp(o, "--baud") == 0) {
-            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_baud(o, v, false, &baud))
-                return EXIT_USAGE;
-        } else if (strcmp(o, "--timeout") == 0) {
-            if ((v = cli_value(argc, argv, &i)) == NULL || !cli_u32(o, v, 1, 3600u, &timeout_s))
-                return EXIT_USAGE;
-        } else if (strcmp(o, "--via") == 0) {
-            if ((v = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
-            unsigned k = 0;
-            while (k < 4u && strcmp(v, via_names[k]) != 0) k++;
-            if (k == 4u) {
-                cli_error("param: --via '%s': use channel, movilink, profidrive or c2", v);
-                return EXIT_USAGE;
-            }
-            run.via = (via_t)k;
-            via_given = true;
-        } else if (strcmp(o, "--volatile") == 0) {
-            run.volatile_write = true;
-        } else if (strcmp(o, "--json") == 0) {
-            run.json = true;
-        } else if (strcmp(o, "--verbose") == 0) {
-            verbose = true;
-        } else if ((copt = capture_option(argc, argv, &i, &capture)) != 0) {
-            if (copt < 0) return EXIT_USAGE;
-        } else if (o[0] == '-' && o[1] == '-') {
-            cli_error("param: unknown option '%s' (see dfp-sim --help)", o);
-            return EXIT_USAGE;
-        } else {
-            if (npos == (int)(sizeof pos / sizeof pos[0])) {
-                cli_error("param: too many arguments ('%s'%s)", o,
-                          strcmp(pos[0], "read") == 0 ? "; a read takes up to 19 indices" : "");
-                _Static_assert(DS47_MAX_PARAMS == 19u, "the message above names 19");
-                return EXIT_USAGE;
-            }
-            pos[npos++] = o;
-        }
-    }
-    if (dev == NULL || !have_address) {
-        cli_error("param: --port DEV and --address N are required");
+    int npos;
+} param_opts_t;
+
+/* --via NAME: 0, or EXIT_USAGE after reporting. */
+static int via_option(const char *v, param_opts_t *o)
+{
+    unsigned k = 0;
+    while (k < 4u && strcmp(v, param_via_names[k]) != 0) k++;
+    if (k == 4u) {
+        cli_error("param: --via '%s': use channel, movilink, profidrive or c2", v);
         return EXIT_USAGE;
     }
-    if (npos == 0) {
-        cli_error("param: say what to do: read INDEX [INDEX ...], write INDEX VALUE or im0");
-        return EXIT_USAGE;
-    }
-    if (strcmp(pos[0], "read") == 0) {
-        run.op = OP_READ;
-        if (npos < 2) {
-            cli_error("param: read takes the parameter INDEX, or up to %u of them for one data "
-                      "set 47 request (e.g. read 8300, read P100, read 8318 8319 8320 --via "
-                      "movilink)",
-                      DS47_MAX_PARAMS);
-            return EXIT_USAGE;
-        }
-    } else if (strcmp(pos[0], "write") == 0) {
-        run.op = OP_WRITE;
-        if (npos != 3) {
-            cli_error("param: write takes two arguments, INDEX and VALUE (e.g. write 8489 1500, "
-                      "write P100 FIELDBUS)");
-            return EXIT_USAGE;
-        }
-    } else if (strcmp(pos[0], "im0") == 0) {
-        run.op = OP_IM0;
-        if (npos != 1) {
-            cli_error("param: im0 takes no argument ('%s')", pos[1]);
-            return EXIT_USAGE;
-        }
-        if (!via_given) {
-            run.via = VIA_MOVILINK; /* class 1 */
-        } else if (run.via == VIA_CHANNEL) {
-            cli_error("param: im0 needs DP-V1: --via movilink, profidrive (class 1) or c2");
-            return EXIT_USAGE;
-        }
+    run.via = (via_t)k;
+    o->via_given = true;
+    return 0;
+}
+
+/* An option taking a value at argv[*i]: 1 when it was one (0 or EXIT_USAGE in *rc), 0 when
+ * not. */
+static int value_option(param_opts_t *o, int argc, char **argv, int *i, int *rc)
+{
+    const char *opt = argv[*i];
+    const char *v;
+    *rc = EXIT_USAGE;
+    if (strcmp(opt, "--address") == 0) {
+        o->have_address = true;
+        if ((v = cli_value(argc, argv, i)) != NULL && cli_u32(opt, v, 0, 125, &o->address)) *rc = 0;
+    } else if (strcmp(opt, "--master-address") == 0) {
+        o->have_own = true;
+        if ((v = cli_value(argc, argv, i)) != NULL && cli_u32(opt, v, 0, 126, &o->own)) *rc = 0;
+    } else if (strcmp(opt, "--baud") == 0) {
+        if ((v = cli_value(argc, argv, i)) != NULL && cli_baud(opt, v, false, &o->baud)) *rc = 0;
+    } else if (strcmp(opt, "--timeout") == 0) {
+        if ((v = cli_value(argc, argv, i)) != NULL && cli_u32(opt, v, 1, 3600u, &o->timeout_s))
+            *rc = 0;
+    } else if (strcmp(opt, "--via") == 0) {
+        if ((v = cli_value(argc, argv, i)) != NULL) *rc = via_option(v, o);
     } else {
-        cli_error("param: unknown operation '%s' (read, write or im0)", pos[0]);
+        return 0;
+    }
+    return 1;
+}
+
+/* One argument at argv[*i]: 0, or EXIT_USAGE after reporting. */
+static int param_argument(param_opts_t *o, int argc, char **argv, int *i)
+{
+    const char *arg = argv[*i];
+    int rc = 0;
+    int mo = medium_option(&o->med, argc, argv, i);
+    if (mo == 0) mo = capture_option(argc, argv, i, &o->capture);
+    if (mo != 0) return mo < 0 ? EXIT_USAGE : 0;
+    if (value_option(o, argc, argv, i, &rc) != 0) return rc;
+    if (strcmp(arg, "--volatile") == 0) {
+        run.volatile_write = true;
+    } else if (strcmp(arg, "--json") == 0) {
+        run.json = true;
+    } else if (strcmp(arg, "--verbose") == 0) {
+        o->verbose = true;
+    } else if (arg[0] == '-' && arg[1] == '-') {
+        cli_error("param: unknown option '%s' (see dfp-sim --help)", arg);
         return EXIT_USAGE;
+    } else if (o->npos == (int)(sizeof o->pos / sizeof o->pos[0])) {
+        cli_error("param: too many arguments ('%s'%s)", arg,
+                  strcmp(o->pos[0], "read") == 0 ? "; a read takes up to 19 indices" : "");
+        _Static_assert(DS47_MAX_PARAMS == 19u, "the message above names 19");
+        return EXIT_USAGE;
+    } else {
+        o->pos[o->npos++] = arg;
     }
-    run.n = run.op == OP_READ ? (uint8_t)(npos - 1) : 1u;
-    for (unsigned i = 0; run.op != OP_IM0 && i < run.n; i++) {
-        if (!parse_index(pos[1 + i], &run.index[i])) return EXIT_USAGE;
+    return 0;
+}
+
+/* read INDEX..., write INDEX VALUE or im0: the operation and its argument count. */
+static bool param_operation(const param_opts_t *o)
+{
+    const char *what = o->pos[0];
+    if (strcmp(what, "read") == 0) {
+        run.op = OP_READ;
+        if (o->npos >= 2) return true;
+        cli_error("param: read takes the parameter INDEX, or up to %u of them for one data "
+                  "set 47 request (e.g. read 8300, read P100, read 8318 8319 8320 --via "
+                  "movilink)",
+                  DS47_MAX_PARAMS);
+        return false;
     }
-    if (run.op == OP_WRITE && !parse_value(run.index[0], pos[2], &run.value)) return EXIT_USAGE;
+    if (strcmp(what, "write") == 0) {
+        run.op = OP_WRITE;
+        if (o->npos == 3) return true;
+        cli_error("param: write takes two arguments, INDEX and VALUE (e.g. write 8489 1500, "
+                  "write P100 FIELDBUS)");
+        return false;
+    }
+    if (strcmp(what, "im0") != 0) {
+        cli_error("param: unknown operation '%s' (read, write or im0)", what);
+        return false;
+    }
+    run.op = OP_IM0;
+    if (o->npos != 1) {
+        cli_error("param: im0 takes no argument ('%s')", o->pos[1]);
+        return false;
+    }
+    if (!o->via_given) {
+        run.via = VIA_MOVILINK; /* class 1 */
+    } else if (run.via == VIA_CHANNEL) {
+        cli_error("param: im0 needs DP-V1: --via movilink, profidrive (class 1) or c2");
+        return false;
+    }
+    return true;
+}
+
+/* The combinations a path or an operation does not allow. False after reporting. */
+static bool param_combination(param_opts_t *o)
+{
     if (run.n > 1u && run.via == VIA_CHANNEL) {
         cli_error("param: the cyclic channel carries one service at a time; read several "
                   "indices with --via movilink, profidrive or c2 (one data set 47 request)");
-        return EXIT_USAGE;
+        return false;
     }
     if (run.volatile_write && run.op != OP_WRITE) {
         cli_error("param: --volatile belongs to write");
-        return EXIT_USAGE;
+        return false;
     }
     if (run.volatile_write && run.via != VIA_MOVILINK && run.via != VIA_CHANNEL) {
         cli_error("param: --volatile works with --via movilink or channel (PROFIdrive change "
                   "parameter always writes non-volatile)");
-        return EXIT_USAGE;
+        return false;
     }
-    if (!have_own) {
-        own = run.via == VIA_C2 ? 1u : 2u;
+    if (!o->have_own) {
+        o->own = run.via == VIA_C2 ? 1u : 2u;
     }
-    if (own == address) {
-        cli_error("param: --master-address %u is the slave's address", own);
-        return EXIT_USAGE;
+    if (o->own == o->address) {
+        cli_error("param: --master-address %u is the slave's address", o->own);
+        return false;
     }
+    return true;
+}
 
-    char err[256];
-    if (tty_port_open(&port, dev, baud, err, sizeof err) != 0) {
+/* The command line into o and run: 0, or EXIT_USAGE after reporting. */
+static int param_parse(param_opts_t *o, int argc, char **argv)
+{
+    *o = (param_opts_t){.baud = 19200, .timeout_s = 10};
+    for (int i = 2; i < argc; i++) {
+        if (param_argument(o, argc, argv, &i) != 0) return EXIT_USAGE;
+    }
+    if ((o->med.dev == NULL && o->med.bus == NULL) || !o->have_address) {
+        cli_error("param: --port DEV and --address N are required (or --bus lcm:CHANNEL instead "
+                  "of --port)");
+        return EXIT_USAGE;
+    }
+    if (!medium_check(&o->med, "param")) return EXIT_USAGE;
+    if (o->npos == 0) {
+        cli_error("param: say what to do: read INDEX [INDEX ...], write INDEX VALUE or im0");
+        return EXIT_USAGE;
+    }
+    if (!param_operation(o)) return EXIT_USAGE;
+    run.n = run.op == OP_READ ? (uint8_t)(o->npos - 1) : 1u;
+    for (unsigned i = 0; run.op != OP_IM0 && i < run.n; i++) {
+        if (!parse_index(o->pos[1 + i], &run.index[i])) return EXIT_USAGE;
+    }
+    if (run.op == OP_WRITE && !parse_value(run.index[0], o->pos[2], &run.value)) {
+        return EXIT_USAGE;
+    }
+    return param_combination(o) ? 0 : EXIT_USAGE;
+}
+
+/* The medium and the capture. Returns false after reporting (nothing left open). */
+static bool param_open(const param_opts_t *o)
+{
+    char err[320];
+    if (medium_link_open(&medium, &o->med, (int16_t)o->own, o->baud, err, sizeof err) != 0) {
         cli_error("%s", err);
-        return 1;
+        return false;
     }
     static uint64_t t0;
     t0 = host_clock_mono_ns();
     rep.now_ns = clock_now;
     rep.now_ctx = &t0;
-    {
-        struct timespec ts;
-        clock_gettime(CLOCK_REALTIME, &ts);
-        rep.capture_direction = true;
-        if (!report_open_capture(&rep, &capture,
-                                 (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec)) {
-            tty_port_close(&port);
-            return 1;
-        }
+    struct timespec ts;
+    (void)clock_gettime(CLOCK_REALTIME, &ts);
+    rep.capture_direction = true;
+    if (!report_open_capture(&rep, &o->capture,
+                             (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec)) {
+        medium_link_close(&medium);
+        return false;
     }
     cli_catch_stop_signals();
+    return true;
+}
 
-    dp_master_cfg_t mc = {.address = (uint8_t)own, .baud = baud, .strict_timing = false,
-                          .slot_time_us = 100000u, .uart = tty_port_uart(&port),
-                          .event = verbose ? report_master_event : quiet_event,
+/* The master with the slave (class 1, started up with Param + 3 PD) or with the class-2
+ * connection, on the medium's runner. */
+static void param_master(const param_opts_t *o)
+{
+    dp_master_cfg_t mc = {.address = (uint8_t)o->own, .baud = o->baud, .strict_timing = false,
+                          .slot_time_us = 100000u, .uart = medium_link_uart(&medium),
+                          .event = o->verbose ? report_master_event : quiet_event,
                           .event_ctx = &rep};
     dp_master_init(&run.master, &mc, tty_now_us());
     if (run.via != VIA_C2) {
-        dpm_slave_cfg_t sc = {.address = (uint8_t)address};
+        dpm_slave_cfg_t sc = {.address = (uint8_t)o->address};
         if (run.via == VIA_CHANNEL) {
             sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 1000,
                                                 dfp21b_user_prm_default,
@@ -743,37 +560,58 @@ int cmd_param(int argc, char **argv)
         sc.cfg_len = sizeof cfg_param_3pd;
         (void)dp_master_add_slave(&run.master, &sc);
     } else {
-        dpm_c2_cfg_t cc = {.slave = (uint8_t)address, .address = (uint8_t)own};
+        dpm_c2_cfg_t cc = {.slave = (uint8_t)o->address, .address = (uint8_t)o->own};
         dpm_c2_init(&run.c2, &cc);
         (void)dp_master_add_c2(&run.master, &run.c2);
         (void)dpm_c2_open(&run.c2, c2_opened, NULL, tty_now_us());
     }
-    tty_runner_init(&runner);
-    tty_runner_set_tap(&runner, report_tap, &rep);
-    sim_station_t st = master_station(&run.master);
-    tty_runner_add(&runner, &port, &st);
-    tty_runner_add_timer(&runner, master_timer, &run.master); /* so a new request goes at once */
+    static sim_station_t st;
+    st = master_station(&run.master);
+    (void)medium_link_attach(&medium, &st, report_tap, &rep);
+    /* so a new request goes at once */
+    (void)tty_runner_add_timer(&medium.runner, master_timer, &run.master);
+}
 
-    uint64_t end_ns = host_clock_mono_ns() + (uint64_t)timeout_s * 1000000000ull;
+/* Until the result, --timeout, a signal or a medium failure; every parameter then has its
+ * result. */
+static void param_run(const param_opts_t *o)
+{
+    uint64_t end_ns = host_clock_mono_ns() + (uint64_t)o->timeout_s * 1000000000ull;
     const char *fail = NULL;
     while (run.stage != ST_DONE && !cli_stop && host_clock_mono_ns() < end_ns) {
-        if (tty_runner_run_until(&runner, tty_now_us() + 5000u, &cli_stop) < 0) {
-            fail = tty_runner_error(&runner);
+        if (tty_runner_run_until(&medium.runner, tty_now_us() + 5000u, &cli_stop) < 0) {
+            fail = tty_runner_error(&medium.runner);
             break;
         }
         step();
     }
-    if (run.stage != ST_DONE) {
-        if (fail != NULL) {
-            set_result_error("failed", "%s", fail);
-        } else if (cli_stop) {
-            set_result_error("failed", "interrupted");
-        } else {
-            timeout_text(timeout_s);
-        }
+    if (run.stage == ST_DONE) {
+        return;
     }
-    print_result();
-    tty_port_close(&port);
+    if (fail != NULL) {
+        set_result_error("failed", "%s", fail);
+    } else if (cli_stop) {
+        set_result_error("failed", "interrupted");
+    } else {
+        timeout_text(o->timeout_s);
+    }
+}
+
+int cmd_param(int argc, char **argv)
+{
+    static param_opts_t o;
+    memset(&run, 0, sizeof run);
+    int rc = param_parse(&o, argc, argv);
+    if (rc != 0) {
+        return rc;
+    }
+    if (!param_open(&o)) {
+        return 1;
+    }
+    param_master(&o);
+    param_run(&o);
+    param_print_results(&run);
+    medium_link_close(&medium);
     if (report_close_capture(&rep) != 0) {
         return 1;
     }

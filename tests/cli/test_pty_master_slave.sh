@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # dfp-sim master drives dfp-sim slave over a PTY pair made by socat: start-up, 100 cycles,
-# the PO words come back as PI words; an address above 125 keeps the card off the bus.
+# the PO words come back as PI words; an address above 125 keeps the card off the bus; the master
+# leaves with Global_Control Clear_Data and acknowledges a drive fault with --reset-fault.
 sim=$1
 . "$(dirname "$0")/lib.sh"
 with_tmp
@@ -44,4 +45,34 @@ kill -INT "$slave"; wait "$slave"
 slave_out=$(cat "$tmp/slave3.out")
 expect_in "RUN blinks" "LED RUN       blink" "$slave_out"
 expect_in "off the bus" "stays off the bus" "$slave_out"
+# The master leaves like a PLC going to STOP: Global_Control Clear_Data and zero outputs, so the
+# drive is inhibited before the watchdog expires; F28 then follows (P831). --reset-fault at the
+# next start acknowledges it with control word bit 6.
+pty_pair || exit 1
+"$sim" slave --port "$tmp/a" --address 4 --baud 19200 >"$tmp/slave4.out" 2>&1 &
+slave=$!; pids+=($slave)
+sleep 0.3
+expect_exit 0 "P101 = FIELDBUS" -- "$sim" param --port "$tmp/b" --address 4 write P101 FIELDBUS
+expect_exit 0 "master enables the drive, then stops" -- timeout 30 "$sim" master --port "$tmp/b" --address 4 \
+  --config F3F2 --baud 19200 --cycles 30 --outputs 0000000000000000000605DC0000
+expect_in "Clear_Data announced" "master   going to STOP: Global_Control Clear_Data, outputs zero for 3 cycles" "$out"
+expect_in "Clear_Data sent" "master   Global_Control 0x02 to group 0x00 (broadcast)" "$out"
+expect_in "master left cleanly" "master   stopped: outputs cleared, leaving the bus" "$out"
+for _ in $(seq 50); do grep -q "fault F28" "$tmp/slave4.out" && break; sleep 0.1; done
+gc=$(grep -n "card     Global_Control 0x02 from master 2" "$tmp/slave4.out" | head -1 | cut -d: -f1)
+inh=$(grep -n "drive 4  inhibited: output stage off" "$tmp/slave4.out" | head -1 | cut -d: -f1)
+f28=$(grep -n "drive 4  fault F28 fieldbus timeout" "$tmp/slave4.out" | head -1 | cut -d: -f1)
+if [ -n "$gc" ] && [ -n "$inh" ] && [ -n "$f28" ] && [ "$gc" -lt "$inh" ] && [ "$inh" -lt "$f28" ]; then ok
+else bad "Clear_Data ($gc), inhibit ($inh), F28 ($f28) not in that order: $(cat "$tmp/slave4.out")"; fi
+expect_exit 0 "master --reset-fault" -- timeout 30 "$sim" master --port "$tmp/b" --address 4 \
+  --config F3F2 --baud 19200 --cycles 30 --reset-fault
+expect_in "reset set" "master   slave 4: fault reset, control word 0040 (bit 6 set)" "$out"
+expect_in "reset cleared" "master   slave 4: fault reset done, control word 0000" "$out"
+sleep 0.2
+expect_in "the drive reset F28" "drive 4  fault F28 fieldbus timeout reset" "$(cat "$tmp/slave4.out")"
+expect_exit 2 "--reset-fault needs a DFP21B configuration" -- "$sim" master --port "$tmp/b" --address 4 \
+  --config F3E2D1 --reset-fault
+[ "$out" = "dfp-sim: master: --reset-fault needs a configuration the DFP21B accepts (its PO1 is the drive's control word)" ] &&
+  ok || bad "--reset-fault usage: $out"
+kill -INT "$slave"; wait "$slave"
 finish

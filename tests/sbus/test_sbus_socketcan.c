@@ -1,5 +1,5 @@
 /* SBus on SocketCAN through the tty runner: the card side as dfp-sim slave uses it
- * (sim_host/dfp_sim/inverter_can.c) against an inverter on another socket of the same interface.
+ * (sim_host/can/src/inverter_can.c) against an inverter on another socket of the same interface.
  *
  *   test_sbus_socketcan                          spec parsing and open errors (any host)
  *   test_sbus_socketcan --can vcan0              + round trips against an in-process
@@ -16,7 +16,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "inverter_can.h"
+#include "sim_can/inverter_can.h"
 #include "movilink/movilink_client.h"
 
 #define MD_P100_FIELDBUS 3u /* setpoint source (index 8461) */

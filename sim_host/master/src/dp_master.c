@@ -397,6 +397,90 @@ static void build_request(dp_master_t *m, dpm_slave_t *s)
 
 /* ---- receiving ---------------------------------------------------------------------------- */
 
+/* A diagnosis in one of the DIAG phases: the first decides whether to parameterise the slave,
+ * the later ones whether it is ready for data exchange. */
+static void diag_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, hal_time_us_t t)
+{
+    dpm_slave_t *s = &m->slaves[idx];
+    const uint8_t *d = msg->data;
+    s->last_diag_len = msg->data_len;
+    memcpy(s->last_diag, d, msg->data_len);
+    dpm_event_t ev = {.type = DPM_EV_DIAG, .t = t, .slave = s->cfg.address, .data = d,
+                      .len = msg->data_len, .old_phase = s->phase, .new_phase = s->phase};
+    emit(m, &ev);
+    if (s->phase == DPM_PHASE_DIAG_1) {
+        uint16_t ident = (uint16_t)((d[DP_DIAG_IDENT_HIGH] << 8) | d[DP_DIAG_IDENT_LOW]);
+        uint16_t want = (uint16_t)((s->cfg.prm[DP_PRM_IDENT_HIGH] << 8) |
+                                   s->cfg.prm[DP_PRM_IDENT_LOW]);
+        if (ident != want) {
+            restart_slave(m, idx, t, "ident number differs from the configuration");
+        } else if (d[DP_DIAG_MASTER_ADD] != DP_MASTER_ADD_NONE &&
+                   d[DP_DIAG_MASTER_ADD] != m->cfg.address &&
+                   (d[DP_DIAG_STATUS_2] & DP_DIAG2_PRM_REQ) == 0u) {
+            restart_slave(m, idx, t, "slave is locked by another master");
+        } else {
+            set_phase(m, idx, DPM_PHASE_SET_PRM, t);
+        }
+        return;
+    }
+    uint8_t st1 = d[DP_DIAG_STATUS_1];
+    uint8_t st2 = d[DP_DIAG_STATUS_2];
+    if ((st1 & DP_DIAG1_PRM_FAULT) != 0u) {
+        restart_slave(m, idx, t, "Prm_Fault: slave refused the parameters");
+    } else if ((st1 & DP_DIAG1_CFG_FAULT) != 0u) {
+        restart_slave(m, idx, t, "Cfg_Fault: slave refused the configuration");
+    } else if ((st1 & DP_DIAG1_NOT_SUPPORTED) != 0u) {
+        restart_slave(m, idx, t, "Not_Supported: slave lacks a requested function");
+    } else if ((st2 & DP_DIAG2_PRM_REQ) != 0u || (st1 & DP_DIAG1_STATION_NOT_READY) != 0u) {
+        if ((st2 & DP_DIAG2_STAT_DIAG) != 0u && s->stat_diag_repeats < 100u) {
+            s->stat_diag_repeats++; /* slave asks to be polled for diagnosis again */
+        } else {
+            restart_slave(m, idx, t, "slave is not ready for data exchange");
+        }
+    } else {
+        s->stat_diag_repeats = 0;
+        s->backoff_us = m->cfg.backoff_min_us;
+        set_phase(m, idx, DPM_PHASE_DATA_EXCH, t);
+    }
+}
+
+/* A Data_Exchange answer: the inputs, and a diagnosis request when the slave flags one. */
+static void data_exchange_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, bool sc,
+                                   uint8_t code, hal_time_us_t t)
+{
+    dpm_slave_t *s = &m->slaves[idx];
+    if (!sc && (code == FDL_RSP_RS || code == FDL_RSP_RR || code == FDL_RSP_UE)) {
+        restart_slave(m, idx, t, code == FDL_RSP_RS ? "RS: slave left data exchange"
+                                                    : "slave refused Data_Exchange");
+        return;
+    }
+    s->cycles++;
+    s->c1_turn = true;
+    s->inputs_len = sc ? 0u : msg->data_len;
+    if (!sc) {
+        memcpy(s->inputs, msg->data, msg->data_len);
+    }
+    dpm_event_t ev = {.type = DPM_EV_INPUTS, .t = t, .slave = s->cfg.address,
+                      .data = s->inputs, .len = s->inputs_len, .old_phase = s->phase,
+                      .new_phase = s->phase};
+    emit(m, &ev);
+    if (!sc && (code == FDL_RSP_DH || code == FDL_RSP_RDH)) {
+        set_phase(m, idx, DPM_PHASE_DIAG_DX, t);
+    }
+}
+
+/* An acknowledgement (sc: short acknowledgement) moves a Set_Prm or Chk_Cfg phase on. */
+static void ack_received(dp_master_t *m, unsigned idx, bool sc, hal_time_us_t t)
+{
+    bool set_prm = m->slaves[idx].phase == DPM_PHASE_SET_PRM;
+    if (!sc) {
+        restart_slave(m, idx, t, set_prm ? "Set_Prm not acknowledged"
+                                         : "Chk_Cfg not acknowledged");
+        return;
+    }
+    set_phase(m, idx, set_prm ? DPM_PHASE_CHK_CFG : DPM_PHASE_DIAG_2, t);
+}
+
 static void reply_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, bool sc,
                            hal_time_us_t t)
 {
@@ -415,88 +499,20 @@ static void reply_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, b
         return;
     case DPM_PHASE_DIAG_1:
     case DPM_PHASE_DIAG_2:
-    case DPM_PHASE_DIAG_DX: {
+    case DPM_PHASE_DIAG_DX:
         if (sc || code != FDL_RSP_DL || msg->data_len < DP_DIAG_STD_LEN) {
             restart_slave(m, idx, t, "no valid diagnosis");
             return;
         }
-        const uint8_t *d = msg->data;
-        s->last_diag_len = msg->data_len;
-        memcpy(s->last_diag, d, msg->data_len);
-        dpm_event_t ev = {.type = DPM_EV_DIAG, .t = t, .slave = s->cfg.address, .data = d,
-                          .len = msg->data_len, .old_phase = s->phase, .new_phase = s->phase};
-        emit(m, &ev);
-        uint16_t ident = (uint16_t)((d[DP_DIAG_IDENT_HIGH] << 8) | d[DP_DIAG_IDENT_LOW]);
-        uint16_t want = (uint16_t)((s->cfg.prm[DP_PRM_IDENT_HIGH] << 8) |
-                                   s->cfg.prm[DP_PRM_IDENT_LOW]);
-        if (s->phase == DPM_PHASE_DIAG_1) {
-            if (ident != want) {
-                restart_slave(m, idx, t, "ident number differs from the configuration");
-            } else if (d[DP_DIAG_MASTER_ADD] != DP_MASTER_ADD_NONE &&
-                       d[DP_DIAG_MASTER_ADD] != m->cfg.address &&
-                       (d[DP_DIAG_STATUS_2] & DP_DIAG2_PRM_REQ) == 0u) {
-                restart_slave(m, idx, t, "slave is locked by another master");
-            } else {
-                set_phase(m, idx, DPM_PHASE_SET_PRM, t);
-            }
-            return;
-        }
-        uint8_t st1 = d[DP_DIAG_STATUS_1];
-        uint8_t st2 = d[DP_DIAG_STATUS_2];
-        if ((st1 & DP_DIAG1_PRM_FAULT) != 0u) {
-            restart_slave(m, idx, t, "Prm_Fault: slave refused the parameters");
-        } else if ((st1 & DP_DIAG1_CFG_FAULT) != 0u) {
-            restart_slave(m, idx, t, "Cfg_Fault: slave refused the configuration");
-        } else if ((st1 & DP_DIAG1_NOT_SUPPORTED) != 0u) {
-            restart_slave(m, idx, t, "Not_Supported: slave lacks a requested function");
-        } else if ((st2 & DP_DIAG2_PRM_REQ) != 0u || (st1 & DP_DIAG1_STATION_NOT_READY) != 0u) {
-            if ((st2 & DP_DIAG2_STAT_DIAG) != 0u && s->stat_diag_repeats < 100u) {
-                s->stat_diag_repeats++; /* slave asks to be polled for diagnosis again */
-            } else {
-                restart_slave(m, idx, t, "slave is not ready for data exchange");
-            }
-        } else {
-            s->stat_diag_repeats = 0;
-            s->backoff_us = m->cfg.backoff_min_us;
-            set_phase(m, idx, DPM_PHASE_DATA_EXCH, t);
-        }
+        diag_received(m, idx, msg, t);
         return;
-    }
     case DPM_PHASE_SET_PRM:
-        if (!sc) {
-            restart_slave(m, idx, t, "Set_Prm not acknowledged");
-            return;
-        }
-        set_phase(m, idx, DPM_PHASE_CHK_CFG, t);
-        return;
     case DPM_PHASE_CHK_CFG:
-        if (!sc) {
-            restart_slave(m, idx, t, "Chk_Cfg not acknowledged");
-            return;
-        }
-        set_phase(m, idx, DPM_PHASE_DIAG_2, t);
+        ack_received(m, idx, sc, t);
         return;
-    case DPM_PHASE_DATA_EXCH: {
-        if (!sc && (code == FDL_RSP_RS || code == FDL_RSP_RR || code == FDL_RSP_UE)) {
-            restart_slave(m, idx, t, code == FDL_RSP_RS ? "RS: slave left data exchange"
-                                                        : "slave refused Data_Exchange");
-            return;
-        }
-        s->cycles++;
-        s->c1_turn = true;
-        s->inputs_len = sc ? 0u : msg->data_len;
-        if (!sc) {
-            memcpy(s->inputs, msg->data, msg->data_len);
-        }
-        dpm_event_t ev = {.type = DPM_EV_INPUTS, .t = t, .slave = s->cfg.address,
-                          .data = s->inputs, .len = s->inputs_len, .old_phase = s->phase,
-                          .new_phase = s->phase};
-        emit(m, &ev);
-        if (!sc && (code == FDL_RSP_DH || code == FDL_RSP_RDH)) {
-            set_phase(m, idx, DPM_PHASE_DIAG_DX, t);
-        }
+    case DPM_PHASE_DATA_EXCH:
+        data_exchange_received(m, idx, msg, sc, code, t);
         return;
-    }
     case DPM_PHASE_BACKOFF:
         return;
     }
@@ -612,85 +628,74 @@ static bool send_c2(dp_master_t *m, hal_time_us_t now)
     return false;
 }
 
-hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
+/* The answer did not come within the slot time: the same frame again, or after the last retry
+ * the connection's or the slave's failure. Returns true when a retry is on its way. */
+static bool reply_timed_out(dp_master_t *m, hal_time_us_t now)
 {
-    hal_time_us_t idle_deadline = now + HAL_TIME_NO_DEADLINE_US;
-    if (!m->running) {
-        return idle_deadline;
-    }
-    if (m->waiting) {
-        if (!hal_time_reached(now, m->reply_deadline)) {
-            return m->reply_deadline;
-        }
-        m->timeouts++;
-        unsigned idx = m->waiting_for;
-        m->waiting = false;
-        if (m->retries < m->cfg.max_retry) {
-            m->retries++;
-            m->total_retries++;
-            if (m->waiting_kind != DPM_WAIT_C2) {
-                dpm_event_t ev = {.type = DPM_EV_RETRY, .t = now,
-                                  .slave = m->slaves[idx].cfg.address,
-                                  .old_phase = m->slaves[idx].phase,
-                                  .new_phase = m->slaves[idx].phase};
-                emit(m, &ev);
-            } else {
-                m->c2[m->waiting_c2]->x.telegrams++;
-            }
-            send(m, now, true, idx); /* same frame, same FCB */
-            return m->reply_deadline;
-        }
-        m->retries = 0;
-        m->next_send = now;
-        if (m->waiting_kind == DPM_WAIT_C2) {
-            bool *first;
-            bool *fcb;
-            pair_fcb(m, m->expect_da, m->expect_sa, &first, &fcb);
-            *first = true;
-            dpm_c2_no_answer(m->c2[m->waiting_c2], now);
+    m->timeouts++;
+    unsigned idx = m->waiting_for;
+    m->waiting = false;
+    if (m->retries < m->cfg.max_retry) {
+        m->retries++;
+        m->total_retries++;
+        if (m->waiting_kind != DPM_WAIT_C2) {
+            dpm_event_t ev = {.type = DPM_EV_RETRY, .t = now,
+                              .slave = m->slaves[idx].cfg.address,
+                              .old_phase = m->slaves[idx].phase,
+                              .new_phase = m->slaves[idx].phase};
+            emit(m, &ev);
         } else {
-            restart_slave(m, idx, now, "no answer");
+            m->c2[m->waiting_c2]->x.telegrams++;
         }
+        send(m, now, true, idx); /* same frame, same FCB */
+        return true;
     }
-    if (!hal_time_reached(now, m->next_send)) {
-        return m->next_send;
+    m->retries = 0;
+    m->next_send = now;
+    if (m->waiting_kind == DPM_WAIT_C2) {
+        bool *first;
+        bool *fcb;
+        pair_fcb(m, m->expect_da, m->expect_sa, &first, &fcb);
+        *first = true;
+        dpm_c2_no_answer(m->c2[m->waiting_c2], now);
+    } else {
+        restart_slave(m, idx, now, "no answer");
     }
-    if (m->gc_pending) {
-        m->gc_pending = false;
-        uint8_t du[2] = {m->gc_command, m->gc_group};
-        m->request_len = (uint16_t)fdl_encode(m->request, FDL_ADDR_BROADCAST, m->cfg.address,
-                                              FDL_FC_REQUEST | FDL_REQ_SDN_HIGH, true,
-                                              DP_SAP_GLOBAL_CONTROL, DP_SAP_MASTER, du, 2);
-        send(m, now, false, 0);
-        dpm_event_t ev = {.type = DPM_EV_GLOBAL_CONTROL_SENT, .t = now, .data = du, .len = 2};
-        emit(m, &ev);
-        return m->next_send;
-    }
-    /* Class-1 response timers run while their slave is busy with other things. */
+    return false;
+}
+
+/* A pending Global_Control goes out as a broadcast SDN (no answer). */
+static void send_global_control(dp_master_t *m, hal_time_us_t now)
+{
+    m->gc_pending = false;
+    uint8_t du[2] = {m->gc_command, m->gc_group};
+    m->request_len = (uint16_t)fdl_encode(m->request, FDL_ADDR_BROADCAST, m->cfg.address,
+                                          FDL_FC_REQUEST | FDL_REQ_SDN_HIGH, true,
+                                          DP_SAP_GLOBAL_CONTROL, DP_SAP_MASTER, du, 2);
+    send(m, now, false, 0);
+    dpm_event_t ev = {.type = DPM_EV_GLOBAL_CONTROL_SENT, .t = now, .data = du, .len = 2};
+    emit(m, &ev);
+}
+
+/* Nothing to send now: the earliest instant something will be. */
+static hal_time_us_t idle_until(dp_master_t *m, hal_time_us_t now)
+{
+    hal_time_us_t next = now + HAL_TIME_NO_DEADLINE_US;
     for (unsigned i = 0; i < m->num_slaves; i++) {
-        (void)dpm_xfer_check_timeout(&m->slaves[i].c1, now);
+        next = hal_time_earlier(next, m->slaves[i].due);
+        hal_time_us_t d = dpm_xfer_check_timeout(&m->slaves[i].c1, now);
+        next = hal_time_earlier(next, d);
     }
-    if (m->c2_turn && send_c2(m, now)) {
-        return m->reply_deadline;
+    for (unsigned i = 0; i < m->num_c2; i++) {
+        hal_time_us_t d = dpm_c2_next_deadline(m->c2[i], now);
+        next = hal_time_earlier(next, d);
     }
-    bool c1 = false;
-    int idx = pick_slave(m, now, &c1);
-    if (idx < 0) {
-        if (send_c2(m, now)) {
-            return m->reply_deadline;
-        }
-        hal_time_us_t next = idle_deadline;
-        for (unsigned i = 0; i < m->num_slaves; i++) {
-            next = hal_time_earlier(next, m->slaves[i].due);
-            hal_time_us_t d = dpm_xfer_check_timeout(&m->slaves[i].c1, now);
-            next = hal_time_earlier(next, d);
-        }
-        for (unsigned i = 0; i < m->num_c2; i++) {
-            hal_time_us_t d = dpm_c2_next_deadline(m->c2[i], now);
-            next = hal_time_earlier(next, d);
-        }
-        return next;
-    }
+    return next;
+}
+
+/* The slave's next telegram: a class-1 acyclic one (c1) or its phase's cyclic one. */
+static void send_to_slave(dp_master_t *m, unsigned idx, bool c1, hal_time_us_t now)
+{
     dpm_slave_t *s = &m->slaves[idx];
     m->expect_da = m->cfg.address;
     m->expect_sa = s->cfg.address;
@@ -703,14 +708,49 @@ hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
         s->c1_turn = false;
         m->waiting_kind = DPM_WAIT_C1;
         m->acyclic_telegrams++;
-        send(m, now, true, (unsigned)idx);
-        return m->reply_deadline;
+        send(m, now, true, idx);
+        return;
     }
     build_request(m, s);
     if (s->phase == DPM_PHASE_DATA_EXCH) {
         s->due = now + m->cfg.cycle_us;
     }
     m->waiting_kind = DPM_WAIT_CYCLIC;
-    send(m, now, true, (unsigned)idx);
+    send(m, now, true, idx);
+}
+
+hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
+{
+    if (!m->running) {
+        return now + HAL_TIME_NO_DEADLINE_US;
+    }
+    if (m->waiting) {
+        if (!hal_time_reached(now, m->reply_deadline)) {
+            return m->reply_deadline;
+        }
+        if (reply_timed_out(m, now)) {
+            return m->reply_deadline;
+        }
+    }
+    if (!hal_time_reached(now, m->next_send)) {
+        return m->next_send;
+    }
+    if (m->gc_pending) {
+        send_global_control(m, now);
+        return m->next_send;
+    }
+    /* Class-1 response timers run while their slave is busy with other things. */
+    for (unsigned i = 0; i < m->num_slaves; i++) {
+        (void)dpm_xfer_check_timeout(&m->slaves[i].c1, now);
+    }
+    if (m->c2_turn && send_c2(m, now)) {
+        return m->reply_deadline;
+    }
+    bool c1 = false;
+    int idx = pick_slave(m, now, &c1);
+    if (idx < 0) {
+        return send_c2(m, now) ? m->reply_deadline : idle_until(m, now);
+    }
+    send_to_slave(m, (unsigned)idx, c1, now);
     return m->reply_deadline;
 }

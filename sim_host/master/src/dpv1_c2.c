@@ -107,90 +107,109 @@ static bool is_abort(const dpm_acyc_result_t *r)
 
 static void start_queued(dpm_c2_t *c, hal_time_us_t now);
 
+static void xfer_done(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now);
+
+/* The resource manager named the connection's SAP: the Initiate goes there next. */
+static void rm_answered(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t now)
+{
+    if (r->len < 2u || r->pdu[0] != DPV1_FN_RM || r->pdu[1] > 48u) {
+        set_error(c, "resource manager: unexpected answer (%zu octets, first 0x%02X)", r->len,
+                  r->len > 0u ? r->pdu[0] : 0u);
+        close_with(c, r, now);
+        return;
+    }
+    c->sap = r->pdu[1];
+    c->state = DPM_C2_INITIATING;
+    (void)dpm_xfer_start_polling(&c->x, c->sap, c->cfg.ssap, c->cfg.response_timeout_us,
+                                 xfer_done, c);
+}
+
+/* The answer to the resource manager's poll or to the Initiate. */
+static void open_done(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t now)
+{
+    if (!r->ok) {
+        set_error(c, "%s: %s", c->state == DPM_C2_RM ? "Initiate (resource manager)"
+                                                     : "Initiate", r->error);
+        close_with(c, r, now);
+        return;
+    }
+    if (is_abort(r)) {
+        char text[160];
+        abort_text(text, sizeof text, r->pdu, r->len);
+        set_error(c, "connection refused (%s SAP %u): %s",
+                  c->state == DPM_C2_RM ? "resource manager" : "connection",
+                  c->state == DPM_C2_RM ? DPV1_SAP_RM : c->sap, text);
+        close_with(c, r, now);
+        return;
+    }
+    if (c->state == DPM_C2_RM) {
+        rm_answered(c, r, now);
+        return;
+    }
+    if (r->pdu[0] == DPV1_FN_INITIATE && r->len >= 12u) {
+        c->state = DPM_C2_OPEN;
+        c->op = DPM_C2_OP_NONE;
+        c->opens++;
+        memcpy(c->initiate_res, r->pdu, r->len);
+        c->initiate_res_len = (uint8_t)r->len;
+        c->error[0] = '\0';
+        report(c, true, r, NULL, now);
+        start_queued(c, now);
+        return;
+    }
+    if (r->pdu[0] == (DPV1_FN_INITIATE | DPV1_FN_ERROR)) {
+        set_error(c, "Initiate refused: %s (Error_Code_1 0x%02X)",
+                  dpm_v1_error_text(r->len > 2u ? r->pdu[2] : 0u), r->len > 2u ? r->pdu[2] : 0u);
+    } else {
+        set_error(c, "Initiate: unexpected answer (%zu octets, first 0x%02X)", r->len,
+                  r->pdu[0]);
+    }
+    close_with(c, r, now);
+}
+
+/* The answer to a request or to the Idle that keeps an open connection alive. */
+static void request_done(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t now)
+{
+    bool idle = c->op == DPM_C2_OP_IDLE;
+    if (!r->ok || is_abort(r)) {
+        if (is_abort(r)) {
+            char text[160];
+            abort_text(text, sizeof text, r->pdu, r->len);
+            set_error(c, "connection closed: %s", text);
+        } else {
+            set_error(c, "%s: %s; connection closed", idle ? "Idle" : "request", r->error);
+        }
+        close_with(c, r, now);
+        return;
+    }
+    c->op = DPM_C2_OP_NONE;
+    if (idle) {
+        if (r->len < 1u || r->pdu[0] != DPV1_FN_IDLE) {
+            set_error(c, "Idle answered with 0x%02X (expected 0x48)",
+                      r->len > 0u ? r->pdu[0] : 0u);
+        }
+        c->idles++;
+    } else {
+        c->requests++;
+        report(c, true, r, NULL, now);
+    }
+    start_queued(c, now);
+}
+
 /* Every exchange of x ends here. */
 static void xfer_done(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
 {
     dpm_c2_t *c = ctx;
-    char text[160];
     switch (c->op) {
     case DPM_C2_OP_NONE:
         return;
     case DPM_C2_OP_OPEN:
-        if (!r->ok) {
-            set_error(c, "%s: %s", c->state == DPM_C2_RM ? "Initiate (resource manager)"
-                                                         : "Initiate", r->error);
-            close_with(c, r, now);
-            return;
-        }
-        if (is_abort(r)) {
-            abort_text(text, sizeof text, r->pdu, r->len);
-            set_error(c, "connection refused (%s SAP %u): %s",
-                      c->state == DPM_C2_RM ? "resource manager" : "connection",
-                      c->state == DPM_C2_RM ? DPV1_SAP_RM : c->sap, text);
-            close_with(c, r, now);
-            return;
-        }
-        if (c->state == DPM_C2_RM) {
-            if (r->len < 2u || r->pdu[0] != DPV1_FN_RM || r->pdu[1] > 48u) {
-                set_error(c, "resource manager: unexpected answer (%zu octets, first 0x%02X)",
-                          r->len, r->len > 0u ? r->pdu[0] : 0u);
-                close_with(c, r, now);
-                return;
-            }
-            c->sap = r->pdu[1];
-            c->state = DPM_C2_INITIATING;
-            (void)dpm_xfer_start_polling(&c->x, c->sap, c->cfg.ssap, c->cfg.response_timeout_us,
-                                         xfer_done, c);
-            return;
-        }
-        if (r->pdu[0] == DPV1_FN_INITIATE && r->len >= 12u) {
-            c->state = DPM_C2_OPEN;
-            c->op = DPM_C2_OP_NONE;
-            c->opens++;
-            memcpy(c->initiate_res, r->pdu, r->len);
-            c->initiate_res_len = (uint8_t)r->len;
-            c->error[0] = '\0';
-            report(c, true, r, NULL, now);
-            start_queued(c, now);
-            return;
-        }
-        if (r->pdu[0] == (DPV1_FN_INITIATE | DPV1_FN_ERROR)) {
-            set_error(c, "Initiate refused: %s (Error_Code_1 0x%02X)",
-                      dpm_v1_error_text(r->len > 2u ? r->pdu[2] : 0u),
-                      r->len > 2u ? r->pdu[2] : 0u);
-        } else {
-            set_error(c, "Initiate: unexpected answer (%zu octets, first 0x%02X)", r->len,
-                      r->pdu[0]);
-        }
-        close_with(c, r, now);
+        open_done(c, r, now);
         return;
     case DPM_C2_OP_REQUEST:
-    case DPM_C2_OP_IDLE: {
-        bool idle = c->op == DPM_C2_OP_IDLE;
-        if (!r->ok || is_abort(r)) {
-            if (is_abort(r)) {
-                abort_text(text, sizeof text, r->pdu, r->len);
-                set_error(c, "connection closed: %s", text);
-            } else {
-                set_error(c, "%s: %s; connection closed", idle ? "Idle" : "request", r->error);
-            }
-            close_with(c, r, now);
-            return;
-        }
-        c->op = DPM_C2_OP_NONE;
-        if (idle) {
-            if (r->len < 1u || r->pdu[0] != DPV1_FN_IDLE) {
-                set_error(c, "Idle answered with 0x%02X (expected 0x48)",
-                          r->len > 0u ? r->pdu[0] : 0u);
-            }
-            c->idles++;
-        } else {
-            c->requests++;
-            report(c, true, r, NULL, now);
-        }
-        start_queued(c, now);
+    case DPM_C2_OP_IDLE:
+        request_done(c, r, now);
         return;
-    }
     case DPM_C2_OP_ABORT:
         c->state = DPM_C2_CLOSED;
         c->op = DPM_C2_OP_NONE;

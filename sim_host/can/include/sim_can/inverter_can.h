@@ -18,8 +18,8 @@
  * default 0 (the factory setting).
  *
  * Structs are caller-owned; nothing is allocated. */
-#ifndef DFP_SIM_INVERTER_CAN_H
-#define DFP_SIM_INVERTER_CAN_H
+#ifndef SIM_CAN_INVERTER_CAN_H
+#define SIM_CAN_INVERTER_CAN_H
 
 #include <stddef.h>
 #include <stdint.h>

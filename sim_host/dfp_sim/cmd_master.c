@@ -1,0 +1,478 @@
+/* dfp-sim master: the built-in class-1 master against one slave or several on a real tty or a
+ * PTY, or on a virtual segment over LCM (--bus lcm:CHANNEL), in wall-clock time. */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "session.h"
+#include "hal/hal_byte_order.h"
+#include "sim_hal/host_clock.h"
+#include "sim_hal/tty_port.h"
+#include "sim_stations/stations.h"
+
+typedef struct master_opts {
+    medium_opts_t med;
+    capture_opts_t capture;
+    instrument_opts_t io;
+    const char *addresses;
+    uint32_t own;
+    uint32_t baud;
+    uint32_t cycles;
+    uint32_t timeout_s;
+    uint32_t wd_ms;
+    uint32_t slot_ms;
+    uint32_t ident;
+    uint8_t cfg[DPM_MAX_CFG];
+    size_t cfg_len;
+    uint8_t user[DPM_MAX_PRM];
+    size_t user_len;
+    uint8_t outputs[DPM_MAX_IO];
+    size_t out_given;
+    bool verbose;
+    bool timeout_given;
+    bool reset_fault;
+    /* from the above */
+    size_t control_word; /* offset of PO1, the control word, in the outputs */
+    uint8_t slave_addr[DPM_MAX_SLAVES];
+    size_t num_slaves;
+} master_opts_t;
+
+/* A number option: 1 when argv[*i] was one (consumed), 0 when not, -1 after reporting. */
+static int number_option(master_opts_t *o, int argc, char **argv, int *i)
+{
+    const struct {
+        const char *name;
+        uint32_t *value;
+        uint32_t min;
+        uint32_t max;
+    } numbers[] = {
+        {"--master-address", &o->own, 0, 126},   {"--ident", &o->ident, 0, 0xFFFF},
+        {"--cycles", &o->cycles, 0, 100000000u}, {"--timeout", &o->timeout_s, 1, 86400u},
+        {"--watchdog", &o->wd_ms, 0, 650000u},   {"--slot-time", &o->slot_ms, 1, 10000u},
+    };
+    const char *opt = argv[*i];
+    for (size_t k = 0; k < sizeof numbers / sizeof numbers[0]; k++) {
+        if (strcmp(opt, numbers[k].name) == 0) {
+            const char *v = cli_value(argc, argv, i);
+            if (v == NULL || !cli_u32(opt, v, numbers[k].min, numbers[k].max, numbers[k].value)) {
+                return -1;
+            }
+            o->timeout_given = o->timeout_given || numbers[k].value == &o->timeout_s;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* --config, --prm, --outputs: 1 when argv[*i] was one (consumed), 0 when not, -1 after
+ * reporting. */
+static int hex_option(master_opts_t *o, int argc, char **argv, int *i)
+{
+    const struct {
+        const char *name;
+        uint8_t *buf;
+        size_t max;
+        size_t *len;
+    } hexes[] = {
+        {"--config", o->cfg, sizeof o->cfg, &o->cfg_len},
+        {"--prm", o->user, sizeof o->user - 7u, &o->user_len},
+        {"--outputs", o->outputs, sizeof o->outputs, &o->out_given},
+    };
+    const char *opt = argv[*i];
+    for (size_t k = 0; k < sizeof hexes / sizeof hexes[0]; k++) {
+        if (strcmp(opt, hexes[k].name) == 0) {
+            const char *v = cli_value(argc, argv, i);
+            return v != NULL && cli_hex(opt, v, hexes[k].buf, hexes[k].max, hexes[k].len) ? 1
+                                                                                           : -1;
+        }
+    }
+    return 0;
+}
+
+/* One option at argv[*i]: 0, or EXIT_USAGE after reporting. */
+static int master_option(master_opts_t *o, int argc, char **argv, int *i)
+{
+    const char *opt = argv[*i];
+    int mo = medium_option(&o->med, argc, argv, i);
+    if (mo == 0) mo = instrument_option(argc, argv, i, &o->io);
+    if (mo == 0) mo = number_option(o, argc, argv, i);
+    if (mo == 0) mo = hex_option(o, argc, argv, i);
+    if (mo == 0) mo = capture_option(argc, argv, i, &o->capture);
+    if (mo != 0) {
+        return mo < 0 ? EXIT_USAGE : 0;
+    }
+    if (strcmp(opt, "--address") == 0) {
+        return (o->addresses = cli_value(argc, argv, i)) == NULL ? EXIT_USAGE : 0;
+    }
+    if (strcmp(opt, "--baud") == 0) {
+        const char *v = cli_value(argc, argv, i);
+        return v == NULL || !cli_baud(opt, v, false, &o->baud) ? EXIT_USAGE : 0;
+    }
+    if (strcmp(opt, "--verbose") == 0) {
+        o->verbose = true;
+        return 0;
+    }
+    if (strcmp(opt, "--reset-fault") == 0) {
+        o->reset_fault = true;
+        return 0;
+    }
+    cli_error("master: unknown option '%s' (see dfp-sim --help)", opt);
+    return EXIT_USAGE;
+}
+
+/* The command line into o: 0, or EXIT_USAGE after reporting. */
+static int master_parse(master_opts_t *o, int argc, char **argv)
+{
+    *o = (master_opts_t){.own = 2, .baud = 19200, .cycles = 100, .timeout_s = 10,
+                         .wd_ms = 1000, .slot_ms = 100, .ident = DFP21B_IDENT,
+                         .user_len = SIZE_MAX};
+    instrument_defaults(&o->io, RIG_LOG_TIME_BUS);
+    for (int i = 2; i < argc; i++) {
+        if (master_option(o, argc, argv, &i) != 0) {
+            return EXIT_USAGE;
+        }
+    }
+    if ((o->med.dev == NULL && o->med.bus == NULL) || o->addresses == NULL || o->cfg_len == 0u) {
+        cli_error("master: --port DEV (or --bus lcm:CHANNEL), --address N and --config HEX are "
+                  "required");
+        return EXIT_USAGE;
+    }
+    if (!medium_check(&o->med, "master") ||
+        !cli_address_list(o->addresses, o->slave_addr, DPM_MAX_SLAVES, &o->num_slaves)) {
+        return EXIT_USAGE;
+    }
+    dfp21b_pd_cfg_t pd = {0};
+    if (o->reset_fault && !dfp21b_check_cfg(o->cfg, o->cfg_len, &pd)) {
+        cli_error("master: --reset-fault needs a configuration the DFP21B accepts (its PO1 is "
+                  "the drive's control word)");
+        return EXIT_USAGE;
+    }
+    o->control_word = o->reset_fault && pd.param_channel ? ML_TELEGRAM_LEN : 0u;
+    if (o->user_len == SIZE_MAX) {
+        /* Without --prm: the DFP21B's user parameters for its ident, none for others. */
+        o->user_len = o->ident == DFP21B_IDENT ? sizeof dfp21b_user_prm_default : 0u;
+        memcpy(o->user, dfp21b_user_prm_default, o->user_len);
+    }
+    return 0;
+}
+
+/* The master on the medium with every slave. Returns 0, or EXIT_USAGE after reporting. */
+static int master_build(session_t *s, const master_opts_t *o)
+{
+    dpm_slave_cfg_t sc = {0};
+    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, (uint16_t)o->ident, o->wd_ms, o->user,
+                                        o->user_len);
+    memcpy(sc.cfg, o->cfg, o->cfg_len);
+    sc.cfg_len = (uint8_t)o->cfg_len;
+    s->in.log.show_inputs = o->verbose;
+    dp_master_cfg_t mc = {.address = (uint8_t)o->own, .baud = o->baud, .strict_timing = false,
+                          .slot_time_us = o->slot_ms * 1000u};
+    dp_master_t *master = rig_add_master(&s->rig, &mc, tty_now_us());
+    for (size_t i = 0; master != NULL && i < o->num_slaves; i++) {
+        sc.address = o->slave_addr[i];
+        if (dp_master_add_slave(master, &sc) < 0) {
+            cli_error("master: configuration %s... cannot be decoded into I/O lengths",
+                      "--config");
+            return EXIT_USAGE;
+        }
+        dp_master_set_outputs(master, (unsigned)i, o->outputs, o->out_given);
+    }
+    return 0;
+}
+
+static void print_start_line(const session_t *s, const master_opts_t *o)
+{
+    char name[300];
+    const dpm_slave_t *first = &s->rig.master.slaves[0];
+    printf("dfp-sim master: address %u on %s at %s; %s %s, ident 0x%04X, %zu cfg octets, "
+           "%u out / %u in octets%s\n",
+           o->own, session_medium_name(s, &o->med, name, sizeof name),
+           report_baud_text(o->baud), o->num_slaves == 1u ? "slave" : "slaves", o->addresses,
+           o->ident, o->cfg_len, first->out_len, first->in_len,
+           o->cycles == 0u ? "; runs until stopped" : "");
+    (void)fflush(stdout);
+}
+
+/* ---- the run ------------------------------------------------------------------------------ */
+
+static bool all_in_data_exchange(const dp_master_t *m)
+{
+    for (uint8_t i = 0; i < m->num_slaves; i++) {
+        if (m->slaves[i].phase != DPM_PHASE_DATA_EXCH) {
+            return false;
+        }
+    }
+    return true;
+}
+
+static bool all_cycled(const dp_master_t *m, uint32_t cycles)
+{
+    for (uint8_t i = 0; i < m->num_slaves; i++) {
+        if (m->slaves[i].cycles < cycles) {
+            return false;
+        }
+    }
+    return true;
+}
+
+static uint64_t total_cycles(const dp_master_t *m)
+{
+    uint64_t n = 0;
+    for (uint8_t i = 0; i < m->num_slaves; i++) {
+        n += m->slaves[i].cycles;
+    }
+    return n;
+}
+
+/* When every slave reached data exchange, and the cycles then: the rate report's start. */
+typedef struct run_times {
+    uint64_t t_start;
+    uint64_t t_all;
+    uint64_t cycles_at_all;
+} run_times_t;
+
+static void report_done(session_t *s, const run_times_t *t)
+{
+    const dp_master_t *m = &s->rig.master;
+    if (m->num_slaves == 1u) {
+        const dpm_slave_t *sl = &m->slaves[0];
+        char hex[3 * DPM_MAX_IO + 1];
+        size_t n = 0;
+        for (size_t i = 0; i < sl->inputs_len; i++) {
+            n += (size_t)snprintf(hex + n, sizeof hex - n, "%02X", sl->inputs[i]);
+        }
+        hex[n] = '\0';
+        rig_log(&s->in.log, RIG_LOG_INFO, "master", "master",
+                "done: slave %u in data exchange, %u cycles, last inputs %s", sl->cfg.address,
+                sl->cycles, n > 0 ? hex : "(none)");
+        return;
+    }
+    uint64_t t_all = t->t_all != 0u ? t->t_all : host_clock_mono_ns();
+    uint64_t now = host_clock_mono_ns();
+    double span = (double)(now - t_all) / 1e9;
+    uint64_t dx = total_cycles(m) - t->cycles_at_all;
+    rig_log(&s->in.log, RIG_LOG_INFO, "master", "master",
+            "done: %u slaves in data exchange, each at least the given cycles; all reached "
+            "data exchange %.3f s after start; since then %llu Data_Exchange telegrams in "
+            "%.3f s (%.0f/s, %.1f full bus cycles/s)",
+            m->num_slaves, (double)(t_all - t->t_start) / 1e9, (unsigned long long)dx, span,
+            span > 0 ? (double)dx / span : 0.0,
+            span > 0 ? (double)dx / span / m->num_slaves : 0.0);
+}
+
+static void report_missing(const dp_master_t *m, uint32_t cycles, const char *why)
+{
+    if (m->num_slaves == 1u) {
+        const dpm_slave_t *sl = &m->slaves[0];
+        cli_error("master: slave %u did not complete %u Data_Exchange cycles (%s; reached %u, "
+                  "phase %s)",
+                  sl->cfg.address, cycles, why, sl->cycles, dpm_phase_name(sl->phase));
+        return;
+    }
+    char list[1024];
+    size_t n = 0;
+    unsigned missing = 0;
+    for (uint8_t i = 0; i < m->num_slaves; i++) {
+        const dpm_slave_t *sl = &m->slaves[i];
+        if (sl->cycles >= cycles) {
+            continue;
+        }
+        missing++;
+        if (n + 48u < sizeof list) {
+            n += (size_t)snprintf(list + n, sizeof list - n, "%s%u (%u, %s)", n > 0 ? ", " : "",
+                                  sl->cfg.address, sl->cycles, dpm_phase_name(sl->phase));
+        }
+    }
+    cli_error("master: %u of %u slaves did not complete %u Data_Exchange cycles (%s): %s",
+              missing, m->num_slaves, cycles, why, list);
+}
+
+/* --reset-fault: a PLC acknowledging a drive fault at start (protocol.md §C3.1): control word
+ * bit 6 "fault reset" set for a while once the slave is in data exchange, then cleared: the
+ * drive resets on the rising edge. Held for RESET_CYCLES cycles and at least RESET_HOLD_NS, so
+ * the drive sees it however fast the bus cycles. */
+#define RESET_CYCLES 5u
+#define RESET_HOLD_NS 100000000ull
+#define CW_FAULT_RESET 0x0040u
+
+typedef enum reset_phase { RESET_WAIT = 0, RESET_HOLD, RESET_DONE } reset_phase_t;
+
+typedef struct fault_reset {
+    reset_phase_t phase[DPM_MAX_SLAVES];
+    uint32_t until_cycles[DPM_MAX_SLAVES];
+    uint64_t until_ns[DPM_MAX_SLAVES];
+} fault_reset_t;
+
+/* The outputs as given, with bit 6 of the control word set or cleared; returns the control
+ * word sent. */
+static uint16_t outputs_with_reset(const master_opts_t *o, dp_master_t *m, unsigned i, bool bit6)
+{
+    uint8_t out[DPM_MAX_IO];
+    memcpy(out, o->outputs, sizeof out);
+    size_t cw_at = o->control_word;
+    uint16_t cw = hal_get_be16(&out[cw_at]);
+    cw = bit6 ? (uint16_t)(cw | CW_FAULT_RESET) : (uint16_t)(cw & ~CW_FAULT_RESET);
+    hal_put_be16(&out[cw_at], cw);
+    dp_master_set_outputs(m, i, out, o->out_given > cw_at + 2u ? o->out_given : cw_at + 2u);
+    return cw;
+}
+
+/* From the loop: moves each slave's fault reset along. */
+static void fault_reset_step(session_t *s, const master_opts_t *o, fault_reset_t *fr)
+{
+    dp_master_t *m = &s->rig.master;
+    for (unsigned i = 0; i < m->num_slaves; i++) {
+        const dpm_slave_t *sl = &m->slaves[i];
+        if (fr->phase[i] == RESET_WAIT && sl->phase == DPM_PHASE_DATA_EXCH) {
+            uint16_t cw = outputs_with_reset(o, m, i, true);
+            fr->phase[i] = RESET_HOLD;
+            fr->until_cycles[i] = sl->cycles + RESET_CYCLES;
+            fr->until_ns[i] = host_clock_mono_ns() + RESET_HOLD_NS;
+            rig_log(&s->in.log, RIG_LOG_INFO, "master", "master",
+                    "slave %u: fault reset, control word %04X (bit 6 set)", sl->cfg.address, cw);
+        } else if (fr->phase[i] == RESET_HOLD && sl->cycles >= fr->until_cycles[i] &&
+                   host_clock_mono_ns() >= fr->until_ns[i]) {
+            uint16_t cw = outputs_with_reset(o, m, i, false);
+            fr->phase[i] = RESET_DONE;
+            rig_log(&s->in.log, RIG_LOG_INFO, "master", "master",
+                    "slave %u: fault reset done, control word %04X", sl->cfg.address, cw);
+        }
+    }
+}
+
+/* A reset still under way: the run does not end in the middle of it. */
+static bool fault_reset_holding(const fault_reset_t *fr, unsigned num_slaves)
+{
+    for (unsigned i = 0; i < num_slaves; i++) {
+        if (fr->phase[i] == RESET_HOLD) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/* Leaving like a PLC going to STOP (protocol.md §A3.5): Global_Control Clear_Data and zero
+ * outputs for LEAVE_CYCLES cycles, so the drive sees controller inhibit before the watchdog
+ * runs out. Whether it then reports F28 is its P831 reaction. */
+#define LEAVE_CYCLES 3u
+#define LEAVE_TIMEOUT_US 1000000u
+
+static void master_leave(session_t *s)
+{
+    dp_master_t *m = &s->rig.master;
+    static const uint8_t zeros[DPM_MAX_IO];
+    uint32_t until[DPM_MAX_SLAVES] = {0};
+    unsigned exchanging = 0;
+    for (unsigned i = 0; i < m->num_slaves; i++) {
+        if (m->slaves[i].phase == DPM_PHASE_DATA_EXCH) {
+            exchanging++;
+            until[i] = m->slaves[i].cycles + LEAVE_CYCLES;
+        }
+        dp_master_set_outputs(m, i, zeros, m->slaves[i].out_len);
+    }
+    if (exchanging == 0u) {
+        return;
+    }
+    rig_log(&s->in.log, RIG_LOG_INFO, "master", "master",
+            "going to STOP: Global_Control Clear_Data, outputs zero for %u cycles", LEAVE_CYCLES);
+    dp_master_global_control(m, DP_GC_CLEAR_DATA, 0);
+    rig_wake(&s->rig);
+    static volatile const int keep_going = 0; /* a second signal does not cut the goodbye short */
+    hal_time_us_t end = tty_now_us() + LEAVE_TIMEOUT_US;
+    bool done = false;
+    while (!done && hal_time_diff(end, tty_now_us()) > 0) {
+        if (rig_run_until(&s->rig, tty_now_us() + 20000u, &keep_going) < 0) {
+            return;
+        }
+        done = true;
+        for (unsigned i = 0; i < m->num_slaves; i++) {
+            done = done && (until[i] == 0u || m->slaves[i].cycles >= until[i] ||
+                            m->slaves[i].phase != DPM_PHASE_DATA_EXCH);
+        }
+    }
+    rig_log(&s->in.log, RIG_LOG_INFO, "master", "master", "%s",
+            done ? "stopped: outputs cleared, leaving the bus"
+                 : "stopped: the slaves did not confirm the cleared outputs in time");
+}
+
+/* Cycles until every slave ran --cycles of them (0), --timeout or a signal (1), or a medium
+ * failure (-1, *why says which). */
+static int master_cycle(session_t *s, const master_opts_t *o, run_times_t *t, const char **why)
+{
+    const dp_master_t *m = &s->rig.master;
+    uint64_t end_ns = o->timeout_given || o->cycles != 0u
+                          ? t->t_start + (uint64_t)o->timeout_s * 1000000000ull
+                          : UINT64_MAX;
+    static fault_reset_t fr;
+    memset(&fr, 0, sizeof fr);
+    *why = "timeout";
+    while (!cli_stop && host_clock_mono_ns() < end_ns) {
+        if (rig_run_until(&s->rig, tty_now_us() + 20000u, &cli_stop) < 0) {
+            *why = rig_error(&s->rig);
+            return -1;
+        }
+        if (o->reset_fault) {
+            fault_reset_step(s, o, &fr);
+        }
+        if (t->t_all == 0u && all_in_data_exchange(m)) {
+            t->t_all = host_clock_mono_ns();
+            t->cycles_at_all = total_cycles(m);
+            if (o->num_slaves > 1u) {
+                rig_log(&s->in.log, RIG_LOG_INFO, "master", "master", "all %zu slaves in data "
+                        "exchange", o->num_slaves);
+            }
+        }
+        if (o->cycles != 0u && all_cycled(m, o->cycles) &&
+            !fault_reset_holding(&fr, m->num_slaves)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* The run and its outcome: 0 when every slave ran its cycles (or, with --cycles 0, on a
+ * signal), 1 when not. */
+static int master_run(session_t *s, const master_opts_t *o)
+{
+    run_times_t t = {.t_start = host_clock_mono_ns()};
+    const char *why = NULL;
+    int rc = master_cycle(s, o, &t, &why);
+    if (o->cycles == 0u && cli_stop) {
+        rig_log(&s->in.log, RIG_LOG_INFO, "master", "master", "stopping (signal)");
+        rc = 0;
+    } else if (rc == 0) {
+        report_done(s, &t);
+    } else {
+        report_missing(&s->rig.master, o->cycles, cli_stop ? "interrupted" : why);
+    }
+    if (rc >= 0) {
+        master_leave(s);
+    }
+    return rc < 0 ? 1 : rc;
+}
+
+int cmd_master(int argc, char **argv)
+{
+    static master_opts_t o;
+    static session_t s;
+    int rc = master_parse(&o, argc, argv);
+    if (rc != 0) {
+        return rc;
+    }
+    if (!session_open(&s, &o.med, (int16_t)o.own, o.baud, &o.capture, &o.io, false)) {
+        return 1;
+    }
+    if (master_build(&s, &o) != 0) {
+        session_close(&s);
+        return EXIT_USAGE;
+    }
+    print_start_line(&s, &o);
+    rc = instrument_start_http(&s.in, &s.rig, &o.io, "master", false);
+    if (rc == 0) {
+        rc = master_run(&s, &o);
+    }
+    return session_end(&s, rc);
+}

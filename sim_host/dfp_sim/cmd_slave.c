@@ -1,0 +1,289 @@
+/* dfp-sim slave: the card (or a line of cards) on a real tty or a PTY, or on a virtual segment
+ * over LCM (--bus lcm:CHANNEL), in wall-clock time. Timing on a PC is relaxed (see fdl_rx.h):
+ * the OS delivers bytes in chunks. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "session.h"
+#include "sim_can/inverter_can.h"
+#include "sim_hal/host_clock.h"
+#include "sim_hal/tty_port.h"
+#include "sim_stations/stations.h"
+
+typedef struct slave_opts {
+    medium_opts_t med;
+    const char *lcm_url;
+    capture_opts_t capture;
+    instrument_opts_t io;
+    const char *address_text;
+    uint32_t baud;
+    uint32_t duration_s;
+    bool echo;
+    const char *inverter;
+    const char *eeprom;
+    const char *card_nvm;
+    /* from the above */
+    uint8_t addresses[DPM_MAX_SLAVES];
+    size_t num_cards;
+    card_inverter_t kind;
+} slave_opts_t;
+
+/* The options that take a text value as is; NULL when argv[i] is none of them. */
+static const char **text_option(slave_opts_t *o, const char *opt)
+{
+    if (strcmp(opt, "--lcm") == 0) return &o->lcm_url;
+    if (strcmp(opt, "--address") == 0) return &o->address_text;
+    if (strcmp(opt, "--inverter") == 0) return &o->inverter;
+    if (strcmp(opt, "--eeprom") == 0) return &o->eeprom;
+    if (strcmp(opt, "--card-nvm") == 0) return &o->card_nvm;
+    return NULL;
+}
+
+/* One option at argv[*i]: 0, or EXIT_USAGE after reporting. */
+static int slave_option(slave_opts_t *o, int argc, char **argv, int *i)
+{
+    const char *v;
+    const char **slot;
+    int mo = medium_option(&o->med, argc, argv, i);
+    if (mo == 0) {
+        mo = instrument_option(argc, argv, i, &o->io);
+    }
+    if (mo == 0) {
+        mo = capture_option(argc, argv, i, &o->capture);
+    }
+    if (mo != 0) {
+        return mo < 0 ? EXIT_USAGE : 0;
+    }
+    if ((slot = text_option(o, argv[*i])) != NULL) {
+        return (*slot = cli_value(argc, argv, i)) == NULL ? EXIT_USAGE : 0;
+    }
+    if (strcmp(argv[*i], "--baud") == 0) {
+        return (v = cli_value(argc, argv, i)) == NULL || !cli_baud("--baud", v, true, &o->baud)
+                   ? EXIT_USAGE : 0;
+    }
+    if (strcmp(argv[*i], "--duration") == 0) {
+        return (v = cli_value(argc, argv, i)) == NULL ||
+                       !cli_u32("--duration", v, 1, 86400u * 365u, &o->duration_s)
+                   ? EXIT_USAGE : 0;
+    }
+    if (strcmp(argv[*i], "--echo-suppress") == 0) {
+        o->echo = true;
+        return 0;
+    }
+    cli_error("slave: unknown option '%s' (see dfp-sim --help)", argv[*i]);
+    return EXIT_USAGE;
+}
+
+/* One address (0..127, above 125 the card stays off the bus) or a line of cards. */
+static bool slave_addresses(slave_opts_t *o)
+{
+    o->num_cards = 1;
+    if (strpbrk(o->address_text, "-,") != NULL) {
+        return cli_address_list(o->address_text, o->addresses, DPM_MAX_SLAVES, &o->num_cards);
+    }
+    uint32_t single = 0;
+    if (!cli_u32("--address", o->address_text, 0, 127, &single)) {
+        return false;
+    }
+    o->addresses[0] = (uint8_t)single;
+    return true;
+}
+
+static bool slave_inverter_kind(slave_opts_t *o)
+{
+    if (strcmp(o->inverter, "sim") == 0) {
+        o->kind = CARD_INVERTER_SIM;
+    } else if (strcmp(o->inverter, "none") == 0) {
+        o->kind = CARD_INVERTER_NONE;
+    } else if (strncmp(o->inverter, "can:", 4) == 0) {
+        o->kind = CARD_INVERTER_LINK;
+    } else {
+        cli_error("slave: --inverter '%s': use sim (emulated MOVIDRIVE), none (PI echoes PO) or "
+                  "can:IFACE[:ADDR] (a MOVIDRIVE on SBus)", o->inverter);
+        return false;
+    }
+    if (o->eeprom != NULL && o->kind != CARD_INVERTER_SIM) {
+        cli_error("slave: --eeprom belongs to the emulated inverter (--inverter sim)");
+        return false;
+    }
+    return true;
+}
+
+static bool is_directory(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+/* A line of cards: emulated drives, and directories for their files. */
+static bool slave_line_of_cards(const slave_opts_t *o)
+{
+    if (o->kind == CARD_INVERTER_LINK) {
+        cli_error("slave: a line of cards (--address %s) needs emulated drives, not SBus",
+                  o->address_text);
+        return false;
+    }
+    const char *dirs[2] = {o->eeprom, o->card_nvm};
+    for (unsigned k = 0; k < 2u; k++) {
+        if (dirs[k] != NULL && !is_directory(dirs[k])) {
+            cli_error("slave: with several addresses, %s names a directory (one file per "
+                      "card in it): '%s' is not one", k == 0u ? "--eeprom" : "--card-nvm",
+                      dirs[k]);
+            return false;
+        }
+    }
+    return true;
+}
+
+/* The command line into o: 0, or EXIT_USAGE after reporting. */
+static int slave_parse(slave_opts_t *o, int argc, char **argv)
+{
+    *o = (slave_opts_t){.address_text = "4", .inverter = "sim"};
+    instrument_defaults(&o->io, RIG_LOG_TIME_BUS);
+    for (int i = 2; i < argc; i++) {
+        if (slave_option(o, argc, argv, &i) != 0) {
+            return EXIT_USAGE;
+        }
+    }
+    if (o->med.dev == NULL && o->med.bus == NULL) {
+        cli_error("slave: --port DEV is required (a tty such as /dev/ttyUSB0, or a PTY), or --bus "
+                  "lcm:CHANNEL");
+        return EXIT_USAGE;
+    }
+    if (!medium_check(&o->med, "slave") || !slave_addresses(o) || !slave_inverter_kind(o) ||
+        (o->num_cards > 1u && !slave_line_of_cards(o))) {
+        return EXIT_USAGE;
+    }
+    return 0;
+}
+
+/* Several cards (--address 4-9) keep their drives' EEPROMs and their own NVM in a directory. */
+static const char *per_card_path(const char *dir, const char *stem, uint8_t address, char *buf,
+                                 size_t n)
+{
+    if (dir == NULL) {
+        return NULL;
+    }
+    (void)snprintf(buf, n, "%s/%s%u.%s", dir, stem, address,
+                   strcmp(stem, "drive") == 0 ? "ee" : "nvm");
+    return buf;
+}
+
+/* Every card of the line on the medium, each with its drive. False after reporting. */
+static bool slave_add_cards(session_t *s, const slave_opts_t *o, ml_link_t external)
+{
+    bool line = o->num_cards > 1u;
+    for (size_t k = 0; k < o->num_cards; k++) {
+        uint8_t a = o->addresses[k];
+        char ee_buf[512];
+        char nvm_buf[512];
+        card_options_t co = {.address = a, .fixed_baud = o->baud, .strict_timing = false,
+                             .inverter = o->kind, .external_link = external,
+                             .eeprom_path = line ? per_card_path(o->eeprom, "drive", a, ee_buf,
+                                                                 sizeof ee_buf)
+                                                 : o->eeprom,
+                             .card_nvm_path = line ? per_card_path(o->card_nvm, "card", a,
+                                                                   nvm_buf, sizeof nvm_buf)
+                                                   : o->card_nvm};
+        rig_card_t *rc = rig_add_card(&s->rig, &co, tty_now_us());
+        if (rc == NULL) {
+            cli_error("slave: cannot add card %u", a);
+            return false;
+        }
+        if (rc->nvm_note[0] != '\0') {
+            rig_log(&s->in.log, RIG_LOG_WARN, line ? "card *" : "card", "nvm",
+                    "non-volatile storage: %s", rc->nvm_note);
+        }
+        if (a > DFP21B_MAX_ADDRESS) {
+            rig_log(&s->in.log, RIG_LOG_WARN, "card", "dp_state",
+                    "address %u is above 125: the card stays off the bus", a);
+        }
+    }
+    return true;
+}
+
+static void print_start_line(const session_t *s, const slave_opts_t *o)
+{
+    char name[300];
+    printf("dfp-sim slave: DFP21B on %s, DIP address %s, %s%s%s; inverter: %s%s%s\n",
+           session_medium_name(s, &o->med, name, sizeof name), o->address_text,
+           o->baud != 0u ? "fixed " : "automatic baud rate",
+           o->baud != 0u ? report_baud_text(o->baud) : "",
+           o->med.bus != NULL || s->rig.port.parity_ok ? "" : " (device has no parity: a PTY)",
+           o->kind == CARD_INVERTER_SIM ? "emulated MOVIDRIVE" : o->inverter,
+           o->eeprom != NULL ? ", EEPROM " : "", o->eeprom != NULL ? o->eeprom : "");
+    (void)fflush(stdout);
+}
+
+/* Until SIGINT/SIGTERM or --duration: 0, or 1 when the medium failed. */
+static int slave_run(session_t *s, const slave_opts_t *o)
+{
+    uint64_t end_ns = o->duration_s != 0u
+                          ? host_clock_mono_ns() + (uint64_t)o->duration_s * 1000000000ull
+                          : 0u;
+    while (!cli_stop && (end_ns == 0u || host_clock_mono_ns() < end_ns)) {
+        if (rig_run_until(&s->rig, tty_now_us() + 200000u, &cli_stop) < 0) {
+            cli_error("%s", rig_error(&s->rig));
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static void log_stop(session_t *s, const slave_opts_t *o)
+{
+    for (size_t k = 0; k < o->num_cards; k++) {
+        rig_log(&s->in.log, RIG_LOG_INFO, o->num_cards > 1u ? "sim" : "card", "dp_state",
+                "stopping (%s); card %u state %s", cli_stop ? "signal" : "end",
+                s->rig.cards[k].cs.card.address,
+                dp_state_name(dp_slave_state(&s->rig.cards[k].cs.card.dp)));
+    }
+}
+
+int cmd_slave(int argc, char **argv)
+{
+    static slave_opts_t o;
+    static session_t s;
+    static inverter_can_t can_link;
+    int rc = slave_parse(&o, argc, argv);
+    if (rc != 0) {
+        return rc;
+    }
+    int16_t station = (int16_t)(o.num_cards == 1u ? o.addresses[0] : -1); /* -1: several */
+    if (!session_open(&s, &o.med, station, o.baud != 0u ? o.baud : hal_uart_bauds[0],
+                      &o.capture, &o.io, o.echo)) {
+        return 1;
+    }
+    card_station_t *first = &s.rig.cards[0].cs;
+    s.rep.card = &first->card;
+    if (o.lcm_url != NULL && session_telemetry(&s, o.lcm_url, &first->card, o.addresses[0]) != 0) {
+        return session_end(&s, 1);
+    }
+    ml_link_t external = {0};
+    if (o.kind == CARD_INVERTER_LINK) {
+        char err[256];
+        if (inverter_can_open(&can_link, o.inverter, card_station_param_response,
+                              card_station_process_inputs, first, &s.rig.runner, err,
+                              sizeof err) != 0) {
+            cli_error("%s", err);
+            return session_end(&s, 1);
+        }
+        external = inverter_can_link(&can_link);
+    }
+    print_start_line(&s, &o);
+    rc = slave_add_cards(&s, &o, external) ? instrument_start_http(&s.in, &s.rig, &o.io, "slave",
+                                                                   false)
+                                           : 1;
+    if (rc == 0) {
+        rc = slave_run(&s, &o);
+        log_stop(&s, &o);
+    }
+    if (o.kind == CARD_INVERTER_LINK) {
+        inverter_can_close(&can_link);
+    }
+    return session_end(&s, rc);
+}

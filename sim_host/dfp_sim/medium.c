@@ -1,0 +1,86 @@
+/* --port / --bus / --lcm-url. See medium.h. */
+#include "medium.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+#include "dfp_lcm_bridge/lcm_segment.h"
+
+int medium_option(medium_opts_t *m, int argc, char **argv, int *i)
+{
+    const char **slot = NULL;
+    if (strcmp(argv[*i], "--port") == 0) {
+        slot = &m->dev;
+    } else if (strcmp(argv[*i], "--bus") == 0) {
+        slot = &m->bus;
+    } else if (strcmp(argv[*i], "--lcm-url") == 0) {
+        slot = &m->lcm_url;
+    } else {
+        return 0;
+    }
+    return (*slot = cli_value(argc, argv, i)) != NULL ? 1 : -1;
+}
+
+bool medium_check(const medium_opts_t *m, const char *cmd)
+{
+    if (m->dev != NULL && m->bus != NULL) {
+        cli_error("%s: --port and --bus exclude each other", cmd);
+        return false;
+    }
+    if (m->bus != NULL && dfp_lcm_segment_channel(m->bus) == NULL) {
+        cli_error("%s: --bus '%s': use lcm:CHANNEL (1..63 of A-Z a-z 0-9 _ . -)", cmd, m->bus);
+        return false;
+    }
+    if (m->lcm_url != NULL && m->bus == NULL) {
+        cli_error("%s: --lcm-url belongs to --bus lcm:CHANNEL", cmd);
+        return false;
+    }
+    return true;
+}
+
+const char *medium_name(const medium_opts_t *m, const char *opened_url, char *buf, size_t n)
+{
+    if (m->bus == NULL) {
+        return m->dev;
+    }
+    (void)snprintf(buf, n, "LCM segment %s (%s)", dfp_lcm_segment_channel(m->bus), opened_url);
+    return buf;
+}
+
+int medium_link_open(medium_link_t *l, const medium_opts_t *m, int16_t station_address,
+                     uint32_t baud, char *err, size_t errlen)
+{
+    l->lcm = m->bus != NULL;
+    tty_runner_init(&l->runner);
+    if (l->lcm) {
+        return dfp_lcm_segment_open(&l->segment, m->lcm_url, dfp_lcm_segment_channel(m->bus),
+                                    station_address, baud, err, errlen);
+    }
+    return tty_port_open(&l->port, m->dev, baud, err, errlen);
+}
+
+hal_uart_t medium_link_uart(medium_link_t *l)
+{
+    return l->lcm ? dfp_lcm_segment_uart(&l->segment) : tty_port_uart(&l->port);
+}
+
+int medium_link_attach(medium_link_t *l, const sim_station_t *st, sim_frame_tap_t tap,
+                       void *tap_ctx)
+{
+    if (l->lcm) {
+        dfp_lcm_segment_set_tap(&l->segment, tap, tap_ctx);
+        return dfp_lcm_segment_attach(&l->segment, &l->runner, st);
+    }
+    tty_runner_set_tap(&l->runner, tap, tap_ctx);
+    return tty_runner_add(&l->runner, &l->port, st);
+}
+
+void medium_link_close(medium_link_t *l)
+{
+    if (l->lcm) {
+        dfp_lcm_segment_close(&l->segment);
+    } else {
+        tty_port_close(&l->port);
+    }
+}

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# dfp-sim param as a master on a virtual segment over LCM (--bus lcm:CHANNEL): against
+# `dfp-sim slave --bus lcm:...` it reads P100 by name on every path, writes a value by name and
+# reads it back by another path, reads I&M0, times out on an address nobody has, and refuses
+# --port with --bus, --lcm-url without --bus and a bad channel (exit 2). udpm on loopback needs a
+# multicast route, so the test runs in a private network namespace (tests/lcm/netns.sh).
+sim=$1
+. "$(dirname "$0")/../lcm/netns.sh"
+. "$(dirname "$0")/lib.sh"
+with_tmp
+url="udpm://239.255.76.74:7674?ttl=0"
+
+"$sim" slave --bus lcm:PARAM --lcm-url "$url" --address 4 >"$tmp/slave.out" 2>&1 &
+slave=$!; pids+=($slave)
+sleep 0.5
+
+param() { "$sim" param --bus lcm:PARAM --lcm-url "$url" --address 4 --timeout 10 "$@"; }
+
+for via in channel movilink profidrive c2; do
+  expect_exit 0 "read P100 via $via" -- param read P100 --via "$via"
+  [ "$out" = "read 8461 via $via: P100 setpoint source = 0 (BIPOL./FIX.SETPT)" ] && ok ||
+    bad "read P100 via $via: $out"
+done
+expect_exit 0 "write P100 FIELDBUS by name" -- param write "setpoint source" FIELDBUS --via movilink
+[ "$out" = "write 8461 = 3 via movilink: ok (P100 setpoint source = 3 (FIELDBUS))" ] && ok ||
+  bad "write P100: $out"
+expect_exit 0 "read back via c2" -- param read P100 --via c2
+[ "$out" = "read 8461 via c2: P100 setpoint source = 3 (FIELDBUS)" ] && ok || bad "read back: $out"
+expect_exit 0 "im0 on the segment" -- param im0
+expect_in "im0 serial" "  serial number      DFP-SIM-004" "$out"
+expect_exit 1 "nobody at 5 on the segment" -- "$sim" param --bus lcm:PARAM --lcm-url "$url" --address 5 --timeout 1 read P100 --via movilink
+[ "$out" = "read 8461 via movilink: error timeout: no result within 1 s: slave 5 did not reach data exchange (phase FDL status)" ] &&
+  ok || bad "timeout on the segment: $out"
+
+expect_exit 2 "--port and --bus" -- "$sim" param --port /dev/null --bus lcm:PARAM --address 4 read P100
+[ "$out" = "dfp-sim: param: --port and --bus exclude each other" ] && ok || bad "--port and --bus: $out"
+expect_exit 2 "--lcm-url without --bus" -- "$sim" param --port /dev/null --lcm-url "$url" --address 4 read P100
+[ "$out" = "dfp-sim: param: --lcm-url belongs to --bus lcm:CHANNEL" ] && ok || bad "--lcm-url: $out"
+expect_exit 2 "bad channel" -- "$sim" param --bus can:X --address 4 read P100
+[ "$out" = "dfp-sim: param: --bus 'can:X': use lcm:CHANNEL (1..63 of A-Z a-z 0-9 _ . -)" ] && ok ||
+  bad "bad channel: $out"
+
+kill -INT "$slave"; wait "$slave"
+expect_in "slave on the segment" "DFP21B on LCM segment PARAM ($url)" "$(cat "$tmp/slave.out")"
+finish
