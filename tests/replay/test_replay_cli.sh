@@ -126,6 +126,40 @@ expect_in "shows the card's octets" "$original" "$out"
 expect_rows "altered reply" "$out" "Data_Exchange 100 99 1 0 0" "total 127 126 1 22 22"
 expect_in "result" "result: DIFFERENT: 1 of 127 replies differ" "$out"
 
+# ---- parameter services named (md_names.h) ---------------------------------------------------
+# --verbose names every MOVILINK service of the cyclic channel and of data set 47 below its
+# telegram, requests and answers alike; so does the first mismatch of a check report.
+expect_exit 0 "param_channel.pcap --verbose" -- "$sim" replay "$golden/param_channel.pcap" --verbose
+expect_in "channel write named" "                       write P100 setpoint source (8461) = 3 (FIELDBUS)" "$out"
+expect_in "channel read answered in its unit" "                       read P000 speed (8318) = 39.000 rpm" "$out"
+expect_in "refused write" "                       write volatile P302 maximum speed 1 (8517) refused" "$out"
+expect_in "IPOS variable" "                       write volatile H0 (11000) = 0" "$out"
+expect_exit 0 "dpv1.pcapng --verbose" -- "$sim" replay "$golden/dpv1.pcapng" --verbose
+expect_in "data set 47 request named" "                       read P076 firmware basic unit (8300)" "$out"
+expect_in "data set 47 answer named after its request" "                       read P160 internal setpoint n11 (8489) = 150.000 rpm" "$out"
+expect_in "data set 47 change" "                       write P160 internal setpoint n11 (8489) = 2.000 rpm" "$out"
+python3 - "$golden/param_channel.pcap" "$tmp/altered_pc.pcap" <<'PY'
+import struct, sys
+d = bytearray(open(sys.argv[1], 'rb').read())
+o, seen = 24, 0
+while o < len(d):
+    incl = struct.unpack_from('<I', d, o + 8)[0]
+    f = d[o + 16:o + 16 + incl]
+    if f[0] == 0x68 and f[5] == 0x04 and f[6] == 0x08:
+        seen += 1
+        if seen == 60:
+            p = o + 16 + 7 + 8 + 1  # PI1 low octet after the 8-octet parameter channel
+            d[p] = (d[p] + 1) & 0xFF
+            d[o + 16 + incl - 2] = sum(d[o + 16 + 4:o + 16 + incl - 2]) & 0xFF
+            break
+    o += 16 + incl
+open(sys.argv[2], 'wb').write(d)
+PY
+expect_exit 1 "altered param_channel reply" -- "$sim" replay "$tmp/altered_pc.pcap" --check
+expect_in "mismatch request named" $'handshake 0, read index 8318 data 0x00000000; PO 0006 05DC 0000\n            read P000 speed (8318)\n  expected' "$out"
+expect_in "mismatch answer named" $'PI 0407 0143 02C4\n            read P000 speed (8318) = 39.000 rpm\n  card' "$out"
+expect_in "context named" $'PI 0407 0116 02C3\n                     read P000 speed (8318) = 39.000 rpm' "$out"
+
 # ---- addresses -----------------------------------------------------------------------------
 expect_exit 2 "two slaves, no --address" -- "$sim" replay "$golden/multimaster.pcap" --check
 expect_in "lists both" "2 slaves answer in" "$out"

@@ -257,7 +257,7 @@ static void test_sap_extension_and_sdn(void)
     CHECK_EQ(rp.svc[REPLAY_SVC_GLOBAL_CONTROL].capture_silent, 1);
     CHECK_EQ(rp.svc[REPLAY_SVC_GLOBAL_CONTROL].card_silent, 1);
     CHECK_EQ(rp.mismatches, 0);
-    CHECK_EQ(dp_slave_state(&rp.card.card.dp), DP_STATE_DATA_EXCH);
+    CHECK_EQ(dp_slave_state(&rp.cs->card.dp), DP_STATE_DATA_EXCH);
 }
 
 /* FCB: a request the capture shows unanswered, then the master's repeat (same FCB) with an
@@ -426,7 +426,7 @@ static void test_rate_that_does_not_fit(void)
     CHECK_EQ(rp.deferred, 9);
     CHECK_EQ(rp.deferred_beyond_resolution, 9);
     CHECK_EQ(rp.first_conflict_record, 2);
-    CHECK_EQ(rp.bus.collisions, 0); /* nothing overlapped on the bus */
+    CHECK_EQ(rp.rig.bus.collisions, 0); /* nothing overlapped on the bus */
 }
 
 /* Without --check nothing is judged, the records are still replayed. */
@@ -583,7 +583,7 @@ static void test_time_going_back(void)
     uint64_t answer_end = 44000u + 11u * 1000u * 1000u / 1500u + 6u * 7333u;
     CHECK(seen_ns[1] >= answer_end && seen_ns[1] < answer_end + 30000u);
     CHECK_EQ(seen_ns[2], seen_ns[1] + 2000000u); /* its recorded spacing from the anchor */
-    CHECK(rp.bus.now_ns < 10000000u);
+    CHECK(rp.rig.bus.now_ns < 10000000u);
     int status;
     char *text = report_text(&status);
     CHECK_EQ(status, 0);
@@ -692,7 +692,7 @@ static void test_long_gap_shortened_exactly(void)
          sizeof fdl_status_req);
     replay_finish(&rp);
     CHECK_EQ(rp.gaps_cut, 1);
-    CHECK(rp.bus.now_ns < REPLAY_GAP_SETTLE_NS + 10000000000ull);
+    CHECK(rp.rig.bus.now_ns < REPLAY_GAP_SETTLE_NS + 10000000000ull);
 }
 
 /* With a fixed rate the idle card has nothing periodic: the whole gap beyond the settling
@@ -752,8 +752,8 @@ static void test_stop_in_a_gap(void)
     CHECK(rp.interrupted);
     CHECK_EQ(seen, 2);
     CHECK_EQ(rp.records, 2);
-    CHECK(rp.bus.now_ns >= 10000000000ull);
-    CHECK(rp.bus.now_ns <= 10000000000ull + REPLAY_SLICE_NS + 1000000000ull);
+    CHECK(rp.rig.bus.now_ns >= 10000000000ull);
+    CHECK(rp.rig.bus.now_ns <= 10000000000ull + REPLAY_SLICE_NS + 1000000000ull);
     CHECK_EQ(replay_total_requests(&rp), 1); /* the second request's window never closed */
 }
 

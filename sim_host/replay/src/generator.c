@@ -1,6 +1,7 @@
 #include "replay/generator.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "dp_master/dpv1_c2.h"
@@ -8,6 +9,7 @@
 #include "dp_master/param_channel.h"
 #include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_frame.h"
+#include "rig/rig.h"
 #include "sim_hal/membus.h"
 
 #define GEN_DEFAULT_BAUD 1500000u
@@ -152,16 +154,15 @@ static hal_time_us_t foreign_poll(void *ctx, hal_time_us_t now)
 
 /* ---- the run ------------------------------------------------------------------------------ */
 
+/* One run: the rig (the bus, both cards, the master) with the script's state. Large: gen_run
+ * keeps it on the heap. */
 typedef struct gen {
     gen_options_t opt;
     gen_result_t *res;
-    membus_t bus;
-    card_station_t card;
-    card_station_t card2;
-    dp_master_t master;
-    membus_port_t *master_port;
-    foreign_t foreign;
+    rig_t rig;
+    dp_master_t *master;
     membus_port_t *foreign_port;
+    foreign_t foreign;
     cap_writer_t w;
     bool write_failed;
     /* cyclic channel */
@@ -190,44 +191,54 @@ typedef struct gen {
     uint32_t foreign_cycle; /* the cycle of the last turn asked for */
 } gen_t;
 
-static gen_t g;
-
 static void gen_tap(void *ctx, uint64_t t_start_ns, const uint8_t *frame, size_t len, bool local,
                     uint32_t baud)
 {
-    (void)ctx;
+    gen_t *g = ctx;
     (void)local;
     (void)baud;
-    if (cap_writer_frame(&g.w, t_start_ns, frame, len, CAP_DIR_UNKNOWN) != 0) {
-        g.write_failed = true;
+    if (cap_writer_frame(&g->w, t_start_ns, frame, len, CAP_DIR_UNKNOWN) != 0) {
+        g->write_failed = true;
     }
-    g.res->telegrams++;
-    g.res->octets += len;
+    g->res->telegrams++;
+    g->res->octets += len;
 }
 
-static void card_event(void *ctx, const dp_event_t *ev)
+/* Watchdog expiries of the card under test (the second card's are not counted). */
+static void card_event(void *ctx, unsigned card, const dp_event_t *ev)
 {
-    (void)ctx;
-    if (ev->type == DP_EV_WD_EXPIRED) {
-        g.wd_seen++;
+    gen_t *g = ctx;
+    if (card == 0u && ev->type == DP_EV_WD_EXPIRED) {
+        g->wd_seen++;
     }
 }
 
-static hal_time_us_t now_us(void)
+static uint64_t bus_ns(const gen_t *g)
 {
-    return membus_now_us(&g.bus);
+    return g->rig.bus.now_ns;
 }
 
-static dpm_slave_t *card_slave(void)
+static hal_time_us_t now_us(const gen_t *g)
 {
-    return &g.master.slaves[0];
+    return membus_now_us(&g->rig.bus);
 }
 
-static void slave_cfg(dpm_slave_cfg_t *sc, uint8_t address, const uint8_t *cfg, size_t len)
+static void wake_master(gen_t *g)
+{
+    membus_wake(g->rig.master_port);
+}
+
+static dpm_slave_t *card_slave(gen_t *g)
+{
+    return &g->master->slaves[0];
+}
+
+static void slave_cfg(const gen_t *g, dpm_slave_cfg_t *sc, uint8_t address, const uint8_t *cfg,
+                      size_t len)
 {
     memset(sc, 0, sizeof *sc);
     sc->address = address;
-    if (g.opt.dpv1) {
+    if (g->opt.dpv1) {
         sc->prm_len = (uint8_t)dpm_build_prm_dpv1(sc->prm, DFP21B_IDENT, GEN_WATCHDOG_MS,
                                                   dfp21b_user_prm_default,
                                                   sizeof dfp21b_user_prm_default);
@@ -243,377 +254,481 @@ static void slave_cfg(dpm_slave_cfg_t *sc, uint8_t address, const uint8_t *cfg, 
 static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
 static const uint8_t cfg_wrong[] = {0xF3, 0xE2, 0xD1}; /* 3 PD out, 2 PD in: refused */
 
-/* The cyclic channel: a fixed round of services, commissioning first (P100/P101 to FIELDBUS so
- * the drive follows PO2), then reads, writes, a volatile write and one the inverter refuses. */
-static void param_channel(void)
+/* Step k of the channel's round of ten services. */
+typedef struct pc_service {
+    uint8_t svc;
+    uint16_t index;
+    uint32_t value;
+} pc_service_t;
+
+/* The cyclic channel's round: commissioning first (P100/P101 to FIELDBUS so the drive follows
+ * PO2), then reads, writes, a volatile write and one the inverter refuses. */
+static pc_service_t pc_round(unsigned step)
 {
-    dpm_slave_t *s = card_slave();
-    if (g.opt.param_every == 0u || s->phase != DPM_PHASE_DATA_EXCH || s->inputs_len < 8u) {
-        g.pc_synced = false;
+    uint32_t k = step / 10u;
+    switch (step % 10u) {
+    case 0: return (pc_service_t){ML_SVC_READ, 8300, 0};                    /* firmware */
+    case 1: return (pc_service_t){ML_SVC_WRITE, 8461, 3};                   /* P100 FIELDBUS */
+    case 2: return (pc_service_t){ML_SVC_WRITE, 8462, 2};                   /* P101 FIELDBUS */
+    case 3: return (pc_service_t){ML_SVC_READ, 8318, 0};                    /* speed */
+    case 4: return (pc_service_t){ML_SVC_WRITE, 8489, 1000u + k};           /* P160 */
+    case 5: return (pc_service_t){ML_SVC_READ, 8489, 0};
+    case 6: return (pc_service_t){ML_SVC_WRITE_VOLATILE, 11000, k};         /* IPOS H0 */
+    case 7: return (pc_service_t){ML_SVC_READ, 11000, 0};
+    case 8: return (pc_service_t){ML_SVC_WRITE_VOLATILE, 8517, 99000000u};  /* too high */
+    default: return (pc_service_t){ML_SVC_READ_MIN, 8489, 0};
+    }
+}
+
+/* The service in progress: counted when answered, given up when lost. */
+static void pc_watch(gen_t *g, const dpm_slave_t *s)
+{
+    if (dpm_param_done(&g->pc, s->inputs)) {
+        g->res->param_services++;
+        if ((s->inputs[0] & ML_MGMT_ERROR) != 0u) {
+            g->res->param_errors++;
+        }
+        g->pc_next_cycle = s->cycles + g->opt.param_every;
+    } else if (s->cycles - g->pc_started_cycle > GEN_PARAM_GIVE_UP) {
+        g->pc.busy = false;
+        g->pc_synced = false;
+    }
+}
+
+static void param_channel(gen_t *g)
+{
+    dpm_slave_t *s = card_slave(g);
+    if (g->opt.param_every == 0u || s->phase != DPM_PHASE_DATA_EXCH || s->inputs_len < 8u) {
+        g->pc_synced = false;
         return;
     }
-    if (!g.pc_synced) {
+    if (!g->pc_synced) {
         /* The card keeps its handshake across start-ups: continue from what it shows. */
-        if (((s->inputs[0] ^ g.out[0]) & ML_MGMT_HANDSHAKE) != 0u && g.pc.busy) {
+        if (((s->inputs[0] ^ g->out[0]) & ML_MGMT_HANDSHAKE) != 0u && g->pc.busy) {
             return;
         }
-        dpm_param_sync(&g.pc, s->inputs);
-        g.pc_synced = true;
-        g.pc_next_cycle = s->cycles + g.opt.param_every;
+        dpm_param_sync(&g->pc, s->inputs);
+        g->pc_synced = true;
+        g->pc_next_cycle = s->cycles + g->opt.param_every;
     }
-    if (g.pc.busy) {
-        if (dpm_param_done(&g.pc, s->inputs)) {
-            g.res->param_services++;
-            if ((s->inputs[0] & ML_MGMT_ERROR) != 0u) {
-                g.res->param_errors++;
-            }
-            g.pc_next_cycle = s->cycles + g.opt.param_every;
-        } else if (s->cycles - g.pc_started_cycle > GEN_PARAM_GIVE_UP) {
-            g.pc.busy = false;
-            g.pc_synced = false;
-        }
+    if (g->pc.busy) {
+        pc_watch(g, s);
         return;
     }
-    if (s->cycles < g.pc_next_cycle) {
+    if (s->cycles < g->pc_next_cycle) {
         return;
     }
-    uint32_t k = g.pc_step / 10u;
-    uint8_t svc = ML_SVC_READ;
-    uint16_t index = 8300;
-    uint32_t value = 0;
-    switch (g.pc_step % 10u) {
-    case 0: svc = ML_SVC_READ; index = 8300; break;                       /* firmware */
-    case 1: svc = ML_SVC_WRITE; index = 8461; value = 3; break;           /* P100 FIELDBUS */
-    case 2: svc = ML_SVC_WRITE; index = 8462; value = 2; break;           /* P101 FIELDBUS */
-    case 3: svc = ML_SVC_READ; index = 8318; break;                       /* speed */
-    case 4: svc = ML_SVC_WRITE; index = 8489; value = 1000u + k; break;   /* P160 */
-    case 5: svc = ML_SVC_READ; index = 8489; break;
-    case 6: svc = ML_SVC_WRITE_VOLATILE; index = 11000; value = k; break; /* IPOS H0 */
-    case 7: svc = ML_SVC_READ; index = 11000; break;
-    case 8: svc = ML_SVC_WRITE_VOLATILE; index = 8517; value = 99000000u; break; /* too high */
-    default: svc = ML_SVC_READ_MIN; index = 8489; break;
-    }
-    g.pc_step++;
-    dpm_param_start(&g.pc, svc, index, value, g.out);
-    dp_master_set_outputs(&g.master, 0, g.out, sizeof g.out);
-    g.pc_started_cycle = s->cycles;
+    pc_service_t p = pc_round(g->pc_step);
+    g->pc_step++;
+    dpm_param_start(&g->pc, p.svc, p.index, p.value, g->out);
+    dp_master_set_outputs(g->master, 0, g->out, sizeof g->out);
+    g->pc_started_cycle = s->cycles;
 }
 
 static void ds47_done(void *ctx, dpm_call_t *call, hal_time_us_t now)
 {
-    (void)ctx;
+    gen_t *g = ctx;
     (void)call;
     (void)now;
-    g.call_running = false;
-    g.res->ds47_calls++;
+    g->call_running = false;
+    g->res->ds47_calls++;
 }
 
-static void dpv1_class1(void)
+/* Step k of the class-1 round of six: data set 47 requests (one the inverter refuses), then
+ * I&M0 (step 5: the request stays empty). */
+static void ds47_round(dpm_ds47_req_t *req, unsigned step)
 {
-    dpm_slave_t *s = card_slave();
-    if (!g.opt.dpv1 || g.call_running || s->phase != DPM_PHASE_DATA_EXCH ||
-        s->cycles < g.ds47_next_cycle || dp_master_c1_busy(&g.master, 0)) {
-        return;
-    }
-    g.ds47_next_cycle = s->cycles + GEN_DS47_EVERY;
-    uint32_t k = g.ds47_step / 6u;
-    memset(&g.call, 0, sizeof g.call);
-    memset(&g.req, 0, sizeof g.req);
-    g.req.ref = (uint8_t)(1u + g.ds47_step % 255u);
-    g.req.n = 1;
-    int rc;
-    switch (g.ds47_step % 6u) {
+    uint32_t k = step / 6u;
+    memset(req, 0, sizeof *req);
+    req->ref = (uint8_t)(1u + step % 255u);
+    req->n = 1;
+    switch (step % 6u) {
     case 0:
-        g.req.id = DS47_ID_MOVILINK;
-        g.req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
+        req->id = DS47_ID_MOVILINK;
+        req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
         break;
     case 1:
-        g.req.id = DS47_ID_REQUEST;
-        g.req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489};
+        req->id = DS47_ID_REQUEST;
+        req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489};
         break;
     case 2:
-        g.req.id = DS47_ID_MOVILINK;
-        g.req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE,
-                                        .number = 11000, .value = 500u + k};
+        req->id = DS47_ID_MOVILINK;
+        req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE,
+                                       .number = 11000, .value = 500u + k};
         break;
     case 3:
-        g.req.id = DS47_ID_CHANGE;
-        g.req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489,
-                                        .value = 2000u + k};
+        req->id = DS47_ID_CHANGE;
+        req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489,
+                                       .value = 2000u + k};
         break;
     case 4: /* a parameter that does not exist: a negative data set 47 response */
-        g.req.id = DS47_ID_MOVILINK;
-        g.req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 1};
+        req->id = DS47_ID_MOVILINK;
+        req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 1};
         break;
     default:
         break;
     }
-    if (g.ds47_step % 6u == 5u) {
-        rc = dpm_im0_start(&g.call, dp_master_c1_port(&g.master, 0), ds47_done, NULL, now_us());
-    } else {
-        rc = dpm_ds47_start(&g.call, dp_master_c1_port(&g.master, 0), &g.req, ds47_done, NULL,
-                            now_us());
+}
+
+static void dpv1_class1(gen_t *g)
+{
+    dpm_slave_t *s = card_slave(g);
+    if (!g->opt.dpv1 || g->call_running || s->phase != DPM_PHASE_DATA_EXCH ||
+        s->cycles < g->ds47_next_cycle || dp_master_c1_busy(g->master, 0)) {
+        return;
     }
-    g.ds47_step++;
+    g->ds47_next_cycle = s->cycles + GEN_DS47_EVERY;
+    memset(&g->call, 0, sizeof g->call);
+    ds47_round(&g->req, g->ds47_step);
+    int rc;
+    if (g->ds47_step % 6u == 5u) {
+        rc = dpm_im0_start(&g->call, dp_master_c1_port(g->master, 0), ds47_done, g, now_us(g));
+    } else {
+        rc = dpm_ds47_start(&g->call, dp_master_c1_port(g->master, 0), &g->req, ds47_done, g,
+                            now_us(g));
+    }
+    g->ds47_step++;
     if (rc == 0) {
-        g.call_running = true;
-        membus_wake(g.master_port);
+        g->call_running = true;
+        wake_master(g);
     }
 }
 
 static void c2_opened(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
 {
-    (void)ctx;
+    gen_t *g = ctx;
     (void)now;
-    g.c2_open_done = true;
-    g.c2_open_ok = r->ok;
+    g->c2_open_done = true;
+    g->c2_open_ok = r->ok;
 }
 
 static void c2_aborted(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
 {
-    (void)ctx;
+    gen_t *g = ctx;
     (void)r;
     (void)now;
-    g.c2_abort_done = true;
+    g->c2_abort_done = true;
+}
+
+/* The connection is open: its one data set 47 read. Returns the next stage. */
+static int c2_read(gen_t *g)
+{
+    if (!g->c2_open_ok) {
+        return 4;
+    }
+    g->res->c2_connections++;
+    memset(&g->c2_call, 0, sizeof g->c2_call);
+    dpm_ds47_req_t q = {.ref = 0x42, .id = DS47_ID_MOVILINK, .n = 1};
+    q.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
+    if (dpm_ds47_start(&g->c2_call, dpm_c2_port(&g->c2), &q, NULL, NULL, now_us(g)) != 0) {
+        return 4;
+    }
+    wake_master(g);
+    return 2;
 }
 
 /* One class-2 connection in the middle of the run: Initiate, a data set 47 read, Abort. */
-static void dpv1_class2(void)
+static void dpv1_class2(gen_t *g)
 {
-    dpm_slave_t *s = card_slave();
-    switch (g.c2_stage) {
+    dpm_slave_t *s = card_slave(g);
+    switch (g->c2_stage) {
     case 0:
-        if (g.opt.dpv1 && s->cycles >= g.opt.cycles / 3u && s->phase == DPM_PHASE_DATA_EXCH &&
-            dpm_c2_open(&g.c2, c2_opened, NULL, now_us()) == 0) {
-            g.c2_stage = 1;
-            membus_wake(g.master_port);
+        if (g->opt.dpv1 && s->cycles >= g->opt.cycles / 3u && s->phase == DPM_PHASE_DATA_EXCH &&
+            dpm_c2_open(&g->c2, c2_opened, g, now_us(g)) == 0) {
+            g->c2_stage = 1;
+            wake_master(g);
         }
         return;
     case 1:
-        if (!g.c2_open_done) return;
-        if (!g.c2_open_ok) {
-            g.c2_stage = 4;
-            return;
+        if (g->c2_open_done) {
+            g->c2_stage = c2_read(g);
         }
-        g.res->c2_connections++;
-        memset(&g.c2_call, 0, sizeof g.c2_call);
-        {
-            dpm_ds47_req_t q = {.ref = 0x42, .id = DS47_ID_MOVILINK, .n = 1};
-            q.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
-            if (dpm_ds47_start(&g.c2_call, dpm_c2_port(&g.c2), &q, NULL, NULL, now_us()) != 0) {
-                g.c2_stage = 4;
-                return;
-            }
-        }
-        g.c2_stage = 2;
-        membus_wake(g.master_port);
         return;
     case 2:
-        if (!dpm_call_done(&g.c2_call)) return;
-        g.res->ds47_calls++;
-        if (dpm_c2_abort(&g.c2, 0, c2_aborted, NULL, now_us()) != 0) {
-            g.c2_stage = 4;
+        if (!dpm_call_done(&g->c2_call)) return;
+        g->res->ds47_calls++;
+        if (dpm_c2_abort(&g->c2, 0, c2_aborted, g, now_us(g)) != 0) {
+            g->c2_stage = 4;
             return;
         }
-        g.c2_stage = 3;
-        membus_wake(g.master_port);
+        g->c2_stage = 3;
+        wake_master(g);
         return;
     case 3:
-        if (g.c2_abort_done || dpm_c2_state(&g.c2) == DPM_C2_CLOSED) g.c2_stage = 4;
+        if (g->c2_abort_done || dpm_c2_state(&g->c2) == DPM_C2_CLOSED) g->c2_stage = 4;
         return;
     default:
         return;
     }
 }
 
-static void reconfigure(const uint8_t *cfg, size_t len)
+static bool c2_busy(const gen_t *g)
+{
+    return g->c2_stage == 1 || g->c2_stage == 2 || g->c2_stage == 3;
+}
+
+static void reconfigure(gen_t *g, const uint8_t *cfg, size_t len)
 {
     dpm_slave_cfg_t sc;
-    slave_cfg(&sc, g.opt.address, cfg, len);
-    dp_master_reconfigure(&g.master, 0, &sc, now_us());
-    membus_wake(g.master_port);
+    slave_cfg(g, &sc, g->opt.address, cfg, len);
+    dp_master_reconfigure(g->master, 0, &sc, now_us(g));
+    wake_master(g);
+}
+
+/* The master falls silent until the card's watchdog expired, then starts again. */
+static void fault_silence(gen_t *g, const dpm_slave_t *s)
+{
+    if (g->fault_stage == 0) {
+        if (s->cycles >= g->opt.cycles / 3u && !g->master->waiting && !g->call_running &&
+            !c2_busy(g) && g->foreign.step < 0) {
+            dp_master_stop(g->master);
+            g->fault_until_ns = bus_ns(g) + 3ull * GEN_WATCHDOG_MS * 1000000ull;
+            g->fault_stage = 1;
+        }
+    } else if (bus_ns(g) >= g->fault_until_ns) {
+        dp_master_start(g->master, now_us(g));
+        wake_master(g);
+        g->res->restarts++;
+        g->fault_stage = 2;
+    }
+}
+
+/* Global_Control Clear_Data, then Operate. */
+static void fault_clear_data(gen_t *g, const dpm_slave_t *s)
+{
+    if (g->fault_stage == 2) {
+        if (s->cycles >= g->opt.cycles / 2u && s->phase == DPM_PHASE_DATA_EXCH) {
+            dp_master_global_control(g->master, DP_GC_CLEAR_DATA, 0);
+            wake_master(g);
+            g->fault_stage = 3;
+            g->fault_until_ns = bus_ns(g) + 20000000ull;
+        }
+    } else if (bus_ns(g) >= g->fault_until_ns) {
+        dp_master_global_control(g->master, 0x00, 0);
+        wake_master(g);
+        g->fault_stage = 4;
+    }
+}
+
+/* A configuration the card refuses, then the right one again. */
+static void fault_wrong_cfg(gen_t *g, const dpm_slave_t *s)
+{
+    if (g->fault_stage == 4) {
+        if (s->cycles >= 2u * g->opt.cycles / 3u && !g->master->waiting && !g->call_running) {
+            reconfigure(g, cfg_wrong, sizeof cfg_wrong);
+            g->fault_until_ns = bus_ns(g) + 100000000ull;
+            g->fault_stage = 5;
+        }
+    } else if (bus_ns(g) >= g->fault_until_ns && !g->master->waiting) {
+        reconfigure(g, cfg_param_3pd, sizeof cfg_param_3pd);
+        g->res->restarts += 2u;
+        g->fault_stage = 6;
+    }
 }
 
 /* --faults: at a third of the run the master falls silent until the card's watchdog expired, at
  * half Global_Control Clear_Data then Operate, at two thirds a configuration the card refuses,
  * then the right one again. */
-static void faults(void)
+static void faults(gen_t *g)
 {
-    if (!g.opt.faults) return;
-    dpm_slave_t *s = card_slave();
-    uint32_t n = g.opt.cycles;
-    switch (g.fault_stage) {
+    if (!g->opt.faults) return;
+    const dpm_slave_t *s = card_slave(g);
+    switch (g->fault_stage) {
     case 0:
-        if (s->cycles >= n / 3u && !g.master.waiting && !g.call_running && g.c2_stage != 1 &&
-            g.c2_stage != 2 && g.c2_stage != 3 && g.foreign.step < 0) {
-            dp_master_stop(&g.master);
-            g.fault_until_ns = g.bus.now_ns + 3ull * GEN_WATCHDOG_MS * 1000000ull;
-            g.fault_stage = 1;
-        }
-        return;
     case 1:
-        if (g.bus.now_ns >= g.fault_until_ns) {
-            dp_master_start(&g.master, now_us());
-            membus_wake(g.master_port);
-            g.res->restarts++;
-            g.fault_stage = 2;
-        }
+        fault_silence(g, s);
         return;
     case 2:
-        if (s->cycles >= n / 2u && s->phase == DPM_PHASE_DATA_EXCH) {
-            dp_master_global_control(&g.master, DP_GC_CLEAR_DATA, 0);
-            membus_wake(g.master_port);
-            g.fault_stage = 3;
-            g.fault_until_ns = g.bus.now_ns + 20000000ull;
-        }
-        return;
     case 3:
-        if (g.bus.now_ns >= g.fault_until_ns) {
-            dp_master_global_control(&g.master, 0x00, 0);
-            membus_wake(g.master_port);
-            g.fault_stage = 4;
-        }
+        fault_clear_data(g, s);
         return;
     case 4:
-        if (s->cycles >= 2u * n / 3u && !g.master.waiting && !g.call_running) {
-            reconfigure(cfg_wrong, sizeof cfg_wrong);
-            g.fault_until_ns = g.bus.now_ns + 100000000ull;
-            g.fault_stage = 5;
-        }
-        return;
     case 5:
-        if (g.bus.now_ns >= g.fault_until_ns && !g.master.waiting) {
-            reconfigure(cfg_param_3pd, sizeof cfg_param_3pd);
-            g.res->restarts += 2u;
-            g.fault_stage = 6;
-        }
+        fault_wrong_cfg(g, s);
         return;
     default:
         return;
     }
 }
 
-static bool quiet(void)
+static bool quiet(const gen_t *g)
 {
-    return !g.master.waiting && !g.master.gc_pending && g.foreign.step < 0;
+    return !g->master->waiting && !g->master->gc_pending && g->foreign.step < 0;
+}
+
+/* The second master, attached after the built-in one: in each round the master is polled first,
+ * so its deadline is current when the second master looks at it. */
+static void attach_foreign(gen_t *g)
+{
+    foreign_t *f = &g->foreign;
+    sim_station_t fs = {.ctx = f, .rx_char = foreign_rx, .poll = foreign_poll};
+    g->foreign_port = membus_attach(&g->rig.bus, &fs, &f->uart);
+    (void)f->uart.ops->set_baud(f->uart.ctx, g->opt.baud);
+    f->bus = &g->rig.bus;
+    f->master = g->master;
+    f->master_port = g->rig.master_port;
+    f->baud = g->opt.baud;
+    f->card = g->opt.address;
+    f->free_address = (uint8_t)(g->opt.address + 10u);
+    f->diag_first = true;
+}
+
+/* The card (and with --foreign a second one at address + 1), then the master serving them. The
+ * order of the stations on the bus decides who is polled first: it must stay as it is for the
+ * goldens to stay byte-identical. */
+static int assemble(gen_t *g, char *err, size_t errlen)
+{
+    rig_cfg_t rc = {.medium = RIG_MEDIUM_MEMBUS, .baud = g->opt.baud};
+    rig_init(&g->rig, &rc);
+    rig_tap_t tap = {.ctx = g, .frame = gen_tap, .card_event = card_event};
+    (void)rig_add_tap(&g->rig, &tap);
+    if (rig_open(&g->rig, err, errlen) != 0) {
+        return -1;
+    }
+    card_options_t co = {.address = g->opt.address, .strict_timing = true,
+                         .inverter = g->opt.inverter,
+                         .inverter_delay_us = g->opt.inverter_delay_us};
+    (void)rig_add_card(&g->rig, &co, 0);
+    if (g->opt.foreign) {
+        card_options_t co2 = {.address = (uint8_t)(g->opt.address + 1u), .strict_timing = true,
+                              .inverter = CARD_INVERTER_NONE};
+        (void)rig_add_card(&g->rig, &co2, 0);
+    }
+    dp_master_cfg_t mc = {.address = GEN_MASTER_ADDRESS, .baud = g->opt.baud,
+                          .strict_timing = true,
+                          .cycle_us = g->opt.foreign ? GEN_FOREIGN_CYCLE_US : GEN_CYCLE_US};
+    g->master = rig_add_master(&g->rig, &mc, 0);
+    g->foreign.step = -1;
+    if (g->opt.foreign) {
+        attach_foreign(g);
+    }
+    return 0;
+}
+
+/* The master's slaves and its DP-V1 class-2 side; the card's outputs ask for enable and 300 rpm
+ * (the drive follows once P100/P101 say FIELDBUS). */
+static void configure_master(gen_t *g)
+{
+    dpm_slave_cfg_t sc;
+    slave_cfg(g, &sc, g->opt.address, cfg_param_3pd, sizeof cfg_param_3pd);
+    dp_master_add_slave(g->master, &sc);
+    if (g->opt.foreign) {
+        slave_cfg(g, &sc, (uint8_t)(g->opt.address + 1u), (const uint8_t[]){0xF2}, 1);
+        dp_master_add_slave(g->master, &sc);
+    }
+    if (g->opt.dpv1) {
+        dpm_c2_cfg_t cc = {.slave = g->opt.address, .address = 1};
+        dpm_c2_init(&g->c2, &cc);
+        dp_master_add_c2(g->master, &g->c2);
+    }
+    g->out[8] = 0x00;
+    g->out[9] = 0x06;
+    g->out[10] = 0x05;
+    g->out[11] = 0xDC;
+    dp_master_set_outputs(g->master, 0, g->out, sizeof g->out);
+}
+
+static bool finished(gen_t *g)
+{
+    const dpm_slave_t *s = card_slave(g);
+    bool dpv1_busy = g->opt.dpv1 && (g->call_running || g->c2_stage == 2 || g->c2_stage == 3);
+    return s->cycles >= g->opt.cycles && g->fault_stage != 1 && quiet(g) && !dpv1_busy;
+}
+
+/* One step of the script after a slice of bus time. */
+static void script_step(gen_t *g, uint32_t *last_progress)
+{
+    const dpm_slave_t *s = card_slave(g);
+    param_channel(g);
+    dpv1_class1(g);
+    dpv1_class2(g);
+    faults(g);
+    if (g->opt.foreign && s->phase == DPM_PHASE_DATA_EXCH &&
+        s->cycles >= g->foreign_cycle + GEN_FOREIGN_EVERY && s->cycles < g->opt.cycles) {
+        g->foreign_cycle = s->cycles;
+        g->foreign.wanted = true;
+    }
+    if (g->opt.progress != NULL && s->cycles - *last_progress >= 10000u) {
+        *last_progress = s->cycles;
+        g->opt.progress(g->opt.ctx, s->cycles, g->res->telegrams);
+    }
+}
+
+/* Start-up may take a baud search and back-offs; each cycle at most a few ms (more with the
+ * faults' pauses). Returns 0, or -1 when the card never got through its cycles. */
+static int run_cycles(gen_t *g, char *err, size_t errlen)
+{
+    uint64_t limit_ns = 10000000000ull + (uint64_t)g->opt.cycles * 50000000ull;
+    uint32_t last_progress = 0;
+    const dpm_slave_t *s = card_slave(g);
+    while (!finished(g)) {
+        if (bus_ns(g) > limit_ns) {
+            (void)snprintf(err, errlen, "the card did not complete %u Data_Exchange cycles (%u "
+                           "done, master phase %s)", g->opt.cycles, s->cycles,
+                           dpm_phase_name(s->phase));
+            return -1;
+        }
+        /* Short steps while finishing, so the capture ends right after the last answer. */
+        membus_run_for_us(&g->rig.bus, s->cycles >= g->opt.cycles ? 20u : GEN_STEP_US);
+        script_step(g, &last_progress);
+    }
+    return 0;
+}
+
+static int check_options(const gen_options_t *opt, char *err, size_t errlen)
+{
+    if (opt->address > DFP21B_MAX_ADDRESS || (opt->foreign && opt->address >= 114u)) {
+        (void)snprintf(err, errlen, "address %u: the card needs 0..125%s", opt->address,
+                       opt->foreign ? " (and --foreign address + 1 and + 10 below 126)" : "");
+        return -1;
+    }
+    return 0;
+}
+
+static int gen_record(gen_t *g, char *err, size_t errlen)
+{
+    cap_writer_options_t wo = g->opt.writer;
+    wo.baud = g->opt.baud; /* pcapng records it (if_speed): a replay then knows the rate */
+    if (cap_writer_open(&g->w, g->opt.path, &wo, (uint64_t)GEN_EPOCH_S * 1000000000ull, err,
+                        errlen) != 0) {
+        return -1;
+    }
+    if (assemble(g, err, errlen) != 0) {
+        cap_writer_close(&g->w);
+        return -1;
+    }
+    configure_master(g);
+    if (run_cycles(g, err, errlen) != 0) {
+        cap_writer_close(&g->w);
+        return -1;
+    }
+    gen_result_t *res = g->res;
+    res->cycles = card_slave(g)->cycles;
+    res->bus_ns = bus_ns(g);
+    res->foreign_bursts = g->foreign.bursts;
+    res->watchdog_expiries = g->wd_seen;
+    if (cap_writer_close(&g->w) != 0 || g->write_failed) {
+        (void)snprintf(err, errlen, "could not write the whole capture to %s", g->opt.path);
+        return -1;
+    }
+    return 0;
 }
 
 int gen_run(const gen_options_t *opt, gen_result_t *res, char *err, size_t errlen)
 {
-    memset(&g, 0, sizeof g);
     memset(res, 0, sizeof *res);
-    g.opt = *opt;
-    g.res = res;
-    if (g.opt.baud == 0u) g.opt.baud = GEN_DEFAULT_BAUD;
-    if (g.opt.address > DFP21B_MAX_ADDRESS || (g.opt.foreign && g.opt.address >= 114u)) {
-        snprintf(err, errlen, "address %u: the card needs 0..125%s", g.opt.address,
-                 g.opt.foreign ? " (and --foreign address + 1 and + 10 below 126)" : "");
+    if (check_options(opt, err, errlen) != 0) {
         return -1;
     }
-    cap_writer_options_t wo = g.opt.writer;
-    wo.baud = g.opt.baud; /* pcapng records it (if_speed): a replay then knows the rate */
-    if (cap_writer_open(&g.w, g.opt.path, &wo, (uint64_t)GEN_EPOCH_S * 1000000000ull, err,
-                        errlen) != 0) {
+    gen_t *g = calloc(1, sizeof *g);
+    if (g == NULL) {
+        (void)snprintf(err, errlen, "out of memory");
         return -1;
     }
-    membus_init(&g.bus);
-    membus_set_tap(&g.bus, gen_tap, NULL);
-    hal_uart_t card_uart;
-    hal_uart_t card2_uart = {.ops = NULL, .ctx = NULL};
-    hal_uart_t master_uart;
-    sim_station_t cs = card_station(&g.card);
-    membus_attach(&g.bus, &cs, &card_uart);
-    if (g.opt.foreign) {
-        sim_station_t cs2 = card_station(&g.card2);
-        membus_attach(&g.bus, &cs2, &card2_uart);
-    }
-    sim_station_t ms = master_station(&g.master);
-    g.master_port = membus_attach(&g.bus, &ms, &master_uart);
-    g.foreign.step = -1;
-    if (g.opt.foreign) {
-        /* After the master: in each round the master is polled first, so its deadline is
-         * current when the second master looks at it. */
-        sim_station_t fs = {.ctx = &g.foreign, .rx_char = foreign_rx, .poll = foreign_poll};
-        g.foreign_port = membus_attach(&g.bus, &fs, &g.foreign.uart);
-        g.foreign.uart.ops->set_baud(g.foreign.uart.ctx, g.opt.baud);
-        g.foreign.bus = &g.bus;
-        g.foreign.master = &g.master;
-        g.foreign.master_port = g.master_port;
-        g.foreign.baud = g.opt.baud;
-        g.foreign.card = g.opt.address;
-        g.foreign.free_address = (uint8_t)(g.opt.address + 10u);
-        g.foreign.diag_first = true;
-    }
-    card_options_t co = {.address = g.opt.address, .strict_timing = true,
-                         .inverter = g.opt.inverter,
-                         .inverter_delay_us = g.opt.inverter_delay_us, .event = card_event};
-    char cerr[256];
-    (void)card_station_init(&g.card, &co, card_uart, 0, cerr, sizeof cerr);
-    if (g.opt.foreign) {
-        card_options_t co2 = {.address = (uint8_t)(g.opt.address + 1u), .strict_timing = true,
-                              .inverter = CARD_INVERTER_NONE};
-        (void)card_station_init(&g.card2, &co2, card2_uart, 0, cerr, sizeof cerr);
-    }
-    dp_master_cfg_t mc = {.address = GEN_MASTER_ADDRESS, .baud = g.opt.baud,
-                          .strict_timing = true,
-                          .cycle_us = g.opt.foreign ? GEN_FOREIGN_CYCLE_US : GEN_CYCLE_US,
-                          .uart = master_uart};
-    dp_master_init(&g.master, &mc, 0);
-    dpm_slave_cfg_t sc;
-    slave_cfg(&sc, g.opt.address, cfg_param_3pd, sizeof cfg_param_3pd);
-    dp_master_add_slave(&g.master, &sc);
-    if (g.opt.foreign) {
-        slave_cfg(&sc, (uint8_t)(g.opt.address + 1u), (const uint8_t[]){0xF2}, 1);
-        dp_master_add_slave(&g.master, &sc);
-    }
-    if (g.opt.dpv1) {
-        dpm_c2_cfg_t cc = {.slave = g.opt.address, .address = 1};
-        dpm_c2_init(&g.c2, &cc);
-        dp_master_add_c2(&g.master, &g.c2);
-    }
-    /* Enable and 300 rpm: the drive follows once P100/P101 say FIELDBUS. */
-    g.out[8] = 0x00;
-    g.out[9] = 0x06;
-    g.out[10] = 0x05;
-    g.out[11] = 0xDC;
-    dp_master_set_outputs(&g.master, 0, g.out, sizeof g.out);
-
-    /* Start-up may take a baud search and back-offs; each cycle at most a few ms (more with
-     * the faults' pauses). */
-    uint64_t limit_ns = 10000000000ull + (uint64_t)g.opt.cycles * 50000000ull;
-    uint32_t last_progress = 0;
-    dpm_slave_t *s = card_slave();
-    while (s->cycles < g.opt.cycles || g.fault_stage == 1 || !quiet() ||
-           (g.opt.dpv1 && (g.call_running || g.c2_stage == 2 || g.c2_stage == 3))) {
-        if (g.bus.now_ns > limit_ns) {
-            snprintf(err, errlen, "the card did not complete %u Data_Exchange cycles (%u done, "
-                     "master phase %s)", g.opt.cycles, s->cycles, dpm_phase_name(s->phase));
-            cap_writer_close(&g.w);
-            return -1;
-        }
-        /* Short steps while finishing, so the capture ends right after the last answer. */
-        membus_run_for_us(&g.bus, s->cycles >= g.opt.cycles ? 20u : GEN_STEP_US);
-        param_channel();
-        dpv1_class1();
-        dpv1_class2();
-        faults();
-        if (g.opt.foreign && s->phase == DPM_PHASE_DATA_EXCH &&
-            s->cycles >= g.foreign_cycle + GEN_FOREIGN_EVERY && s->cycles < g.opt.cycles) {
-            g.foreign_cycle = s->cycles;
-            g.foreign.wanted = true;
-        }
-        if (g.opt.progress != NULL && s->cycles - last_progress >= 10000u) {
-            last_progress = s->cycles;
-            g.opt.progress(g.opt.ctx, s->cycles, res->telegrams);
-        }
-    }
-    res->cycles = s->cycles;
-    res->bus_ns = g.bus.now_ns;
-    res->foreign_bursts = g.foreign.bursts;
-    res->watchdog_expiries = g.wd_seen;
-    if (cap_writer_close(&g.w) != 0 || g.write_failed) {
-        snprintf(err, errlen, "could not write the whole capture to %s", g.opt.path);
-        return -1;
-    }
-    return 0;
+    g->opt = *opt;
+    g->res = res;
+    if (g->opt.baud == 0u) g->opt.baud = GEN_DEFAULT_BAUD;
+    int rc = gen_record(g, err, errlen);
+    free(g);
+    return rc;
 }

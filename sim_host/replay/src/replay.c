@@ -68,11 +68,22 @@ static void bus_tap(void *ctx, uint64_t t_start_ns, const uint8_t *frame, size_t
     }
 }
 
-static void card_event(void *ctx, const dp_event_t *ev)
+static void card_event(void *ctx, unsigned card, const dp_event_t *ev)
 {
     replay_t *r = ctx;
+    (void)card;
     if (r->opt.on_card_event != NULL) {
-        r->opt.on_card_event(r->opt.ctx, r->bus.now_ns, ev);
+        r->opt.on_card_event(r->opt.ctx, r->rig.bus.now_ns, ev);
+    }
+}
+
+static void param_service(void *ctx, unsigned card, uint8_t channel,
+                          const uint8_t req[ML_TELEGRAM_LEN], const uint8_t rsp[ML_TELEGRAM_LEN])
+{
+    replay_t *r = ctx;
+    (void)card;
+    if (r->opt.param_observer != NULL) {
+        r->opt.param_observer(r->opt.param_observer_ctx, channel, req, rsp);
     }
 }
 
@@ -109,26 +120,35 @@ int replay_init(replay_t *r, const replay_options_t *opt, char *err, size_t errl
     }
     memset(r->last_fc, 0xFF, sizeof r->last_fc);
     r->time_resolution_us = true;
-    membus_init(&r->bus);
-    membus_set_tap(&r->bus, bus_tap, r);
-    hal_uart_t card_uart;
-    sim_station_t cs = card_station(&r->card);
-    r->card_port = membus_attach(&r->bus, &cs, &card_uart);
-    /* The injector is only a UART: it transmits when replay_feed says, and hears nothing. */
-    sim_station_t inj = {0};
-    r->inj_port = membus_attach(&r->bus, &inj, &r->inj_uart);
-    r->inj_baud = r->opt.baud;
-    (void)r->inj_uart.ops->set_baud(r->inj_uart.ctx, r->inj_baud);
+    rig_cfg_t rc = {.medium = RIG_MEDIUM_MEMBUS, .baud = r->opt.baud};
+    rig_init(&r->rig, &rc);
+    rig_tap_t tap = {.ctx = r, .frame = bus_tap, .card_event = card_event,
+                     .param = param_service};
+    (void)rig_add_tap(&r->rig, &tap);
+    if (rig_open(&r->rig, err, errlen) != 0) {
+        return -1;
+    }
     card_options_t co = {.address = opt->address,
                          .fixed_baud = opt->fixed_card_baud ? r->opt.baud : 0u,
                          .strict_timing = true,
                          .inverter = opt->inverter,
-                         .inverter_delay_us = opt->inverter_delay_us,
-                         .event = card_event,
-                         .ctx = r,
-                         .param_observer = opt->param_observer,
-                         .param_observer_ctx = opt->param_observer_ctx};
-    return card_station_init(&r->card, &co, card_uart, 0, err, errlen);
+                         .inverter_delay_us = opt->inverter_delay_us};
+    rig_card_t *card = rig_add_card(&r->rig, &co, 0);
+    if (card == NULL) {
+        (void)snprintf(err, errlen, "the card could not be put on the bus");
+        return -1;
+    }
+    r->cs = &card->cs;
+    /* The injector is only a UART: it transmits when replay_feed says, and hears nothing. */
+    sim_station_t inj = {0};
+    r->inj_port = membus_attach(&r->rig.bus, &inj, &r->inj_uart);
+    r->inj_baud = r->opt.baud;
+    (void)r->inj_uart.ops->set_baud(r->inj_uart.ctx, r->inj_baud);
+    if (card->nvm_note[0] != '\0') {
+        (void)snprintf(err, errlen, "%s", card->nvm_note);
+        return -1;
+    }
+    return 0;
 }
 
 uint32_t replay_bus_baud(const replay_t *r, const cap_record_t *rec)
@@ -155,20 +175,43 @@ static bool stop_requested(const replay_t *r)
     return r->opt.stop != NULL && *r->opt.stop != 0;
 }
 
-/* --speed real: sleeps until the wall clock reaches bus time t. False when a stop request ended
- * the wait (a signal interrupts the sleep: EINTR). */
-static bool wait_wall(const replay_t *r, uint64_t t)
+static void give_service_turn(const replay_t *r)
 {
-    uint64_t due = r->wall_start_ns + t;
-    if (due <= host_clock_mono_ns()) {
-        return true;
+    if (r->opt.service != NULL) {
+        r->opt.service(r->opt.service_ctx);
     }
-    struct timespec ts = {.tv_sec = (time_t)(due / 1000000000u),
-                          .tv_nsec = (long)(due % 1000000000u)};
+}
+
+/* Sleeps until the monotonic clock reads due_ns. False when a stop request ended the wait (a
+ * signal interrupts the sleep: EINTR). */
+static bool sleep_until(const replay_t *r, uint64_t due_ns)
+{
+    struct timespec ts = {.tv_sec = (time_t)(due_ns / 1000000000u),
+                          .tv_nsec = (long)(due_ns % 1000000000u)};
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) != 0) {
         if (stop_requested(r)) {
             return false;
         }
+    }
+    return true;
+}
+
+/* --speed real: sleeps until the wall clock reaches bus time t, giving the service hook its
+ * turns meanwhile. False when a stop request ended the wait. */
+static bool wait_wall(const replay_t *r, uint64_t t)
+{
+    uint64_t due = r->wall_start_ns + t;
+    uint64_t now = host_clock_mono_ns();
+    while (due > now) {
+        uint64_t step = due;
+        if (r->opt.service != NULL && due - now > REPLAY_SERVICE_NS) {
+            step = now + REPLAY_SERVICE_NS;
+        }
+        if (!sleep_until(r, step)) {
+            return false;
+        }
+        give_service_turn(r);
+        now = host_clock_mono_ns();
     }
     return true;
 }
@@ -179,16 +222,17 @@ static bool wait_wall(const replay_t *r, uint64_t t)
  * and sets interrupted, when a stop request ended it short of t. */
 static bool run_to(replay_t *r, uint64_t t)
 {
-    while (r->bus.now_ns < t) {
+    while (r->rig.bus.now_ns < t) {
         if (stop_requested(r)) {
             r->interrupted = true;
             return false;
         }
-        uint64_t next = t - r->bus.now_ns > REPLAY_SLICE_NS ? r->bus.now_ns + REPLAY_SLICE_NS : t;
+        uint64_t next = t - r->rig.bus.now_ns > REPLAY_SLICE_NS ? r->rig.bus.now_ns + REPLAY_SLICE_NS : t;
         if (r->opt.speed == REPLAY_SPEED_REAL && !wait_wall(r, next)) {
             continue; /* stopped while waiting: the loop's test ends it */
         }
-        membus_run_until_ns(&r->bus, next);
+        membus_run_until_ns(&r->rig.bus, next);
+        give_service_turn(r);
     }
     return true;
 }
@@ -230,10 +274,10 @@ static void close_window(replay_t *r)
     m->fcb_repeat = r->pend_fcb_repeat;
     m->card_state = r->pend_card_state;
     /* The rate as the request ended: still searching means the card did not take it. */
-    m->baud_state = dp_slave_baud_state(&r->card.card.dp);
-    m->card_baud = dp_slave_baud(&r->card.card.dp);
+    m->baud_state = dp_slave_baud_state(&r->cs->card.dp);
+    m->card_baud = dp_slave_baud(&r->cs->card.dp);
     m->set_prm_seen = r->set_prm_seen;
-    const dfp21b_t *card = &r->card.card;
+    const dfp21b_t *card = &r->cs->card;
     m->layout.known = card->pd.valid;
     m->layout.param_channel = card->pd.param_channel;
     /* The newest ring entries are the request and (if any) the card's answer. */
@@ -300,15 +344,15 @@ static uint64_t settle_ns(const replay_t *r)
  * position it reports grows). */
 static bool card_at_rest(const replay_t *r)
 {
-    const dp_slave_t *dp = &r->card.card.dp;
+    const dp_slave_t *dp = &r->cs->card.dp;
     if (dp_slave_baud_state(dp) == DP_BAUD_CONTROL) {
         return false;
     }
     if (dp->wd_on && dp_slave_state(dp) != DP_STATE_WAIT_PRM) {
         return false;
     }
-    if (r->card.inverter == CARD_INVERTER_SIM &&
-        (r->card.md.speed_actual_mrpm != 0 || r->card.md.speed_setpoint_mrpm != 0)) {
+    if (r->cs->inverter == CARD_INVERTER_SIM &&
+        (r->cs->md.speed_actual_mrpm != 0 || r->cs->md.speed_setpoint_mrpm != 0)) {
         return false;
     }
     return true;
@@ -324,22 +368,22 @@ static bool card_at_rest(const replay_t *r)
  * for the record; the record becomes the anchor when the gap was shortened. */
 static uint64_t shorten_gap(replay_t *r, const cap_record_t *rec, uint64_t want)
 {
-    if (!run_to(r, r->bus.now_ns + settle_ns(r))) {
+    if (!run_to(r, r->rig.bus.now_ns + settle_ns(r))) {
         return want;
     }
     while (!card_at_rest(r)) {
-        if (want - r->bus.now_ns <= REPLAY_SLICE_NS) {
+        if (want - r->rig.bus.now_ns <= REPLAY_SLICE_NS) {
             r->gaps_turning++;
             return want;
         }
-        if (!run_to(r, r->bus.now_ns + REPLAY_SLICE_NS)) {
+        if (!run_to(r, r->rig.bus.now_ns + REPLAY_SLICE_NS)) {
             return want;
         }
     }
-    uint64_t period = dp_slave_baud_state(&r->card.card.dp) == DP_BAUD_SEARCH
+    uint64_t period = dp_slave_baud_state(&r->cs->card.dp) == DP_BAUD_SEARCH
                           ? replay_search_cycle_ns()
                           : 1000u; /* fixed rate: keep whole microseconds, the card's clock */
-    uint64_t cut = (want - r->bus.now_ns) / period * period;
+    uint64_t cut = (want - r->rig.bus.now_ns) / period * period;
     if (cut == 0u) {
         return want;
     }
@@ -351,6 +395,85 @@ static uint64_t shorten_gap(replay_t *r, const cap_record_t *rec, uint64_t want)
     r->cut_ns += cut;
     anchor_at(r, rec->t_ns, want - cut);
     return want - cut;
+}
+
+/* A record without a time (text captures): right after the telegram before it, with the gap a
+ * station would leave. */
+static uint64_t untimed_slot(replay_t *r, bool starts_cycle, uint32_t baud, uint64_t busy)
+{
+    r->untimed++;
+    uint32_t gap = starts_cycle ? REPLAY_SYNTH_GAP_REQUEST_BITS : REPLAY_SYNTH_GAP_ANSWER_BITS;
+    uint64_t t = busy + (r->injected > 0u ? bits_ns(baud, gap) : 0u);
+    return t > r->rig.bus.now_ns ? t : r->rig.bus.now_ns;
+}
+
+/* The idle the line needs before this kind of telegram: TSYN before a request or token, min TSDR
+ * before an answer. */
+static uint64_t idle_before(const replay_frame_t *m, bool starts_cycle, uint32_t baud)
+{
+    if (starts_cycle) {
+        return bits_ns(baud, FDL_TSYN_BITS);
+    }
+    if (m->kind == REPLAY_KIND_RESPONSE || m->kind == REPLAY_KIND_SC) {
+        return bits_ns(baud, FDL_MIN_TSDR_DEFAULT_BITS);
+    }
+    return 0u;
+}
+
+/* The record's time goes back: a difference across it means nothing (and must never be taken
+ * unsigned). By less than the spacing of the records before, the record is out of order (merged
+ * or buffered recorders): it goes on right after the one before and the records after it keep
+ * their recorded times. By more, the clock stepped: the record goes on at the spacing the
+ * records before had (on a cyclic bus the best guess the step leaves; right after the one before
+ * when there is none) and becomes the anchor, so the records after it keep their spacing from
+ * it. Returns true, with the bus time in *t, for a record out of order. */
+static bool time_went_back(replay_t *r, const cap_record_t *rec, uint64_t earliest, uint64_t *t)
+{
+    uint64_t back = r->last_time_ns - rec->t_ns;
+    if (r->backwards == 0u) {
+        r->first_back_record = rec->index;
+        r->first_back_position = rec->position;
+    }
+    r->backwards++;
+    if (back > r->max_back_ns) {
+        r->max_back_ns = back;
+    }
+    uint64_t soonest = earliest > r->rig.bus.now_ns ? earliest : r->rig.bus.now_ns;
+    if (back < r->last_spacing_ns) {
+        r->out_of_order++;
+        *t = soonest;
+        return true;
+    }
+    r->clock_steps++;
+    uint64_t paced = r->last_inject_ns + r->last_spacing_ns;
+    anchor_at(r, rec->t_ns, paced > soonest ? paced : soonest);
+    return false;
+}
+
+/* A recorded time that would overlap the telegram before it goes on at the line's earliest;
+ * counted, and reported as a conflict beyond the capture's time resolution. */
+static uint64_t defer_to_line(replay_t *r, const cap_record_t *rec, uint64_t want,
+                              uint64_t earliest)
+{
+    if (want >= earliest) {
+        return want;
+    }
+    uint64_t d = earliest - want;
+    r->deferred++;
+    if (d > r->max_defer_ns) {
+        r->max_defer_ns = d;
+    }
+    /* Stations time their telegrams in whole microseconds, and a capture may round its
+     * timestamps to them: within that, a moved telegram is no conflict. */
+    uint64_t tolerance = 1000u + (r->time_resolution_us ? 1000u : 0u);
+    if (d > tolerance) {
+        if (r->deferred_beyond_resolution == 0u) {
+            r->first_conflict_record = rec->index;
+            r->first_conflict_position = rec->position;
+        }
+        r->deferred_beyond_resolution++;
+    }
+    return earliest;
 }
 
 /* When the record goes onto the bus (bus time). Never while the line is busy: a recorded time
@@ -365,86 +488,44 @@ static uint64_t schedule(replay_t *r, const cap_record_t *rec, const replay_fram
     bool starts_cycle = m->kind == REPLAY_KIND_REQUEST || m->kind == REPLAY_KIND_TOKEN;
     /* Let the card answer the previous telegram first: its reply then occupies the line. */
     if (!run_to(r, r->last_end_ns)) {
-        return r->bus.now_ns;
+        return r->rig.bus.now_ns;
     }
-    uint64_t busy = r->bus.line_busy_until_ns > r->last_end_ns ? r->bus.line_busy_until_ns
-                                                               : r->last_end_ns;
+    const membus_t *bus = &r->rig.bus;
+    uint64_t busy = bus->line_busy_until_ns > r->last_end_ns ? bus->line_busy_until_ns
+                                                             : r->last_end_ns;
     if (!rec->has_time) {
-        r->untimed++;
-        uint32_t gap = starts_cycle ? REPLAY_SYNTH_GAP_REQUEST_BITS : REPLAY_SYNTH_GAP_ANSWER_BITS;
-        uint64_t t = busy + (r->injected > 0u ? bits_ns(baud, gap) : 0u);
-        return t > r->bus.now_ns ? t : r->bus.now_ns;
+        return untimed_slot(r, starts_cycle, baud, busy);
     }
     if ((rec->t_ns % 1000u) != 0u) {
         r->time_resolution_us = false;
     }
-    uint64_t idle = starts_cycle ? bits_ns(baud, FDL_TSYN_BITS)
-                    : (m->kind == REPLAY_KIND_RESPONSE || m->kind == REPLAY_KIND_SC)
-                        ? bits_ns(baud, FDL_MIN_TSDR_DEFAULT_BITS)
-                        : 0u;
-    uint64_t earliest = r->injected > 0u || busy > 0u ? busy + idle : 0u;
+    uint64_t earliest = r->injected > 0u || busy > 0u
+                            ? busy + idle_before(m, starts_cycle, baud)
+                            : 0u;
     if (!r->have_anchor) {
         /* The first timed record: earlier untimed ones (if any) keep their synthetic times. */
         uint64_t start = r->injected > 0u ? busy + bits_ns(baud, REPLAY_SYNTH_GAP_REQUEST_BITS)
                                           : 0u;
         anchor_at(r, rec->t_ns, start);
     } else if (r->have_last_time && rec->t_ns < r->last_time_ns) {
-        /* The time goes back: a difference across it means nothing (and must never be taken
-         * unsigned). By less than the spacing of the records before, the record is out of
-         * order (merged or buffered recorders): it goes on right after the one before and the
-         * records after it keep their recorded times. By more, the clock stepped: the record
-         * goes on at the spacing the records before had (on a cyclic bus the best guess the
-         * step leaves; right after the one before when there is none) and becomes the anchor,
-         * so the records after it keep their spacing from it. */
-        uint64_t back = r->last_time_ns - rec->t_ns;
-        if (r->backwards == 0u) {
-            r->first_back_record = rec->index;
-            r->first_back_position = rec->position;
+        uint64_t t = 0;
+        if (time_went_back(r, rec, earliest, &t)) {
+            return t;
         }
-        r->backwards++;
-        if (back > r->max_back_ns) {
-            r->max_back_ns = back;
-        }
-        uint64_t soonest = earliest > r->bus.now_ns ? earliest : r->bus.now_ns;
-        if (back < r->last_spacing_ns) {
-            r->out_of_order++;
-            return soonest;
-        }
-        r->clock_steps++;
-        uint64_t paced = r->last_inject_ns + r->last_spacing_ns;
-        anchor_at(r, rec->t_ns, paced > soonest ? paced : soonest);
     } else if (r->have_last_time) {
         r->last_spacing_ns = rec->t_ns - r->last_time_ns;
     }
     r->have_last_time = true;
     r->last_time_ns = rec->t_ns;
     uint64_t want = bus_time_of(r, rec->t_ns);
-    if (want > r->bus.now_ns && want - r->bus.now_ns > settle_ns(r)) {
+    if (want > bus->now_ns && want - bus->now_ns > settle_ns(r)) {
         want = shorten_gap(r, rec, want);
         if (r->interrupted) {
-            return r->bus.now_ns;
+            return bus->now_ns;
         }
     }
-    uint64_t t = want;
-    if (t < earliest) {
-        uint64_t d = earliest - t;
-        r->deferred++;
-        if (d > r->max_defer_ns) {
-            r->max_defer_ns = d;
-        }
-        /* Stations time their telegrams in whole microseconds, and a capture may round its
-         * timestamps to them: within that, a moved telegram is no conflict. */
-        uint64_t tolerance = 1000u + (r->time_resolution_us ? 1000u : 0u);
-        if (d > tolerance) {
-            if (r->deferred_beyond_resolution == 0u) {
-                r->first_conflict_record = rec->index;
-                r->first_conflict_position = rec->position;
-            }
-            r->deferred_beyond_resolution++;
-        }
-        t = earliest;
-    }
-    return t > r->bus.now_ns ? t : r->bus.now_ns;
+    uint64_t t = defer_to_line(r, rec, want, earliest);
+    return t > bus->now_ns ? t : bus->now_ns;
 }
 
 static bool is_card_answer(const replay_t *r, const replay_frame_t *m)
@@ -474,6 +555,89 @@ static void note_rate(replay_t *r, const cap_record_t *rec)
     }
 }
 
+/* The card's recorded answer: not injected (the card produces its own); it is what the pending
+ * request's answer is compared with. */
+static void own_answer_recorded(replay_t *r, const cap_record_t *rec)
+{
+    r->own_answers++;
+    if (!r->prev_request_to_card) {
+        r->stray_answers++;
+    } else if (r->pending && !r->pend_expected) {
+        r->pend_expected = true;
+        keep(&r->pend_expected_rec, REPLAY_FROM_CAPTURE, 0, rec->index, rec->position, rec->data,
+             rec->len);
+        (void)snprintf(r->pend_expected_problem, sizeof r->pend_expected_problem, "%s",
+                       rec->problem);
+    }
+    r->prev_request_to_card = false;
+}
+
+/* A request to the card opens the window in which its answer is collected (with check on), and
+ * its FCB is remembered per master. */
+static void request_to_card(replay_t *r, const cap_record_t *rec, const replay_frame_t *m,
+                            uint64_t t)
+{
+    if (r->opt.check && rec->len > 0u) {
+        r->pending = true;
+        r->pend_service = replay_service_of(m);
+        keep(&r->pend_request, REPLAY_FROM_CAPTURE, t, rec->index, rec->position, rec->data,
+             rec->len);
+        (void)snprintf(r->pend_request_problem, sizeof r->pend_request_problem, "%s",
+                       rec->problem);
+        r->pend_expected = false;
+        r->pend_actual = false;
+        r->pend_card_state = dp_slave_state(&r->cs->card.dp);
+        uint8_t prev = r->last_fc[m->sa];
+        r->pend_fcb_repeat = (m->fc & FDL_FC_FCV) != 0u && prev != 0xFFu &&
+                             (prev & FDL_FC_FCB) == (m->fc & FDL_FC_FCB) &&
+                             (m->fc & FDL_FC_CODE_MASK) != FDL_REQ_FDL_STATUS;
+    }
+    r->last_fc[m->sa] = m->fc;
+    if (replay_service_of(m) == REPLAY_SVC_SET_PRM) {
+        r->set_prm_seen = true;
+    }
+}
+
+/* Puts the record on the bus now, at baud. */
+static void inject(replay_t *r, const cap_record_t *rec, const replay_frame_t *m, uint64_t t,
+                   uint32_t baud)
+{
+    close_window(r);
+    if (baud != r->inj_baud) {
+        r->inj_baud = baud;
+        (void)r->inj_uart.ops->set_baud(r->inj_uart.ctx, baud);
+    }
+    bool to_card = m->kind == REPLAY_KIND_REQUEST && m->has_header && m->da == r->opt.address &&
+                   m->da != FDL_ADDR_BROADCAST;
+    if (to_card) {
+        request_to_card(r, rec, m, t);
+    }
+    r->prev_request_to_card = to_card && replay_expects_answer(m);
+    if (rec->len > 0u) {
+        r->injecting = true;
+        r->inj_rec = rec;
+        (void)r->inj_uart.ops->transmit(r->inj_uart.ctx, rec->data, rec->len,
+                                        membus_now_us(&r->rig.bus));
+        r->injecting = false;
+        r->inj_rec = NULL;
+        r->injected++;
+    }
+    r->last_inject_ns = r->rig.bus.now_ns;
+    r->last_end_ns = r->rig.bus.now_ns + (uint64_t)hal_uart_char_ns(baud) * rec->len;
+    r->last_record_ns = r->rig.bus.now_ns;
+}
+
+static void count_record(replay_t *r, const cap_record_t *rec)
+{
+    r->records++;
+    r->last_index = rec->index;
+    r->octets += rec->len;
+    if (rec->problem[0] != '\0' || rec->len < rec->orig_len) {
+        note_damage(r, rec);
+    }
+    note_rate(r, rec);
+}
+
 void replay_feed(replay_t *r, const cap_record_t *rec)
 {
     if (!r->started) {
@@ -483,89 +647,26 @@ void replay_feed(replay_t *r, const cap_record_t *rec)
     if (r->interrupted) {
         return; /* the bus has stopped: nothing more goes on it */
     }
-    replay_frame_t m;
-    bool on_wire = rec->len > 0u;
-    bool own_answer = false;
-    uint32_t baud = r->opt.baud;
-    uint64_t t = 0;
-    if (on_wire) {
-        replay_frame_parse(rec->data, rec->len, &m);
-        own_answer = is_card_answer(r, &m);
-        if (!own_answer) {
-            baud = replay_bus_baud(r, rec);
-            t = schedule(r, rec, &m, baud);
-            if (r->interrupted || !run_to(r, t)) {
-                return; /* stopped in the gap before it: the record was not replayed */
-            }
-        }
-    }
-    r->records++;
-    r->last_index = rec->index;
-    r->octets += rec->len;
-    if (rec->problem[0] != '\0' || rec->len < rec->orig_len) {
-        note_damage(r, rec);
-    }
-    note_rate(r, rec);
-    if (!on_wire) {
+    if (rec->len == 0u) {
         /* A line a text importer could not read: nothing went on the wire. It is listed as
          * damaged and leaves the order of the telegrams around it alone. */
+        count_record(r, rec);
         return;
     }
-    if (own_answer) {
-        /* The card produces its own answers; the recorded one is what to expect. */
-        r->own_answers++;
-        if (!r->prev_request_to_card) {
-            r->stray_answers++;
-        } else if (r->pending && !r->pend_expected) {
-            r->pend_expected = true;
-            keep(&r->pend_expected_rec, REPLAY_FROM_CAPTURE, 0, rec->index, rec->position,
-                 rec->data, rec->len);
-            snprintf(r->pend_expected_problem, sizeof r->pend_expected_problem, "%s",
-                     rec->problem);
-        }
-        r->prev_request_to_card = false;
+    replay_frame_t m;
+    replay_frame_parse(rec->data, rec->len, &m);
+    if (is_card_answer(r, &m)) {
+        count_record(r, rec);
+        own_answer_recorded(r, rec);
         return;
     }
-    close_window(r);
-    if (baud != r->inj_baud) {
-        r->inj_baud = baud;
-        (void)r->inj_uart.ops->set_baud(r->inj_uart.ctx, baud);
+    uint32_t baud = replay_bus_baud(r, rec);
+    uint64_t t = schedule(r, rec, &m, baud);
+    if (r->interrupted || !run_to(r, t)) {
+        return; /* stopped in the gap before it: the record was not replayed */
     }
-    bool to_card = m.kind == REPLAY_KIND_REQUEST && m.has_header && m.da == r->opt.address &&
-                   m.da != FDL_ADDR_BROADCAST;
-    if (to_card && r->opt.check && rec->len > 0u) {
-        r->pending = true;
-        r->pend_service = replay_service_of(&m);
-        keep(&r->pend_request, REPLAY_FROM_CAPTURE, t, rec->index, rec->position, rec->data,
-             rec->len);
-        snprintf(r->pend_request_problem, sizeof r->pend_request_problem, "%s", rec->problem);
-        r->pend_expected = false;
-        r->pend_actual = false;
-        r->pend_card_state = dp_slave_state(&r->card.card.dp);
-        uint8_t prev = r->last_fc[m.sa];
-        r->pend_fcb_repeat = (m.fc & FDL_FC_FCV) != 0u && prev != 0xFFu &&
-                             (prev & FDL_FC_FCB) == (m.fc & FDL_FC_FCB) &&
-                             (m.fc & FDL_FC_CODE_MASK) != FDL_REQ_FDL_STATUS;
-    }
-    if (to_card) {
-        r->last_fc[m.sa] = m.fc;
-        if (replay_service_of(&m) == REPLAY_SVC_SET_PRM) {
-            r->set_prm_seen = true;
-        }
-    }
-    r->prev_request_to_card = to_card && replay_expects_answer(&m);
-    if (rec->len > 0u) {
-        r->injecting = true;
-        r->inj_rec = rec;
-        (void)r->inj_uart.ops->transmit(r->inj_uart.ctx, rec->data, rec->len,
-                                        membus_now_us(&r->bus));
-        r->injecting = false;
-        r->inj_rec = NULL;
-        r->injected++;
-    }
-    r->last_inject_ns = r->bus.now_ns;
-    r->last_end_ns = r->bus.now_ns + (uint64_t)hal_uart_char_ns(baud) * rec->len;
-    r->last_record_ns = r->bus.now_ns;
+    count_record(r, rec);
+    inject(r, rec, &m, t, baud);
 }
 
 void replay_finish(replay_t *r)
@@ -576,8 +677,8 @@ void replay_finish(replay_t *r)
     r->finished = true;
     if (run_to(r, r->last_end_ns)) {
         /* The card has handed its answer to the UART by now; let it go out. */
-        uint64_t end = r->bus.line_busy_until_ns > r->bus.now_ns ? r->bus.line_busy_until_ns
-                                                                : r->bus.now_ns;
+        uint64_t end = r->rig.bus.line_busy_until_ns > r->rig.bus.now_ns ? r->rig.bus.line_busy_until_ns
+                                                                : r->rig.bus.now_ns;
         (void)run_to(r, end + 1000u);
     }
     if (r->interrupted) {
@@ -593,153 +694,4 @@ void replay_finish(replay_t *r)
         r->tail_position = r->pend_request.position;
     }
     close_window(r);
-}
-
-/* ---- first pass: who answers --------------------------------------------------------------- */
-
-void replay_scan_init(replay_scan_t *s)
-{
-    memset(s, 0, sizeof *s);
-}
-
-static void scan_keep_pair(replay_scan_t *s, const replay_scan_pair_t *p)
-{
-    if (p->need_baud > s->need.need_baud) {
-        s->need2 = s->need;
-        s->need = *p;
-    } else if (p->need_baud > s->need2.need_baud) {
-        s->need2 = *p;
-    }
-}
-
-/* The recorded timing bounds the rate from below: a telegram cannot begin before the one before
- * it ended, nor an answer before min TSDR (11 bit times) after its request. Timestamps may be
- * rounded to microseconds: one is added to every gap. A pair whose time goes back (a clock
- * step, a record out of order) bounds nothing: it is counted and left out. */
-static void scan_timing(replay_scan_t *s, const cap_record_t *rec, bool answers_prev)
-{
-    if (replay_is_profibus_baud(rec->baud)) {
-        s->recorded_baud = rec->baud;
-    }
-    if (!rec->has_time || rec->problem[0] != '\0') {
-        /* Damaged records may be a recorder's artefacts: their timing proves nothing. */
-        s->have_prev_time = false;
-        return;
-    }
-    if (s->have_prev_time && rec->t_ns < s->prev_t_ns) {
-        s->backward_pairs++;
-    } else if (s->have_prev_time) {
-        uint64_t bits = 11u * (uint64_t)s->prev_len + (answers_prev ? 11u : 0u);
-        uint64_t gap_ns = rec->t_ns - s->prev_t_ns;
-        replay_scan_pair_t p = {.need_baud = bits * 1000000000ull / (gap_ns + 1000u),
-                                .record = rec->index,
-                                .prev_record = s->prev_index,
-                                .gap_ns = gap_ns,
-                                .bits = (uint32_t)bits};
-        scan_keep_pair(s, &p);
-        s->timed_pairs++;
-        if (answers_prev) {
-            s->timed_answers++;
-        }
-    }
-    s->have_prev_time = true;
-    s->prev_t_ns = rec->t_ns;
-    s->prev_len = rec->len;
-    s->prev_index = rec->index;
-}
-
-/* The lowest PROFIBUS rate of at least need bit/s (12 Mbit/s when even that is too slow), as an
- * index into hal_uart_bauds[] (highest rate first, the order of the baud search). */
-static unsigned rate_index(uint64_t need)
-{
-    unsigned i = HAL_UART_NUM_BAUDS - 1u;
-    while (i > 0u && hal_uart_bauds[i] < need) {
-        i--;
-    }
-    return i;
-}
-
-uint32_t replay_scan_rate(const replay_scan_t *s, replay_scan_rate_t *why)
-{
-    replay_scan_rate_t w;
-    memset(&w, 0, sizeof w);
-    if (s->timed_answers > 0u) {
-        unsigned i = rate_index(s->need.need_baud);
-        w.decided = s->need;
-        /* On a line every request/answer pair needs close to the rate in use, and the rates are
-         * at least a factor of 2 apart: a single pair needing two rates more than any other (a
-         * factor of 4 or more) is a timestamp gone wrong, not the line. */
-        unsigned i2 = rate_index(s->need2.need_baud);
-        if (s->timed_answers >= REPLAY_SCAN_OUTLIER_MIN_ANSWERS && i + 2u <= i2) {
-            w.outlier = true;
-            w.ignored = s->need;
-            w.decided = s->need2;
-            i = i2;
-        }
-        w.baud = hal_uart_bauds[i];
-    }
-    if (why != NULL) {
-        *why = w;
-    }
-    return w.baud;
-}
-
-void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec)
-{
-    s->records++;
-    if (rec->len == 0u) {
-        return; /* an unreadable text line: nothing was on the wire */
-    }
-    replay_frame_t m;
-    replay_frame_parse(rec->data, rec->len, &m);
-    bool was_request = s->prev_request;
-    uint8_t da = s->prev_da;
-    s->prev_request = false;
-    bool answers_prev = was_request && rec->problem[0] == '\0' &&
-                        (m.kind == REPLAY_KIND_SC ||
-                         (m.kind == REPLAY_KIND_RESPONSE && m.has_header && m.sa == da));
-    scan_timing(s, rec, answers_prev);
-    if (rec->problem[0] != '\0') {
-        return; /* a damaged record says nothing reliable about who is who */
-    }
-    switch (m.kind) {
-    case REPLAY_KIND_REQUEST:
-        s->master[m.sa] = true;
-        s->prev_request = m.da != FDL_ADDR_BROADCAST && replay_expects_answer(&m);
-        s->prev_da = m.da;
-        return;
-    case REPLAY_KIND_TOKEN:
-        if (m.has_header) {
-            s->master[m.sa] = true;
-            s->master[m.da] = true;
-        }
-        return;
-    case REPLAY_KIND_RESPONSE:
-        /* Masters answer FDL status requests with their station type; slaves with 00. */
-        if ((m.fc & FDL_FC_STATION_MASK) == 0u) {
-            s->answers[m.sa]++;
-        }
-        return;
-    case REPLAY_KIND_SC:
-        if (was_request) {
-            s->answers[da]++;
-        }
-        return;
-    case REPLAY_KIND_GARBAGE:
-        return;
-    }
-}
-
-unsigned replay_scan_result(const replay_scan_t *s, uint8_t *out, unsigned max)
-{
-    unsigned n = 0;
-    for (unsigned a = 0; a <= 125u; a++) {
-        if (s->answers[a] > 0u && !s->master[a]) {
-            if (n < max) {
-                out[n] = (uint8_t)a;
-            }
-            n++;
-        }
-    }
-    return n;
 }

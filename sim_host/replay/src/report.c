@@ -1,6 +1,7 @@
 /* The replay report (format in docs/replay.md). */
 #include <string.h>
 
+#include "replay/param_text.h"
 #include "replay/replay.h"
 
 static const char *baud_text(uint32_t baud, char *buf, size_t max)
@@ -22,7 +23,7 @@ static void where(const replay_report_info_t *info, uint64_t record, uint64_t po
 }
 
 static void print_kept(FILE *out, const replay_report_info_t *info, const replay_kept_t *k,
-                       const replay_dx_layout_t *lay, const char *indent)
+                       const replay_dx_layout_t *lay, replay_param_ctx_t *pc, const char *indent)
 {
     char hex[3u * CAP_MAX_RECORD + 8u];
     char text[512];
@@ -36,16 +37,22 @@ static void print_kept(FILE *out, const replay_report_info_t *info, const replay
     }
     fprintf(out, "%s%12.6f s  %-26s %s\n%s%16s %s\n", indent, (double)k->t_ns / 1e9, at, hex,
             indent, "", text);
+    if (replay_param_text(k->data, k->len, lay, pc, text, sizeof text) > 0u) {
+        fprintf(out, "%s%16s %s\n", indent, "", text);
+    }
 }
 
 static void print_octets(FILE *out, const char *label, const replay_kept_t *k,
-                         const replay_dx_layout_t *lay)
+                         const replay_dx_layout_t *lay, replay_param_ctx_t *pc)
 {
     char hex[3u * CAP_MAX_RECORD + 8u];
     char text[512];
     replay_hex(k->data, k->len, hex, sizeof hex);
     replay_describe(k->data, k->len, lay, text, sizeof text);
     fprintf(out, "  %-9s %s\n  %-9s %s\n", label, hex, "", text);
+    if (replay_param_text(k->data, k->len, lay, pc, text, sizeof text) > 0u) {
+        fprintf(out, "  %-9s %s\n", "", text);
+    }
 }
 
 static bool needs_data_exch(replay_service_t s)
@@ -154,31 +161,24 @@ static void explain(FILE *out, const replay_t *r, const replay_mismatch_t *m)
 #undef WHY
 }
 
-int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out)
+static const char *or_given(const char *text)
+{
+    return text != NULL ? text : "given";
+}
+
+/* The bus line: which rate, and where it came from. */
+static void print_bus(FILE *out, const replay_t *r, const replay_report_info_t *info)
 {
     char b[32];
-    char at[96];
-    uint64_t span = r->last_record_ns;
-    fprintf(out, "replay of %s (%s): %llu records, %.6f s of bus time\n",
-            info->file != NULL ? info->file : "(records)",
-            info->format != NULL ? info->format : "?", (unsigned long long)r->records,
-            (double)span / 1e9);
-    fprintf(out, "  card      DFP21B at address %u (%s), %s; inverter: %s\n", r->opt.address,
-            info->address_source != NULL ? info->address_source : "given",
-            r->opt.fixed_card_baud ? "fixed at the bus rate"
-                                   : "automatic baud search from the first record",
-            r->opt.inverter == CARD_INVERTER_SIM ? "emulated MOVIDRIVE" : "none (PI echoes PO)");
+    char b2[32];
+    char b3[32];
     if (r->opt.baud_override && r->min_baud_seen != 0u && r->rate_overridden == 0u) {
         fprintf(out, "  bus       %s (%s, the rate the capture records too)\n",
-                baud_text(r->opt.baud, b, sizeof b),
-                info->baud_source != NULL ? info->baud_source : "given");
+                baud_text(r->opt.baud, b, sizeof b), or_given(info->baud_source));
     } else if (r->opt.baud_override && r->min_baud_seen != 0u) {
-        char b2[32];
-        char b3[32];
         fprintf(out, "  bus       %s (%s; it overrides the capture's own rate, %s%s%s, for "
                      "every record)\n",
-                baud_text(r->opt.baud, b, sizeof b),
-                info->baud_source != NULL ? info->baud_source : "given",
+                baud_text(r->opt.baud, b, sizeof b), or_given(info->baud_source),
                 baud_text(r->min_baud_seen, b2, sizeof b2),
                 r->max_baud_seen != r->min_baud_seen ? " .. " : "",
                 r->max_baud_seen != r->min_baud_seen ? baud_text(r->max_baud_seen, b3, sizeof b3)
@@ -187,14 +187,29 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
         fprintf(out, "  bus       %s (recorded in the capture)\n",
                 baud_text(r->min_baud_seen, b, sizeof b));
     } else if (r->min_baud_seen != 0u) {
-        char b2[32];
         fprintf(out, "  bus       %s .. %s (recorded per telegram)\n",
                 baud_text(r->min_baud_seen, b, sizeof b), baud_text(r->max_baud_seen, b2,
                                                                      sizeof b2));
     } else {
         fprintf(out, "  bus       %s (%s)\n", baud_text(r->opt.baud, b, sizeof b),
-                info->baud_source != NULL ? info->baud_source : "given");
+                or_given(info->baud_source));
     }
+}
+
+/* What was replayed against what: the file, the card, the bus, the records, the card's end. */
+static void print_header(FILE *out, const replay_t *r, const replay_report_info_t *info)
+{
+    char b[32];
+    fprintf(out, "replay of %s (%s): %llu records, %.6f s of bus time\n",
+            info->file != NULL ? info->file : "(records)",
+            info->format != NULL ? info->format : "?", (unsigned long long)r->records,
+            (double)r->last_record_ns / 1e9);
+    fprintf(out, "  card      DFP21B at address %u (%s), %s; inverter: %s\n", r->opt.address,
+            or_given(info->address_source),
+            r->opt.fixed_card_baud ? "fixed at the bus rate"
+                                   : "automatic baud search from the first record",
+            r->opt.inverter == CARD_INVERTER_SIM ? "emulated MOVIDRIVE" : "none (PI echoes PO)");
+    print_bus(out, r, info);
     fprintf(out, "  records   %llu put on the bus, %llu the card's recorded answers (the card "
                  "makes its own), %llu damaged\n",
             (unsigned long long)r->injected, (unsigned long long)r->own_answers,
@@ -207,10 +222,16 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
                 REPLAY_SYNTH_GAP_REQUEST_BITS);
     }
     fprintf(out, "  card sent %llu telegrams; state at the end: %s, %s %s\n",
-            (unsigned long long)r->card_tx, dp_state_name(dp_slave_state(&r->card.card.dp)),
-            dp_baud_state_name(dp_slave_baud_state(&r->card.card.dp)),
-            baud_text(dp_slave_baud(&r->card.card.dp), b, sizeof b));
+            (unsigned long long)r->card_tx, dp_state_name(dp_slave_state(&r->cs->card.dp)),
+            dp_baud_state_name(dp_slave_baud_state(&r->cs->card.dp)),
+            baud_text(dp_slave_baud(&r->cs->card.dp), b, sizeof b));
+}
+
+/* Records the replay treated specially: odd rates, stray answers, an unanswered last request. */
+static void print_notes(FILE *out, const replay_t *r, const replay_report_info_t *info)
+{
     if (r->odd_rate_records > 0u) {
+        char b[32];
         fprintf(out, "  note      %llu records carry a rate that is not a PROFIBUS rate (first: "
                      "%u bit/s): they went onto the bus at %s\n",
                 (unsigned long long)r->odd_rate_records, r->first_odd_rate,
@@ -222,12 +243,42 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
                 (unsigned long long)r->stray_answers, r->opt.address);
     }
     if (r->tail_unchecked) {
+        char at[96];
         where(info, r->tail_record, r->tail_position, at, sizeof at);
         fprintf(out, "  note      the capture ends with a request to the card (%s, %s): its "
                      "answer is not in the file, so it is not compared\n", at,
                 replay_service_name(r->tail_service));
     }
+}
+
+static void print_backwards(FILE *out, const replay_t *r, const replay_report_info_t *info)
+{
+    char at[96];
+    where(info, r->first_back_record, r->first_back_position, at, sizeof at);
+    fprintf(out, "  timing    %llu records stamped earlier than the record before (first: %s; "
+                 "at most %.6f s back)", (unsigned long long)r->backwards, at,
+            (double)r->max_back_ns / 1e9);
+    if (r->clock_steps > 0u) {
+        fprintf(out, ": %llu clock steps, re-anchored (the record went onto the bus at the "
+                     "spacing of the records before it, the records after it keep their "
+                     "recorded spacing from it)", (unsigned long long)r->clock_steps);
+    }
+    if (r->out_of_order > 0u) {
+        fprintf(out, "%s %llu out of order by less than that spacing (the record went onto "
+                     "the bus right after the one before, the records after it at their "
+                     "recorded times)", r->clock_steps > 0u ? ";" : ":",
+                (unsigned long long)r->out_of_order);
+    }
+    fputc('\n', out);
+}
+
+/* Where the replay's timing departed from the capture's: moved telegrams, times going back,
+ * shortened and whole long gaps. */
+static void print_timing(FILE *out, const replay_t *r, const replay_report_info_t *info)
+{
+    char at[96];
     if (r->deferred_beyond_resolution > 0u) {
+        char b[32];
         where(info, r->first_conflict_record, r->first_conflict_position, at, sizeof at);
         fprintf(out, "  timing    %llu telegrams would have overlapped the one before at %s "
                      "and went onto the bus later (at most %.1f us; first: %s): does the rate "
@@ -236,22 +287,7 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
                 baud_text(r->opt.baud, b, sizeof b), (double)r->max_defer_ns / 1e3, at);
     }
     if (r->backwards > 0u) {
-        where(info, r->first_back_record, r->first_back_position, at, sizeof at);
-        fprintf(out, "  timing    %llu records stamped earlier than the record before (first: %s; "
-                     "at most %.6f s back)", (unsigned long long)r->backwards, at,
-                (double)r->max_back_ns / 1e9);
-        if (r->clock_steps > 0u) {
-            fprintf(out, ": %llu clock steps, re-anchored (the record went onto the bus at the "
-                         "spacing of the records before it, the records after it keep their "
-                         "recorded spacing from it)", (unsigned long long)r->clock_steps);
-        }
-        if (r->out_of_order > 0u) {
-            fprintf(out, "%s %llu out of order by less than that spacing (the record went onto "
-                         "the bus right after the one before, the records after it at their "
-                         "recorded times)", r->clock_steps > 0u ? ";" : ":",
-                    (unsigned long long)r->out_of_order);
-        }
-        fputc('\n', out);
+        print_backwards(out, r, info);
     }
     if (r->gaps_cut > 0u) {
         where(info, r->first_cut_record, r->first_cut_position, at, sizeof at);
@@ -268,61 +304,82 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
                      "emulated drive was still turning (its position changes with time)\n",
                 (unsigned long long)r->gaps_turning, (double)REPLAY_GAP_SETTLE_NS / 1e9);
     }
+}
 
-    bool file_ok = info->file_error == NULL && !info->interrupted;
-    if (!r->opt.check) {
-        if (info->file_error != NULL) {
-            fprintf(out, "file error: %s\n", info->file_error);
-        }
-        if (info->interrupted) {
-            fprintf(out, "interrupted after %llu records\n", (unsigned long long)r->records);
-        }
-        if (r->damaged_count > 0u) {
-            fprintf(out, "damaged records: %llu\n", (unsigned long long)r->damaged_count);
-            for (uint64_t i = 0; i < r->damaged_count && i < REPLAY_DAMAGED_LISTED; i++) {
-                where(info, r->damaged[i].record, r->damaged[i].position, at, sizeof at);
-                fprintf(out, "  %s: %s\n", at, r->damaged[i].problem);
-            }
-        }
-        fprintf(out, "result: %s\n", file_ok ? "replayed" : "replay incomplete");
-        return file_ok ? 0 : 1;
+/* Without --check: the file's problems and "replayed". */
+static int print_unchecked_result(FILE *out, const replay_t *r, const replay_report_info_t *info,
+                                  bool file_ok)
+{
+    if (info->file_error != NULL) {
+        fprintf(out, "file error: %s\n", info->file_error);
     }
-
-    uint64_t total = replay_total_requests(r);
-    if (r->first.valid) {
-        const replay_mismatch_t *m = &r->first;
-        where(info, m->request.record, m->request.position, at, sizeof at);
-        fprintf(out, "\nfirst mismatch: %s, t = %.6f s, %s\n", at, (double)m->request.t_ns / 1e9,
-                replay_service_name(m->service));
-        print_octets(out, "request", &m->request, &m->layout);
-        if (m->expected_present) {
-            where(info, m->expected.record, m->expected.position, at, sizeof at);
-            fprintf(out, "  expected  %s:\n", at);
-            print_octets(out, "", &m->expected, &m->layout);
-        } else {
-            fprintf(out, "  expected  no answer (the next record is not from station %u)\n",
-                    r->opt.address);
-        }
-        if (m->actual_present) {
-            fprintf(out, "  actual    the card's answer:\n");
-            print_octets(out, "", &m->actual, &m->layout);
-        } else {
-            fprintf(out, "  actual    no answer from the card\n");
-        }
-        fprintf(out, "  card      %s when the request began; %s %s when it ended\n",
-                dp_state_name(m->card_state),
-                m->baud_state == DP_BAUD_SEARCH ? "searching the rate, listening at"
-                                                : "rate",
-                baud_text(m->card_baud, b, sizeof b));
-        explain(out, r, m);
-        if (m->n_before > 0u) {
-            fprintf(out, "  before it:\n");
-            for (unsigned i = 0; i < m->n_before; i++) {
-                print_kept(out, info, &m->before[i], &m->layout, "    ");
-            }
+    if (info->interrupted) {
+        fprintf(out, "interrupted after %llu records\n", (unsigned long long)r->records);
+    }
+    if (r->damaged_count > 0u) {
+        fprintf(out, "damaged records: %llu\n", (unsigned long long)r->damaged_count);
+        for (uint64_t i = 0; i < r->damaged_count && i < REPLAY_DAMAGED_LISTED; i++) {
+            char at[96];
+            where(info, r->damaged[i].record, r->damaged[i].position, at, sizeof at);
+            fprintf(out, "  %s: %s\n", at, r->damaged[i].problem);
         }
     }
+    fprintf(out, "result: %s\n", file_ok ? "replayed" : "replay incomplete");
+    return file_ok ? 0 : 1;
+}
 
+/* The first request whose answer differed: the octets, the card's state, why, what came before. */
+static void print_first_mismatch(FILE *out, const replay_t *r, const replay_report_info_t *info)
+{
+    char b[32];
+    char at[96];
+    const replay_mismatch_t *m = &r->first;
+    replay_param_ctx_t pc = {0};
+    replay_param_ctx_t expected_pc;
+    where(info, m->request.record, m->request.position, at, sizeof at);
+    fprintf(out, "\nfirst mismatch: %s, t = %.6f s, %s\n", at, (double)m->request.t_ns / 1e9,
+            replay_service_name(m->service));
+    print_octets(out, "request", &m->request, &m->layout, &pc);
+    expected_pc = pc; /* both answers belong to the one request */
+    if (m->expected_present) {
+        where(info, m->expected.record, m->expected.position, at, sizeof at);
+        fprintf(out, "  expected  %s:\n", at);
+        print_octets(out, "", &m->expected, &m->layout, &expected_pc);
+    } else {
+        fprintf(out, "  expected  no answer (the next record is not from station %u)\n",
+                r->opt.address);
+    }
+    if (m->actual_present) {
+        fprintf(out, "  actual    the card's answer:\n");
+        print_octets(out, "", &m->actual, &m->layout, &pc);
+    } else {
+        fprintf(out, "  actual    no answer from the card\n");
+    }
+    fprintf(out, "  card      %s when the request began; %s %s when it ended\n",
+            dp_state_name(m->card_state),
+            m->baud_state == DP_BAUD_SEARCH ? "searching the rate, listening at" : "rate",
+            baud_text(m->card_baud, b, sizeof b));
+    explain(out, r, m);
+    if (m->n_before > 0u) {
+        fprintf(out, "  before it:\n");
+        replay_param_ctx_t before_pc = {0};
+        for (unsigned i = 0; i < m->n_before; i++) {
+            print_kept(out, info, &m->before[i], &m->layout, &before_pc, "    ");
+        }
+    }
+}
+
+static void print_counts(FILE *out, const char *name, const replay_counts_t *c)
+{
+    fprintf(out, "%-22s %10llu %10llu %10llu %12llu %12llu\n", name,
+            (unsigned long long)c->requests, (unsigned long long)c->matched,
+            (unsigned long long)c->differ, (unsigned long long)c->capture_silent,
+            (unsigned long long)c->card_silent);
+}
+
+/* Requests, matches and differences per service, and their total. */
+static void print_service_table(FILE *out, const replay_t *r)
+{
     fprintf(out, "\n%-22s %10s %10s %10s %12s %12s\n", "service", "requests", "match", "differ",
             "capture:", "card:");
     fprintf(out, "%-22s %10s %10s %10s %12s %12s\n", "", "", "", "", "no answer", "no answer");
@@ -332,20 +389,20 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
         if (c->requests == 0u) {
             continue;
         }
-        fprintf(out, "%-22s %10llu %10llu %10llu %12llu %12llu\n",
-                replay_service_name((replay_service_t)i), (unsigned long long)c->requests,
-                (unsigned long long)c->matched, (unsigned long long)c->differ,
-                (unsigned long long)c->capture_silent, (unsigned long long)c->card_silent);
+        print_counts(out, replay_service_name((replay_service_t)i), c);
         sum.requests += c->requests;
         sum.matched += c->matched;
         sum.differ += c->differ;
         sum.capture_silent += c->capture_silent;
         sum.card_silent += c->card_silent;
     }
-    fprintf(out, "%-22s %10llu %10llu %10llu %12llu %12llu\n", "total",
-            (unsigned long long)sum.requests, (unsigned long long)sum.matched,
-            (unsigned long long)sum.differ, (unsigned long long)sum.capture_silent,
-            (unsigned long long)sum.card_silent);
+    print_counts(out, "total", &sum);
+}
+
+/* Mismatches, damaged records and the file's problems, below the table. */
+static void print_check_details(FILE *out, const replay_t *r, const replay_report_info_t *info)
+{
+    char at[96];
     fprintf(out, "mismatches: %llu\n", (unsigned long long)r->mismatches);
     if (r->unsolicited > 0u) {
         fprintf(out, "card telegrams outside any request's window: %llu\n",
@@ -366,23 +423,45 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
     if (info->interrupted) {
         fprintf(out, "interrupted after %llu records\n", (unsigned long long)r->records);
     }
-    int rc;
+}
+
+/* The verdict of --check; returns the exit status. */
+static int print_verdict(FILE *out, const replay_t *r, bool file_ok)
+{
+    uint64_t total = replay_total_requests(r);
     if (total == 0u) {
         fprintf(out, "result: NOTHING CHECKED: no request to station %u in the capture\n",
                 r->opt.address);
-        rc = 1;
-    } else if (r->mismatches > 0u) {
+        return 1;
+    }
+    if (r->mismatches > 0u) {
         fprintf(out, "result: DIFFERENT: %llu of %llu replies differ%s\n",
                 (unsigned long long)r->mismatches, (unsigned long long)total,
                 file_ok ? "" : " (and the file was not read to its end)");
-        rc = 1;
-    } else if (!file_ok) {
+        return 1;
+    }
+    if (!file_ok) {
         fprintf(out, "result: INCOMPLETE: the %llu replies checked match, but the file was not "
                      "read to its end\n", (unsigned long long)total);
-        rc = 1;
-    } else {
-        fprintf(out, "result: MATCH: all %llu replies match\n", (unsigned long long)total);
-        rc = 0;
+        return 1;
     }
-    return rc;
+    fprintf(out, "result: MATCH: all %llu replies match\n", (unsigned long long)total);
+    return 0;
+}
+
+int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out)
+{
+    print_header(out, r, info);
+    print_notes(out, r, info);
+    print_timing(out, r, info);
+    bool file_ok = info->file_error == NULL && !info->interrupted;
+    if (!r->opt.check) {
+        return print_unchecked_result(out, r, info, file_ok);
+    }
+    if (r->first.valid) {
+        print_first_mismatch(out, r, info);
+    }
+    print_service_table(out, r);
+    print_check_details(out, r, info);
+    return print_verdict(out, r, file_ok);
 }

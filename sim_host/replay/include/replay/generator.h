@@ -57,7 +57,8 @@ typedef struct gen_result {
 } gen_result_t;
 
 /* Returns 0, or -1 with the reason in err (file not writable, the card never reached data
- * exchange). One run at a time: the bus and its stations are static (they are large). */
+ * exchange). The run is assembled on a rig (rig/rig.h) that lives on the heap for the call:
+ * runs in several threads do not share anything. */
 int gen_run(const gen_options_t *opt, gen_result_t *res, char *err, size_t errlen);
 
 #endif

@@ -1,7 +1,7 @@
 /* Replaying a bus capture against the emulated DFP21B (docs/replay.md).
  *
- * The card (sim_host/stations card_station, with the emulated MOVIDRIVE or none) sits on the
- * in-memory bus (membus, simulated time) next to an injector port. Records are fed one at a time
+ * The card (a rig card: sim_host/stations card_station, with the emulated MOVIDRIVE or none) sits
+ * on the rig's in-memory bus (membus, simulated time) next to an injector port. Records are fed one at a time
  * (replay_feed): every telegram of the capture goes onto the bus at its recorded time, except
  * the card's own recorded answers: the card produces its own. Time starts at the first record,
  * where the card powers up (automatic baud search unless fixed_card_baud). A record stamped
@@ -26,6 +26,7 @@
 
 #include "capture/record.h"
 #include "replay/decode.h"
+#include "rig/rig.h"
 #include "sim_hal/membus.h"
 #include "sim_stations/stations.h"
 
@@ -42,6 +43,8 @@
 /* The bus runs in slices of at most this much bus time; the stop flag is looked at between
  * them, so a long gap is never a long wait for SIGINT. */
 #define REPLAY_SLICE_NS 1000000000ull
+/* With a service hook, --speed real waits for the wall clock in steps of at most this much. */
+#define REPLAY_SERVICE_NS 20000000ull
 /* How long after the last record the card's one-shot timers may still run out (replay.c,
  * settle_ns): the longest baud control, twice the longest DP watchdog 255 x 255 x 10 ms. An
  * idle gap is only shortened after this much of it has been simulated. */
@@ -90,6 +93,11 @@ typedef struct replay_options {
     void (*param_observer)(void *ctx, uint8_t channel, const uint8_t req[ML_TELEGRAM_LEN],
                            const uint8_t rsp[ML_TELEGRAM_LEN]);
     void *param_observer_ctx;
+    /* Called by the replay's loop between slices of bus time and, with REPLAY_SPEED_REAL, at
+     * least every REPLAY_SERVICE_NS while it waits for the wall clock: the control API's turn
+     * (rig_ctl_service). Optional. */
+    void (*service)(void *ctx);
+    void *service_ctx;
 } replay_options_t;
 
 typedef struct replay_counts {
@@ -139,9 +147,10 @@ typedef struct replay_damaged {
 
 typedef struct replay {
     replay_options_t opt;
-    membus_t bus;
-    card_station_t card;
-    membus_port_t *card_port;
+    /* The in-memory bus with the card (cards[0]) and the injector's port: the same assembly as
+     * every other simulation, so the control API (rig_ctl) can watch a replay. */
+    rig_t rig;
+    card_station_t *cs; /* the card under test: rig.cards[0].cs */
     membus_port_t *inj_port;
     hal_uart_t inj_uart;
     uint32_t inj_baud;
