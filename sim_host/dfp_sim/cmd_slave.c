@@ -177,6 +177,7 @@ static const char *per_card_path(const char *dir, const char *stem, uint8_t addr
 static bool slave_add_cards(session_t *s, const slave_opts_t *o, ml_link_t external)
 {
     bool line = o->num_cards > 1u;
+    s->in.log.name_cards = line;
     for (size_t k = 0; k < o->num_cards; k++) {
         uint8_t a = o->addresses[k];
         char ee_buf[512];

@@ -158,9 +158,10 @@ void rig_po_text(const uint16_t *po, unsigned n, char *out, size_t max)
 
 /* ---- card --------------------------------------------------------------------------------- */
 
-static void card_source(const rig_t *r, unsigned card, char *out, size_t n, const char *what)
+static void card_source(const rig_log_t *l, unsigned card, char *out, size_t n, const char *what)
 {
-    if (r->num_cards <= 1u && strcmp(what, "card") == 0) {
+    const rig_t *r = l->rig;
+    if (!l->name_cards && r->num_cards <= 1u && strcmp(what, "card") == 0) {
         snprintf(out, n, "card");
         return;
     }
@@ -243,7 +244,7 @@ static void log_card_event(void *ctx, unsigned card, const dp_event_t *ev)
 {
     rig_log_t *l = ctx;
     char src[16];
-    card_source(l->rig, card, src, sizeof src, "card");
+    card_source(l, card, src, sizeof src, "card");
     char text[RIG_CTL_TEXT];
     rig_log_level_t level;
     const char *kind;
@@ -257,7 +258,7 @@ static void log_led(void *ctx, unsigned card, hal_led_id_t led, hal_led_mode_t m
 {
     rig_log_t *l = ctx;
     char src[16];
-    card_source(l->rig, card, src, sizeof src, "card");
+    card_source(l, card, src, sizeof src, "card");
     rig_log(l, RIG_LOG_INFO, src, "led", "LED %-9s %s", sim_led_name(led),
             hal_led_mode_name(mode));
 }
@@ -283,7 +284,7 @@ static void log_param(void *ctx, unsigned card, uint8_t channel, const uint8_t *
     /* The card reads the drive's status every 100 ms for its diagnosis: not a user's service. */
     rig_log_level_t level = channel == DFP21B_CH_STATUS_POLL ? RIG_LOG_DEBUG : RIG_LOG_INFO;
     char src[16];
-    card_source(l->rig, card, src, sizeof src, "drive");
+    card_source(l, card, src, sizeof src, "drive");
     const md_param_info_t *p = md_param_info(index);
     char name[96];
     if (p != NULL) {
@@ -316,7 +317,7 @@ static void log_drive(void *ctx, unsigned card, const rig_drive_event_t *ev)
 {
     rig_log_t *l = ctx;
     char src[16];
-    card_source(l->rig, card, src, sizeof src, "drive");
+    card_source(l, card, src, sizeof src, "drive");
     const char *fname = md_fault_name((uint8_t)ev->value);
     double n = ev->speed_mrpm / 1000.0;
     double target = ev->setpoint_mrpm / 1000.0;
@@ -358,7 +359,7 @@ static void log_action(void *ctx, unsigned card, rig_action_type_t type, uint32_
 {
     rig_log_t *l = ctx;
     char src[16];
-    card_source(l->rig, card, src, sizeof src, "card");
+    card_source(l, card, src, sizeof src, "card");
     switch (type) {
     case RIG_ACTION_CABLE:
         rig_log(l, RIG_LOG_INFO, src, "action", "bus connector %s",

@@ -28,6 +28,8 @@ typedef struct rig_log {
     rig_ctl_t *ctl;      /* NULL: print only */
     bool show_inputs;    /* master --verbose: decoded inputs whenever they change */
     bool slave_silent;   /* unanswered polls of a silent address are told once */
+    bool name_cards;     /* a line of cards: every card's lines carry its address, also
+                          * before the second card exists */
     uint32_t baud_steps[RIG_MAX_CARDS];
     uint8_t last_inputs[DPM_MAX_SLAVES][DPM_MAX_IO];
     uint16_t last_inputs_len[DPM_MAX_SLAVES];
