@@ -29,7 +29,6 @@ ctest skip) when pyprofibus, pyserial or socat is missing. On a failure it print
 socat's output, pyprofibus's debug log and the last telegrams on the wire.
 """
 
-import argparse
 import contextlib
 import io
 import os
@@ -40,9 +39,8 @@ import sys
 import tempfile
 import time
 
-from checker import Checker  # sibling module in tests/interop
+from checker import pyprofibus_main  # sibling module in tests/interop
 
-SKIP = 77
 SLAVE_ADDR = 4
 MASTER_ADDR = 2
 # Each output pattern is held until the last CHECKED replies carry its echo (at least HOLD
@@ -457,36 +455,11 @@ def dump(tag, sim_out, sim_err, socat_err, pb_log, res):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--dfp-sim", required=True)
-    ap.add_argument("--gsd-dir", required=True)
-    ap.add_argument("--baud", type=int, default=19200)
-    ap.add_argument("--verbose", action="store_true", help="print the logs even on success")
-    args = ap.parse_args()
+    def scenarios(c, pyprofibus, args):
+        for sc in SCENARIOS:
+            run_scenario(c, pyprofibus, sc, args.dfp_sim, args.gsd_dir, args.baud, args.verbose)
 
-    try:
-        import pyprofibus
-        import pyprofibus.phy_serial  # needs pyserial
-    except ImportError as e:
-        print("SKIP: pyprofibus/pyserial not installed for %s (%s); pip install pyprofibus "
-              "pyserial, or point the CMake cache variable DFP_PYTHON at an interpreter that "
-              "has them" % (sys.executable, e))
-        return SKIP
-    if shutil.which("socat") is None:
-        print("SKIP: socat not found (apt-get install socat)")
-        return SKIP
-    if not os.access(args.dfp_sim, os.X_OK):
-        print("FAIL dfp-sim not executable: %s" % args.dfp_sim)
-        print("0 passed, 1 failed")
-        return 1
-
-    c = Checker()
-    t0 = time.monotonic()
-    for sc in SCENARIOS:
-        run_scenario(c, pyprofibus, sc, args.dfp_sim, args.gsd_dir, args.baud, args.verbose)
-    print("     total %.2f s" % (time.monotonic() - t0))
-    print("%d passed, %d failed" % (c.passed, c.failed))
-    return 0 if c.failed == 0 else 1
+    return pyprofibus_main(__doc__, scenarios)
 
 
 if __name__ == "__main__":

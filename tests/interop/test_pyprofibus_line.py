@@ -58,7 +58,6 @@ socat's output, pyprofibus's debug log, each slave's PD history and the last tel
 wire.
 """
 
-import argparse
 import contextlib
 import io
 import os
@@ -70,8 +69,8 @@ import sys
 import tempfile
 import time
 
-from checker import Checker  # sibling modules in tests/interop
-from test_pyprofibus_interop import (MASTER_ADDR, SD2, SKIP, make_tap_phy, read_text,
+from checker import pyprofibus_main  # sibling modules in tests/interop
+from test_pyprofibus_interop import (MASTER_ADDR, SD2, make_tap_phy, read_text,
                                      stop_process, wait_for, words)
 
 ADDRS = (4, 5, 6)
@@ -588,35 +587,7 @@ def dump(sim_out, sim_err, socat_err, pb_log, res, drives):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--dfp-sim", required=True)
-    ap.add_argument("--gsd-dir", required=True)
-    ap.add_argument("--baud", type=int, default=19200)
-    ap.add_argument("--verbose", action="store_true", help="print the logs even on success")
-    args = ap.parse_args()
-
-    try:
-        import pyprofibus
-        import pyprofibus.phy_serial  # needs pyserial
-    except ImportError as e:
-        print("SKIP: pyprofibus/pyserial not installed for %s (%s); pip install pyprofibus "
-              "pyserial, or point the CMake cache variable DFP_PYTHON at an interpreter that "
-              "has them" % (sys.executable, e))
-        return SKIP
-    if shutil.which("socat") is None:
-        print("SKIP: socat not found (apt-get install socat)")
-        return SKIP
-    if not os.access(args.dfp_sim, os.X_OK):
-        print("FAIL dfp-sim not executable: %s" % args.dfp_sim)
-        print("0 passed, 1 failed")
-        return 1
-
-    c = Checker()
-    t0 = time.monotonic()
-    run(c, pyprofibus, args)
-    print("     total %.2f s" % (time.monotonic() - t0))
-    print("%d passed, %d failed" % (c.passed, c.failed))
-    return 0 if c.failed == 0 else 1
+    return pyprofibus_main(__doc__, run)
 
 
 if __name__ == "__main__":
