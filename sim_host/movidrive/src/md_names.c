@@ -240,17 +240,26 @@ static void explain_ipos_variable(const char *s, size_t len, char *err, size_t e
     }
 }
 
+/* The len characters at s as a C string for strtoul/strtoll; false if they do not fit. */
+static bool copy_token(char *out, size_t cap, const char *s, size_t len)
+{
+    if (len >= cap) {
+        return false;
+    }
+    memcpy(out, s, len);
+    out[len] = '\0';
+    return true;
+}
+
 /* An index, decimal or 0xHEX. False when the text is no number after all ("4-quadrant
  * operation 1" is a name); true with *found (NULL and a reason when no parameter has it). */
 static bool find_by_index(const char *s, size_t len, const md_param_info_t **found, char *err,
                           size_t errlen)
 {
     char num[24];
-    if (len >= sizeof num) {
+    if (!copy_token(num, sizeof num, s, len)) {
         return false;
     }
-    memcpy(num, s, len);
-    num[len] = '\0';
     char *end = NULL;
     errno = 0;
     unsigned long v = strtoul(num, &end, 0);
@@ -481,11 +490,9 @@ static bool parse_raw_integer(const char *s, size_t len, int32_t *raw, bool *ok,
                               size_t errlen)
 {
     char num[32];
-    if (len >= sizeof num) {
+    if (!copy_token(num, sizeof num, s, len)) {
         return false;
     }
-    memcpy(num, s, len);
-    num[len] = '\0';
     char *end = NULL;
     errno = 0;
     long long v = strtoll(num, &end, 0);
