@@ -268,7 +268,7 @@ int cmd_slave(int argc, char **argv)
     if (o.kind == CARD_INVERTER_LINK) {
         char err[256];
         if (inverter_can_open(&can_link, o.inverter, card_station_param_response,
-                              card_station_process_inputs, first, &s.rig.runner, err,
+                              card_station_process_inputs, first, s.rig.runner, err,
                               sizeof err) != 0) {
             cli_error("%s", err);
             return session_end(&s, 1);

@@ -89,7 +89,7 @@ int session_telemetry(session_t *s, const char *url, const dfp21b_t *card, uint8
 {
     int64_t wall = lcm_cli_wall_of_mono(s->rig.cfg.medium == RIG_MEDIUM_LCM
                                             ? s->rig.segment.t0_ns
-                                            : s->rig.runner.t0_ns);
+                                            : s->rig.runner->t0_ns);
     if (lcm_cli_open(&s->telemetry, url, card, address, &s->rep, wall, wall) != 0) {
         return -1;
     }

@@ -562,7 +562,7 @@ static void attach_foreign(gen_t *g)
 {
     foreign_t *f = &g->foreign;
     sim_station_t fs = {.ctx = f, .rx_char = foreign_rx, .poll = foreign_poll};
-    g->foreign_port = membus_attach(&g->rig.bus, &fs, &f->uart);
+    g->foreign_port = rig_attach_station(&g->rig, &fs, &f->uart);
     (void)f->uart.ops->set_baud(f->uart.ctx, g->opt.baud);
     f->bus = &g->rig.bus;
     f->master = g->master;

@@ -198,27 +198,44 @@ static bool wall_clock(const rig_t *r)
     return r->cfg.medium != RIG_MEDIUM_MEMBUS;
 }
 
+static void open_runner(rig_t *r)
+{
+    if (r->cfg.shared_runner != NULL) {
+        r->runner = r->cfg.shared_runner;
+        return;
+    }
+    r->runner = &r->own_runner;
+    tty_runner_init(r->runner);
+    if (r->cfg.medium == RIG_MEDIUM_TTY) {
+        tty_runner_set_tap(r->runner, tap_frame, r);
+    }
+}
+
 int rig_open(rig_t *r, char *err, size_t errlen)
 {
     switch (r->cfg.medium) {
     case RIG_MEDIUM_MEMBUS:
         membus_init(&r->bus);
+        r->bus.now_ns = r->cfg.start_ns;
         membus_set_tap(&r->bus, tap_frame, r);
         break;
-    case RIG_MEDIUM_TTY:
-        if (tty_port_open(&r->port, r->cfg.device, r->cfg.baud, err, errlen) != 0) {
+    case RIG_MEDIUM_TTY: {
+        int rc = r->cfg.use_fd
+                     ? tty_port_open_fd(&r->port, r->cfg.fd, r->cfg.baud, err, errlen)
+                     : tty_port_open(&r->port, r->cfg.device, r->cfg.baud, err, errlen);
+        if (rc != 0) {
             return -1;
         }
         r->port.echo_suppress = r->cfg.echo_suppress;
-        tty_runner_init(&r->runner);
-        tty_runner_set_tap(&r->runner, tap_frame, r);
+        open_runner(r);
         break;
+    }
     case RIG_MEDIUM_LCM:
         if (dfp_lcm_segment_open(&r->segment, r->cfg.lcm_url, r->cfg.lcm_channel,
                                  r->cfg.lcm_station_address, r->cfg.baud, err, errlen) != 0) {
             return -1;
         }
-        tty_runner_init(&r->runner);
+        open_runner(r);
         dfp_lcm_segment_set_tap(&r->segment, tap_frame, r);
         break;
     }
@@ -249,9 +266,9 @@ static hal_uart_t medium_uart(rig_t *r)
 static int attach_wall_station(rig_t *r, const sim_station_t *st)
 {
     if (r->cfg.medium == RIG_MEDIUM_TTY) {
-        return tty_runner_add(&r->runner, &r->port, st);
+        return tty_runner_add(r->runner, &r->port, st);
     }
-    return dfp_lcm_segment_attach(&r->segment, &r->runner, st);
+    return dfp_lcm_segment_attach(&r->segment, r->runner, st);
 }
 
 rig_card_t *rig_add_card(rig_t *r, const card_options_t *opt, hal_time_us_t now)
@@ -332,6 +349,11 @@ dp_master_t *rig_add_master(rig_t *r, const dp_master_cfg_t *cfg, hal_time_us_t 
     return &r->master;
 }
 
+membus_port_t *rig_attach_station(rig_t *r, const sim_station_t *st, hal_uart_t *uart)
+{
+    return wall_clock(r) ? NULL : membus_attach(&r->bus, st, uart);
+}
+
 rig_card_t *rig_card_by_address(rig_t *r, uint8_t address)
 {
     for (unsigned i = 0; i < r->num_cards; i++) {
@@ -396,9 +418,9 @@ void rig_card_inject_fault(rig_card_t *c, uint8_t fault)
 void rig_wake(rig_t *r)
 {
     if (wall_clock(r)) {
-        tty_runner_wake(&r->runner);
-        for (uint8_t s = 0; s < r->runner.num_slots; s++) {
-            r->runner.slots[s].deadline = tty_now_us();
+        tty_runner_wake(r->runner);
+        for (uint8_t s = 0; s < r->runner->num_slots; s++) {
+            r->runner->slots[s].deadline = tty_now_us();
         }
         return;
     }
@@ -420,7 +442,7 @@ uint64_t rig_elapsed_ns(const rig_t *r)
     case RIG_MEDIUM_MEMBUS:
         return r->bus.now_ns;
     case RIG_MEDIUM_TTY:
-        return host_clock_mono_ns() - r->runner.t0_ns;
+        return host_clock_mono_ns() - r->runner->t0_ns;
     case RIG_MEDIUM_LCM:
         return host_clock_mono_ns() - r->segment.t0_ns;
     }
@@ -437,20 +459,20 @@ int rig_run_until(rig_t *r, hal_time_us_t t_us, volatile const int *stop)
         }
         return 0;
     }
-    return tty_runner_run_until(&r->runner, t_us, stop);
+    return tty_runner_run_until(r->runner, t_us, stop);
 }
 
 const char *rig_error(const rig_t *r)
 {
-    return tty_runner_error(&r->runner);
+    return r->runner != NULL ? tty_runner_error(r->runner) : "";
 }
 
 int rig_add_fd(rig_t *r, int fd, tty_fd_readable_fn readable, void *ctx)
 {
-    return wall_clock(r) ? tty_runner_add_fd(&r->runner, fd, readable, ctx) : 0;
+    return wall_clock(r) ? tty_runner_add_fd(r->runner, fd, readable, ctx) : 0;
 }
 
 int rig_add_timer(rig_t *r, tty_timer_fn poll, void *ctx)
 {
-    return wall_clock(r) ? tty_runner_add_timer(&r->runner, poll, ctx) : 0;
+    return wall_clock(r) ? tty_runner_add_timer(r->runner, poll, ctx) : 0;
 }

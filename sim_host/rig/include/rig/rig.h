@@ -101,8 +101,11 @@ typedef struct rig_card {
 
 typedef struct rig_cfg {
     rig_medium_t medium;
-    /* RIG_MEDIUM_TTY: the device; RIG_MEDIUM_LCM: channel and LCM URL (NULL = default). */
+    /* RIG_MEDIUM_TTY: the device, or an open descriptor when use_fd (the master end of a PTY
+     * pair has no path); RIG_MEDIUM_LCM: channel and LCM URL (NULL = default). */
     const char *device;
+    bool use_fd;
+    int fd;
     const char *lcm_channel;
     const char *lcm_url;
     int16_t lcm_station_address; /* the local station's address on the segment (-1: several) */
@@ -112,6 +115,11 @@ typedef struct rig_cfg {
      * are the card's own). */
     hal_uart_t (*wrap_card_uart)(void *ctx, hal_uart_t inner);
     void *wrap_ctx;
+    /* Wall-clock media: a runner shared with another rig, so both ends of a PTY pair run in one
+     * loop (NULL: the rig's own). The rig does not tap a shared runner's frames. */
+    tty_runner_t *shared_runner;
+    /* RIG_MEDIUM_MEMBUS: where simulated time starts (a clock past 2^31 us finds wrap bugs). */
+    uint64_t start_ns;
 } rig_cfg_t;
 
 struct rig {
@@ -119,7 +127,8 @@ struct rig {
     membus_t bus;
     tty_port_t port;
     dfp_lcm_segment_t segment;
-    tty_runner_t runner;
+    tty_runner_t own_runner;
+    tty_runner_t *runner; /* own_runner or cfg.shared_runner */
     bool open;
     rig_card_t cards[RIG_MAX_CARDS];
     unsigned num_cards;
@@ -145,6 +154,11 @@ rig_card_t *rig_add_card(rig_t *r, const card_options_t *opt, hal_time_us_t now)
 /* The built-in master (cfg->uart is filled in by the rig). Returns it, or NULL when there is one
  * already. */
 dp_master_t *rig_add_master(rig_t *r, const dp_master_cfg_t *cfg, hal_time_us_t now);
+
+/* Any other station on the in-memory bus (a scripted second master, a test's probe), polled
+ * after those attached before it. Returns its port, or NULL on a wall-clock medium or when the
+ * bus is full. */
+membus_port_t *rig_attach_station(rig_t *r, const sim_station_t *st, hal_uart_t *uart);
 
 /* The card by bus address (the DIP address at its last power-up), NULL if none. */
 rig_card_t *rig_card_by_address(rig_t *r, uint8_t address);
