@@ -13,8 +13,7 @@
 #include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_frame.h"
 #include "dp_slave/fdl_wire.h"
-#include "sim_hal/membus.h"
-#include "sim_stations/stations.h"
+#include "rig/rig.h"
 
 #define BAUD 1500000u
 #define MASTER 2u
@@ -29,20 +28,18 @@ typedef struct frame {
 
 #define MAX_FRAMES 6000u
 
-typedef struct rig {
-    membus_t bus;
-    card_station_t card;
-    dp_master_t master;
-    membus_port_t *master_port;
+/* What the test keeps beside the rig: the recorded telegrams and the fault it injects. */
+typedef struct bench {
     membus_port_t *card_port;
     frame_t frames[MAX_FRAMES];
     size_t nframes;
     bool recording;
     bool drop_read_res;  /* the master misses the card's next Read.res from SAP 51 */
     uint64_t dropped_at_ns;
-} rig_t;
+} bench_t;
 
-static rig_t rig;
+static rig_t rig; /* large: keep it off the stack */
+static bench_t bench;
 
 static void tap(void *ctx, uint64_t t, const uint8_t *f, size_t len, bool local, uint32_t baud)
 {
@@ -50,18 +47,18 @@ static void tap(void *ctx, uint64_t t, const uint8_t *f, size_t len, bool local,
     (void)t;
     (void)local;
     (void)baud;
-    if (rig.drop_read_res && len > 10u && f[0] == FDL_SD2 && f[4] == (MASTER | 0x80u) &&
+    if (bench.drop_read_res && len > 10u && f[0] == FDL_SD2 && f[4] == (MASTER | 0x80u) &&
         f[6] == FDL_RSP_DL && f[7] == DPV1_SAP_C1 && f[9] == DPV1_FN_READ) {
         rig.master_port->silenced = true; /* deaf (and mute) until the test lifts it */
-        rig.drop_read_res = false;
-        rig.dropped_at_ns = rig.bus.now_ns;
+        bench.drop_read_res = false;
+        bench.dropped_at_ns = rig.bus.now_ns;
     }
-    if (!rig.recording || rig.nframes >= MAX_FRAMES || len > FDL_FRAME_MAX) {
+    if (!bench.recording || bench.nframes >= MAX_FRAMES || len > FDL_FRAME_MAX) {
         return;
     }
-    memcpy(rig.frames[rig.nframes].b, f, len);
-    rig.frames[rig.nframes].len = (uint16_t)len;
-    rig.nframes++;
+    memcpy(bench.frames[bench.nframes].b, f, len);
+    bench.frames[bench.nframes].len = (uint16_t)len;
+    bench.nframes++;
 }
 
 static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
@@ -69,21 +66,22 @@ static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
 /* cyclic: the master brings slave 4 into Data_Exchange (with DP-V1 parameters if dpv1). */
 static void setup(bool cyclic, bool dpv1, uint32_t inverter_delay_us)
 {
-    memset(&rig, 0, sizeof rig);
-    membus_init(&rig.bus);
-    membus_set_tap(&rig.bus, tap, NULL);
-    hal_uart_t cu;
-    hal_uart_t mu;
-    sim_station_t cs = card_station(&rig.card);
-    sim_station_t ms = master_station(&rig.master);
-    rig.card_port = membus_attach(&rig.bus, &cs, &cu);
-    rig.master_port = membus_attach(&rig.bus, &ms, &mu);
+    memset(&bench, 0, sizeof bench);
+    rig_cfg_t rc = {.medium = RIG_MEDIUM_MEMBUS};
+    rig_init(&rig, &rc);
+    rig_tap_t rt = {.frame = tap};
+    (void)rig_add_tap(&rig, &rt);
     card_options_t co = {.address = SLAVE, .fixed_baud = BAUD, .strict_timing = true,
                          .inverter = CARD_INVERTER_SIM, .inverter_delay_us = inverter_delay_us};
-    char err[256];
-    CHECK_EQ(card_station_init(&rig.card, &co, cu, membus_now_us(&rig.bus), err, sizeof err), 0);
-    dp_master_cfg_t mc = {.address = MASTER, .baud = BAUD, .strict_timing = true, .uart = mu};
-    dp_master_init(&rig.master, &mc, membus_now_us(&rig.bus));
+    char err[256] = "no room for the card on the bus"; /* rig_open overwrites it on failure */
+    rig_card_t *card = rig_open(&rig, err, sizeof err) == 0
+                           ? rig_add_card(&rig, &co, membus_now_us(&rig.bus))
+                           : NULL;
+    /* The note is empty unless card_station_init failed. */
+    CHECK_STR(card != NULL ? card->nvm_note : err, "");
+    bench.card_port = &rig.bus.ports[rig.bus.num_ports - 1u]; /* the card's, attached last */
+    dp_master_cfg_t mc = {.address = MASTER, .baud = BAUD, .strict_timing = true};
+    (void)rig_add_master(&rig, &mc, membus_now_us(&rig.bus));
     if (!cyclic) {
         return;
     }
@@ -101,7 +99,7 @@ static void setup(bool cyclic, bool dpv1, uint32_t inverter_delay_us)
     CHECK_EQ(dp_master_add_slave(&rig.master, &sc), 0);
     membus_run_for_us(&rig.bus, 20000);
     CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
-    CHECK_EQ(dp_slave_dpv1_mode(&rig.card.card.dp), dpv1);
+    CHECK_EQ(dp_slave_dpv1_mode(&rig.cards[0].cs.card.dp), dpv1);
 }
 
 static bool run_until_call(const dpm_call_t *c, uint32_t limit_us)
@@ -186,9 +184,9 @@ static bool is_request_to(const frame_t *f, uint8_t da, uint8_t sa, fdl_msg_t *m
  * when fn is 0), from index `from`; -1 if none. */
 static long find_request(size_t from, uint8_t da, uint8_t sa, uint8_t dsap, int fn)
 {
-    for (size_t i = from; i < rig.nframes; i++) {
+    for (size_t i = from; i < bench.nframes; i++) {
         fdl_msg_t m;
-        if (!is_request_to(&rig.frames[i], da, sa, &m) || !m.has_dsap || m.dsap != dsap) {
+        if (!is_request_to(&bench.frames[i], da, sa, &m) || !m.has_dsap || m.dsap != dsap) {
             continue;
         }
         if ((fn < 0 && m.data_len == 0u) || (fn >= 0 && m.data_len > 0u && m.data[0] == fn)) {
@@ -234,9 +232,9 @@ static unsigned check_c1_discipline(void)
     bool fcb_ok = true;
     const frame_t *prev = NULL;
     unsigned repeats = 0;
-    for (size_t i = 0; i < rig.nframes; i++) {
+    for (size_t i = 0; i < bench.nframes; i++) {
         fdl_msg_t m;
-        const frame_t *f = &rig.frames[i];
+        const frame_t *f = &bench.frames[i];
         if (!is_request_to(f, SLAVE, MASTER, &m)) {
             continue;
         }
@@ -290,7 +288,7 @@ static void test_prm_dpv1_octets(void)
 static void test_c1_ds47_read_8300_on_the_wire(void)
 {
     setup(true, true, 0);
-    rig.recording = true;
+    bench.recording = true;
     dpm_call_t call;
     dpm_ds47_rsp_t rsp;
     dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
@@ -307,27 +305,28 @@ static void test_c1_ds47_read_8300_on_the_wire(void)
     const uint8_t write_req[] = {0x68, 0x13, 0x13, 0x68, 0x84, 0x82, 0x7D, 0x33, 0x33, 0x5F,
                                  0x00, 0x2F, 0x0A, 0x01, 0x40, 0x00, 0x01, 0x10, 0x00, 0x20,
                                  0x6C, 0x00, 0x00, 0x5F, 0x16};
-    check_request(&rig.frames[w], write_req, sizeof write_req, "C1 Write DS47");
-    CHECK_BYTES(rig.frames[w + 1].b, rig.frames[w + 1].len, 0xE5);
+    check_request(&bench.frames[w], write_req, sizeof write_req, "C1 Write DS47");
+    CHECK_BYTES(bench.frames[w + 1].b, bench.frames[w + 1].len, 0xE5);
     /* Next telegram to the slave: a Data_Exchange, then the first poll (empty SRD, 51/51). */
     fdl_msg_t m;
-    CHECK(is_request_to(&rig.frames[w + 2], SLAVE, MASTER, &m) && !m.has_dsap);
+    CHECK(is_request_to(&bench.frames[w + 2], SLAVE, MASTER, &m) && !m.has_dsap);
     long p = find_request((size_t)w + 1u, SLAVE, MASTER, DPV1_SAP_C1, -1);
     CHECK_EQ(p, w + 4);
     if (p < 0) return;
     const uint8_t poll[] = {0x68, 0x05, 0x05, 0x68, 0x84, 0x82, 0x7D, 0x33, 0x33, 0xE9, 0x16};
-    check_request(&rig.frames[p], poll, sizeof poll, "C1 poll");
+    check_request(&bench.frames[p], poll, sizeof poll, "C1 poll");
     /* The Write.res comes to a poll: DL, SAPs swapped, 5F 00 2F 0A. */
     long rsp_at = -1;
-    for (size_t i = (size_t)w; i < rig.nframes; i++) {
-        if (rig.frames[i].len == 15u && rig.frames[i].b[0] == 0x68 && rig.frames[i].b[9] == 0x5F) {
+    for (size_t i = (size_t)w; i < bench.nframes; i++) {
+        const frame_t *f = &bench.frames[i];
+        if (f->len == 15u && f->b[0] == 0x68 && f->b[9] == 0x5F) {
             rsp_at = (long)i;
             break;
         }
     }
     CHECK(rsp_at > w);
     if (rsp_at > 0) {
-        CHECK_BYTES(rig.frames[rsp_at].b, rig.frames[rsp_at].len, 0x68, 0x09, 0x09, 0x68, 0x82,
+        CHECK_BYTES(bench.frames[rsp_at].b, bench.frames[rsp_at].len, 0x68, 0x09, 0x09, 0x68, 0x82,
                     0x84, 0x08, 0x33, 0x33, 0x5F, 0x00, 0x2F, 0x0A, 0x0C, 0x16);
     }
     /* Read.req index 47, length 240, as §A1.6 prints it. */
@@ -336,11 +335,11 @@ static void test_c1_ds47_read_8300_on_the_wire(void)
     if (r < 0) return;
     const uint8_t read_req[] = {0x68, 0x09, 0x09, 0x68, 0x84, 0x82, 0x7D, 0x33, 0x33, 0x5E,
                                 0x00, 0x2F, 0xF0, 0x66, 0x16};
-    check_request(&rig.frames[r], read_req, sizeof read_req, "C1 Read DS47");
+    check_request(&bench.frames[r], read_req, sizeof read_req, "C1 Read DS47");
     /* The last telegram of the call: Read.res with the manual's response octets. */
     bool found = false;
-    for (size_t i = (size_t)r; i < rig.nframes; i++) {
-        const frame_t *f = &rig.frames[i];
+    for (size_t i = (size_t)r; i < bench.nframes; i++) {
+        const frame_t *f = &bench.frames[i];
         if (f->len == 25u && f->b[9] == 0x5E) {
             CHECK_BYTES(f->b, f->len, 0x68, 0x13, 0x13, 0x68, 0x82, 0x84, 0x08, 0x33, 0x33, 0x5E,
                         0x00, 0x2F, 0x0A, 0x01, 0x40, 0x00, 0x01, 0x43, 0x01, 0x31, 0x1C, 0x72,
@@ -372,7 +371,7 @@ static void test_c1_manual_examples_and_writes(void)
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x01, 0x40, 0x00, 0x01);
     int32_t v = 0;
-    CHECK(movidrive_read_value(&rig.card.md, 11000, &v));
+    CHECK(movidrive_read_value(&rig.cards[0].cs.md, 11000, &v));
     CHECK_EQ(v, 3000);
     /* PROFIdrive request parameter 8300. */
     req = (dpm_ds47_req_t){.ref = 1, .id = DS47_ID_REQUEST, .n = 1};
@@ -392,7 +391,7 @@ static void test_c1_manual_examples_and_writes(void)
     /* MOVILINK write (non-volatile) of P160 through 0x40 / 0x20. */
     req = ml_request(DS47_ATTR_ML_WRITE, 8489, 123000);
     CHECK(ds47(port, &req, &call, &rsp));
-    CHECK(movidrive_read_value(&rig.card.md, 8489, &v));
+    CHECK(movidrive_read_value(&rig.cards[0].cs.md, 8489, &v));
     CHECK_EQ(v, 123000);
     check_c1_discipline();
 }
@@ -496,14 +495,14 @@ static void test_c1_nineteen_parameters(void)
     CHECK(ds47(dp_master_c1_port(&rig.master, 0), &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x56, 0x40, 0x00, 0x13);
     int32_t v = 0;
-    CHECK(movidrive_read_value(&rig.card.md, 11018, &v));
+    CHECK(movidrive_read_value(&rig.cards[0].cs.md, 11018, &v));
     CHECK_EQ(v, 118);
 }
 
 static void test_c1_slow_inverter_b5_and_exchange_goes_on(void)
 {
     setup(true, true, 20000); /* 20 ms per MOVILINK service */
-    rig.recording = true;
+    bench.recording = true;
     uint32_t cycles0 = rig.master.slaves[0].cycles;
     dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     dpm_call_t call;
@@ -516,8 +515,8 @@ static void test_c1_slow_inverter_b5_and_exchange_goes_on(void)
     CHECK(rig.master.slaves[0].cycles - cycles0 + 1u >= call.telegrams);
     /* One B5 telegram as §A1.6 prints it (from slave 4 to master 2). */
     bool b5 = false;
-    for (size_t i = 0; i < rig.nframes && !b5; i++) {
-        const frame_t *f = &rig.frames[i];
+    for (size_t i = 0; i < bench.nframes && !b5; i++) {
+        const frame_t *f = &bench.frames[i];
         if (f->len == 15u && f->b[9] == 0xDE) {
             CHECK_BYTES(f->b, f->len, 0x68, 0x09, 0x09, 0x68, 0x82, 0x84, 0x08, 0x33, 0x33, 0xDE,
                         0x80, 0xB5, 0x00, 0x87, 0x16);
@@ -602,7 +601,7 @@ static void test_c1_refusals_and_timeouts(void)
            !rig.master.slaves[0].c1.started) {
         membus_run_for_us(&rig.bus, 10);
     }
-    rig.card_port->silenced = true;
+    bench.card_port->silenced = true;
     CHECK(run_until_call(&call, 1000000));
     CHECK(!call.ok);
     CHECK(strstr(call.error, "restarted (no answer); the request is lost") != NULL);
@@ -616,15 +615,15 @@ static void test_c1_lost_response_is_repeated_by_the_card(void)
      * get SC and the value would be lost). */
     setup(true, true, 0);
     rig.master.cfg.slot_time_us = 1000; /* the retry comes after the whole answer */
-    rig.recording = true;
-    rig.drop_read_res = true;
+    bench.recording = true;
+    bench.drop_read_res = true;
     dpm_call_t call = {0};
     dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     CHECK_EQ(dpm_ds47_start(&call, dp_master_c1_port(&rig.master, 0), &req, NULL, NULL,
                             membus_now_us(&rig.bus)), 0);
     for (int i = 0; i < 100000 && !dpm_call_done(&call); i++) {
         membus_run_for_us(&rig.bus, 10);
-        if (rig.master_port->silenced && rig.bus.now_ns - rig.dropped_at_ns > 400000u) {
+        if (rig.master_port->silenced && rig.bus.now_ns - bench.dropped_at_ns > 400000u) {
             rig.master_port->silenced = false;
         }
     }
@@ -635,8 +634,8 @@ static void test_c1_lost_response_is_repeated_by_the_card(void)
     CHECK_EQ(rsp.p[0].value, 0x311C7289u);
     /* On the wire: poll, Read.res (missed), the same poll again, the same Read.res again. */
     long first = -1;
-    for (size_t i = 0; i + 3u < rig.nframes; i++) {
-        const frame_t *f = &rig.frames[i + 1u];
+    for (size_t i = 0; i + 3u < bench.nframes; i++) {
+        const frame_t *f = &bench.frames[i + 1u];
         if (f->len > 10u && f->b[6] == FDL_RSP_DL && f->b[9] == DPV1_FN_READ) {
             first = (long)i;
             break;
@@ -644,10 +643,10 @@ static void test_c1_lost_response_is_repeated_by_the_card(void)
     }
     CHECK(first >= 0);
     if (first >= 0) {
-        const frame_t *poll1 = &rig.frames[first];
-        const frame_t *rsp1 = &rig.frames[first + 1];
-        const frame_t *poll2 = &rig.frames[first + 2];
-        const frame_t *rsp2 = &rig.frames[first + 3];
+        const frame_t *poll1 = &bench.frames[first];
+        const frame_t *rsp1 = &bench.frames[first + 1];
+        const frame_t *poll2 = &bench.frames[first + 2];
+        const frame_t *rsp2 = &bench.frames[first + 3];
         CHECK_EQ(poll1->len, 11);
         CHECK(poll1->len == poll2->len && memcmp(poll1->b, poll2->b, poll1->len) == 0);
         CHECK(rsp1->len == rsp2->len && memcmp(rsp1->b, rsp2->b, rsp1->len) == 0);
@@ -702,7 +701,7 @@ static bool c2_open(dpm_c2_t *c, acyc_result_t *a)
 static void test_c2_open_read_abort_on_the_wire(void)
 {
     setup(false, false, 0); /* no class-1 master: the card stays in Wait_Prm */
-    rig.recording = true;
+    bench.recording = true;
     static dpm_c2_t c;
     c2_setup(&c, 1, 0);
     acyc_result_t a;
@@ -712,20 +711,20 @@ static void test_c2_open_read_abort_on_the_wire(void)
     CHECK_BYTES(a.pdu, a.len, 0x57, 0xF0, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
                 0x00);
     /* Initiate.req (first telegram from 1 to 4: FCV 0, FCB 1), RM answer, polls of SAP 0. */
-    CHECK(rig.nframes >= 4u);
-    CHECK_BYTES(rig.frames[0].b, rig.frames[0].len, 0x68, 0x19, 0x19, 0x68, 0x84, 0x81, 0x6D,
+    CHECK(bench.nframes >= 4u);
+    CHECK_BYTES(bench.frames[0].b, bench.frames[0].len, 0x68, 0x19, 0x19, 0x68, 0x84, 0x81, 0x6D,
                 0x31, 0x32, 0x57, 0x00, 0x00, 0x00, 0x00, 0xC8, 0x01, 0x00, 0x00, 0x00, 0x00,
                 0x00, 0x00, 0x02, 0x00, 0x02, 0x00, 0x00, 0x00, 0x00, 0xF9, 0x16);
-    CHECK_BYTES(rig.frames[1].b, rig.frames[1].len, 0x68, 0x09, 0x09, 0x68, 0x81, 0x84, 0x08,
+    CHECK_BYTES(bench.frames[1].b, bench.frames[1].len, 0x68, 0x09, 0x09, 0x68, 0x81, 0x84, 0x08,
                 0x32, 0x31, 0x56, 0x00, 0x00, 0x00, 0xC6, 0x16);
-    CHECK_BYTES(rig.frames[2].b, rig.frames[2].len, 0x68, 0x05, 0x05, 0x68, 0x84, 0x81, 0x5D,
+    CHECK_BYTES(bench.frames[2].b, bench.frames[2].len, 0x68, 0x05, 0x05, 0x68, 0x84, 0x81, 0x5D,
                 0x00, 0x32, 0x94, 0x16);
-    size_t last = rig.nframes - 1u;
-    CHECK_BYTES(rig.frames[last].b, rig.frames[last].len, 0x68, 0x11, 0x11, 0x68, 0x81, 0x84,
+    size_t last = bench.nframes - 1u;
+    CHECK_BYTES(bench.frames[last].b, bench.frames[last].len, 0x68, 0x11, 0x11, 0x68, 0x81, 0x84,
                 0x08, 0x32, 0x00, 0x57, 0xF0, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
-                0x00, 0x00, fdl_fcs(&rig.frames[last].b[4], 17), 0x16);
+                0x00, 0x00, fdl_fcs(&bench.frames[last].b[4], 17), 0x16);
     /* A DS47 read on the connection. */
-    size_t before = rig.nframes;
+    size_t before = bench.nframes;
     dpm_call_t call;
     dpm_ds47_rsp_t rsp;
     dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
@@ -737,8 +736,8 @@ static void test_c2_open_read_abort_on_the_wire(void)
         const uint8_t write_req[] = {0x68, 0x13, 0x13, 0x68, 0x84, 0x81, 0x7D, 0x00, 0x32, 0x5F,
                                      0x00, 0x2F, 0x0A, 0x01, 0x40, 0x00, 0x01, 0x10, 0x00, 0x20,
                                      0x6C, 0x00, 0x00, 0x2A, 0x16};
-        check_request(&rig.frames[w], write_req, sizeof write_req, "C2 Write DS47");
-        CHECK_BYTES(rig.frames[w + 1].b, rig.frames[w + 1].len, 0xE5);
+        check_request(&bench.frames[w], write_req, sizeof write_req, "C2 Write DS47");
+        CHECK_BYTES(bench.frames[w + 1].b, bench.frames[w + 1].len, 0xE5);
     }
     /* Abort: 58 00 20 00 to SAP 0, answered SC; the card frees the connection. */
     acyc_result_t ab = {0};
@@ -752,12 +751,12 @@ static void test_c2_open_read_abort_on_the_wire(void)
     if (abort_at >= 0) {
         const uint8_t abort_req[] = {0x68, 0x09, 0x09, 0x68, 0x84, 0x81, 0x7D, 0x00, 0x32, 0x58,
                                      0x00, 0x20, 0x00, 0x2C, 0x16};
-        check_request(&rig.frames[abort_at], abort_req, sizeof abort_req, "C2 Abort");
-        CHECK_BYTES(rig.frames[abort_at + 1].b, rig.frames[abort_at + 1].len, 0xE5);
+        check_request(&bench.frames[abort_at], abort_req, sizeof abort_req, "C2 Abort");
+        CHECK_BYTES(bench.frames[abort_at + 1].b, bench.frames[abort_at + 1].len, 0xE5);
     }
-    CHECK_EQ(rig.card.card.dpv1.c2_aborts, 1);
-    CHECK(!rig.card.card.dpv1.c2[0].open);
-    CHECK_EQ(dp_slave_state(&rig.card.card.dp), DP_STATE_WAIT_PRM);
+    CHECK_EQ(rig.cards[0].cs.card.dpv1.c2_aborts, 1);
+    CHECK(!rig.cards[0].cs.card.dpv1.c2[0].open);
+    CHECK_EQ(dp_slave_state(&rig.cards[0].cs.card.dp), DP_STATE_WAIT_PRM);
     CHECK_EQ(dpm_c2_submit(&c, (const uint8_t *)"\x5E\x00\x2F\xF0", 4, acyc_done, &ab,
                            membus_now_us(&rig.bus)), -1); /* closed */
     /* The connection can be opened again. */
@@ -809,16 +808,16 @@ static void test_c2_third_connection_refused(void)
     CHECK(c2_open(&c1, &a));
     CHECK(c2_open(&c2, &a));
     CHECK_EQ(c2.sap, 1);
-    rig.recording = true;
+    bench.recording = true;
     CHECK(!c2_open(&c3, &a));
     CHECK(a.done && !a.ok);
     CHECK_EQ(dpm_c2_state(&c3), DPM_C2_CLOSED);
     CHECK_STR(a.error, "connection refused (resource manager SAP 49): Abort from the slave: "
                        "subnet 0, instance MSAC_C2, reason 15 RES resource");
     CHECK_STR(dpm_c2_error(&c3), a.error);
-    CHECK_EQ(rig.card.card.dpv1.c2_refused, 1);
+    CHECK_EQ(rig.cards[0].cs.card.dpv1.c2_refused, 1);
     /* The refusal on the wire: an Abort PDU from SAP 49 to SSAP 40. */
-    CHECK_BYTES(rig.frames[1].b, rig.frames[1].len, 0x68, 0x09, 0x09, 0x68, 0x81, 0x84, 0x08,
+    CHECK_BYTES(bench.frames[1].b, bench.frames[1].len, 0x68, 0x09, 0x09, 0x68, 0x81, 0x84, 0x08,
                 0x28, 0x31, 0x58, 0x00, 0x1F, 0x00, 0xDD, 0x16);
     /* Both others still work; the FCB sequence of address 1 is shared by c1 and c3. */
     dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
@@ -847,18 +846,18 @@ static void test_c2_idle_keeps_the_connection(void)
     CHECK_EQ(dp_master_add_c2(&rig.master, &c), 0);
     acyc_result_t a;
     CHECK(c2_open(&c, &a));
-    rig.recording = true;
+    bench.recording = true;
     membus_run_for_us(&rig.bus, 500000); /* 5 send timeouts without a request */
     CHECK_EQ(dpm_c2_state(&c), DPM_C2_OPEN);
     CHECK(c.idles >= 8u && c.idles <= 11u); /* one per 50 ms */
-    CHECK_EQ(rig.card.card.dpv1.c2_timeouts, 0);
+    CHECK_EQ(rig.cards[0].cs.card.dpv1.c2_timeouts, 0);
     long i = find_request(0, SLAVE, 1, 0, DPV1_FN_IDLE);
     CHECK(i >= 0);
     if (i >= 0) {
         const uint8_t idle[] = {0x68, 0x09, 0x09, 0x68, 0x84, 0x81, 0x7D, 0x00, 0x32, 0x48,
                                 0x00, 0x00, 0x00, 0xFC, 0x16};
-        check_request(&rig.frames[i], idle, sizeof idle, "C2 Idle");
-        CHECK_BYTES(rig.frames[i + 1].b, rig.frames[i + 1].len, 0x68, 0x09, 0x09, 0x68, 0x81,
+        check_request(&bench.frames[i], idle, sizeof idle, "C2 Idle");
+        CHECK_BYTES(bench.frames[i + 1].b, bench.frames[i + 1].len, 0x68, 0x09, 0x09, 0x68, 0x81,
                     0x84, 0x08, 0x32, 0x00, 0x48, 0x00, 0x00, 0x00, 0x87, 0x16);
     }
     /* A request right after an Idle still goes through. */
@@ -870,7 +869,7 @@ static void test_c2_idle_keeps_the_connection(void)
     /* Without Idle the card's supervision frees the connection; the next request sees RS. */
     c.cfg.no_idle = true;
     membus_run_for_us(&rig.bus, 300000);
-    CHECK_EQ(rig.card.card.dpv1.c2_timeouts, 1);
+    CHECK_EQ(rig.cards[0].cs.card.dpv1.c2_timeouts, 1);
     CHECK_EQ(dpm_c2_state(&c), DPM_C2_OPEN); /* the master cannot know yet */
     memset(&call, 0, sizeof call);
     CHECK_EQ(dpm_ds47_start(&call, dpm_c2_port(&c), &req, NULL, NULL, membus_now_us(&rig.bus)),
@@ -886,7 +885,7 @@ static void test_c2_idle_keeps_the_connection(void)
 static void test_c2_and_c1_together_with_cyclic_exchange(void)
 {
     setup(true, true, 2000);
-    rig.recording = true;
+    bench.recording = true;
     static dpm_c2_t c;
     c2_setup(&c, MASTER, 0); /* same address as the class-1 master: one FCB sequence */
     acyc_result_t a;
@@ -920,7 +919,7 @@ static void test_c2_slave_falls_silent(void)
     c2_setup(&c, 1, 0);
     acyc_result_t a;
     CHECK(c2_open(&c, &a));
-    rig.card_port->silenced = true;
+    bench.card_port->silenced = true;
     dpm_call_t call = {0};
     dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     CHECK_EQ(dpm_ds47_start(&call, dpm_c2_port(&c), &req, NULL, NULL, membus_now_us(&rig.bus)),

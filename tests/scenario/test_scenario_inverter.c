@@ -6,51 +6,54 @@
 #include "check.h"
 #include "dp_master/param_channel.h"
 #include "dp_slave/dp_wire.h"
-#include "sim_hal/membus.h"
-#include "sim_stations/stations.h"
+#include "rig/rig.h"
 
-typedef struct rig {
-    membus_t bus;
-    card_station_t card;
-    dp_master_t master;
-    membus_port_t *master_port;
+/* The master's side of the parameter channel, and what the card's events counted. */
+typedef struct scn {
     uint8_t out[14];
     dpm_param_t param;
     unsigned gc_events;
-} rig_t;
+} scn_t;
 
-static rig_t rig;
+static rig_t rig; /* large: keep it off the stack */
+static scn_t scn;
 /* Where simulated time starts: 0, or a wall-clock-like instant past 2^31 us (35.8 min uptime). */
 static uint64_t start_ns;
 
 static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
 
-static void on_card_event(void *ctx, const dp_event_t *ev)
+static void on_card_event(void *ctx, unsigned card, const dp_event_t *ev)
 {
+    (void)card;
     if (ev->type == DP_EV_GLOBAL_CONTROL) {
-        ((rig_t *)ctx)->gc_events++;
+        ((scn_t *)ctx)->gc_events++;
     }
 }
 
+/* A rig with card co on the in-memory bus from t_ns; the check stands for card_station_init's
+ * result (the note is empty unless it failed). */
+static void rig_with_card(const card_options_t *co, uint64_t t_ns)
+{
+    memset(&scn, 0, sizeof scn);
+    rig_cfg_t rc = {.medium = RIG_MEDIUM_MEMBUS, .start_ns = t_ns};
+    rig_init(&rig, &rc);
+    rig_tap_t tap = {.ctx = &scn, .card_event = on_card_event};
+    (void)rig_add_tap(&rig, &tap);
+    char err[256] = "no room for the card on the bus"; /* rig_open overwrites it on failure */
+    rig_card_t *card = rig_open(&rig, err, sizeof err) == 0
+                           ? rig_add_card(&rig, co, membus_now_us(&rig.bus))
+                           : NULL;
+    CHECK_STR(card != NULL ? card->nvm_note : err, "");
+}
+
+/* Card 4 first, then master 2: the order the bus polls them in, which the timings rest on. */
 static void setup(uint32_t inverter_delay_us, uint8_t diag_alarm_octet)
 {
-    memset(&rig, 0, sizeof rig);
-    membus_init(&rig.bus);
-    rig.bus.now_ns = start_ns;
-    hal_uart_t cu;
-    hal_uart_t mu;
-    sim_station_t cs = card_station(&rig.card);
-    sim_station_t ms = master_station(&rig.master);
-    membus_attach(&rig.bus, &cs, &cu);
-    rig.master_port = membus_attach(&rig.bus, &ms, &mu);
     card_options_t co = {.address = 4, .fixed_baud = 1500000, .strict_timing = true,
-                         .inverter = CARD_INVERTER_SIM, .inverter_delay_us = inverter_delay_us,
-                         .event = on_card_event, .ctx = &rig};
-    char err[256];
-    CHECK_EQ(card_station_init(&rig.card, &co, cu, membus_now_us(&rig.bus), err, sizeof err), 0);
-    dp_master_cfg_t mc = {.address = 2, .baud = 1500000, .strict_timing = true,
-                          .cycle_us = 2000, .uart = mu};
-    dp_master_init(&rig.master, &mc, membus_now_us(&rig.bus));
+                         .inverter = CARD_INVERTER_SIM, .inverter_delay_us = inverter_delay_us};
+    rig_with_card(&co, start_ns);
+    dp_master_cfg_t mc = {.address = 2, .baud = 1500000, .strict_timing = true, .cycle_us = 2000};
+    (void)rig_add_master(&rig, &mc, membus_now_us(&rig.bus));
     const uint8_t user[9] = {0x00, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, diag_alarm_octet};
     dpm_slave_cfg_t sc = {.address = 4};
     sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 50, user, sizeof user);
@@ -68,8 +71,8 @@ static const uint8_t *inputs(void)
 
 static void start(uint8_t service, uint16_t index, uint32_t value)
 {
-    dpm_param_start(&rig.param, service, index, value, rig.out);
-    dp_master_set_outputs(&rig.master, 0, rig.out, sizeof rig.out);
+    dpm_param_start(&scn.param, service, index, value, scn.out);
+    dp_master_set_outputs(&rig.master, 0, scn.out, sizeof scn.out);
 }
 
 /* Runs until the reply to the running service is in the inputs; returns the cycles it took. */
@@ -77,7 +80,7 @@ static uint32_t finish(uint32_t limit_us)
 {
     uint32_t c0 = rig.master.slaves[0].cycles;
     for (uint32_t t = 0; t < limit_us; t += 500u) {
-        if (dpm_param_done(&rig.param, inputs())) {
+        if (dpm_param_done(&scn.param, inputs())) {
             return rig.master.slaves[0].cycles - c0;
         }
         membus_run_for_us(&rig.bus, 500u);
@@ -87,11 +90,11 @@ static uint32_t finish(uint32_t limit_us)
 
 static void set_po(uint16_t cw, uint16_t speed)
 {
-    rig.out[8] = (uint8_t)(cw >> 8);
-    rig.out[9] = (uint8_t)cw;
-    rig.out[10] = (uint8_t)(speed >> 8);
-    rig.out[11] = (uint8_t)speed;
-    dp_master_set_outputs(&rig.master, 0, rig.out, sizeof rig.out);
+    scn.out[8] = (uint8_t)(cw >> 8);
+    scn.out[9] = (uint8_t)cw;
+    scn.out[10] = (uint8_t)(speed >> 8);
+    scn.out[11] = (uint8_t)speed;
+    dp_master_set_outputs(&rig.master, 0, scn.out, sizeof scn.out);
 }
 
 static uint16_t pi_word(unsigned i)
@@ -120,7 +123,7 @@ static void test_slow_inverter_keeps_old_reply_and_exchange_running(void)
     start(ML_SVC_READ, 8489, 0);
     bool same_until_done = true;
     uint32_t c0 = rig.master.slaves[0].cycles;
-    for (int i = 0; i < 200 && !dpm_param_done(&rig.param, inputs()); i++) {
+    for (int i = 0; i < 200 && !dpm_param_done(&scn.param, inputs()); i++) {
         same_until_done = same_until_done && memcmp(inputs(), first, 8) == 0;
         membus_run_for_us(&rig.bus, 500);
     }
@@ -132,8 +135,8 @@ static void test_slow_inverter_keeps_old_reply_and_exchange_running(void)
 static void test_write_executes_exactly_once(void)
 {
     setup(5000, 0x01);
-    uint32_t writes0 = rig.card.md.eeprom_writes;
-    uint32_t services0 = rig.card.card.param.services;
+    uint32_t writes0 = rig.cards[0].cs.md.eeprom_writes;
+    uint32_t services0 = rig.cards[0].cs.card.param.services;
     start(ML_SVC_WRITE, 8489, 300000);
     CHECK(finish(100000) != UINT32_MAX);
     /* The same request keeps arriving with an unchanged handshake for 100 more cycles. */
@@ -141,10 +144,10 @@ static void test_write_executes_exactly_once(void)
     while (rig.master.slaves[0].cycles - c0 < 100u) {
         membus_run_for_us(&rig.bus, 1000);
     }
-    CHECK_EQ(rig.card.card.param.services - services0, 1);
-    CHECK_EQ(rig.card.md.eeprom_writes - writes0, 0); /* no EEPROM file in this rig */
+    CHECK_EQ(rig.cards[0].cs.card.param.services - services0, 1);
+    CHECK_EQ(rig.cards[0].cs.md.eeprom_writes - writes0, 0); /* no EEPROM file in this rig */
     int32_t v = 0;
-    CHECK(movidrive_read_value(&rig.card.md, 8489, &v));
+    CHECK(movidrive_read_value(&rig.cards[0].cs.md, 8489, &v));
     CHECK_EQ(v, 300000);
     CHECK_BYTES(inputs(), 8, 0x72, 0x00, 0x21, 0x29, 0x00, 0x04, 0x93, 0xE0);
 }
@@ -156,9 +159,9 @@ static void test_inverter_error_and_card_error(void)
     CHECK(finish(100000) != UINT32_MAX);
     CHECK_BYTES(inputs(), 8, 0xF3, 0x00, 0x21, 0x45, 0x08, 0x00, 0x00, 0x15);
     /* Reserved octet not 0: the card answers class 5 code 5 without asking the inverter. */
-    dpm_param_start(&rig.param, ML_SVC_READ, 8300, 0, rig.out);
-    rig.out[1] = 0x01;
-    dp_master_set_outputs(&rig.master, 0, rig.out, sizeof rig.out);
+    dpm_param_start(&scn.param, ML_SVC_READ, 8300, 0, scn.out);
+    scn.out[1] = 0x01;
+    dp_master_set_outputs(&rig.master, 0, scn.out, sizeof scn.out);
     CHECK(finish(100000) != UINT32_MAX);
     CHECK_BYTES(inputs(), 8, 0xB1, 0x01, 0x20, 0x6C, 0x05, 0x05, 0x00, 0x00);
 }
@@ -172,7 +175,7 @@ static void test_inverter_not_answering_gives_6_2(void)
     CHECK_BYTES(inputs(), 8, 0xF1, 0x00, 0x20, 0x6C, 0x06, 0x02, 0x00, 0x00);
     membus_run_for_us(&rig.bus, 400000); /* the late answer arrives and must change nothing */
     CHECK_BYTES(inputs(), 8, 0xF1, 0x00, 0x20, 0x6C, 0x06, 0x02, 0x00, 0x00);
-    CHECK_EQ(rig.card.card.ml.stale_responses, 1);
+    CHECK_EQ(rig.cards[0].cs.card.ml.stale_responses, 1);
 }
 
 static void commission(void)
@@ -199,8 +202,8 @@ static void test_process_data_ramp_and_status_word(void)
     CHECK(speed > 600 && speed < 900); /* 150 rpm after 100 ms with P130 = 2 s per 3000 rpm */
     membus_run_for_us(&rig.bus, 200000);
     CHECK_EQ(pi_word(1), 1500);
-    CHECK_EQ(rig.card.card.po[0], 0x0006);
-    CHECK_EQ(rig.card.card.po[1], 1500);
+    CHECK_EQ(rig.cards[0].cs.card.po[0], 0x0006);
+    CHECK_EQ(rig.cards[0].cs.card.po[1], 1500);
 }
 
 static void test_fieldbus_timeout_fault_ext_diag_and_reset(void)
@@ -212,8 +215,8 @@ static void test_fieldbus_timeout_fault_ext_diag_and_reset(void)
     CHECK_EQ(pi_word(1), 1500);
     dp_master_stop(&rig.master);
     membus_run_for_us(&rig.bus, 100000); /* 50 ms watchdog */
-    CHECK_EQ(dp_slave_state(&rig.card.card.dp), DP_STATE_WAIT_PRM);
-    CHECK_EQ(rig.card.md.fault, 28); /* P831 default 4: rapid stop with fault */
+    CHECK_EQ(dp_slave_state(&rig.cards[0].cs.card.dp), DP_STATE_WAIT_PRM);
+    CHECK_EQ(rig.cards[0].cs.md.fault, 28); /* P831 default 4: rapid stop with fault */
     dp_master_start(&rig.master, membus_now_us(&rig.bus));
     membus_wake(rig.master_port);
     membus_run_for_us(&rig.bus, 300000);
@@ -225,7 +228,7 @@ static void test_fieldbus_timeout_fault_ext_diag_and_reset(void)
     membus_run_for_us(&rig.bus, 10000);
     set_po(0x0006, 1500);
     membus_run_for_us(&rig.bus, 300000);
-    CHECK_EQ(rig.card.md.fault, 0);
+    CHECK_EQ(rig.cards[0].cs.md.fault, 0);
     CHECK_EQ(pi_word(0) & 0x0027u, 0x0007u);
     CHECK_BYTES(rig.master.slaves[0].last_diag, rig.master.slaves[0].last_diag_len, 0x00, 0x0C,
                 0x00, 0x02, 0x60, 0x03);
@@ -242,7 +245,7 @@ static void test_no_ext_diag_with_alarm_off(void)
     dp_master_start(&rig.master, membus_now_us(&rig.bus));
     membus_wake(rig.master_port);
     membus_run_for_us(&rig.bus, 300000);
-    CHECK_EQ(rig.card.md.fault, 28);
+    CHECK_EQ(rig.cards[0].cs.md.fault, 28);
     CHECK_EQ(pi_word(0) & 0x0020u, 0x0020u);
     CHECK_BYTES(rig.master.slaves[0].last_diag, rig.master.slaves[0].last_diag_len, 0x00, 0x0C,
                 0x00, 0x02, 0x60, 0x03);
@@ -252,7 +255,7 @@ static void test_no_ext_diag_with_alarm_off(void)
 static int32_t drive_value(uint16_t index)
 {
     int32_t v = -1;
-    CHECK(movidrive_read_value(&rig.card.md, index, &v));
+    CHECK(movidrive_read_value(&rig.cards[0].cs.md, index, &v));
     return v;
 }
 
@@ -269,10 +272,10 @@ static void test_p819_written_elsewhere_stays_until_next_set_prm(void)
     CHECK(finish(100000) != UINT32_MAX);
     CHECK_EQ(inputs()[0] & ML_MGMT_ERROR, 0);
     CHECK_EQ(p819(), 300);
-    unsigned gc_before = rig.gc_events;
+    unsigned gc_before = scn.gc_events;
     dp_master_global_control(&rig.master, DP_GC_CLEAR_DATA, 0);
     membus_run_for_us(&rig.bus, 20000);
-    CHECK_EQ(rig.gc_events, gc_before + 1u);
+    CHECK_EQ(scn.gc_events, gc_before + 1u);
     CHECK_EQ(p819(), 300);
     /* The master parameterises again with the same 50 ms: that overwrites it. */
     dpm_slave_cfg_t sc = rig.master.slaves[0].cfg;
@@ -286,16 +289,10 @@ static void test_p819_written_elsewhere_stays_until_next_set_prm(void)
  * first diagnosis step is to read P093 on the drive: it must show that address. */
 static void test_address_above_125_shown_in_p093(void)
 {
-    memset(&rig, 0, sizeof rig);
-    membus_init(&rig.bus);
-    hal_uart_t cu;
-    sim_station_t cs = card_station(&rig.card);
-    membus_attach(&rig.bus, &cs, &cu);
     card_options_t co = {.address = 126, .fixed_baud = 1500000, .inverter = CARD_INVERTER_SIM};
-    char err[256];
-    CHECK_EQ(card_station_init(&rig.card, &co, cu, membus_now_us(&rig.bus), err, sizeof err), 0);
+    rig_with_card(&co, 0);
     membus_run_for_us(&rig.bus, 10000);
-    CHECK(!rig.card.card.on_bus);
+    CHECK(!rig.cards[0].cs.card.on_bus);
     CHECK_EQ(drive_value(8454), 126); /* P093 */
     CHECK_EQ(drive_value(8452), 5);   /* P091: PROFIBUS DP */
     CHECK_EQ(drive_value(8453), 0);   /* P092: no rate heard */
