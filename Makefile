@@ -39,14 +39,15 @@ deps-apt:
 
 # pyprofibus is the independent DP master of the interoperability tests; pytest runs the Python
 # client's tests (python/, installed editable), selenium drives chromium for the panel test,
-# lizard measures function lengths for the repository's size limits (tests/repo). The
+# lizard measures function lengths for the repository's size limits (tests/repo), lcm is LCM 1.5
+# (liblcm, its headers, lcm-gen, lcm-logger, the Python module; cmake/dfp_lcm.cmake). The
 # stamp's number goes up whenever this list changes, so an older venv is topped up.
-VENV_STAMP := $(VENV)/.deps-3
+VENV_STAMP := $(VENV)/.deps-4
 $(VENV_STAMP):
 	@mkdir -p build
 	[ -x $(PYTHON) ] || python3 -m venv $(VENV) || { apt-get install -y -qq python3-venv && python3 -m venv $(VENV); }
 	$(VENV)/bin/pip install -q --disable-pip-version-check pyprofibus==1.13 pyserial \
-	  pytest==8.3.4 selenium==4.27.1 lizard==1.17.13
+	  pytest==8.3.4 selenium==4.27.1 lizard==1.17.13 lcm==1.5.3
 	$(VENV)/bin/pip install -q --disable-pip-version-check -e ./python
 	touch $@
 

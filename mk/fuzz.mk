@@ -26,7 +26,7 @@ FUZZ_BIN := $(if $(filter OFF,$(FUZZ_TRACE_CMP)),build/fuzz-nocmp,$(FUZZ_BUILD))
 
 .PHONY: fuzz-build fuzz-smoke fuzz-long fuzz-known fuzz-seeds
 
-fuzz-build: deps-apt
+fuzz-build: deps
 	cmake -S tests/fuzz -B $(FUZZ_BIN) -G Ninja -DCMAKE_C_COMPILER=clang-14 \
 	  -DFUZZ_TRACE_CMP=$(FUZZ_TRACE_CMP)
 	cmake --build $(FUZZ_BIN)

@@ -13,7 +13,7 @@ EXTRA_TEST_TARGETS += lint coverage
 
 .PHONY: lint coverage
 
-lint: deps-apt
+lint: deps
 	tools/quality/lint.sh
 
 coverage: deps

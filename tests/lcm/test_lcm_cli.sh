@@ -6,6 +6,7 @@
 # loopback needs a multicast route, so the test runs in a private network namespace.
 sim=$1
 channels=$2 # lcm_log_channels: events per channel of a log
+lcm_logger=$3
 . "$(dirname "$0")/netns.sh"
 . "$(dirname "$0")/../cli/lib.sh"
 tmp=$(mktemp -d)
@@ -19,7 +20,7 @@ url="udpm://239.255.76.72:7672?ttl=0"
 # lcm-logger says "Opening log file" before it subscribes; the exact counts below need every
 # message, so give it a generous moment on a loaded machine.
 start_logger() { # start_logger LOG OUT
-  lcm-logger --lcm-url="$url" -f "$1" >"$2" 2>&1 &
+  "$lcm_logger" --lcm-url="$url" --force "$1" >"$2" 2>&1 &
   logger=$!; pids+=($logger)
   for _ in $(seq 100); do grep -q "Opening log file" "$2" 2>/dev/null && break; sleep 0.1; done
   sleep 1
