@@ -294,6 +294,26 @@ static void test_damaged_logs(void)
     expect_damage("bad_telegram.lcm", b, size, 0,
                   "event 1 at byte 0: channel DFP_TELEGRAM: telegram_t length field -6");
 
+    /* A telegram with no octets: lcm-gen's decoder would pass memcpy a NULL buffer. */
+    {
+        char p0[600];
+        path_of(p0, sizeof p0, "empty_telegram.lcm");
+        log_writer_t w0;
+        memset(&w0, 0, sizeof w0);
+        w0.log = lcm_eventlog_create(p0, "w");
+        CHECK(w0.log != NULL);
+        telegram_event(&w0, "DFP_TELEGRAM", T0, DFP_LCM_TELEGRAM_T_DIR_RX, 1500000, 0, req,
+                       sizeof req);
+        telegram_event(&w0, "SEG", T0 + 10, DFP_LCM_TELEGRAM_T_DIR_RX, 1500000, 0, req, 0);
+        long size0 = ftell(w0.log->f);
+        lcm_eventlog_destroy(w0.log);
+        unsigned char *b0 = slurp(p0, &size0);
+        snprintf(want, sizeof want, "event 2 at byte %ld: channel SEG: telegram_t length 0: a "
+                 "telegram has at least one octet", w0.offsets[2]);
+        expect_damage("empty_telegram.lcm", b0, size0, 1, want);
+        free(b0);
+    }
+
     /* Garbage only. */
     for (int i = 0; i < 200; i++) {
         b[i] = (unsigned char)(i * 37 + 11);

@@ -41,6 +41,12 @@ int dfp_lcm_telegram_decode_checked(const void *buf, size_t len, dfp_lcm_telegra
         snprintf(why, why_max, "telegram_t length field %d", n);
         return -1;
     }
+    /* lcm-gen's decoder hands memcpy the NULL that lcm_malloc(0) returns; and no telegram is
+     * shorter than SC's one octet anyway. */
+    if (n == 0) {
+        snprintf(why, why_max, "telegram_t length 0: a telegram has at least one octet");
+        return -1;
+    }
     size_t want = DFP_LCM_TELEGRAM_FIXED + (size_t)n;
     if (len != want) {
         snprintf(why, why_max, "telegram_t of %zu octets, its length field %d needs %zu", len,
