@@ -13,8 +13,7 @@
 #include "dfp_lcm_bridge/lcm_bridge.h"
 #include "dfp_lcm_types/telegram_decode.h"
 #include "dp_master/param_channel.h"
-#include "sim_hal/membus.h"
-#include "sim_stations/stations.h"
+#include "rig/rig.h"
 
 /* ---- what the subscriber received ---------------------------------------------------------- */
 
@@ -204,15 +203,13 @@ static void test_telegram_layout_and_checked_decode(void)
 
 /* ---- the card on the in-memory bus ----------------------------------------------------------- */
 
-typedef struct rig {
-    membus_t bus;
-    card_station_t card;
-    dp_master_t master;
+/* What the test drives the master with; the bus, the card and the master are in the rig. */
+static struct {
     uint8_t out[14];
     dpm_param_t param;
-} rig_t;
+} drv;
 
-static rig_t rig;
+static rig_t rig; /* large: keep it off the stack */
 #define RIG_EPOCH_US 1700000000000000LL
 
 static int64_t rig_clock(void *ctx)
@@ -221,26 +218,33 @@ static int64_t rig_clock(void *ctx)
     return RIG_EPOCH_US + (int64_t)(rig.bus.now_ns / 1000u);
 }
 
+static void observe_param(void *ctx, unsigned card, uint8_t channel,
+                          const uint8_t req[ML_TELEGRAM_LEN], const uint8_t rsp[ML_TELEGRAM_LEN])
+{
+    (void)card;
+    dfp_lcm_bridge_param_observer(ctx, channel, req, rsp);
+}
+
+/* Card 4 first, then master 2: the order the bus polls them in, which the timings rest on. */
 static void setup(card_inverter_t inverter)
 {
-    memset(&rig, 0, sizeof rig);
-    membus_init(&rig.bus);
-    hal_uart_t cu;
-    hal_uart_t mu;
-    sim_station_t cs = card_station(&rig.card);
-    sim_station_t ms = master_station(&rig.master);
-    membus_attach(&rig.bus, &cs, &cu);
-    membus_attach(&rig.bus, &ms, &mu);
+    memset(&drv, 0, sizeof drv);
+    rig_cfg_t rc = {.medium = RIG_MEDIUM_MEMBUS};
+    rig_init(&rig, &rc);
+    rig_tap_t tap = {.ctx = &bridge, .param = observe_param};
+    (void)rig_add_tap(&rig, &tap);
     card_options_t co = {.address = 4, .fixed_baud = 1500000, .strict_timing = true,
-                         .inverter = inverter,
-                         .param_observer = dfp_lcm_bridge_param_observer,
-                         .param_observer_ctx = &bridge};
+                         .inverter = inverter};
     bridge.clock = rig_clock;
-    char err[256];
-    CHECK_EQ(card_station_init(&rig.card, &co, cu, membus_now_us(&rig.bus), err, sizeof err), 0);
+    char err[256] = "no room for the card on the bus"; /* rig_open overwrites it on failure */
+    rig_card_t *card = rig_open(&rig, err, sizeof err) == 0
+                           ? rig_add_card(&rig, &co, membus_now_us(&rig.bus))
+                           : NULL;
+    /* The note is empty unless card_station_init failed. */
+    CHECK_STR(card != NULL ? card->nvm_note : err, "");
     dp_master_cfg_t mc = {.address = 2, .baud = 1500000, .strict_timing = true,
-                          .cycle_us = 2000, .uart = mu};
-    dp_master_init(&rig.master, &mc, membus_now_us(&rig.bus));
+                          .cycle_us = 2000};
+    (void)rig_add_master(&rig, &mc, membus_now_us(&rig.bus));
     dpm_slave_cfg_t sc = {.address = 4};
     sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 50, dfp21b_user_prm_default,
                                         sizeof dfp21b_user_prm_default);
@@ -256,10 +260,10 @@ static void set_po(uint16_t a, uint16_t b, uint16_t c)
 {
     const uint16_t w[3] = {a, b, c};
     for (int i = 0; i < 3; i++) {
-        rig.out[8 + 2 * i] = (uint8_t)(w[i] >> 8);
-        rig.out[9 + 2 * i] = (uint8_t)w[i];
+        drv.out[8 + 2 * i] = (uint8_t)(w[i] >> 8);
+        drv.out[9 + 2 * i] = (uint8_t)w[i];
     }
-    dp_master_set_outputs(&rig.master, 0, rig.out, sizeof rig.out);
+    dp_master_set_outputs(&rig.master, 0, drv.out, sizeof drv.out);
 }
 
 static void test_card_state_fields_and_throttle(void)
@@ -268,7 +272,7 @@ static void test_card_state_fields_and_throttle(void)
     setup(CARD_INVERTER_NONE); /* PI words echo the PO words */
     set_po(0x0006, 0x05DC, 0xFFFF);
     membus_run_for_us(&rig.bus, 10000);
-    CHECK_EQ(dfp_lcm_bridge_card_state(&bridge, rig_clock(NULL), &rig.card.card), 1);
+    CHECK_EQ(dfp_lcm_bridge_card_state(&bridge, rig_clock(NULL), &rig.cards[0].cs.card), 1);
     deliver();
     CHECK_EQ(got.states, 1);
     const dfp_lcm_card_state_t *s = &got.state;
@@ -301,14 +305,14 @@ static void test_card_state_fields_and_throttle(void)
 
     /* Unchanged: nothing. Changed within 100 ms: held back, then published. */
     membus_run_for_us(&rig.bus, 5000);
-    CHECK_EQ(dfp_lcm_bridge_card_state(&bridge, rig_clock(NULL), &rig.card.card), 0);
+    CHECK_EQ(dfp_lcm_bridge_card_state(&bridge, rig_clock(NULL), &rig.cards[0].cs.card), 0);
     CHECK(!bridge.state_pending);
     set_po(0x0007, 0x05DC, 0xFFFF);
     membus_run_for_us(&rig.bus, 10000);
-    CHECK_EQ(dfp_lcm_bridge_card_state(&bridge, rig_clock(NULL), &rig.card.card), 0);
+    CHECK_EQ(dfp_lcm_bridge_card_state(&bridge, rig_clock(NULL), &rig.cards[0].cs.card), 0);
     CHECK(bridge.state_pending);
     membus_run_for_us(&rig.bus, 90000);
-    CHECK_EQ(dfp_lcm_bridge_card_state(&bridge, rig_clock(NULL), &rig.card.card), 1);
+    CHECK_EQ(dfp_lcm_bridge_card_state(&bridge, rig_clock(NULL), &rig.cards[0].cs.card), 1);
     CHECK(!bridge.state_pending);
     deliver();
     CHECK_EQ(got.states, 2);
@@ -319,10 +323,10 @@ static void test_card_state_fields_and_throttle(void)
 
 static uint32_t run_service(uint8_t service, uint16_t index, uint32_t value)
 {
-    dpm_param_start(&rig.param, service, index, value, rig.out);
-    dp_master_set_outputs(&rig.master, 0, rig.out, sizeof rig.out);
+    dpm_param_start(&drv.param, service, index, value, drv.out);
+    dp_master_set_outputs(&rig.master, 0, drv.out, sizeof drv.out);
     for (uint32_t t = 0; t < 200000u; t += 500u) {
-        if (dpm_param_done(&rig.param, rig.master.slaves[0].inputs)) {
+        if (dpm_param_done(&drv.param, rig.master.slaves[0].inputs)) {
             return t;
         }
         membus_run_for_us(&rig.bus, 500u);
@@ -379,11 +383,11 @@ static void test_param_observer_one_message_per_service(void)
     CHECK_EQ(p->ok, 1);
 
     /* A request the card answers itself (reserved octet not 0) never reaches the inverter. */
-    dpm_param_start(&rig.param, ML_SVC_READ, 8300, 0, rig.out);
-    rig.out[1] = 0x01;
-    dp_master_set_outputs(&rig.master, 0, rig.out, sizeof rig.out);
+    dpm_param_start(&drv.param, ML_SVC_READ, 8300, 0, drv.out);
+    drv.out[1] = 0x01;
+    dp_master_set_outputs(&rig.master, 0, drv.out, sizeof drv.out);
     membus_run_for_us(&rig.bus, 50000);
-    CHECK(dpm_param_done(&rig.param, rig.master.slaves[0].inputs));
+    CHECK(dpm_param_done(&drv.param, rig.master.slaves[0].inputs));
     deliver();
     CHECK_EQ(got.params, 3);
     CHECK_EQ(bridge.failures, 0);

@@ -306,6 +306,9 @@ rig_card_t *rig_add_card(rig_t *r, const card_options_t *opt, hal_time_us_t now)
         c->medium_uart = medium_uart(r);
     } else {
         sim_station_t st = {.ctx = c, .rx_char = card_rx, .poll = card_poll};
+        if (r->cfg.wrap_card_station != NULL) {
+            st = r->cfg.wrap_card_station(r->cfg.wrap_ctx, st);
+        }
         if (membus_attach(&r->bus, &st, &c->medium_uart) == NULL) {
             return NULL;
         }

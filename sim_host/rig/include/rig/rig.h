@@ -114,6 +114,9 @@ typedef struct rig_cfg {
     /* Optional: wraps the medium's UART of each card (telemetry that must know which frames
      * are the card's own). */
     hal_uart_t (*wrap_card_uart)(void *ctx, hal_uart_t inner);
+    /* Optional, in-memory bus: wraps each card's station on the bus (what the card hears and
+     * when it is polled: a test that damages received characters). */
+    sim_station_t (*wrap_card_station)(void *ctx, sim_station_t inner);
     void *wrap_ctx;
     /* Wall-clock media: a runner shared with another rig, so both ends of a PTY pair run in one
      * loop (NULL: the rig's own). The rig does not tap a shared runner's frames. */
