@@ -18,10 +18,12 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "dfp_lcm_bridge/lcm_segment.h"
 #include "medium.h"
 #include "movidrive/md_names.h"
 #include "param_run.h"
 #include "report.h"
+#include "rig/rig.h"
 #include "sim_hal/host_clock.h"
 #include "sim_hal/tty_port.h"
 #include "sim_stations/stations.h"
@@ -29,7 +31,8 @@
 static const uint8_t cfg_param_3pd[] = {0xF3, 0xF2};
 
 static run_t run;
-static medium_link_t medium;
+static rig_t rig; /* large: static storage, as rig.h asks */
+static dp_master_t *master; /* the rig's */
 static report_t rep;
 
 /* A failure of the whole request (no answer, a negative DP-V1 response, ...): every parameter
@@ -169,7 +172,7 @@ static bool start_call(dpm_acyc_port_t p, hal_time_us_t now)
         set_result_error("failed", "the request could not be queued");
         return false;
     }
-    tty_runner_wake(&medium.runner);
+    rig_wake(&rig);
     return true;
 }
 
@@ -177,7 +180,7 @@ static bool start_call(dpm_acyc_port_t p, hal_time_us_t now)
 static void step(void)
 {
     hal_time_us_t now = tty_now_us();
-    dpm_slave_t *s = run.master.num_slaves > 0u ? &run.master.slaves[0] : NULL;
+    dpm_slave_t *s = master->num_slaves > 0u ? &master->slaves[0] : NULL;
     switch (run.stage) {
     case ST_START:
         if (run.via == VIA_C2) {
@@ -192,7 +195,7 @@ static void step(void)
             run.stage = start_call(dpm_c2_port(&run.c2), now) ? ST_RUNNING : ST_ABORTING;
             if (run.stage == ST_ABORTING) {
                 (void)dpm_c2_abort(&run.c2, 0, c2_aborted, NULL, now);
-                tty_runner_wake(&medium.runner);
+                rig_wake(&rig);
             }
             return;
         }
@@ -212,11 +215,11 @@ static void step(void)
                           : run.volatile_write ? ML_SVC_WRITE_VOLATILE : ML_SVC_WRITE;
             dpm_param_sync(&run.pc, s->inputs);
             dpm_param_start(&run.pc, svc, run.index[0], run.value, run.out);
-            dp_master_set_outputs(&run.master, 0, run.out, sizeof run.out);
+            dp_master_set_outputs(master, 0, run.out, sizeof run.out);
             run.stage = ST_RUNNING;
             return;
         }
-        run.stage = start_call(dp_master_c1_port(&run.master, 0), now) ? ST_RUNNING : ST_DONE;
+        run.stage = start_call(dp_master_c1_port(master, 0), now) ? ST_RUNNING : ST_DONE;
         return;
     case ST_RUNNING:
         if (run.via == VIA_CHANNEL) {
@@ -232,7 +235,7 @@ static void step(void)
         finish_call();
         if (run.via == VIA_C2 && dpm_c2_state(&run.c2) != DPM_C2_CLOSED &&
             dpm_c2_abort(&run.c2, 0, c2_aborted, NULL, now) == 0) {
-            tty_runner_wake(&medium.runner);
+            rig_wake(&rig);
             run.stage = ST_ABORTING;
             return;
         }
@@ -250,7 +253,7 @@ static void step(void)
 
 static void timeout_text(uint32_t timeout_s)
 {
-    dpm_slave_t *s = run.master.num_slaves > 0u ? &run.master.slaves[0] : NULL;
+    dpm_slave_t *s = master->num_slaves > 0u ? &master->slaves[0] : NULL;
     if (run.stage == ST_START && s != NULL) {
         set_result_error("timeout", "no result within %u s: slave %u did not reach data "
                          "exchange (phase %s)", timeout_s, s->cfg.address,
@@ -270,12 +273,6 @@ static void timeout_text(uint32_t timeout_s)
 static hal_time_us_t master_timer(void *ctx, hal_time_us_t now)
 {
     return dp_master_poll(ctx, now);
-}
-
-static void quiet_event(void *ctx, const dpm_event_t *ev)
-{
-    (void)ctx;
-    (void)ev;
 }
 
 /* ---- command line ------------------------------------------------------------------------ */
@@ -516,7 +513,18 @@ static int param_parse(param_opts_t *o, int argc, char **argv)
 static bool param_open(const param_opts_t *o)
 {
     char err[320];
-    if (medium_link_open(&medium, &o->med, (int16_t)o->own, o->baud, err, sizeof err) != 0) {
+    const medium_opts_t *m = &o->med;
+    rig_cfg_t rc = {.medium = m->bus != NULL ? RIG_MEDIUM_LCM : RIG_MEDIUM_TTY,
+                    .device = m->dev,
+                    .lcm_channel = m->bus != NULL ? dfp_lcm_segment_channel(m->bus) : NULL,
+                    .lcm_url = m->lcm_url,
+                    .lcm_station_address = (int16_t)o->own,
+                    .baud = o->baud};
+    rig_init(&rig, &rc);
+    rig_tap_t tap = {.ctx = &rep, .frame = report_tap,
+                     .master_event = o->verbose ? report_master_event : NULL};
+    (void)rig_add_tap(&rig, &tap);
+    if (rig_open(&rig, err, sizeof err) != 0) {
         cli_error("%s", err);
         return false;
     }
@@ -529,7 +537,7 @@ static bool param_open(const param_opts_t *o)
     rep.capture_direction = true;
     if (!report_open_capture(&rep, &o->capture,
                              (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec)) {
-        medium_link_close(&medium);
+        rig_close(&rig);
         return false;
     }
     cli_catch_stop_signals();
@@ -537,14 +545,17 @@ static bool param_open(const param_opts_t *o)
 }
 
 /* The master with the slave (class 1, started up with Param + 3 PD) or with the class-2
- * connection, on the medium's runner. */
-static void param_master(const param_opts_t *o)
+ * connection, on the rig's medium. False after reporting (a fresh runner always has room, so
+ * this does not happen in practice). */
+static bool param_master(const param_opts_t *o)
 {
     dp_master_cfg_t mc = {.address = (uint8_t)o->own, .baud = o->baud, .strict_timing = false,
-                          .slot_time_us = 100000u, .uart = medium_link_uart(&medium),
-                          .event = o->verbose ? report_master_event : quiet_event,
-                          .event_ctx = &rep};
-    dp_master_init(&run.master, &mc, tty_now_us());
+                          .slot_time_us = 100000u};
+    master = rig_add_master(&rig, &mc, tty_now_us());
+    if (master == NULL) {
+        cli_error("param: the master could not join the medium");
+        return false;
+    }
     if (run.via != VIA_C2) {
         dpm_slave_cfg_t sc = {.address = (uint8_t)o->address};
         if (run.via == VIA_CHANNEL) {
@@ -558,18 +569,16 @@ static void param_master(const param_opts_t *o)
         }
         memcpy(sc.cfg, cfg_param_3pd, sizeof cfg_param_3pd);
         sc.cfg_len = sizeof cfg_param_3pd;
-        (void)dp_master_add_slave(&run.master, &sc);
+        (void)dp_master_add_slave(master, &sc);
     } else {
         dpm_c2_cfg_t cc = {.slave = (uint8_t)o->address, .address = (uint8_t)o->own};
         dpm_c2_init(&run.c2, &cc);
-        (void)dp_master_add_c2(&run.master, &run.c2);
+        (void)dp_master_add_c2(master, &run.c2);
         (void)dpm_c2_open(&run.c2, c2_opened, NULL, tty_now_us());
     }
-    static sim_station_t st;
-    st = master_station(&run.master);
-    (void)medium_link_attach(&medium, &st, report_tap, &rep);
     /* so a new request goes at once */
-    (void)tty_runner_add_timer(&medium.runner, master_timer, &run.master);
+    (void)rig_add_timer(&rig, master_timer, master);
+    return true;
 }
 
 /* Until the result, --timeout, a signal or a medium failure; every parameter then has its
@@ -579,8 +588,8 @@ static void param_run(const param_opts_t *o)
     uint64_t end_ns = host_clock_mono_ns() + (uint64_t)o->timeout_s * 1000000000ull;
     const char *fail = NULL;
     while (run.stage != ST_DONE && !cli_stop && host_clock_mono_ns() < end_ns) {
-        if (tty_runner_run_until(&medium.runner, tty_now_us() + 5000u, &cli_stop) < 0) {
-            fail = tty_runner_error(&medium.runner);
+        if (rig_run_until(&rig, tty_now_us() + 5000u, &cli_stop) < 0) {
+            fail = rig_error(&rig);
             break;
         }
         step();
@@ -608,10 +617,14 @@ int cmd_param(int argc, char **argv)
     if (!param_open(&o)) {
         return 1;
     }
-    param_master(&o);
+    if (!param_master(&o)) {
+        rig_close(&rig);
+        (void)report_close_capture(&rep);
+        return 1;
+    }
     param_run(&o);
     param_print_results(&run);
-    medium_link_close(&medium);
+    rig_close(&rig);
     if (report_close_capture(&rep) != 0) {
         return 1;
     }

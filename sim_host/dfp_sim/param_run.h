@@ -1,5 +1,5 @@
-/* dfp-sim param: what one run asks for and what it got, shared by the run (cmd_param.c), the
- * way to the slave (param_medium.c) and the output (param_print.c). */
+/* dfp-sim param: what one run asks for and what it got, shared by the run and its way to the
+ * slave (cmd_param.c, a rig with the master on the medium) and the output (param_print.c). */
 #ifndef DFP_SIM_PARAM_RUN_H
 #define DFP_SIM_PARAM_RUN_H
 
@@ -45,7 +45,6 @@ typedef struct run {
     param_result_t r[DS47_MAX_PARAMS];
     dpm_im0_t im0;
     /* paths */
-    dp_master_t master;
     dpm_param_t pc;
     uint8_t out[14];
     dpm_call_t call;
