@@ -62,11 +62,13 @@ static void on_telegram(dfp_lcm_segment_t *s, const dfp_lcm_telegram_t *msg)
         flags |= HAL_UART_RX_FRAMING_ERR;
     }
     size_t len = (size_t)msg->length;
-    for (size_t i = 0; i < len && s->station.rx_char != NULL; i++) {
-        s->station.rx_char(s->station.ctx, msg->data[i], flags, t);
-    }
+    /* Tapped before the station hears it: a card answers inside rx_char, and its reply must
+     * not reach the log (LCM telemetry, captures) ahead of the request. */
     if (s->tap != NULL && flags == 0u) {
         s->tap(s->tap_ctx, t_ns - s->t0_ns, msg->data, len, false, s->baud);
+    }
+    for (size_t i = 0; i < len && s->station.rx_char != NULL; i++) {
+        s->station.rx_char(s->station.ctx, msg->data[i], flags, t);
     }
 }
 
