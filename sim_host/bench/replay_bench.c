@@ -103,8 +103,9 @@ static void child_replay(const char *path, int fd)
     char err[256];
     if (replay_init(&rp, &o, err, sizeof err) == 0) {
         replay_file_status_t st;
+        replay_input_t src = {.path = path, .format = CAP_FORMAT_AUTO};
         uint64_t t0 = host_clock_mono_ns();
-        int rc = replay_run_file(&rp, path, CAP_FORMAT_AUTO, NULL, NULL, NULL, &st);
+        int rc = replay_run_file(&rp, &src, NULL, NULL, NULL, &st);
         out.wall_ns = host_clock_mono_ns() - t0;
         out.file_ok = rc == 0 && !st.read_error;
         out.records = rp.records;

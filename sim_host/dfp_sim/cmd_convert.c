@@ -38,6 +38,7 @@ typedef struct convert_opts {
     const char *in;
     const char *out;
     cap_format_t in_format;
+    const char *lcm_channel;
     cap_writer_options_t w;
     bool quiet;
 } convert_opts_t;
@@ -79,6 +80,10 @@ static int convert_argument(convert_opts_t *o, int argc, char **argv, int *i)
         if (v == NULL) return EXIT_USAGE;
         return strcmp(arg, "--linktype") == 0 ? linktype_option(o, v)
                                               : format_option(o, arg, v);
+    }
+    if (strcmp(arg, "--channel") == 0) {
+        o->lcm_channel = cli_value(argc, argv, i);
+        return o->lcm_channel != NULL ? 0 : EXIT_USAGE;
     }
     if (strcmp(arg, "--ns") == 0) {
         o->w.nanosecond = true;
@@ -202,9 +207,13 @@ int cmd_convert(int argc, char **argv)
     static cap_reader_t reader;
     static cap_record_t rec;
     char err[1100];
-    if (cap_reader_open(&reader, o.in, o.in_format, err, sizeof err) != 0) {
+    if (cap_reader_open_channel(&reader, o.in, o.in_format, o.lcm_channel, err, sizeof err) !=
+        0) {
         cli_error("%s", err);
         return EXIT_USAGE;
+    }
+    if (reader.lcm_note[0] != '\0' && !o.quiet) {
+        fprintf(stderr, "%s\n", reader.lcm_note);
     }
     /* The first record is read before the output is opened: its baud rate, when the input has
      * one, goes into the pcapng interface description. */

@@ -92,6 +92,7 @@ typedef struct replay_args {
     bool baud_given;
     uint32_t delay_us;
     cap_format_t format;
+    const char *lcm_channel;
     card_inverter_t inverter;
     replay_speed_t speed;
     const char *lcm_url;
@@ -212,7 +213,7 @@ static int parse_value_option(int argc, char **argv, int *i, replay_args_t *a)
                 strcmp(o, "--format") == 0;
     bool known = word || strcmp(o, "--address") == 0 || strcmp(o, "--baud") == 0 ||
                  strcmp(o, "--lcm") == 0 || strcmp(o, "--inverter-delay") == 0 ||
-                 strcmp(o, "--http") == 0;
+                 strcmp(o, "--http") == 0 || strcmp(o, "--channel") == 0;
     if (!known) {
         return 0;
     }
@@ -232,6 +233,8 @@ static int parse_value_option(int argc, char **argv, int *i, replay_args_t *a)
         ok = cli_u32(o, v, 0, 10000000u, &a->delay_us);
     } else if (strcmp(o, "--lcm") == 0) {
         a->lcm_url = v;
+    } else if (strcmp(o, "--channel") == 0) {
+        a->lcm_channel = v;
     } else {
         a->http = v;
     }
@@ -378,7 +381,8 @@ static int first_pass(replay_args_t *a)
     replay_file_status_t st;
     replay_scan_init(&scan);
     progress_begin(&prog, "looking at the capture");
-    int rc = replay_scan_file(&scan, a->file, a->format, &cli_stop, progress_show, &prog, &st);
+    replay_input_t src = {.path = a->file, .format = a->format, .lcm_channel = a->lcm_channel};
+    int rc = replay_scan_file(&scan, &src, &cli_stop, progress_show, &prog, &st);
     progress_end(&prog);
     if (rc != 0) {
         cli_error("%s", st.error);
@@ -482,6 +486,7 @@ static int finish_replay(const replay_args_t *a, const replay_file_status_t *st)
         .address_source = a->address_source,
         .baud_source = a->baud_source,
         .file_error = st->read_error ? st->error : NULL,
+        .source_note = st->note,
         .interrupted = st->interrupted,
     };
     int status = replay_report(&rc_state.replay, &info, stdout);
@@ -527,8 +532,8 @@ int cmd_replay(int argc, char **argv)
         prog.on = false; /* the trace is on stdout; keep the terminal readable */
     }
     replay_file_status_t st;
-    rc = replay_run_file(&rc_state.replay, a.file, a.format, &cli_stop, progress_show, &prog,
-                         &st);
+    replay_input_t src = {.path = a.file, .format = a.format, .lcm_channel = a.lcm_channel};
+    rc = replay_run_file(&rc_state.replay, &src, &cli_stop, progress_show, &prog, &st);
     progress_end(&prog);
     if (rc != 0) {
         cli_error("%s", st.error);

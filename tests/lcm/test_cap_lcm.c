@@ -96,6 +96,10 @@ static long write_log(const char *path, log_writer_t *w)
     return size;
 }
 
+/* Every channel unless one is named ("*" all, NULL: the reader's choice, its note in note). */
+static const char *channel = "*";
+static char note[240];
+
 static void read_all(const char *path, cap_format_t format, cap_record_t *recs, int max,
                      int *count, int *last_rc, char *error, size_t error_max)
 {
@@ -105,10 +109,11 @@ static void read_all(const char *path, cap_format_t format, cap_record_t *recs, 
     *last_rc = -2;
     error[0] = '\0';
     memset(&r, 0, sizeof r);
-    if (cap_reader_open(&r, path, format, err, sizeof err) != 0) {
+    if (cap_reader_open_channel(&r, path, format, channel, err, sizeof err) != 0) {
         snprintf(error, error_max, "open: %s", err);
         return;
     }
+    snprintf(note, sizeof note, "%s", r.lcm_note);
     CHECK_EQ(r.format, CAP_FORMAT_LCM);
     static cap_record_t rec;
     int rc;
@@ -325,6 +330,53 @@ static void test_damaged_logs(void)
     free(good);
 }
 
+/* A log with the card's telemetry (DFP_TELEGRAM) and a segment's frames (SEG): unless told, the
+ * reader takes DFP_TELEGRAM alone and says so; a named channel is read alone; a channel without
+ * telegrams is refused with the ones there are. */
+static void test_channel_choice(void)
+{
+    char p[600];
+    path_of(p, sizeof p, "two_channels.lcm");
+    log_writer_t w;
+    write_log(p, &w);
+    int n = 0;
+    int rc = 0;
+    char error[1024];
+    channel = NULL;
+    read_all(p, CAP_FORMAT_AUTO, recs, 16, &n, &rc, error, sizeof error);
+    CHECK_EQ(n, 4);
+    CHECK_EQ(rc, 0);
+    CHECK_EQ(recs[0].position, 1);
+    CHECK_EQ(recs[1].position, 5); /* event 4 is on SEG */
+    CHECK_STR(note, "LCM log: read channel DFP_TELEGRAM (the card's telemetry); not read: SEG "
+                    "(--channel NAME, or '*' for all)");
+    channel = "SEG";
+    read_all(p, CAP_FORMAT_AUTO, recs, 16, &n, &rc, error, sizeof error);
+    CHECK_EQ(n, 1);
+    CHECK_EQ(recs[0].position, 4);
+    CHECK_BYTES(recs[0].data, recs[0].len, 0xE5);
+    CHECK_STR(note, "");
+    channel = "OTHER"; /* has events, but no telegram_t */
+    read_all(p, CAP_FORMAT_AUTO, recs, 16, &n, &rc, error, sizeof error);
+    char want[800];
+    snprintf(want, sizeof want, "open: %s: no telegram_t on LCM channel 'OTHER' (channels with "
+             "telegrams: DFP_TELEGRAM, SEG)", p);
+    CHECK_STR(error, want);
+    CHECK_EQ(n, 0);
+    /* One telegram channel only: read as it is, nothing to say. */
+    path_of(p, sizeof p, "one_channel.lcm");
+    memset(&w, 0, sizeof w);
+    w.log = lcm_eventlog_create(p, "w");
+    CHECK(w.log != NULL);
+    telegram_event(&w, "SEG", T0, DFP_LCM_TELEGRAM_T_DIR_TX, 1500000, 0, req, sizeof req);
+    lcm_eventlog_destroy(w.log);
+    channel = NULL;
+    read_all(p, CAP_FORMAT_AUTO, recs, 16, &n, &rc, error, sizeof error);
+    CHECK_EQ(n, 1);
+    CHECK_STR(note, "");
+    channel = "*";
+}
+
 static void test_empty_and_missing(void)
 {
     char p[600];
@@ -360,6 +412,7 @@ int main(int argc, char **argv)
     }
     RUN_TEST(test_log_read_back_exactly);
     RUN_TEST(test_damaged_logs);
+    RUN_TEST(test_channel_choice);
     RUN_TEST(test_empty_and_missing);
     RUN_TEST(test_sniff);
     return check_report();

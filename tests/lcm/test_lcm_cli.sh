@@ -114,6 +114,16 @@ if [ "${seg:-0}" -ge 40 ] && [ "$tel" = "$seg" ] && [ "${st:-0}" -ge 2 ]; then o
 # --capture on the segment has the same telegrams as the telemetry.
 expect_exit 0 "the slave's capture on the segment" -- "$sim" convert "$tmp/slave.pcap" "$tmp/sp.txt"
 expect_in "as many as published" "(text): $tel records" "$out"
+# The log replays: the card's telemetry alone (the reader says so; SEG1 repeats the same frames
+# from their senders), each request before the reply it got.
+expect_exit 0 "the segment log replays against the card" -- "$sim" replay "$tmp/slave.lcm" --check \
+  --fixed-baud --inverter none
+expect_in "the telemetry channel, said" "source    LCM log: read channel DFP_TELEGRAM (the card's telemetry); not read: SEG1" "$out"
+expect_in "every reply matches" "MATCH: all" "$out"
+expect_exit 0 "the segment channel alone" -- "$sim" convert "$tmp/slave.lcm" "$tmp/seg1.txt" --channel SEG1
+expect_in "its frames" "(text): $seg records" "$out"
+expect_exit 2 "a channel without telegrams" -- "$sim" convert "$tmp/slave.lcm" "$tmp/x.txt" --channel DFP_PARAM
+expect_in "names the ones there are" "no telegram_t on LCM channel 'DFP_PARAM' (channels with telegrams: " "$out"
 # ---- replay --lcm: the replay's telemetry carries the capture's times ----
 golden="$(dirname "$0")/../replay/golden/param_channel.pcap"
 expect_exit 0 "replay --check --lcm into an LCM log" -- "$sim" replay "$golden" --check \

@@ -39,7 +39,119 @@ bool cap_lcm_sniff(const uint8_t *head, size_t n)
            head[3] == 0x01u;
 }
 
-int cap_lcm_open(cap_reader_t *r, char *err, size_t errlen)
+#define LCM_MAX_LISTED 8u
+
+/* The channels of a log that carry telegram_t messages. */
+typedef struct channel_list {
+    char name[LCM_MAX_LISTED][sizeof ((cap_reader_t *)0)->lcm_channel];
+    unsigned n;
+    bool more; /* others that did not fit (or whose names are too long to choose) */
+} channel_list_t;
+
+static uint32_t be32(const uint8_t *p);
+
+static bool listed(const channel_list_t *l, const char *name)
+{
+    for (unsigned i = 0; i < l->n; i++) {
+        if (strcmp(l->name[i], name) == 0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+static void list_add(channel_list_t *l, const char *name)
+{
+    if (listed(l, name)) {
+        return;
+    }
+    if (l->n >= LCM_MAX_LISTED || strlen(name) >= sizeof l->name[0]) {
+        l->more = true;
+        return;
+    }
+    snprintf(l->name[l->n++], sizeof l->name[0], "%s", name);
+}
+
+static void list_text(const channel_list_t *l, const char *except, char *out, size_t max)
+{
+    size_t used = 0;
+    out[0] = '\0';
+    for (unsigned i = 0; i < l->n && used < max; i++) {
+        if (except == NULL || strcmp(l->name[i], except) != 0) {
+            int w = snprintf(out + used, max - used, "%s%s", used > 0 ? ", " : "", l->name[i]);
+            used += w > 0 ? (size_t)w : 0u;
+        }
+    }
+    if (l->more && used < max) {
+        (void)snprintf(out + used, max - used, "%s...", used > 0 ? ", " : "");
+    }
+}
+
+/* Which channels carry telegrams, from the event headers and the first octets of each event's
+ * data (the type fingerprint). Stops quietly at the first damage: the reading proper reports it
+ * with its position. */
+static void telegram_channels(FILE *f, uint64_t size, channel_list_t *out)
+{
+    memset(out, 0, sizeof *out);
+    uint64_t at = 0;
+    while (at + LCM_LOG_HEADER <= size) {
+        uint8_t h[LCM_LOG_HEADER];
+        if (fseeko(f, (off_t)at, SEEK_SET) != 0 || fread(h, 1, sizeof h, f) != sizeof h ||
+            be32(h) != LCM_LOG_SYNC) {
+            break;
+        }
+        uint32_t channel_len = be32(&h[20]);
+        uint32_t data_len = be32(&h[24]);
+        uint64_t total = LCM_LOG_HEADER + (uint64_t)channel_len + data_len;
+        if (channel_len == 0u || channel_len >= LCM_LOG_MAX_CHANNEL ||
+            data_len > (uint32_t)INT32_MAX || at + total > size) {
+            break;
+        }
+        char name[LCM_LOG_MAX_CHANNEL];
+        uint8_t fingerprint[8];
+        if (fread(name, 1, channel_len, f) != channel_len) {
+            break;
+        }
+        name[channel_len] = '\0';
+        if (data_len >= sizeof fingerprint &&
+            fread(fingerprint, 1, sizeof fingerprint, f) == sizeof fingerprint &&
+            dfp_lcm_is_telegram(fingerprint, sizeof fingerprint)) {
+            list_add(out, name);
+        }
+        at += total;
+    }
+    (void)fseeko(f, 0, SEEK_SET);
+}
+
+/* cap_reader_open_channel's rule for r->lcm_channel; false with err when the named channel has
+ * no telegrams. */
+static bool choose_channel(cap_reader_t *r, FILE *f, uint64_t size, const char *channel,
+                           char *err, size_t errlen)
+{
+    channel_list_t l;
+    telegram_channels(f, size, &l);
+    char others[200];
+    if (channel != NULL && strcmp(channel, "*") != 0) {
+        if (!listed(&l, channel)) {
+            list_text(&l, NULL, others, sizeof others);
+            snprintf(err, errlen, "%s: no telegram_t on LCM channel '%.63s' (channels with "
+                     "telegrams: %s)", r->path, channel, l.n > 0u ? others : "none");
+            return false;
+        }
+        snprintf(r->lcm_channel, sizeof r->lcm_channel, "%s", channel);
+        return true;
+    }
+    if (channel == NULL && (l.n > 1u || l.more) && listed(&l, CAP_LCM_TELEMETRY_CHANNEL)) {
+        snprintf(r->lcm_channel, sizeof r->lcm_channel, "%s", CAP_LCM_TELEMETRY_CHANNEL);
+        list_text(&l, CAP_LCM_TELEMETRY_CHANNEL, others, sizeof others);
+        snprintf(r->lcm_note, sizeof r->lcm_note, "LCM log: read channel %s (the card's "
+                 "telemetry); not read: %.100s (--channel NAME, or '*' for all)",
+                 CAP_LCM_TELEMETRY_CHANNEL, others);
+    }
+    return true;
+}
+
+int cap_lcm_open(cap_reader_t *r, const char *channel, char *err, size_t errlen)
 {
     cap_lcm_state_t *st = calloc(1, sizeof *st);
     if (st == NULL) {
@@ -62,6 +174,11 @@ int cap_lcm_open(cap_reader_t *r, char *err, size_t errlen)
         return -1;
     }
     st->size = (uint64_t)sb.st_size;
+    if (!choose_channel(r, st->log->f, st->size, channel, err, errlen)) {
+        lcm_eventlog_destroy(st->log);
+        free(st);
+        return -1;
+    }
     r->file_size = st->size;
     r->file_pos = 0;
     r->linktype = 0;
@@ -259,8 +376,9 @@ int cap_lcm_next(cap_reader_t *r, cap_record_t *rec)
             return fail(r, event, at, "the LCM library could not read this event");
         }
         r->file_pos = (uint64_t)after;
-        if (!dfp_lcm_is_telegram(ev->data, (size_t)ev->datalen)) {
-            lcm_eventlog_free_event(ev); /* another message type: not ours to read */
+        if (!dfp_lcm_is_telegram(ev->data, (size_t)ev->datalen) ||
+            (r->lcm_channel[0] != '\0' && strcmp(ev->channel, r->lcm_channel) != 0)) {
+            lcm_eventlog_free_event(ev); /* another message type or channel: not ours */
             continue;
         }
         dfp_lcm_telegram_t m;

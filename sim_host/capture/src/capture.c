@@ -187,6 +187,12 @@ static int open_pcap(cap_reader_t *r, char *err, size_t errlen)
 int cap_reader_open(cap_reader_t *r, const char *path, cap_format_t format, char *err,
                     size_t errlen)
 {
+    return cap_reader_open_channel(r, path, format, NULL, err, errlen);
+}
+
+int cap_reader_open_channel(cap_reader_t *r, const char *path, cap_format_t format,
+                            const char *lcm_channel, char *err, size_t errlen)
+{
     memset(r, 0, sizeof *r);
     if (strlen(path) >= sizeof r->path) {
         snprintf(err, errlen, "capture file name too long (%zu characters)", strlen(path));
@@ -237,7 +243,7 @@ int cap_reader_open(cap_reader_t *r, const char *path, cap_format_t format, char
         return 0;
     case CAP_FORMAT_LCM:
         (void)fclose(f); /* opened for reading: nothing to lose */
-        return cap_lcm_open(r, err, errlen);
+        return cap_lcm_open(r, lcm_channel, err, errlen);
     case CAP_FORMAT_AUTO:
         break;
     }

@@ -1,4 +1,5 @@
 /* Streaming a capture file through the replay or the address scan: one record in memory. */
+#include <stdio.h>
 #include <string.h>
 
 #include "capture/capture.h"
@@ -17,16 +18,18 @@ const char *replay_position_unit(cap_format_t f)
 
 typedef void (*feed_fn)(void *target, const cap_record_t *rec);
 
-static int stream(const char *path, cap_format_t format, feed_fn feed, void *target,
+static int stream(const replay_input_t *src, feed_fn feed, void *target,
                   volatile const int *stop, replay_progress_t progress, void *ctx,
                   replay_file_status_t *st)
 {
     static cap_reader_t rd; /* large (path, text state): not on the stack */
     static cap_record_t rec;
     memset(st, 0, sizeof *st);
-    if (cap_reader_open(&rd, path, format, st->error, sizeof st->error) != 0) {
+    if (cap_reader_open_channel(&rd, src->path, src->format, src->lcm_channel, st->error,
+                                sizeof st->error) != 0) {
         return -1;
     }
+    snprintf(st->note, sizeof st->note, "%s", rd.lcm_note);
     st->format = rd.format;
     st->linktype = rd.linktype;
     for (;;) {
@@ -66,19 +69,18 @@ static void feed_scan(void *target, const cap_record_t *rec)
     replay_scan_feed(target, rec);
 }
 
-int replay_run_file(replay_t *r, const char *path, cap_format_t format, volatile const int *stop,
+int replay_run_file(replay_t *r, const replay_input_t *src, volatile const int *stop,
                     replay_progress_t progress, void *ctx, replay_file_status_t *st)
 {
-    int rc = stream(path, format, feed_replay, r, stop, progress, ctx, st);
+    int rc = stream(src, feed_replay, r, stop, progress, ctx, st);
     if (rc == 0) {
         replay_finish(r);
     }
     return rc;
 }
 
-int replay_scan_file(replay_scan_t *s, const char *path, cap_format_t format,
-                     volatile const int *stop, replay_progress_t progress, void *ctx,
-                     replay_file_status_t *st)
+int replay_scan_file(replay_scan_t *s, const replay_input_t *src, volatile const int *stop,
+                     replay_progress_t progress, void *ctx, replay_file_status_t *st)
 {
-    return stream(path, format, feed_scan, s, stop, progress, ctx, st);
+    return stream(src, feed_scan, s, stop, progress, ctx, st);
 }

@@ -210,6 +210,9 @@ static void print_header(FILE *out, const replay_t *r, const replay_report_info_
                                    : "automatic baud search from the first record",
             r->opt.inverter == CARD_INVERTER_SIM ? "emulated MOVIDRIVE" : "none (PI echoes PO)");
     print_bus(out, r, info);
+    if (info->source_note != NULL && info->source_note[0] != '\0') {
+        fprintf(out, "  source    %s\n", info->source_note);
+    }
     fprintf(out, "  records   %llu put on the bus, %llu the card's recorded answers (the card "
                  "makes its own), %llu damaged\n",
             (unsigned long long)r->injected, (unsigned long long)r->own_answers,

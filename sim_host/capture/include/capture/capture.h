@@ -38,6 +38,10 @@ typedef struct cap_reader {
     void *lcm_log;  /* lcm_eventlog_t */
     uint64_t line;  /* text: current line number */
     uint32_t if_baud; /* pcapng if_speed of the (single) interface, 0 when absent */
+    /* LCM logs: the channel whose telegram_t messages are the capture ("" = every channel),
+     * and what the reader chose and why when it was not told (for the report). */
+    char lcm_channel[64];
+    char lcm_note[240];
     text_import_state_t text;
     char line_buf[TEXT_IMPORT_MAX_LINE + 2];
 } cap_reader_t;
@@ -46,6 +50,14 @@ typedef struct cap_reader {
  * err ("dump.pcap: link type 1 (ETHERNET) is not PROFIBUS: expected 257 or 147"). */
 int cap_reader_open(cap_reader_t *r, const char *path, cap_format_t format, char *err,
                     size_t errlen);
+/* The same, naming the LCM channel to read (other formats ignore it). NULL: inferred — a log
+ * that holds the card's telemetry (DFP_TELEGRAM) besides other telegram channels (a segment's
+ * frames, recorded by the same logger) is read on DFP_TELEGRAM alone, since the others repeat
+ * the same telegrams from the senders' side; otherwise every channel. "*": every channel. A
+ * named channel the log has no telegram on is an error that lists the ones it has. */
+#define CAP_LCM_TELEMETRY_CHANNEL "DFP_TELEGRAM"
+int cap_reader_open_channel(cap_reader_t *r, const char *path, cap_format_t format,
+                            const char *lcm_channel, char *err, size_t errlen);
 /* 1: rec holds the next record; 0: end of file; -1: the rest of the file cannot be read,
  * r->error says why and at which position ("record 12 at byte 456: truncated: 9 of 20
  * octets"). Records read before stay valid. */

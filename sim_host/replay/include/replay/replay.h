@@ -277,6 +277,7 @@ typedef struct replay_report_info {
     const char *address_source; /* "given with --address", "from the capture: ..." */
     const char *baud_source;    /* why this rate */
     const char *file_error;     /* the reader's error, NULL if the file was read to its end */
+    const char *source_note;    /* what the reader chose on its own (an LCM log's channel) */
     bool interrupted;
 } replay_report_info_t;
 
@@ -352,19 +353,26 @@ typedef struct replay_file_status {
     bool read_error;        /* the file could not be read to its end: error says where */
     bool interrupted;       /* *stop became non-zero */
     char error[1024];
+    char note[240];         /* the reader's choice when it was not told (cap_reader_t.lcm_note) */
 } replay_file_status_t;
 
 /* "byte" for pcap/pcapng, "line" for text, "event" for LCM logs. */
 const char *replay_position_unit(cap_format_t f);
 
+/* Which file, read how: lcm_channel as for cap_reader_open_channel (NULL: inferred). */
+typedef struct replay_input {
+    const char *path;
+    cap_format_t format;
+    const char *lcm_channel;
+} replay_input_t;
+
 /* Streams the file through replay_feed (then replay_finish). Returns -1 when it cannot be
  * opened (st->error says why), else 0; a read error after some records is in st. stop may be
  * NULL. */
-int replay_run_file(replay_t *r, const char *path, cap_format_t format, volatile const int *stop,
+int replay_run_file(replay_t *r, const replay_input_t *src, volatile const int *stop,
                     replay_progress_t progress, void *ctx, replay_file_status_t *st);
 /* The same through replay_scan_feed. */
-int replay_scan_file(replay_scan_t *s, const char *path, cap_format_t format,
-                     volatile const int *stop, replay_progress_t progress, void *ctx,
-                     replay_file_status_t *st);
+int replay_scan_file(replay_scan_t *s, const replay_input_t *src, volatile const int *stop,
+                     replay_progress_t progress, void *ctx, replay_file_status_t *st);
 
 #endif
