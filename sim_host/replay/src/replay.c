@@ -141,7 +141,7 @@ int replay_init(replay_t *r, const replay_options_t *opt, char *err, size_t errl
     r->cs = &card->cs;
     /* The injector is only a UART: it transmits when replay_feed says, and hears nothing. */
     sim_station_t inj = {0};
-    r->inj_port = membus_attach(&r->rig.bus, &inj, &r->inj_uart);
+    r->inj_port = rig_attach_station(&r->rig, &inj, &r->inj_uart);
     r->inj_baud = r->opt.baud;
     (void)r->inj_uart.ops->set_baud(r->inj_uart.ctx, r->inj_baud);
     if (card->nvm_note[0] != '\0') {
