@@ -7,7 +7,10 @@ attributes, I&M indices, MOVILINK services and errors) in Lua tables of its own;
 takes them from fdl_wire.h, dp_wire.h, dpv1_wire.h and movilink_wire.h. Each C macro below is
 looked up in its Lua table by the name the dissector shows for it, and the two values must
 agree; where a Lua table should hold nothing but header codes, every entry must be claimed by a
-macro. Exit status 1 and one line per disagreement otherwise.
+macro. The names of the DDLM services are not listed here: they are the labels of the card's
+service table (dp_slave/src/dp_services.c), looked up at the SAP dp_service_of() maps to that
+service, so the dissector, the host tools and the card name a service alike. Exit status 1 and
+one line per disagreement otherwise.
 
 Usage: check_wire_constants.py REPO_ROOT
 """
@@ -22,6 +25,8 @@ HEADERS = [
     "movilink/include/movilink/movilink_wire.h",
 ]
 LUA_GLOB = "tools/wireshark/profibus*.lua"
+SERVICES_C = "dp_slave/src/dp_services.c"
+SERVICES_H = "dp_slave/include/dp_slave/dp_services.h"
 
 
 def to_key(value):
@@ -53,13 +58,8 @@ CHECKS = [
 ] + [("FDL_RSP_" + n, "response_short", n)
      for n in ("OK", "UE", "RR", "RS", "DL", "NR", "DH", "RDL", "RDH")] + [
     # dp_wire.h
-    ("DP_SAP_MSAC2_RM", "sap_services", "MSAC2_RM"), ("DP_SAP_MSAC1", "sap_services", "MSAC1"),
-    ("DP_SAP_SET_SLAVE_ADD", "sap_services", "Set_Slave_Add"),
-    ("DP_SAP_RD_INP", "sap_services", "Rd_Inp"), ("DP_SAP_RD_OUTP", "sap_services", "Rd_Outp"),
-    ("DP_SAP_GLOBAL_CONTROL", "sap_services", "Global_Control"),
-    ("DP_SAP_GET_CFG", "sap_services", "Get_Cfg"),
-    ("DP_SAP_SLAVE_DIAG", "sap_services", "Slave_Diag"),
-    ("DP_SAP_SET_PRM", "sap_services", "Set_Prm"), ("DP_SAP_CHK_CFG", "sap_services", "Chk_Cfg"),
+    # (the SAPs of DDLM services and MSAC1: service_checks(), from the service table)
+    ("DP_SAP_MSAC2_RM", "sap_services", "MSAC2_RM"),
     ("DP_CFG_DIR_SPECIAL", "cfg_directions", "special format", shift4),
     ("DP_CFG_DIR_IN", "cfg_directions", "input", shift4),
     ("DP_CFG_DIR_OUT", "cfg_directions", "output", shift4),
@@ -176,6 +176,64 @@ def c_defines(root):
     return values
 
 
+def c_source(root, rel):
+    return re.sub(r"/\*.*?\*/", "", (root / rel).read_text(), flags=re.S)
+
+
+def service_table(root, problems):
+    """The rows of dp_services.c, {enumerator: (name, label)}, and the SAP cases of
+    dp_service_of(), [(DP_SAP_ macro, enumerator)]."""
+    text = c_source(root, SERVICES_C)
+    # A label may be a string macro of dp_services.h (one a host tool composes names from).
+    literals = dict(re.findall(r'^\s*#define\s+(\w+)\s+"([^"]*)"\s*$',
+                               c_source(root, SERVICES_H), flags=re.M))
+    rows = {}
+    for svc, name, label, macro in re.findall(
+            r'\[\s*(\w+)\s*\]\s*=\s*\{\s*"([^"]*)"\s*,\s*(?:"([^"]*)"|(\w+))', text):
+        if macro and macro not in literals:
+            problems.append("%s %s: label %s is not a string macro of %s" % (
+                SERVICES_C, svc, macro, SERVICES_H))
+        rows[svc] = (name, literals.get(macro, "") if macro else label)
+    body = re.search(r"dp_service_of\s*\([^)]*\)\s*\{(.*?)\n\}", text, flags=re.S)
+    cases = re.findall(r"case\s+(DP_SAP_\w+)\s*:\s*return\s+(\w+)\s*;",
+                       body.group(1) if body else "")
+    if not rows or not cases:
+        problems.append("%s: no service rows {name, label, ...} or no dp_service_of() cases "
+                        "found" % SERVICES_C)
+    for svc, (name, label) in sorted(rows.items()):
+        # Only the spelling may differ ("DDLM_RD_Inp" / "Rd_Inp"), never the service.
+        if name.startswith("DDLM_") and label.lower() != name[len("DDLM_"):].lower():
+            problems.append('%s %s: label "%s" is not the name "%s" without DDLM_' % (
+                SERVICES_C, svc, label, name))
+    for svc in sorted(set(rows) - {s for _, s in cases}):
+        if svc.startswith("DDLM_") and svc != "DDLM_DATA_EXCHANGE":
+            problems.append("%s: %s has no SAP case in dp_service_of()" % (SERVICES_C, svc))
+    for macro, svc in cases:
+        if svc not in rows:
+            problems.append("%s: dp_service_of() returns %s for %s, which has no row" % (
+                SERVICES_C, svc, macro))
+    return rows, cases
+
+
+def service_checks(rows, cases):
+    """CHECKS entries for the SAP of every service dp_service_of() maps one SAP to."""
+    return [(macro, "sap_services", rows[svc][1]) for macro, svc in cases if svc in rows]
+
+
+def check_sapless_services(rows, lua, problems):
+    # service_of_sap() calls the connection SAPs below the resource manager MSAC2, and
+    # telegrams without SAPs carry Data_Exchange: neither has a sap_services entry.
+    m = re.search(r'if\s+sap\s*<=\s*\d+\s+then\s+return\s+"([^"]*)"', lua)
+    want = rows.get("MSAC2S", (None, None))[1]
+    if m is None or m.group(1) != want:
+        problems.append('service_of_sap(): the MSAC2 connection SAPs are named %s, the table\'s '
+                        'label of MSAC2S is "%s"' % (repr(m.group(1)) if m else "nowhere", want))
+    want = rows.get("DDLM_DATA_EXCHANGE", (None, None))[1]
+    if want not in re.findall(r'\bservice\s*=\s*"([^"]*)"', lua):
+        problems.append('no telegram without SAP gets service = "%s" (the table\'s label of '
+                        'DDLM_DATA_EXCHANGE)' % want)
+
+
 def lua_source(root):
     files = sorted(root.glob(LUA_GLOB))
     if not files:
@@ -227,10 +285,10 @@ def macro_value(defs, spec):
     return value
 
 
-def check_names(defs, lua, problems):
+def check_names(defs, lua, checks, problems):
     claimed = {}
     tables = {}
-    for entry in CHECKS:
+    for entry in checks:
         macro, tname, text = entry[:3]
         transform = entry[3] if len(entry) > 3 else to_key
         value = macro_value(defs, macro)
@@ -274,15 +332,19 @@ def main():
     defs = c_defines(root)
     lua = lua_source(root)
     problems = []
-    check_names(defs, lua, problems)
+    rows, cases = service_table(root, problems)
+    checks = CHECKS + service_checks(rows, cases)
+    check_names(defs, lua, checks, problems)
+    check_sapless_services(rows, lua, problems)
     check_ml_error_values(defs, lua, problems)
     for p in problems:
         print("MISMATCH: " + p)
-    n = len(CHECKS) + len(ML_ERROR_VALUES)
+    n = len(checks) + 2 + len(ML_ERROR_VALUES)
     if problems:
-        print("%d of the dissector's codes disagree with the C headers" % len(problems))
+        print("%d of the dissector's codes disagree with the C headers and the service table"
+              % len(problems))
         return 1
-    print("%d codes of the dissector agree with the C headers" % n)
+    print("%d codes of the dissector agree with the C headers and the service table" % n)
     return 0
 
 

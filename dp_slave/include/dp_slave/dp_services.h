@@ -3,8 +3,9 @@
  * while a master holds the lock (protocol.md §A3.1 SAP map, §A3.6 state machine).
  *
  * The slave (dp_slave.c) routes every request through dp_service_rule(); host tools (master,
- * replay decoder, logs) name services with dp_service_of() and dp_service_name(), so a rule and
- * its name are found in one place. */
+ * replay decoder, logs) name services with dp_service_of() and dp_service_label(), and the
+ * Wireshark dissector's SAP names are checked against the labels
+ * (tests/wireshark/check_wire_constants.py), so a rule and its names are found in one place. */
 #ifndef DP_SLAVE_DP_SERVICES_H
 #define DP_SLAVE_DP_SERVICES_H
 
@@ -47,6 +48,7 @@ typedef enum dp_lock_rule {
 
 typedef struct dp_service_rule {
     const char *name;    /* the standard's name, e.g. "DDLM_Set_Prm" */
+    const char *label;   /* what host tools print, e.g. "Set_Prm" (see dp_services.c) */
     bool sdn;            /* sent as SDN (send data with no acknowledge) rather than SRD */
     dp_lock_rule_t lock;
     dp_state_rule_t in_state[DP_STATE_COUNT];
@@ -56,5 +58,11 @@ typedef struct dp_service_rule {
 dp_service_t dp_service_of(bool has_dsap, uint8_t dsap);
 const dp_service_rule_t *dp_service_rule(dp_service_t svc);
 const char *dp_service_name(dp_service_t svc);
+/* The short name host tools print (logs, replay report, dissector): the standard's name without
+ * "DDLM_", in the spelling those tools have always used. */
+const char *dp_service_label(dp_service_t svc);
+/* Slave_Diag's label as a literal, for names composed at compile time (the host master's
+ * "Slave_Diag (check)" phase). */
+#define DP_SERVICE_LABEL_SLAVE_DIAG "Slave_Diag"
 
 #endif

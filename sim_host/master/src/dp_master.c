@@ -5,21 +5,24 @@
 #include "dp_master/dpv1_c2.h"
 
 #include "dp_slave/dp_cfg.h"
+#include "dp_slave/dp_services.h"
 #include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_frame.h"
 #include "dp_slave/fdl_wire.h"
 
+/* A phase that sends a DDLM service is named by the service table (dp_services.h); the phases
+ * around them are the master's own. */
 const char *dpm_phase_name(dpm_phase_t p)
 {
     switch (p) {
     case DPM_PHASE_BACKOFF: return "back-off";
     case DPM_PHASE_FDL_STATUS: return "FDL status";
-    case DPM_PHASE_DIAG_1: return "Slave_Diag";
-    case DPM_PHASE_SET_PRM: return "Set_Prm";
-    case DPM_PHASE_CHK_CFG: return "Chk_Cfg";
-    case DPM_PHASE_DIAG_2: return "Slave_Diag (check)";
-    case DPM_PHASE_DATA_EXCH: return "Data_Exchange";
-    case DPM_PHASE_DIAG_DX: return "Slave_Diag (DH)";
+    case DPM_PHASE_DIAG_1: return dp_service_label(DDLM_SLAVE_DIAG);
+    case DPM_PHASE_SET_PRM: return dp_service_label(DDLM_SET_PRM);
+    case DPM_PHASE_CHK_CFG: return dp_service_label(DDLM_CHK_CFG);
+    case DPM_PHASE_DATA_EXCH: return dp_service_label(DDLM_DATA_EXCHANGE);
+    case DPM_PHASE_DIAG_2: return DP_SERVICE_LABEL_SLAVE_DIAG " (check)";
+    case DPM_PHASE_DIAG_DX: return DP_SERVICE_LABEL_SLAVE_DIAG " (DH)";
     }
     return "?";
 }

@@ -6,6 +6,7 @@
 
 #include "dp_master/dpv1_xfer.h"
 #include "dp_master/param_channel.h"
+#include "dp_slave/dp_services.h"
 #include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_frame.h"
 #include "dp_slave/fdl_wire.h"
@@ -45,17 +46,53 @@ void replay_frame_parse(const uint8_t *f, size_t len, replay_frame_t *out)
 
 /* ---- services ----------------------------------------------------------------------------- */
 
-static const char *const service_names[REPLAY_SVC_COUNT] = {
-    "FDL_Status", "Data_Exchange", "Set_Prm", "Chk_Cfg", "Slave_Diag", "Get_Cfg",
-    "Global_Control", "Rd_Inp", "Rd_Outp", "Set_Slave_Add", "Set_Ext_Prm", "MSAC1 read",
-    "MSAC1 write", "MSAC1 poll", "MSAC1 alarm ack", "MSAC1 other", "MSAC2 initiate",
-    "MSAC2 poll", "MSAC2 read", "MSAC2 write", "MSAC2 data transport", "MSAC2 idle",
-    "MSAC2 abort", "MSAC2 other", "alarm SAP 50", "other SAP", "other FDL function",
+/* The DDLM services are named by the service table (dp_services.h); the rest are replay's own
+ * finer kinds (FDL functions, SAPs the card does not serve, DP-V1 by function). */
+static bool ddlm_service(replay_service_t s, dp_service_t *out)
+{
+    switch (s) {
+    case REPLAY_SVC_DATA_EXCHANGE: *out = DDLM_DATA_EXCHANGE; return true;
+    case REPLAY_SVC_SET_PRM: *out = DDLM_SET_PRM; return true;
+    case REPLAY_SVC_CHK_CFG: *out = DDLM_CHK_CFG; return true;
+    case REPLAY_SVC_SLAVE_DIAG: *out = DDLM_SLAVE_DIAG; return true;
+    case REPLAY_SVC_GET_CFG: *out = DDLM_GET_CFG; return true;
+    case REPLAY_SVC_GLOBAL_CONTROL: *out = DDLM_GLOBAL_CONTROL; return true;
+    case REPLAY_SVC_RD_INP: *out = DDLM_RD_INP; return true;
+    case REPLAY_SVC_RD_OUTP: *out = DDLM_RD_OUTP; return true;
+    case REPLAY_SVC_SET_SLAVE_ADD: *out = DDLM_SET_SLAVE_ADD; return true;
+    default: return false;
+    }
+}
+
+static const char *const local_names[REPLAY_SVC_COUNT] = {
+    [REPLAY_SVC_FDL_STATUS] = "FDL_Status",
+    [REPLAY_SVC_SET_EXT_PRM] = "Set_Ext_Prm",
+    [REPLAY_SVC_MSAC1_READ] = "MSAC1 read",
+    [REPLAY_SVC_MSAC1_WRITE] = "MSAC1 write",
+    [REPLAY_SVC_MSAC1_POLL] = "MSAC1 poll",
+    [REPLAY_SVC_MSAC1_ALARM_ACK] = "MSAC1 alarm ack",
+    [REPLAY_SVC_MSAC1_OTHER] = "MSAC1 other",
+    [REPLAY_SVC_MSAC2_INITIATE] = "MSAC2 initiate",
+    [REPLAY_SVC_MSAC2_POLL] = "MSAC2 poll",
+    [REPLAY_SVC_MSAC2_READ] = "MSAC2 read",
+    [REPLAY_SVC_MSAC2_WRITE] = "MSAC2 write",
+    [REPLAY_SVC_MSAC2_TRANSPORT] = "MSAC2 data transport",
+    [REPLAY_SVC_MSAC2_IDLE] = "MSAC2 idle",
+    [REPLAY_SVC_MSAC2_ABORT] = "MSAC2 abort",
+    [REPLAY_SVC_MSAC2_OTHER] = "MSAC2 other",
+    [REPLAY_SVC_ALARM_SAP] = "alarm SAP 50",
+    [REPLAY_SVC_OTHER_SAP] = "other SAP",
+    [REPLAY_SVC_OTHER_FUNCTION] = "other FDL function",
 };
 
 const char *replay_service_name(replay_service_t s)
 {
-    return (unsigned)s < REPLAY_SVC_COUNT ? service_names[s] : "?";
+    dp_service_t ddlm;
+    if (ddlm_service(s, &ddlm)) {
+        return dp_service_label(ddlm);
+    }
+    const char *name = (unsigned)s < REPLAY_SVC_COUNT ? local_names[s] : NULL;
+    return name != NULL ? name : "?";
 }
 
 bool replay_expects_answer(const replay_frame_t *req)
