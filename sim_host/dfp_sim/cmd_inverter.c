@@ -196,6 +196,12 @@ static int inverter_parse(inverter_opts_t *o, int argc, char **argv)
                 !cli_u32(opt, v, 0, SBUS_MAX_ADDRESS, &o->address)) return EXIT_USAGE;
         } else if (strcmp(opt, "--eeprom") == 0) {
             if ((o->eeprom = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
+            char why[300];
+            if (file_nvm_check_path(o->eeprom, why, sizeof why) != 0) {
+                cli_error("inverter: --eeprom %s: refused (give a regular file, or a path "
+                          "where one can be created)", why);
+                return EXIT_USAGE;
+            }
         } else if (strcmp(opt, "--duration") == 0) {
             if ((v = cli_value(argc, argv, &i)) == NULL ||
                 !cli_u32(opt, v, 1, 86400u * 365u, &o->duration_s)) return EXIT_USAGE;
@@ -224,7 +230,7 @@ static void drive_init(const inverter_opts_t *o)
         /* A missing file is a blank EEPROM; a damaged one is reported and replaced by the
          * previous generation or the factory settings (file_nvm.h). */
         if (file_nvm_open(&inv.nvm, o->eeprom, movidrive_eeprom_size(), err, sizeof err) != 0) {
-            (void)fprintf(stderr, "dfp-sim inverter: EEPROM %s: %s\n", o->eeprom, err);
+            (void)fprintf(stderr, "dfp-sim inverter: %s\n", err); /* err names the file */
         }
         cfg.eeprom = file_nvm_hal(&inv.nvm);
     }

@@ -10,6 +10,7 @@
 #include "commands.h"
 #include "session.h"
 #include "sim_can/inverter_can.h"
+#include "sim_hal/file_nvm.h"
 #include "sim_hal/host_clock.h"
 #include "sim_hal/tty_port.h"
 #include "sim_stations/stations.h"
@@ -139,6 +140,41 @@ static bool slave_line_of_cards(const slave_opts_t *o)
     return true;
 }
 
+/* Several cards (--address 4-9) keep their drives' EEPROMs and their own NVM in a directory. */
+static const char *per_card_path(const char *dir, const char *stem, uint8_t address, char *buf,
+                                 size_t n)
+{
+    if (dir == NULL) {
+        return NULL;
+    }
+    (void)snprintf(buf, n, "%s/%s%u.%s", dir, stem, address,
+                   strcmp(stem, "drive") == 0 ? "ee" : "nvm");
+    return buf;
+}
+
+/* Every file --eeprom/--card-nvm stands for must be a regular file or not exist yet: opening a
+ * FIFO would block before the card starts, and a write would rename a file over a device. */
+static bool slave_files_usable(const slave_opts_t *o)
+{
+    const char *given[2] = {o->eeprom, o->card_nvm};
+    for (unsigned k = 0; k < 2u; k++) {
+        for (size_t i = 0; given[k] != NULL && i < o->num_cards; i++) {
+            char buf[512];
+            const char *path = o->num_cards > 1u
+                                   ? per_card_path(given[k], k == 0u ? "drive" : "card",
+                                                   o->addresses[i], buf, sizeof buf)
+                                   : given[k];
+            char why[600];
+            if (file_nvm_check_path(path, why, sizeof why) != 0) {
+                cli_error("slave: %s %s: refused (give a regular file, or a path where one can "
+                          "be created)", k == 0u ? "--eeprom" : "--card-nvm", why);
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
 /* The command line into o: 0, or EXIT_USAGE after reporting. */
 static int slave_parse(slave_opts_t *o, int argc, char **argv)
 {
@@ -155,22 +191,43 @@ static int slave_parse(slave_opts_t *o, int argc, char **argv)
         return EXIT_USAGE;
     }
     if (!medium_check(&o->med, "slave") || !slave_addresses(o) || !slave_inverter_kind(o) ||
-        (o->num_cards > 1u && !slave_line_of_cards(o))) {
+        (o->num_cards > 1u && !slave_line_of_cards(o)) || !slave_files_usable(o)) {
         return EXIT_USAGE;
     }
     return 0;
 }
 
-/* Several cards (--address 4-9) keep their drives' EEPROMs and their own NVM in a directory. */
-static const char *per_card_path(const char *dir, const char *stem, uint8_t address, char *buf,
-                                 size_t n)
+/* A log line holds RIG_CTL_TEXT octets: a longer note (two damaged images, with the card's NVM)
+ * goes on in further lines, cut at a "; " (file_nvm.h: no reason contains one) so no file name
+ * or reason is split; the card's NVM starts a line of its own. */
+static void log_nvm_note(rig_log_t *log, const char *src, const char *note)
 {
-    if (dir == NULL) {
-        return NULL;
+    const size_t room = RIG_CTL_TEXT - 40u; /* the "non-volatile storage ..." prefix */
+    bool continued = false;
+    while (*note != '\0') {
+        size_t n = strlen(note);
+        bool next_continues = true;
+        const char *card = strstr(note, "; card NVM: "); /* each file on a line of its own */
+        if (card != NULL && card > note && (size_t)(card - note) <= room) {
+            n = (size_t)(card - note);
+            next_continues = false;
+        } else if (n > room) {
+            n = room;
+            for (size_t i = room - 1u; i > 0u; i--) {
+                if (note[i] == ';' && note[i + 1u] == ' ') {
+                    n = i;
+                    break;
+                }
+            }
+        }
+        rig_log(log, RIG_LOG_WARN, src, "nvm", "non-volatile storage%s: %.*s",
+                continued ? " (continued)" : "", (int)n, note);
+        continued = next_continues;
+        note += n;
+        while (*note == ';' || *note == ' ') {
+            note++;
+        }
     }
-    (void)snprintf(buf, n, "%s/%s%u.%s", dir, stem, address,
-                   strcmp(stem, "drive") == 0 ? "ee" : "nvm");
-    return buf;
 }
 
 /* Every card of the line on the medium, each with its drive. False after reporting. */
@@ -195,9 +252,12 @@ static bool slave_add_cards(session_t *s, const slave_opts_t *o, ml_link_t exter
             cli_error("slave: cannot add card %u", a);
             return false;
         }
-        if (rc->nvm_note[0] != '\0') {
-            rig_log(&s->in.log, RIG_LOG_WARN, line ? "card *" : "card", "nvm",
-                    "non-volatile storage: %s", rc->nvm_note);
+        if (rc->cs.nvm_note[0] != '\0') { /* in full: rc->nvm_note may be cut */
+            char src[16] = "card";
+            if (line) {
+                (void)snprintf(src, sizeof src, "card %u", a);
+            }
+            log_nvm_note(&s->in.log, src, rc->cs.nvm_note);
         }
         if (a > DFP21B_MAX_ADDRESS) {
             rig_log(&s->in.log, RIG_LOG_WARN, "card", "dp_state",

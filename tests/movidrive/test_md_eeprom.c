@@ -1,6 +1,7 @@
 /* Emulated MOVIDRIVE EEPROM: write vs write volatile across restarts, crash safety of the file
  * backend (truncated files, torn temporary files, a writer killed at random moments), corrupt
- * images (message + factory defaults, never a crash), factory setting, fault memory. */
+ * images (message + factory defaults, never a crash), factory setting, fault memory; what the
+ * open says about the image it took, and paths that are not regular files (never blocking). */
 #define _GNU_SOURCE
 
 #include <errno.h>
@@ -518,6 +519,107 @@ static void test_file_nvm(void)
     CHECK_EQ(b[0], 0xFF); /* not changed */
 }
 
+/* Which image the open took and its exact words: a good file says nothing, a damaged one names
+ * itself, its reason and the backup taken; with both unusable both files and reasons. */
+static void test_open_reports(void)
+{
+    char e[2000];
+    char want[2000];
+    two_generations("report.ee", 10, 20);
+    CHECK_EQ(file_nvm_open(&nvm, path, EE_SIZE, e, sizeof e), 0);
+    CHECK_STR(e, "");
+    CHECK_EQ(nvm.loaded, FILE_NVM_IMAGE_MAIN);
+    static uint8_t good[FILE_NVM_HEADER + EE_SIZE];
+    CHECK_EQ(read_file(path, good, sizeof good), (long)sizeof good);
+    write_file(path, good, 10);
+    CHECK_EQ(file_nvm_open(&nvm, path, EE_SIZE, e, sizeof e), 1);
+    snprintf(want, sizeof want, "%s: file too short (10 bytes, less than the 20-byte header); "
+             "using the previous image %s.bak (the writes after it are lost)", path, path);
+    CHECK_STR(e, want);
+    CHECK_EQ(nvm.loaded, FILE_NVM_IMAGE_BACKUP);
+    CHECK_EQ(open_md(NULL), 0);
+    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 10); /* the backup's value, not the lost 20 */
+    /* both unusable */
+    char bak[700];
+    snprintf(bak, sizeof bak, "%s.bak", path);
+    uint8_t junk[64];
+    memset(junk, 'Z', sizeof junk);
+    write_file(bak, junk, sizeof junk);
+    CHECK_EQ(file_nvm_open(&nvm, path, EE_SIZE, e, sizeof e), -1);
+    snprintf(want, sizeof want, "%s: file too short (10 bytes, less than the 20-byte header); "
+             "%s: not an EEPROM image (magic 0x5A5A5A5A, expected 0x44465045): no usable image",
+             path, bak);
+    CHECK_STR(e, want);
+    CHECK_EQ(nvm.loaded, FILE_NVM_IMAGE_NONE);
+    CHECK_EQ(open_md(NULL), -1);
+    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 0); /* factory settings */
+    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000);
+    /* the file gone, the backup good */
+    write_file(bak, good, sizeof good);
+    unlink(path);
+    CHECK_EQ(file_nvm_open(&nvm, path, EE_SIZE, e, sizeof e), 1);
+    snprintf(want, sizeof want, "%s: no such file; using the previous image %s (the writes after "
+             "it are lost)", path, bak);
+    CHECK_STR(e, want);
+    use_file("report.ee");
+    CHECK_EQ(file_nvm_open(&nvm, path, EE_SIZE, e, sizeof e), 0);
+    CHECK_STR(e, "");
+    CHECK_EQ(nvm.loaded, FILE_NVM_IMAGE_BLANK);
+}
+
+/* A FIFO, a directory or a device is refused without being opened (a FIFO would block): SIGALRM
+ * ends the test should anything block. A refused path is never written. */
+static void test_not_regular(void)
+{
+    char e[2000];
+    char want[2000];
+    char side[700];
+    alarm(10);
+    use_file("fifo.ee");
+    CHECK_EQ(file_nvm_check_path(path, e, sizeof e), 0); /* nothing there: created later */
+    CHECK_EQ(mkfifo(path, 0644), 0);
+    CHECK_EQ(file_nvm_check_path(path, e, sizeof e), -1);
+    snprintf(want, sizeof want, "%s: a FIFO, not a regular file", path);
+    CHECK_STR(e, want);
+    CHECK_EQ(file_nvm_open(&nvm, path, EE_SIZE, e, sizeof e), -1);
+    snprintf(want, sizeof want, "%s: a FIFO, not a regular file: refused, nothing is read from "
+             "or written to it", path);
+    CHECK_STR(e, want);
+    CHECK_EQ(nvm.loaded, FILE_NVM_IMAGE_REFUSED);
+    hal_nvm_t h = file_nvm_hal(&nvm);
+    const uint8_t one[1] = {1};
+    CHECK_EQ(h.ops->write(h.ctx, 0, one, 1), -1);
+    struct stat st;
+    CHECK(stat(path, &st) == 0 && S_ISFIFO(st.st_mode)); /* not renamed over */
+    CHECK_EQ(file_nvm_check_path(dir, e, sizeof e), -1);
+    snprintf(want, sizeof want, "%s: a directory, not a regular file", dir);
+    CHECK_STR(e, want);
+    CHECK_EQ(file_nvm_check_path("/dev/null", e, sizeof e), -1);
+    CHECK_STR(e, "/dev/null: a character device, not a regular file");
+    unlink(path);
+    /* a FIFO as the backup, the file missing: reported, not opened; a write starts afresh */
+    snprintf(side, sizeof side, "%s.bak", path);
+    CHECK_EQ(mkfifo(side, 0644), 0);
+    CHECK_EQ(file_nvm_open(&nvm, path, 64, e, sizeof e), -1);
+    snprintf(want, sizeof want, "%s: no such file; %s: a FIFO, not a regular file: no usable "
+             "image", path, side);
+    CHECK_STR(e, want);
+    CHECK_EQ(h.ops->write(h.ctx, 0, one, 1), 0);
+    CHECK_EQ(file_nvm_check_path(path, e, sizeof e), 0);
+    CHECK_EQ(file_nvm_open(&nvm, path, 64, e, sizeof e), 0);
+    /* a FIFO left as the temporary file: the write fails, the image stays */
+    snprintf(side, sizeof side, "%s.tmp", path);
+    CHECK_EQ(mkfifo(side, 0644), 0);
+    const uint8_t two[1] = {2};
+    CHECK_EQ(h.ops->write(h.ctx, 0, two, 1), -1);
+    unlink(side);
+    uint8_t b[1];
+    CHECK_EQ(file_nvm_open(&nvm, path, 64, e, sizeof e), 0);
+    CHECK_EQ(h.ops->read(h.ctx, 0, b, 1), 0);
+    CHECK_EQ(b[0], 1);
+    alarm(0);
+}
+
 /* A child writes H0 = 1, 2, 3, ... through the emulation as fast as it can; it is SIGKILLed at a
  * random moment, many times. After each kill the image must be exactly the last or the next
  * value, the file must open without complaint, and the child continues from there. */
@@ -675,6 +777,8 @@ int main(int argc, char **argv)
     RUN_TEST(test_fault_memory);
     RUN_TEST(test_nvm_failures);
     RUN_TEST(test_file_nvm);
+    RUN_TEST(test_open_reports);
+    RUN_TEST(test_not_regular);
     RUN_TEST(test_kill_writer);
     remove_tree(dir);
     return check_report();

@@ -22,17 +22,78 @@ uint32_t file_nvm_crc32(uint32_t crc, const uint8_t *p, size_t n)
     return ~crc;
 }
 
-/* 0 loaded into f->data; -1 missing (ENOENT, no message); -2 unusable, why in err. */
-static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
+static const char *file_kind(mode_t mode)
 {
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (S_ISFIFO(mode)) {
+        return "a FIFO";
+    }
+    if (S_ISDIR(mode)) {
+        return "a directory";
+    }
+    if (S_ISCHR(mode)) {
+        return "a character device";
+    }
+    if (S_ISBLK(mode)) {
+        return "a block device";
+    }
+    if (S_ISSOCK(mode)) {
+        return "a socket";
+    }
+    return "something else";
+}
+
+int file_nvm_check_path(const char *path, char *err, size_t errlen)
+{
+    struct stat st;
+    /* A stat error other than "nothing there" is left to the open, which reports it. */
+    if (path == NULL || stat(path, &st) != 0 || S_ISREG(st.st_mode)) {
+        return 0;
+    }
+    if (err != NULL && errlen > 0u) {
+        snprintf(err, errlen, "%s: %s, not a regular file", path, file_kind(st.st_mode));
+    }
+    return -1;
+}
+
+enum {
+    LOAD_OK = 0,
+    LOAD_MISSING = -1,   /* ENOENT; err says "no such file" */
+    LOAD_DAMAGED = -2,   /* err says why */
+    LOAD_NOT_FILE = -3,  /* not a regular file; err says what it is */
+};
+
+/* The open cannot block: stat first, O_NONBLOCK for a FIFO put there after the stat. */
+static int open_regular(const char *path, char *err, size_t errlen)
+{
+    if (file_nvm_check_path(path, err, errlen) != 0) {
+        return LOAD_NOT_FILE;
+    }
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
     if (fd < 0) {
         if (errno == ENOENT) {
-            return -1;
+            snprintf(err, errlen, "%s: no such file", path);
+            return LOAD_MISSING;
         }
         snprintf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
-        return -2;
+        return LOAD_DAMAGED;
     }
+    struct stat st;
+    if (fstat(fd, &st) != 0) {
+        snprintf(err, errlen, "%s: cannot stat: %s", path, strerror(errno));
+        close(fd);
+        return LOAD_DAMAGED;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        snprintf(err, errlen, "%s: %s, not a regular file", path, file_kind(st.st_mode));
+        close(fd);
+        return LOAD_NOT_FILE;
+    }
+    return fd;
+}
+
+/* The whole file into f->image: its length, or -1 with err. */
+static long read_whole(file_nvm_t *f, int fd, const char *path, char *err, size_t errlen)
+{
     size_t got = 0;
     for (;;) {
         ssize_t r = read(fd, f->image + got, sizeof f->image - got);
@@ -41,27 +102,40 @@ static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
                 continue;
             }
             snprintf(err, errlen, "%s: read error: %s", path, strerror(errno));
-            close(fd);
-            return -2;
-        }
-        if (r == 0 || got + (size_t)r == sizeof f->image) {
-            got += (size_t)r;
-            break;
+            return -1;
         }
         got += (size_t)r;
+        if (r == 0 || got == sizeof f->image) {
+            return (long)got;
+        }
     }
+}
+
+/* LOAD_OK: loaded into f->data; otherwise why in err (always naming path). */
+static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
+{
+    int fd = open_regular(path, err, errlen);
+    if (fd < 0) {
+        return fd;
+    }
+    long n = read_whole(f, fd, path, err, errlen);
     close(fd);
+    if (n < 0) {
+        return LOAD_DAMAGED;
+    }
+    size_t got = (size_t)n;
     const uint8_t *h = f->image;
     if (got < FILE_NVM_HEADER) {
-        snprintf(err, errlen, "%s: file too short (%zu bytes; the header alone has %u)", path, got,
-                 (unsigned)FILE_NVM_HEADER);
-        return -2;
+        /* No ';' in a reason: callers join texts with "; " and may split there. */
+        snprintf(err, errlen, "%s: file too short (%zu bytes, less than the %u-byte header)", path,
+                 got, (unsigned)FILE_NVM_HEADER);
+        return LOAD_DAMAGED;
     }
     uint32_t magic = hal_get_be32(h);
     if (magic != FILE_NVM_MAGIC) {
         snprintf(err, errlen, "%s: not an EEPROM image (magic 0x%08X, expected 0x%08X)", path,
                  (unsigned)magic, (unsigned)FILE_NVM_MAGIC);
-        return -2;
+        return LOAD_DAMAGED;
     }
     uint32_t version = hal_get_be16(h + 4);
     uint32_t hlen = hal_get_be16(h + 6);
@@ -69,14 +143,14 @@ static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
     if (version != FILE_NVM_VERSION || hlen != FILE_NVM_HEADER) {
         snprintf(err, errlen, "%s: image version %u / header length %u not supported", path,
                  (unsigned)version, (unsigned)hlen);
-        return -2;
+        return LOAD_DAMAGED;
     }
     if (len > FILE_NVM_MAX_SIZE || got != FILE_NVM_HEADER + len) {
         snprintf(err, errlen,
                  "%s: length field says %u data bytes but the file holds %zu (truncated or "
                  "appended to)",
                  path, (unsigned)len, got - FILE_NVM_HEADER);
-        return -2;
+        return LOAD_DAMAGED;
     }
     uint32_t stored = hal_get_be32(h + 16);
     uint32_t crc = file_nvm_crc32(0, h, 16);
@@ -84,12 +158,40 @@ static int load_image(file_nvm_t *f, const char *path, char *err, size_t errlen)
     if (crc != stored) {
         snprintf(err, errlen, "%s: CRC mismatch (stored 0x%08X, computed 0x%08X): contents damaged",
                  path, (unsigned)stored, (unsigned)crc);
-        return -2;
+        return LOAD_DAMAGED;
     }
     memset(f->data, 0xFF, f->size);
     memcpy(f->data, h + FILE_NVM_HEADER, len < f->size ? len : f->size);
     f->seq = hal_get_be32(h + 12);
-    return 0;
+    return LOAD_OK;
+}
+
+/* PATH could not be used (rc): the previous generation, or a blank or no image. */
+static int open_previous(file_nvm_t *f, int rc, const char *why, char *err, size_t errlen)
+{
+    char bak[FILE_NVM_PATH_MAX + 8];
+    snprintf(bak, sizeof bak, "%s.bak", f->path);
+    char bwhy[FILE_NVM_PATH_MAX + 160];
+    bwhy[0] = '\0';
+    int brc = load_image(f, bak, bwhy, sizeof bwhy);
+    if (brc == LOAD_OK) {
+        f->readable = true;
+        f->loaded = FILE_NVM_IMAGE_BACKUP;
+        /* PATH.bak is exactly one write older than PATH (nvm_write): that write is gone. */
+        snprintf(err, errlen, "%s; using the previous image %s (the writes after it are lost)",
+                 why, bak);
+        return 1;
+    }
+    memset(f->data, 0xFF, f->size);
+    if (rc == LOAD_MISSING && brc == LOAD_MISSING) {
+        f->readable = true;
+        f->loaded = FILE_NVM_IMAGE_BLANK; /* first start */
+        return 0;
+    }
+    f->readable = false;
+    f->loaded = FILE_NVM_IMAGE_NONE;
+    snprintf(err, errlen, "%s; %s: no usable image", why, bwhy);
+    return -1;
 }
 
 int file_nvm_open(file_nvm_t *f, const char *path, size_t size, char *err, size_t errlen)
@@ -118,36 +220,19 @@ int file_nvm_open(file_nvm_t *f, const char *path, size_t size, char *err, size_
     char why[FILE_NVM_PATH_MAX + 160];
     why[0] = '\0';
     int rc = load_image(f, path, why, sizeof why);
-    if (rc == 0) {
+    if (rc == LOAD_OK) {
         f->readable = true;
         f->main_valid = true;
+        f->loaded = FILE_NVM_IMAGE_MAIN;
         return 0;
     }
-    char bak[FILE_NVM_PATH_MAX];
-    snprintf(bak, sizeof bak, "%s.bak", path);
-    char bwhy[FILE_NVM_PATH_MAX + 160];
-    bwhy[0] = '\0';
-    int brc = load_image(f, bak, bwhy, sizeof bwhy);
-    if (brc == 0) {
-        f->readable = true;
-        snprintf(err, errlen, "%s; using the previous image %s",
-                 rc == -1 ? "EEPROM image missing" : why, bak);
-        return 1;
+    if (rc == LOAD_NOT_FILE) {
+        /* Not an image that went bad but a wrong path: no backup would be the user's data. */
+        f->loaded = FILE_NVM_IMAGE_REFUSED;
+        snprintf(err, errlen, "%s: refused, nothing is read from or written to it", why);
+        return -1;
     }
-    memset(f->data, 0xFF, size);
-    if (rc == -1 && brc == -1) {
-        f->readable = true; /* first start: a blank EEPROM */
-        return 0;
-    }
-    f->readable = false;
-    if (rc == -1) {
-        snprintf(err, errlen, "%s (EEPROM image missing)", bwhy);
-    } else if (brc == -1) {
-        snprintf(err, errlen, "%s", why);
-    } else {
-        snprintf(err, errlen, "%s; previous image: %s", why, bwhy);
-    }
-    return -1;
+    return open_previous(f, rc, why, err, errlen);
 }
 
 static size_t nvm_size(void *ctx)
@@ -202,10 +287,35 @@ static int sync_dir(const char *path)
     return rc;
 }
 
+/* The new image into tmp, on the disk when sync: 0, or -1 with tmp removed. */
+static int write_tmp(const char *tmp, const uint8_t *img, size_t n, bool sync)
+{
+    /* Something other than a file left at PATH.tmp must neither block nor be written into. */
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NONBLOCK, 0644);
+    if (fd < 0) {
+        return -1;
+    }
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        close(fd);
+        return -1;
+    }
+    if (write_all(fd, img, n) != 0 || (sync && fsync(fd) != 0)) {
+        close(fd);
+        unlink(tmp);
+        return -1;
+    }
+    if (close(fd) != 0) {
+        unlink(tmp);
+        return -1;
+    }
+    return 0;
+}
+
 static int nvm_write(void *ctx, size_t offset, const uint8_t *data, size_t len)
 {
     file_nvm_t *f = ctx;
-    if (offset > f->size || len > f->size - offset) {
+    if (f->loaded == FILE_NVM_IMAGE_REFUSED || offset > f->size || len > f->size - offset) {
         return -1;
     }
     uint8_t *img = f->image;
@@ -229,17 +339,7 @@ static int nvm_write(void *ctx, size_t offset, const uint8_t *data, size_t len)
     char bak[FILE_NVM_PATH_MAX + 8];
     snprintf(tmp, sizeof tmp, "%s.tmp", f->path);
     snprintf(bak, sizeof bak, "%s.bak", f->path);
-    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) {
-        return -1;
-    }
-    if (write_all(fd, img, FILE_NVM_HEADER + f->size) != 0 || (f->sync && fsync(fd) != 0)) {
-        close(fd);
-        unlink(tmp);
-        return -1;
-    }
-    if (close(fd) != 0) {
-        unlink(tmp);
+    if (write_tmp(tmp, img, FILE_NVM_HEADER + f->size, f->sync) != 0) {
         return -1;
     }
     if (f->main_valid) {

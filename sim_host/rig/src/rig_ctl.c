@@ -178,7 +178,7 @@ static void snap_card(const rig_card_t *rc, rig_snap_card_t *s)
             s->msac2_master[i] = (int16_t)card->dpv1.c2[i].master;
         }
     }
-    copy_text(s->nvm_note, sizeof s->nvm_note, rc->nvm_note);
+    copy_text(s->nvm_note, sizeof s->nvm_note, rc->cs.nvm_note); /* in full, not rig_card_t's cut */
     copy_text(s->eeprom_path, sizeof s->eeprom_path, rc->opt.eeprom_path);
     copy_text(s->card_nvm_path, sizeof s->card_nvm_path, rc->opt.card_nvm_path);
     if (rc->cs.inverter == CARD_INVERTER_SIM) {

@@ -1,5 +1,6 @@
 #include "sim_stations/stations.h"
 
+#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -89,40 +90,89 @@ sim_station_t card_station(card_station_t *c)
     return (sim_station_t){.ctx = c, .rx_char = card_rx, .poll = card_poll};
 }
 
-/* The emulated MOVIDRIVE, commissioned as the manual's §4.3 wiring leaves it: DI00 at +24 V. */
-static int start_inverter(card_station_t *c, const card_options_t *opt, char *err,
-                          size_t errlen)
+/* Appends one part to the start-up note in err, "; " between parts. */
+static void note_add(char *err, size_t errlen, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static void note_add(char *err, size_t errlen, const char *fmt, ...)
 {
-    int rc = 0;
+    size_t used = strlen(err);
+    if (errlen == 0u || used + 1u >= errlen) {
+        return;
+    }
+    if (used > 0u) {
+        (void)snprintf(err + used, errlen - used, "; ");
+        used = strlen(err);
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(err + used, errlen - used, fmt, ap);
+    va_end(ap);
+}
+
+/* file_nvm_open's text names both images and both reasons: room for two paths. */
+#define NVM_TEXT_MAX (2u * (FILE_NVM_PATH_MAX + 200u))
+
+/* The emulated MOVIDRIVE, commissioned as the manual's §4.3 wiring leaves it: DI00 at +24 V.
+ * What the EEPROM file or the drive had to say goes into the note in err: true if anything. */
+static bool start_inverter(card_station_t *c, const card_options_t *opt, char *err,
+                           size_t errlen)
+{
     movidrive_cfg_t mcfg = {.terminal_enable = true};
+    int nrc = 0;
+    char nerr[NVM_TEXT_MAX] = "";
     if (opt->eeprom_path != NULL) {
-        if (file_nvm_open(&c->nvm, opt->eeprom_path, movidrive_eeprom_size(), err, errlen) < 0) {
-            rc = -1;
-        }
+        nrc = file_nvm_open(&c->nvm, opt->eeprom_path, movidrive_eeprom_size(), nerr,
+                            sizeof nerr);
         mcfg.eeprom = file_nvm_hal(&c->nvm);
     }
     char merr[256] = "";
-    if (movidrive_init(&c->md, &mcfg, merr, sizeof merr) != 0) {
-        snprintf(err, errlen, "%s", merr);
-        rc = -1;
+    int mrc = movidrive_init(&c->md, &mcfg, merr, sizeof merr);
+    if (nrc < 0) {
+        /* The drive can only add that it found nothing readable: the file's text says why. */
+        note_add(err, errlen, "drive EEPROM: %s; the drive starts from its factory settings",
+                 nerr);
+    } else if (nrc > 0) {
+        note_add(err, errlen, "drive EEPROM: %s", nerr);
+    }
+    if (nrc >= 0 && mrc != 0) {
+        /* The file was read, its contents are not all the drive's: merr names no file. */
+        note_add(err, errlen, "drive EEPROM: %s: %s",
+                 opt->eeprom_path != NULL ? opt->eeprom_path : "(none)", merr);
     }
     c->md_link = (md_inproc_link_t){.md = &c->md, .param_response = card_station_param_response,
                                     .process_inputs = card_station_process_inputs, .card = c,
                                     .delay_us = opt->inverter_delay_us};
-    return rc;
+    return nrc != 0 || mrc != 0;
+}
+
+/* The card's own storage (I&M1..I&M4); its note, if any, goes into err and sets *noted. */
+static hal_nvm_t open_card_nvm(card_station_t *c, const char *path, char *err, size_t errlen,
+                               bool *noted)
+{
+    if (path == NULL) {
+        return (hal_nvm_t){0};
+    }
+    char nerr[NVM_TEXT_MAX] = "";
+    int nrc = file_nvm_open(&c->card_nvm, path, IM_NVM_SIZE, nerr, sizeof nerr);
+    if (nrc < 0) {
+        note_add(err, errlen, "card NVM: %s; I&M1..I&M4 start empty", nerr);
+    } else if (nrc > 0) {
+        note_add(err, errlen, "card NVM: %s", nerr);
+    }
+    *noted = *noted || nrc != 0;
+    return file_nvm_hal(&c->card_nvm);
 }
 
 int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t uart,
                       hal_time_us_t now, char *err, size_t errlen)
 {
-    int rc = 0;
-    if (errlen > 0u) {
-        err[0] = '\0';
-    }
+    char *note = c->nvm_note;
+    note[0] = '\0';
+    bool noted = false;
     c->inverter = opt->inverter;
     ml_link_t link = {0};
     if (opt->inverter == CARD_INVERTER_SIM) {
-        rc = start_inverter(c, opt, err, errlen);
+        noted = start_inverter(c, opt, note, sizeof c->nvm_note);
         link = md_inproc_link(&c->md_link);
     } else if (opt->inverter == CARD_INVERTER_LINK) {
         link = opt->external_link;
@@ -134,14 +184,9 @@ int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t u
         c->inverter_link = link;
         link = (ml_link_t){.ops = &observed_link_ops, .ctx = c};
     }
-    hal_nvm_t card_nvm = {0};
-    if (opt->card_nvm_path != NULL) {
-        char nerr[256] = "";
-        if (file_nvm_open(&c->card_nvm, opt->card_nvm_path, IM_NVM_SIZE, nerr, sizeof nerr) < 0) {
-            snprintf(err, errlen, "%s", nerr);
-            rc = -1;
-        }
-        card_nvm = file_nvm_hal(&c->card_nvm);
+    hal_nvm_t card_nvm = open_card_nvm(c, opt->card_nvm_path, note, sizeof c->nvm_note, &noted);
+    if (err != NULL && errlen > 0u) {
+        (void)snprintf(err, errlen, "%s", note);
     }
     static char default_serial[24];
     snprintf(default_serial, sizeof default_serial, "DFP-SIM-%03u", opt->address);
@@ -165,7 +210,7 @@ int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t u
         .software_revision = {0, 4, 0},
     };
     dfp21b_init(&c->card, &cfg, now);
-    return rc;
+    return noted ? -1 : 0;
 }
 
 static void master_rx(void *ctx, uint8_t byte, uint8_t flags, hal_time_us_t t)

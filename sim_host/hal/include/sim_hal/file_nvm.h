@@ -6,7 +6,10 @@
  * PATH.tmp is written and fsync'ed, the current PATH is hard-linked to PATH.bak (the previous
  * generation), PATH.tmp is renamed over PATH and the directory is fsync'ed. A crash at any
  * moment leaves PATH holding the old or the new image; should PATH itself be damaged
- * (truncated, overwritten), the previous generation in PATH.bak is used and the open says so. */
+ * (truncated, overwritten), the previous generation in PATH.bak is used and the open says so.
+ * PATH must be a regular file or not exist yet: anything else (a FIFO, a directory, a device)
+ * is refused before it is opened, since opening a FIFO blocks and renaming over a device
+ * would replace it. */
 #ifndef SIM_HAL_FILE_NVM_H
 #define SIM_HAL_FILE_NVM_H
 
@@ -22,8 +25,18 @@
 #define FILE_NVM_MAGIC 0x44465045u /* "DFPE" */
 #define FILE_NVM_VERSION 1u
 
+/* Which image file_nvm_open took, for callers that tell the user more than err does. */
+typedef enum file_nvm_image {
+    FILE_NVM_IMAGE_NONE = 0, /* no usable image: reads fail until the next write */
+    FILE_NVM_IMAGE_BLANK,    /* neither PATH nor PATH.bak exists: a blank EEPROM (first start) */
+    FILE_NVM_IMAGE_MAIN,     /* PATH */
+    FILE_NVM_IMAGE_BACKUP,   /* PATH.bak, the previous generation: PATH was damaged or missing */
+    FILE_NVM_IMAGE_REFUSED,  /* PATH is not a regular file: never read nor written */
+} file_nvm_image_t;
+
 typedef struct file_nvm {
     char path[FILE_NVM_PATH_MAX];
+    file_nvm_image_t loaded; /* what file_nvm_open took; writes do not change it */
     size_t size;
     bool readable;   /* false: no usable image; reads fail until the next write */
     bool main_valid; /* PATH holds a valid image (kept as PATH.bak by the next write) */
@@ -36,13 +49,22 @@ typedef struct file_nvm {
     uint8_t image[FILE_NVM_HEADER + FILE_NVM_MAX_SIZE + 1u];
 } file_nvm_t;
 
-/* Opens (does not create) the image at path with `size` data bytes (<= FILE_NVM_MAX_SIZE).
- *  0  image loaded, or no file yet (all bytes 0xFF, a blank EEPROM);
- *  1  PATH unusable, the previous generation PATH.bak was loaded; err says why;
- * -1  no usable image (corrupt, short, garbage, unreadable; err says which): reads fail until
- *     the next write, which starts from a blank image; or bad arguments.
- * A shorter or longer image from another size is accepted: cut or padded with 0xFF. */
+/* Opens (does not create) the image at path with `size` data bytes (<= FILE_NVM_MAX_SIZE);
+ * f->loaded says which image was taken. err names every file it speaks of:
+ *  0  image loaded, or no file yet (all bytes 0xFF, a blank EEPROM); err empty;
+ *  1  PATH damaged or missing, the previous generation PATH.bak was loaded:
+ *     "PATH: <reason>; using the previous image PATH.bak (the writes after it are lost)";
+ * -1  no usable image: "PATH: <reason>; PATH.bak: <reason>: no usable image" (reasons: corrupt,
+ *     short, garbage, unreadable, "no such file"); reads fail until the next write, which starts
+ *     from a blank image. Or PATH is not a regular file: "PATH: a FIFO, not a regular file:
+ *     refused, nothing is read from or written to it", and every write fails. Or bad arguments.
+ * No reason contains "; ", so callers may split err there. A shorter or longer image from
+ * another size is accepted: cut or padded with 0xFF. */
 int file_nvm_open(file_nvm_t *f, const char *path, size_t size, char *err, size_t errlen);
+/* Whether path can hold an image without opening it (a FIFO would block the open): 0 when it is
+ * a regular file or nothing is there (a write creates it), else -1 with
+ * "PATH: a FIFO, not a regular file" (a directory, a character device ...) in err. */
+int file_nvm_check_path(const char *path, char *err, size_t errlen);
 hal_nvm_t file_nvm_hal(file_nvm_t *f);
 /* CRC-32 (IEEE 802.3, reflected, as zlib), exposed for tests that build images. */
 uint32_t file_nvm_crc32(uint32_t crc, const uint8_t *p, size_t n);

@@ -68,7 +68,7 @@ typedef struct rig_snap_card {
     bool msac1_open;
     bool msac2_open[2];
     int16_t msac2_master[2];
-    char nvm_note[320];
+    char nvm_note[1024]; /* both files' notes of card_station_init, each a few hundred characters */
     char eeprom_path[160];
     char card_nvm_path[160];
     /* the drive */

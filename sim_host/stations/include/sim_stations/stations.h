@@ -15,6 +15,9 @@ typedef enum card_inverter {
     CARD_INVERTER_LINK,     /* an external ml_link (SBus over CAN) */
 } card_inverter_t;
 
+/* Room for any start-up note: both files with both images named, at the longest paths. */
+#define CARD_NVM_NOTE_MAX 2560u
+
 typedef struct card_station {
     dfp21b_t card;
     sim_leds_t leds;
@@ -24,6 +27,7 @@ typedef struct card_station {
     md_inproc_link_t md_link;
     file_nvm_t nvm;      /* the inverter's EEPROM */
     file_nvm_t card_nvm; /* the card's own storage: I&M1..I&M4 */
+    char nvm_note[CARD_NVM_NOTE_MAX]; /* card_station_init's note in full ("" = none) */
     /* Parameter services seen on their way to the inverter and back (card_options_t). */
     ml_link_t inverter_link; /* the link the card's requests are forwarded to */
     uint8_t last_request[ML_MAX_CHANNELS][ML_TELEGRAM_LEN];
@@ -58,9 +62,15 @@ typedef struct card_options {
 } card_options_t;
 
 sim_station_t card_station(card_station_t *c);
-/* Call after attaching the station to a medium (which supplies uart). Returns 0, or -1 with a
- * reason in err (EEPROM file unusable: the inverter then starts from factory values, which is
- * reported but not fatal, so -1 means only that err has something to say). */
+/* Call after attaching the station to a medium (which supplies uart). Returns 0 with err empty,
+ * or -1 with a note in err: what the drive's EEPROM file or the card's NVM file did not give as
+ * stored (file_nvm_open's text, naming the files and reasons, after "drive EEPROM: " or
+ * "card NVM: ", parts joined by "; "): the previous image PATH.bak was used, or none was usable
+ * and the drive starts from its factory settings (I&M1..I&M4 empty), or the path is not a
+ * regular file and is neither read nor written. Never fatal: the card runs either way, so -1
+ * means only that the note has something to say. A note with both files' images unusable
+ * needs about 2 x (the paths' lengths + 250) octets: a shorter err gets it cut, c->nvm_note
+ * keeps it whole. */
 int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t uart,
                       hal_time_us_t now, char *err, size_t errlen);
 /* For links that deliver inverter answers (SBus): forwards to the card. */
