@@ -1,0 +1,418 @@
+/* The text of dfp-sim --help, dfp-sim help CMD and the man page. Texts are kept without their
+ * indentation: the printers add it, so the same lines serve the terminal and roff. */
+#include "help.h"
+
+#include <ctype.h>
+#include <string.h>
+
+/* The shared options a command takes (help_note_t.bit). */
+enum {
+    NOTE_RATE = 1u << 0,
+    NOTE_CAPTURE = 1u << 1,
+    NOTE_HTTP = 1u << 2,
+    NOTE_LOG = 1u << 3,
+    NOTE_LCM = 1u << 4,
+};
+
+typedef struct {
+    const char *name;
+    const char *synopsis; /* after the name; "\n" between lines */
+    const char *text;     /* what it does; "\n" between lines */
+    unsigned notes;       /* NOTE_* */
+} help_cmd_t;
+
+typedef struct {
+    unsigned bit;
+    const char *term; /* the option or word described */
+    const char *sep;  /* between term and text on the terminal */
+    const char *text;
+} help_note_t;
+
+typedef struct {
+    const char *term;
+    const char *text;
+} help_item_t;
+
+static const char program[] = "dfp-sim";
+static const char summary[] = "the DFP21B PROFIBUS-DP card, simulated on Linux";
+
+/* After "dfp-sim ". */
+static const char *const forms[] = {
+    "COMMAND [options]",
+    "help [COMMAND]",
+    "COMMAND --help|-h",
+    "--version",
+};
+
+static const char intro[] =
+    "The emulated SEW DFP21B PROFIBUS-DP option card, with an emulated MOVIDRIVE behind it, on\n"
+    "a tty or PTY, on a virtual segment over LCM, or with a DP master on a simulated bus; and\n"
+    "the tools around it: a class-1 master, parameter services, captures, replay and record.\n"
+    "dfp-sim help COMMAND or dfp-sim COMMAND --help shows one command.";
+
+static const help_cmd_t commands[] = {
+    {"demo", "[--capture FILE] [--lcm URL] [--http [ADDR:]PORT] [LOG OPTIONS]",
+     "the card and a DP master on a simulated bus: start-up, cyclic data, watchdog,\n"
+     "a wrong configuration; needs no hardware and ends by itself. With --http it runs\n"
+     "at wall-clock speed and then keeps going, panel and API up, until Ctrl-C",
+     NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG | NOTE_LCM},
+    {"slave",
+     "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] [--address N|N-M,...]\n"
+     "[--baud RATE|auto] [--capture FILE] [--duration S]\n"
+     "[--inverter sim|none|can:IFACE[:ADDR]] [--eeprom FILE|DIR] [--card-nvm FILE|DIR]\n"
+     "[--echo-suppress] [--lcm URL] [--http [ADDR:]PORT] [LOG OPTIONS]",
+     "the emulated card on a tty (USB-RS485 adapter) or PTY until SIGINT/SIGTERM;\n"
+     "--bus lcm:CHANNEL puts it on a virtual segment over LCM instead, shared with the\n"
+     "stations of other processes or machines (--lcm-url, else $LCM_DEFAULT_URL, else\n"
+     "LCM's default udpm://239.255.76.67:7667?ttl=0);\n"
+     "--address is the DIP-switch setting (default 4; above 125 the card stays off the bus);\n"
+     "--inverter: the emulated MOVIDRIVE (default; --eeprom keeps its parameters in FILE),\n"
+     "none (PI words echo PO words), or a MOVIDRIVE on SBus through SocketCAN;\n"
+     "--card-nvm keeps the card's own data (I&M1..I&M4) in FILE;\n"
+     "several addresses (4-9, 3,5,7) put a line of cards, each with its own drive, on\n"
+     "the one port: --eeprom and --card-nvm then name directories (driveN.ee, cardN.nvm)",
+     NOTE_RATE | NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG | NOTE_LCM},
+    {"master",
+     "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] --address N|N-M,... --config HEX\n"
+     "[--prm HEX] [--cycles N] [--baud RATE] [--ident N] [--watchdog MS]\n"
+     "[--master-address N] [--slot-time MS] [--outputs HEX] [--timeout S]\n"
+     "[--capture FILE] [--verbose] [--reset-fault] [--http [ADDR:]PORT] [LOG OPTIONS]",
+     "the built-in class-1 master against one slave or several (up to 32, e.g. 3-34 or\n"
+     "3,5,7-9, all with the same configuration); exit 0 once each ran N cycles (default\n"
+     "100; 0: run until SIGINT, exit 0) in data exchange. --verbose logs the inputs,\n"
+     "decoded, whenever they change. --prm is the user parameter part (Set_Prm from octet 7);\n"
+     "default for ident 0x6003: 00 00 00 06 81 00 00 01 01. Like a PLC going to STOP, it\n"
+     "leaves (after --cycles, or on SIGINT/SIGTERM) with Global_Control Clear_Data and zero\n"
+     "outputs for 3 cycles; --reset-fault acknowledges a drive fault at start (control\n"
+     "word bit 6 set, then cleared; the drive needs P101 = FIELDBUS)",
+     NOTE_RATE | NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG},
+    {"inverter",
+     "--can IFACE [--sbus-address N] [--eeprom FILE] [--duration S] [--channel2]\n"
+     "[--quiet]",
+     "the emulated MOVIDRIVE on SBus (SocketCAN, e.g. vcan0) until SIGINT/SIGTERM; prints\n"
+     "every parameter service and state change. --sbus-address is P813 (0..63, default 0);\n"
+     "--eeprom keeps non-volatile parameters in FILE across runs",
+     0u},
+    {"param",
+     "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] --address N\n"
+     "[--via channel|movilink|profidrive|c2] [--baud RATE] [--master-address N]\n"
+     "[--timeout S] [--json] [--capture FILE] [--verbose]\n"
+     "read PARAM [PARAM ...] | write PARAM VALUE [--volatile] | im0",
+     "one parameter service against the card on a tty, or as a master on an LCM segment\n"
+     "(--bus, --lcm-url as for slave). PARAM: an index (8461, 0x210D), a P-number\n"
+     "(P100), a name or a unique part of one (\"setpoint source\"), or an IPOS variable\n"
+     "(H12 = 11012). VALUE: a raw number (3, -5, 0x10), an enumeration text (FIELDBUS) or\n"
+     "a value in the parameter's unit (300.5, \"300 rpm\"). Results name the parameter\n"
+     "(P100 setpoint source = 3 (FIELDBUS)). channel (default) brings the slave up with\n"
+     "Param + 3 PD and uses the cyclic 8-byte channel; movilink / profidrive bring it up\n"
+     "with DP-V1 parameters and use class-1 data set 47 (request id 0x40 / 0x01, write\n"
+     "0x02 non-volatile); c2 opens a class-2 connection (no start-up), id 0x40, aborts it.\n"
+     "im0 reads I&M0 (class 1, or --via c2). --volatile: write to RAM only (movilink,\n"
+     "channel). read with up to 19 indices: one data set 47 request (not channel), one\n"
+     "result line each. --master-address: default 2 (1 with c2). Exit 0 when every result\n"
+     "is positive, 1 on a negative one or none within --timeout (default 10 s), 2 on a bad\n"
+     "command line or an unknown PARAM; --json: one JSON object per result (p_number,\n"
+     "name, value, text ...)",
+     NOTE_RATE | NOTE_CAPTURE},
+    {"convert",
+     "IN OUT [--format pcap|pcapng|text] [--linktype profibus|user0] [--ns]\n"
+     "[--in-format pcap|pcapng|text|lcm] [--channel NAME] [--quiet]",
+     "copies a capture into another format or link type (e.g. user0 for the Wireshark\n"
+     "dissector in tools/wireshark/); the output format defaults to OUT's extension\n"
+     "(.pcapng, .txt, else pcap); damaged records are copied and reported",
+     0u},
+    {"replay",
+     "FILE [--address N] [--check] [--speed real|max] [--baud RATE]\n"
+     "[--format pcap|pcapng|text|lcm] [--inverter sim|none] [--inverter-delay US]\n"
+     "[--fixed-baud] [--verbose] [--lcm URL] [--channel NAME]\n"
+     "[--http [ADDR:]PORT]",
+     "a bus capture played against the emulated card at its recorded times (the card's\n"
+     "own recorded answers are left out: it makes its own); --check compares every reply\n"
+     "with the recorded one and reports the first difference and counts per service\n"
+     "(exit 0: all match, 1: a difference or a damaged file, 2: bad command line or\n"
+     "unreadable file). The address comes from the capture unless given; the rate from\n"
+     "--baud, else the capture, else the lowest its timing allows. --lcm publishes the\n"
+     "replay's telegrams, card state and parameter services with the capture's times\n"
+     "(file://OUT.lcm?mode=w writes an LCM log at any speed). --channel: an LCM log's\n"
+     "telegram channel to read ('*' all; default DFP_TELEGRAM when the log has it beside\n"
+     "others, else all; also for convert). --http serves the control API read-only while\n"
+     "the replay runs (use --speed real). docs/replay.md",
+     NOTE_RATE | NOTE_HTTP | NOTE_LCM},
+    {"record",
+     "--capture FILE --cycles N [--baud RATE] [--address N] [--dpv1] [--faults]\n"
+     "[--foreign] [--param-every N] [--inverter sim|none] [--capture-format ...]",
+     "the built-in master and the card on the simulated bus for N Data_Exchange cycles,\n"
+     "parameter-channel services every N cycles (default 10, 0: none), every telegram\n"
+     "into FILE: --dpv1 adds data set 47 (class 1) and a class-2 connection, --faults a\n"
+     "watchdog expiry and a wrong configuration, --foreign a second slave and master",
+     NOTE_RATE | NOTE_CAPTURE},
+    {"check-cfg", "HEX", "would the card accept this Chk_Cfg configuration?", 0u},
+};
+
+static const help_note_t notes[] = {
+    {NOTE_RATE, "RATE", ": ", "9600 19200 45450 93750 187500 500000 1.5M 3M 6M 12M (also 19.2k ...)."},
+    {NOTE_CAPTURE, "--capture FILE", " ",
+     "writes every telegram: pcap (default), pcapng (.pcapng) or text (.txt), or\n"
+     "as --capture-format pcap|pcapng|text says; link type PROFIBUS_DL (257) unless\n"
+     "--capture-linktype user0 (147, for Wireshark); --capture-ns: nanosecond timestamps.\n"
+     "docs/captures.md describes the formats."},
+    {NOTE_HTTP, "--http [ADDR:]PORT", " ",
+     "serves the control API (JSON, docs/api.md) and the front panel at /;\n"
+     "127.0.0.1 unless ADDR is given. A taken port is an error (exit 2)."},
+    {NOTE_LOG, "LOG OPTIONS", ": ",
+     "--quiet (warnings and errors only), --log-level error|warn|info|debug (debug\n"
+     "adds every baud-search step), --timestamps bus|wall (ms since start, or clock time)."},
+    {NOTE_LCM, "--lcm URL", " ",
+     "publishes the card's telegrams, state and parameter services to LCM (channels\n"
+     "DFP_TELEGRAM, DFP_CARD_STATE, DFP_PARAM; sim_host/lcm/README.md)."},
+};
+
+static const char exit_lead[] = "the same for every command";
+
+/* What the commands return: cli.h's EXIT_USAGE is 2. */
+static const help_item_t exit_codes[] = {
+    {"0", "success; also a slave, inverter or master --cycles 0 stopped by SIGINT/SIGTERM, and\n"
+          "help and --version"},
+    {"1", "failure at run time: a negative or missing answer (param, master, demo), a refused\n"
+          "configuration (check-cfg), a difference or a damaged capture (replay --check,\n"
+          "convert), a device or an output file that cannot be opened or written"},
+    {"2", "bad command line: unknown command or option, bad or missing value, unknown PARAM;\n"
+          "an input file that cannot be read or is not a capture (convert, replay), a\n"
+          "--eeprom or --card-nvm path that is no regular file; a --http port that is taken"},
+};
+
+static const help_item_t environment[] = {
+    {"LCM_DEFAULT_URL", "the LCM URL for --bus lcm:CHANNEL without --lcm-url and for --lcm ''\n"
+                        "(unset: udpm://239.255.76.67:7667?ttl=0)"},
+};
+
+static const char see_also[] =
+    "README.md, docs/commissioning.md, docs/api.md, docs/captures.md, docs/replay.md and\n"
+    "sim_host/lcm/README.md in the source tree; wireshark(1) with tools/wireshark/profibus.lua";
+
+#define COUNT(a) (sizeof(a) / sizeof((a)[0]))
+
+/* ---- terminal ---- */
+
+/* Every line of text: the first where the caller left the cursor, the others after indent
+ * spaces. */
+static void print_lines(FILE *out, const char *text, int indent)
+{
+    for (const char *p = text; *p != '\0';) {
+        const char *nl = strchr(p, '\n');
+        size_t len = nl != NULL ? (size_t)(nl - p) : strlen(p);
+        if (p != text) {
+            fprintf(out, "%*s", indent, "");
+        }
+        fprintf(out, "%.*s\n", (int)len, p);
+        p += len + (nl != NULL ? 1u : 0u);
+    }
+}
+
+/* prefix, the name and the synopsis; continuation lines line up after the name. */
+static void print_synopsis(FILE *out, const char *prefix, const help_cmd_t *c)
+{
+    fprintf(out, "%s%s ", prefix, c->name);
+    print_lines(out, c->synopsis, (int)(strlen(prefix) + strlen(c->name) + 1u));
+}
+
+static void print_notes(FILE *out, unsigned which)
+{
+    for (size_t i = 0; i < COUNT(notes); i++) {
+        if ((notes[i].bit & which) != 0u) {
+            fprintf(out, "%s%s", notes[i].term, notes[i].sep);
+            print_lines(out, notes[i].text, 2);
+        }
+    }
+}
+
+/* lead: NULL, or a remark on the whole list. */
+static void print_items(FILE *out, const char *title, const char *lead, const help_item_t *items,
+                        size_t n)
+{
+    if (lead != NULL) {
+        fprintf(out, "\n%s (%s):\n", title, lead);
+    } else {
+        fprintf(out, "\n%s:\n", title);
+    }
+    for (size_t i = 0; i < n; i++) {
+        fprintf(out, "  %s  ", items[i].term);
+        print_lines(out, items[i].text, (int)(strlen(items[i].term) + 4u));
+    }
+}
+
+void help_print_all(FILE *out)
+{
+    for (size_t i = 0; i < COUNT(forms); i++) {
+        fprintf(out, "%s%s %s\n", i == 0 ? "usage: " : "       ", program, forms[i]);
+    }
+    fputc('\n', out);
+    print_lines(out, intro, 0);
+    fputc('\n', out);
+    unsigned all = 0;
+    for (size_t i = 0; i < COUNT(commands); i++) {
+        print_synopsis(out, "  ", &commands[i]);
+        fputs("      ", out);
+        print_lines(out, commands[i].text, 6);
+        all |= commands[i].notes;
+    }
+    fputc('\n', out);
+    print_notes(out, all);
+    print_items(out, "EXIT STATUS", exit_lead, exit_codes, COUNT(exit_codes));
+    print_items(out, "ENVIRONMENT", NULL, environment, COUNT(environment));
+    fputs("\nSEE ALSO: ", out);
+    print_lines(out, see_also, 2);
+}
+
+static const help_cmd_t *find_command(const char *name)
+{
+    for (size_t i = 0; i < COUNT(commands); i++) {
+        if (strcmp(commands[i].name, name) == 0) {
+            return &commands[i];
+        }
+    }
+    return NULL;
+}
+
+bool help_print_command(FILE *out, const char *cmd)
+{
+    const help_cmd_t *c = find_command(cmd);
+    if (c == NULL) {
+        return false;
+    }
+    print_synopsis(out, "usage: dfp-sim ", c);
+    fputs("\n  ", out);
+    print_lines(out, c->text, 2);
+    if (c->notes != 0u) {
+        fputc('\n', out);
+        print_notes(out, c->notes);
+    }
+    print_items(out, "EXIT STATUS", exit_lead, exit_codes, COUNT(exit_codes));
+    return true;
+}
+
+const char *help_command_names(void)
+{
+    static char names[128];
+    if (names[0] == '\0') {
+        size_t n = 0;
+        for (size_t i = 0; i < COUNT(commands) && n < sizeof names; i++) {
+            n += (size_t)snprintf(names + n, sizeof names - n, "%s%s", i == 0 ? "" : ", ",
+                                  commands[i].name);
+        }
+    }
+    return names;
+}
+
+/* ---- man(7) ---- */
+
+/* One line of text for roff: a backslash is \e, a minus \- (so options copy as typed), and a
+ * leading . or ' (which roff would take for a request) gets the zero-width \&. */
+static void man_text(FILE *out, const char *p, size_t len)
+{
+    if (len > 0u && (p[0] == '.' || p[0] == '\'')) {
+        fputs("\\&", out);
+    }
+    for (size_t i = 0; i < len; i++) {
+        if (p[i] == '\\') {
+            fputs("\\e", out);
+        } else if (p[i] == '-') {
+            fputs("\\-", out);
+        } else {
+            fputc(p[i], out);
+        }
+    }
+}
+
+static void man_lines(FILE *out, const char *text, int indent)
+{
+    for (const char *p = text; *p != '\0';) {
+        const char *nl = strchr(p, '\n');
+        size_t len = nl != NULL ? (size_t)(nl - p) : strlen(p);
+        if (p != text && indent > 0) {
+            fprintf(out, "%*s", indent, "");
+        }
+        man_text(out, p, len);
+        fputc('\n', out);
+        p += len + (nl != NULL ? 1u : 0u);
+    }
+}
+
+static void man_bold(FILE *out, const char *text)
+{
+    fputs("\\fB", out);
+    man_text(out, text, strlen(text));
+    fputs("\\fP", out);
+}
+
+static void man_items(FILE *out, const char *title, const char *lead, const help_item_t *items,
+                      size_t n)
+{
+    if (strchr(title, ' ') != NULL) {
+        fprintf(out, ".SH \"%s\"\n", title);
+    } else {
+        fprintf(out, ".SH %s\n", title);
+    }
+    if (lead != NULL) {
+        fputc(toupper((unsigned char)lead[0]), out);
+        man_text(out, lead + 1, strlen(lead + 1));
+        fputs(".\n", out);
+    }
+    for (size_t i = 0; i < n; i++) {
+        fputs(".TP\n", out);
+        man_bold(out, items[i].term);
+        fputc('\n', out);
+        man_lines(out, items[i].text, 0);
+    }
+}
+
+static void man_commands(FILE *out)
+{
+    fputs(".SH COMMANDS\n", out);
+    for (size_t i = 0; i < COUNT(commands); i++) {
+        const help_cmd_t *c = &commands[i];
+        fputs(".SS ", out);
+        man_text(out, c->name, strlen(c->name));
+        fputs("\n.nf\n", out);
+        man_bold(out, program);
+        fputc(' ', out);
+        man_bold(out, c->name);
+        fputc(' ', out);
+        man_lines(out, c->synopsis, (int)(strlen(program) + strlen(c->name) + 2u));
+        fputs(".fi\n.PP\n", out);
+        man_lines(out, c->text, 0);
+    }
+    fputs(".SH \"COMMON OPTIONS\"\n", out);
+    for (size_t i = 0; i < COUNT(notes); i++) {
+        fputs(".TP\n", out);
+        man_bold(out, notes[i].term);
+        fputc('\n', out);
+        man_lines(out, notes[i].text, 0);
+    }
+}
+
+void help_print_man(FILE *out, const char *version)
+{
+    fputs(".TH DFP\\-SIM 1 \"\" \"", out);
+    man_text(out, program, strlen(program));
+    fputc(' ', out);
+    man_text(out, version, strlen(version));
+    /* Neither hyphenated nor justified: option names must stay whole to be typed as printed. */
+    fputs("\" \"User Commands\"\n.nh\n.ad l\n.SH NAME\n", out);
+    man_text(out, program, strlen(program));
+    fputs(" \\- ", out);
+    man_text(out, summary, strlen(summary));
+    fputs("\n.SH SYNOPSIS\n.nf\n", out);
+    for (size_t i = 0; i < COUNT(forms); i++) {
+        man_bold(out, program);
+        fputc(' ', out);
+        man_lines(out, forms[i], 0);
+    }
+    fputs(".fi\n.SH DESCRIPTION\n", out);
+    man_lines(out, intro, 0);
+    man_commands(out);
+    man_items(out, "EXIT STATUS", exit_lead, exit_codes, COUNT(exit_codes));
+    man_items(out, "ENVIRONMENT", NULL, environment, COUNT(environment));
+    fputs(".SH \"SEE ALSO\"\n", out);
+    man_lines(out, see_also, 0);
+}

@@ -1,0 +1,19 @@
+/* dfp-sim's usage text and its man page, both printed from the one table in help.c so that they
+ * cannot drift apart. */
+#ifndef DFP_SIM_HELP_H
+#define DFP_SIM_HELP_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+/* The whole text: usage forms, every command, the shared options, exit status, environment. */
+void help_print_all(FILE *out);
+/* One command's usage, the shared options it takes and the exit status. False, with nothing
+ * printed, when cmd is no command. */
+bool help_print_command(FILE *out, const char *cmd);
+/* "demo, slave, ...": the commands in the order of the help, for error messages. */
+const char *help_command_names(void);
+/* The same content as a man(7) page for section 1. */
+void help_print_man(FILE *out, const char *version);
+
+#endif
