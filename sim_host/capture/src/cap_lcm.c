@@ -87,6 +87,48 @@ static void list_text(const channel_list_t *l, const char *except, char *out, si
     }
 }
 
+/* An event header's fields, once its octets passed event_header_ok. */
+typedef struct event_header {
+    uint32_t channel_len;
+    uint32_t data_len;
+    uint64_t total; /* header + channel name + data */
+} event_header_t;
+
+/* The rules an event header at `at` of a size-octet file must meet (got: octets read of it).
+ * True with out filled, else false with the reason in why. One place for both the channel scan
+ * and the reading proper, so they cannot disagree on what a damaged event is. */
+static bool event_header_ok(const uint8_t h[LCM_LOG_HEADER], size_t got, uint64_t at,
+                            uint64_t size, event_header_t *out, char *why, size_t whylen)
+{
+    if (got >= 4u && be32(h) != LCM_LOG_SYNC) {
+        snprintf(why, whylen, "bad sync word 0x%08" PRIX32 " (expected 0xEDA1DA01): garbage or a "
+                 "damaged event", be32(h));
+        return false;
+    }
+    if (got < LCM_LOG_HEADER) {
+        snprintf(why, whylen, "truncated event header: %zu of %u octets", got, LCM_LOG_HEADER);
+        return false;
+    }
+    out->channel_len = be32(&h[20]);
+    out->data_len = be32(&h[24]);
+    if (out->channel_len == 0u || out->channel_len >= LCM_LOG_MAX_CHANNEL) {
+        snprintf(why, whylen, "channel name length %" PRIu32 " out of range (1..%u)",
+                 out->channel_len, LCM_LOG_MAX_CHANNEL - 1u);
+        return false;
+    }
+    if (out->data_len > (uint32_t)INT32_MAX) {
+        snprintf(why, whylen, "data length %" PRIu32 " out of range", out->data_len);
+        return false;
+    }
+    out->total = LCM_LOG_HEADER + (uint64_t)out->channel_len + out->data_len;
+    if (at + out->total > size) {
+        snprintf(why, whylen, "truncated event: %" PRIu64 " octets, the file has %" PRIu64
+                 " left", out->total, size - at);
+        return false;
+    }
+    return true;
+}
+
 /* Which channels carry telegrams, from the event headers and the first octets of each event's
  * data (the type fingerprint). Stops quietly at the first damage: the reading proper reports it
  * with its position. */
@@ -94,19 +136,16 @@ static void telegram_channels(FILE *f, uint64_t size, channel_list_t *out)
 {
     memset(out, 0, sizeof *out);
     uint64_t at = 0;
-    while (at + LCM_LOG_HEADER <= size) {
-        uint8_t h[LCM_LOG_HEADER];
-        if (fseeko(f, (off_t)at, SEEK_SET) != 0 || fread(h, 1, sizeof h, f) != sizeof h ||
-            be32(h) != LCM_LOG_SYNC) {
+    while (at < size) {
+        uint8_t h[LCM_LOG_HEADER] = {0}; /* a short read fills only part of it */
+        event_header_t eh;
+        char why[160];
+        if (fseeko(f, (off_t)at, SEEK_SET) != 0 ||
+            !event_header_ok(h, fread(h, 1, sizeof h, f), at, size, &eh, why, sizeof why)) {
             break;
         }
-        uint32_t channel_len = be32(&h[20]);
-        uint32_t data_len = be32(&h[24]);
-        uint64_t total = LCM_LOG_HEADER + (uint64_t)channel_len + data_len;
-        if (channel_len == 0u || channel_len >= LCM_LOG_MAX_CHANNEL ||
-            data_len > (uint32_t)INT32_MAX || at + total > size) {
-            break;
-        }
+        uint32_t channel_len = eh.channel_len;
+        uint32_t data_len = eh.data_len;
         char name[LCM_LOG_MAX_CHANNEL];
         uint8_t fingerprint[8];
         if (fread(name, 1, channel_len, f) != channel_len) {
@@ -118,7 +157,7 @@ static void telegram_channels(FILE *f, uint64_t size, channel_list_t *out)
             dfp_lcm_is_telegram(fingerprint, sizeof fingerprint)) {
             list_add(out, name);
         }
-        at += total;
+        at += eh.total;
     }
     (void)fseeko(f, 0, SEEK_SET);
 }
@@ -228,36 +267,19 @@ static int check_header(cap_reader_t *r, cap_lcm_state_t *st, uint64_t at, uint3
     if (at >= st->size) {
         return 0;
     }
-    uint8_t h[LCM_LOG_HEADER];
+    uint8_t h[LCM_LOG_HEADER] = {0};
     size_t got = fread(h, 1, sizeof h, f);
     if (fseeko(f, (off_t)at, SEEK_SET) != 0) {
         return fail(r, event, at, "cannot seek back: %s", strerror(errno));
     }
-    if (got >= 4u && be32(h) != LCM_LOG_SYNC) {
-        return fail(r, event, at,
-                    "bad sync word 0x%08" PRIX32 " (expected 0xEDA1DA01): garbage or a damaged "
-                    "event", be32(h));
+    event_header_t eh;
+    char why[160];
+    if (!event_header_ok(h, got, at, st->size, &eh, why, sizeof why)) {
+        return fail(r, event, at, "%s", why);
     }
-    if (got < sizeof h) {
-        return fail(r, event, at, "truncated event header: %zu of %u octets", got,
-                    LCM_LOG_HEADER);
-    }
-    uint32_t channel_len = be32(&h[20]);
-    uint32_t data_len = be32(&h[24]);
-    if (channel_len == 0u || channel_len >= LCM_LOG_MAX_CHANNEL) {
-        return fail(r, event, at, "channel name length %" PRIu32 " out of range (1..%u)",
-                    channel_len, LCM_LOG_MAX_CHANNEL - 1u);
-    }
-    if (data_len > (uint32_t)INT32_MAX) {
-        return fail(r, event, at, "data length %" PRIu32 " out of range", data_len);
-    }
-    *channel_out = channel_len;
-    *data_out = data_len;
-    *total = LCM_LOG_HEADER + (uint64_t)channel_len + data_len;
-    if (at + *total > st->size) {
-        return fail(r, event, at, "truncated event: %" PRIu64 " octets, the file has %" PRIu64
-                    " left", *total, st->size - at);
-    }
+    *channel_out = eh.channel_len;
+    *data_out = eh.data_len;
+    *total = eh.total;
     return 1;
 }
 
