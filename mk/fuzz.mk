@@ -16,7 +16,7 @@ EXTRA_TEST_TARGETS += fuzz-smoke
 
 FUZZ_BUILD := build/fuzz
 FUZZ_LONG := $(FUZZ_BUILD)/long
-FUZZ_TARGETS := fdl_rx card movilink dpv1 ds47 capture
+FUZZ_TARGETS := fdl_rx fdl_collect card movilink dpv1 ds47 capture
 FUZZ_SECONDS ?= 30
 FUZZ_RUNS ?= 100000000
 FUZZ_MAX_LEN ?= 2048

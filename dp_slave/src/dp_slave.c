@@ -120,6 +120,7 @@ static void adopt_min_tsdr(dp_slave_t *s, uint8_t min_tsdr)
     if (min_tsdr != 0u) {
         s->min_tsdr_bits = min_tsdr < FDL_MIN_TSDR_DEFAULT_BITS ? (uint8_t)FDL_MIN_TSDR_DEFAULT_BITS
                                                                 : min_tsdr;
+        fdl_station_timing_changed(s);
     }
 }
 
@@ -505,6 +506,16 @@ void dp_slave_rx_char(dp_slave_t *s, uint8_t byte, uint8_t flags, hal_time_us_t 
         fdl_station_frame(s);
     } else if (r == FDL_RX_ERROR) {
         dp_slave_emit(s, DP_EV_RX_ERROR, t, (uint32_t)s->rx.last_error, 0);
+    }
+}
+
+void dp_slave_rx_telegram(dp_slave_t *s, const fdl_rx_telegram_t *tg)
+{
+    fdl_rx_result_t r = fdl_rx_telegram(&s->rx, tg);
+    if (r == FDL_RX_FRAME) {
+        fdl_station_frame(s);
+    } else if (r == FDL_RX_ERROR) {
+        dp_slave_emit(s, DP_EV_RX_ERROR, tg->end_t, (uint32_t)s->rx.last_error, 0);
     }
 }
 

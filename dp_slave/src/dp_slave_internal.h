@@ -27,6 +27,8 @@ void fdl_station_reply_rs(dp_slave_t *s, const fdl_msg_t *m);
 
 /* FDL station: a complete telegram is in s->rx. */
 void fdl_station_frame(dp_slave_t *s);
+/* The rate or min TSDR changed: recompute what the reply path needs of them. */
+void fdl_station_timing_changed(dp_slave_t *s);
 /* FDL station: baud search start and its timers; returns the merged next deadline. */
 void fdl_station_start_baud(dp_slave_t *s, hal_time_us_t now);
 hal_time_us_t fdl_station_poll(dp_slave_t *s, hal_time_us_t now);

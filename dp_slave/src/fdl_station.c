@@ -15,9 +15,15 @@ uint32_t dp_baud_search_dwell_us(uint32_t baud)
     return us < 20000u ? 20000u : (uint32_t)us;
 }
 
+void fdl_station_timing_changed(dp_slave_t *s)
+{
+    s->min_tsdr_us = hal_uart_bits_us(s->baud, s->min_tsdr_bits);
+}
+
 static void select_baud(dp_slave_t *s, uint32_t baud)
 {
     s->baud = baud;
+    fdl_station_timing_changed(s);
     fdl_rx_set_baud(&s->rx, baud);
     if (s->cfg.uart.ops != NULL && s->cfg.uart.ops->set_baud != NULL) {
         (void)s->cfg.uart.ops->set_baud(s->cfg.uart.ctx, baud);
@@ -135,7 +141,7 @@ static void transmit(dp_slave_t *s, const uint8_t *frame, size_t len, hal_time_u
     if (len == 0u || s->cfg.uart.ops == NULL || s->cfg.uart.ops->transmit == NULL) {
         return;
     }
-    hal_time_us_t not_before = request_end + hal_uart_bits_us(s->baud, s->min_tsdr_bits);
+    hal_time_us_t not_before = request_end + s->min_tsdr_us;
     (void)s->cfg.uart.ops->transmit(s->cfg.uart.ctx, frame, len, not_before);
 }
 
@@ -165,7 +171,7 @@ static bool tsyn_violated(const dp_slave_t *s)
 /* Parses the telegram and keeps it if it is a request for this station or a broadcast. */
 static bool accept_request(dp_slave_t *s, fdl_msg_t *m, hal_time_us_t t)
 {
-    if (fdl_parse(s->rx.buf, s->rx.frame_len, m) != FDL_PARSE_OK) {
+    if (fdl_parse(s->rx.frame, s->rx.frame_len, m) != FDL_PARSE_OK) {
         return false;
     }
     if ((m->fc & FDL_FC_REQUEST) == 0u) {
@@ -220,7 +226,7 @@ static void serve_srd(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
 void fdl_station_frame(dp_slave_t *s)
 {
     hal_time_us_t t = s->rx.frame_end_t;
-    note_line_activity(s, s->rx.buf[0], t);
+    note_line_activity(s, s->rx.frame[0], t);
     fdl_msg_t m;
     if (!accept_request(s, &m, t)) {
         return;

@@ -33,5 +33,6 @@ for _ in $(seq 600); do
 done
 wait $qpid || true
 grep -q "dfp21b-qemu:" "$out/qemu.log" || { echo "measure_reply_path: the image printed no summary" >&2; exit 1; }
-python3 "$(dirname "$0")/../../firmware/board/stm32f405/tools/reply_path_count.py" "$img" \
+python3 "$(dirname "$0")/../../firmware/board/stm32f405/tools/reply_path_count.py" \
+  --card "$1/dfp21b-stm32f405.elf" "$img" \
   "$out/trace.log" "$out/1.pcap" "$out/2.pcap" "$out/3.pcap" "$out/4.pcap"

@@ -1,7 +1,7 @@
 /* A PROFIBUS-DP (DP-V0) slave: FDL station, DP state machine, watchdog and baud search.
  *
  * The caller owns the dp_slave_t (no heap, no globals), feeds it every received character with
- * dp_slave_rx_char() and calls dp_slave_poll() at or after the deadline it returned. Replies go
+ * dp_slave_rx_char() (or every telegram a receiver collected, dp_slave_rx_telegram()) and calls dp_slave_poll() at or after the deadline it returned. Replies go
  * out through the HAL UART's transmit(), timed at end-of-request + min TSDR. What the device
  * does with the data (which configurations and parameters it accepts, what the outputs mean,
  * what the inputs are) is supplied through dp_slave_hooks_t; the DFP21B personality in
@@ -137,6 +137,7 @@ typedef struct dp_slave {
 
     /* FDL */
     uint8_t min_tsdr_bits;
+    uint32_t min_tsdr_us; /* min_tsdr_bits at baud, kept so the reply path does not divide */
     fdl_fcb_slot_t fcb[FDL_FCB_SLOTS];
     uint8_t reply[FDL_FRAME_MAX];
     uint16_t reply_len;
@@ -181,6 +182,8 @@ typedef struct dp_slave {
 void dp_slave_init(dp_slave_t *s, const dp_slave_cfg_t *cfg, hal_time_us_t now);
 /* One received character; t = end of its stop bit. May transmit a reply. */
 void dp_slave_rx_char(dp_slave_t *s, uint8_t byte, uint8_t flags, hal_time_us_t t);
+/* Instead of rx_char: a whole telegram a receiver collected (fdl_rx.h). May transmit a reply. */
+void dp_slave_rx_telegram(dp_slave_t *s, const fdl_rx_telegram_t *tg);
 /* Runs timers (watchdog, baud search/control). Returns the next deadline (absolute). */
 hal_time_us_t dp_slave_poll(dp_slave_t *s, hal_time_us_t now);
 

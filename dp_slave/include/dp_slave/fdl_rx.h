@@ -58,6 +58,7 @@ typedef struct fdl_rx {
     uint32_t idle_before_pending_ns;
     /* Valid after FDL_RX_FRAME: the telegram, its length, when its last character ended, and
      * how long the line was idle before its first character (UINT32_MAX if unknown). */
+    const uint8_t *frame; /* buf, or the buffer of the telegram fdl_rx_telegram() was given */
     uint16_t frame_len;
     hal_time_us_t frame_end_t;
     uint32_t idle_before_ns;
@@ -70,6 +71,20 @@ void fdl_rx_set_baud(fdl_rx_t *rx, uint32_t baud);
 /* Discard any telegram in progress, e.g. after the station transmitted or changed rate. */
 void fdl_rx_reset(fdl_rx_t *rx);
 fdl_rx_result_t fdl_rx_char(fdl_rx_t *rx, uint8_t byte, uint8_t flags, hal_time_us_t t);
+
+/* A telegram whose characters a receiver collected itself (fdl_collect.h in an interrupt, DMA,
+ * an ASIC): its length followed from SD and LE, gaps and character errors were judged as it
+ * came in. What is left is checked here (LE/LEr, the repeated SD2, FCS, ED); the result is the
+ * same as if its characters had gone through fdl_rx_char(), with frame pointing at buf, which
+ * must stay unchanged until the frame has been served. */
+typedef struct fdl_rx_telegram {
+    const uint8_t *buf;
+    uint16_t len;
+    fdl_rx_error_t error; /* what the collector found (then buf is not looked at), else FDL_RX_OK */
+    hal_time_us_t end_t;
+    uint32_t idle_before_ns; /* UINT32_MAX: unknown (long) */
+} fdl_rx_telegram_t;
+fdl_rx_result_t fdl_rx_telegram(fdl_rx_t *rx, const fdl_rx_telegram_t *tg);
 /* Call at least once per 35 minutes of silence, best at the deadline it returns: after
  * FDL_RX_FORGET_US without a character the next one counts as after an idle line of unknown
  * (long) length, as the first one after init does. */

@@ -219,8 +219,8 @@ static void hook_outputs(void *ctx, const uint8_t *out, size_t len, dp_outputs_r
     if (len > sizeof c->out_image) {
         len = sizeof c->out_image;
     }
-    memset(c->out_image, 0, sizeof c->out_image);
     memcpy(c->out_image, out, len);
+    memset(&c->out_image[len], 0, sizeof c->out_image - len);
     c->outputs_new = true;
     c->outputs_reason = why;
 }
@@ -236,6 +236,7 @@ static dp_sap_answer_t hook_sap_request(void *ctx, uint8_t master, uint8_t dsap,
 static void hook_event(void *ctx, const dp_event_t *ev)
 {
     dfp21b_t *c = ctx;
+    bool leds_change = ev->type != DP_EV_RX_ERROR && ev->type != DP_EV_FCB_REPEAT;
     if (ev->type == DP_EV_STATE || ev->type == DP_EV_PRM_OK) {
         /* MSAC1 follows the DP state; a new Set_Prm (even in Data_Exch) closes it. */
         dpv1_dp_state(&c->dpv1,
@@ -251,6 +252,10 @@ static void hook_event(void *ctx, const dp_event_t *ev)
         }
         break;
     case DP_EV_ADDRESSED:
+        /* Every telegram for this station: it can only turn BUS FAULT from on (no line, or the
+         * master lost) to off or blinking, so the reply path does not recompute the LEDs each
+         * time. */
+        leds_change = c->master_lost || !c->leds_known || c->led[HAL_LED_BUS_FAULT] == HAL_LED_ON;
         c->master_lost = false;
         break;
     case DP_EV_PRM_OK:
@@ -283,7 +288,9 @@ static void hook_event(void *ctx, const dp_event_t *ev)
         ev->type != DP_EV_FCB_REPEAT) {
         c->status_dirty = true;
     }
-    update_leds(c);
+    if (leds_change) {
+        update_leds(c);
+    }
     if (c->cfg.event != NULL) {
         c->cfg.event(c->cfg.event_ctx, ev);
     }
@@ -349,6 +356,13 @@ void dfp21b_rx_char(dfp21b_t *c, uint8_t byte, uint8_t flags, hal_time_us_t t)
 {
     if (c->on_bus) {
         dp_slave_rx_char(&c->dp, byte, flags, t);
+    }
+}
+
+void dfp21b_rx_telegram(dfp21b_t *c, const fdl_rx_telegram_t *tg)
+{
+    if (c->on_bus) {
+        dp_slave_rx_telegram(&c->dp, tg);
     }
 }
 

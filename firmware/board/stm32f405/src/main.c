@@ -1,9 +1,10 @@
 /* The DFP21B card on the STM32F405 reference board.
  *
- * Interrupt context: USART1 (characters with flags and time into the driver's ring; the
- * transmit steps), PendSV (the receive-to-reply path: the ring into dfp21b_rx_char, which
- * decodes, answers and hands the reply to the UART driver at once), SysTick (time base,
- * deadlines, LED patterns), CAN1 RX0 (frames into a ring).
+ * Interrupt context: USART1 (each character into the telegram collector, finished telegrams
+ * into the driver's queue; the transmit steps), PendSV (the receive-to-reply path: each queued
+ * telegram into dfp21b_rx_telegram, which checks, answers and hands the reply to the UART driver
+ * at once), SysTick (deadlines, LED patterns), CAN1 RX0 (frames into a ring). Time is TIM2, a
+ * free-running 1 MHz counter.
  * Main loop: dfp21b_poll (timers, outputs to the inverter, MOVILINK, data set 47, inputs for the
  * next reply) and the SBus link, with PendSV and CAN masked (BASEPRI) while they run, so the
  * core is never entered twice; the USART keeps receiving and sending meanwhile. Then sleep until
@@ -45,6 +46,11 @@
 #ifndef DFP_BOARD_SBUS_BITRATE
 #define DFP_BOARD_SBUS_BITRATE 500000u
 #endif
+/* TIM2's kernel clock: twice PCLK1 when APB1 is divided (RM0090 §7.2), as on this board;
+ * QEMU's model counts at 1 GHz whatever RCC says. */
+#ifndef DFP_BOARD_TIM2_HZ
+#define DFP_BOARD_TIM2_HZ (2u * clocks.pclk1_hz)
+#endif
 #define FW_VERSION_MAJOR 0u
 #define FW_VERSION_MINOR 6u
 #define FW_VERSION_BUGFIX 0u
@@ -83,13 +89,10 @@ void SysTick_Handler(void)
     board_leds_tick(&leds);
 }
 
-static void uart_rx(void *ctx, uint8_t byte, uint8_t flags, hal_time_us_t t)
+static void uart_rx(void *ctx, const fdl_rx_telegram_t *tg)
 {
-    dfp21b_t *c = ctx;
-    dfp21b_rx_char(c, byte, flags, t);
-    if (!c->dp.rx.collecting) {
-        poll_request = true; /* a telegram ended (or was dropped): the main loop's turn */
-    }
+    dfp21b_rx_telegram(ctx, tg);
+    poll_request = true; /* a telegram ended (or was dropped): the main loop's turn */
 }
 
 void USART1_IRQHandler(void)
@@ -107,7 +110,7 @@ static void uart_rx_pending(void *ctx)
 }
 
 /* Tail-chains to the USART interrupt unless the main loop is inside the core (BASEPRI): then
- * right after it, with the characters' own times. */
+ * right after it, with the telegrams' own times. */
 void PendSV_Handler(void)
 {
     (void)rs485_uart_rx_drain(&uart);
@@ -159,12 +162,16 @@ static void board_init(void)
     clocks = board_clock_init(RCC, FLASH_IF);
     RCC->AHB1ENR |= RCC_AHB1ENR_GPIOA | RCC_AHB1ENR_GPIOB | RCC_AHB1ENR_GPIOC;
     RCC->APB2ENR |= RCC_APB2ENR_USART1;
-    RCC->APB1ENR |= RCC_APB1ENR_CAN1;
+    RCC->APB1ENR |= RCC_APB1ENR_CAN1 | RCC_APB1ENR_TIM2;
+    TIM2->PSC = timebase_prescaler(DFP_BOARD_TIM2_HZ);
+    TIM2->ARR = 0xFFFFFFFFu;
+    TIM2->EGR = TIM_EGR_UG; /* the prescaler is buffered: load it now */
+    TIM2->CR1 = TIM_CR1_CEN;
     /* SysTick priority (SHPR3 bits 31..24). */
     SCB_SHPR3 = (SCB_SHPR3 & 0x0000FFFFu) | ((BOARD_PRIO_SYSTICK << BOARD_PRIO_SHIFT) << 24) |
                 ((BOARD_PRIO_CORE << BOARD_PRIO_SHIFT) << 16); /* PendSV: bits 23..16 */
     SCB_SHCSR |= (1u << 16) | (1u << 17) | (1u << 18); /* MemManage, BusFault, UsageFault */
-    timebase_init(&tb, SYSTICK, &SCB_ICSR, clocks.hclk_hz);
+    timebase_init(&tb, SYSTICK, clocks.hclk_hz, &TIM2->CNT);
     board_leds_init(&leds);
     for (uint8_t i = 0; i < 7u; i++) {
         gpio_config(GPIOC, i, GPIO_MODE_INPUT, GPIO_PULL_UP, 0);
@@ -213,10 +220,12 @@ static void report_and_exit(void)
     p = put_u32(p, data_exch_entries);
     p = put_s(p, "x, telegrams for me ");
     p = put_u32(p, card.dp.telegrams_for_me);
-    p = put_s(p, ", rx chars ");
-    p = put_u32(p, uart.rx_chars);
+    p = put_s(p, ", rx telegrams ");
+    p = put_u32(p, uart.rx_telegrams);
     p = put_s(p, ", rx errors ");
     p = put_u32(p, rx_err);
+    p = put_s(p, ", no buffer free ");
+    p = put_u32(p, uart.rx_buffer_overflows);
     p = put_s(p, ", frames sent ");
     p = put_u32(p, uart.tx_frames);
     p = put_s(p, " (late, not sent: ");
@@ -295,7 +304,8 @@ static void start_card(ml_link_t inverter)
     rs485_uart_cfg_t ucfg = {.regs = USART1, .de_port = GPIOA, .de_pin = 8u,
                              .pclk_hz = clocks.pclk2_hz,
                              .baud = DFP_BOARD_FIXED_BAUD != 0u ? DFP_BOARD_FIXED_BAUD : 6000000u,
-                             .now = now_us, .rx = uart_rx, .rx_ctx = &card,
+                             .strict_timing = DFP_BOARD_STRICT_TIMING != 0,
+                             .clock_us = &TIM2->CNT, .rx = uart_rx, .rx_ctx = &card,
                              .rx_pending = uart_rx_pending};
     (void)rs485_uart_init(&uart, &ucfg);
     dfp21b_cfg_t cfg = {
@@ -320,14 +330,14 @@ static void start_card(ml_link_t inverter)
 /* Test images end themselves once the master has gone quiet after Data_Exch. Returns the next
  * deadline, no later than the next look at the silence (100 ms). */
 typedef struct silence_watch {
-    uint32_t last_chars;
+    uint32_t last_telegrams;
     hal_time_us_t last_activity;
 } silence_watch_t;
 
 static hal_time_us_t exit_on_silence(silence_watch_t *w, hal_time_us_t now, hal_time_us_t next)
 {
-    if (uart.rx_chars != w->last_chars) {
-        w->last_chars = uart.rx_chars;
+    if (uart.rx_telegrams != w->last_telegrams) {
+        w->last_telegrams = uart.rx_telegrams;
         w->last_activity = now;
     } else if (data_exch_entries > 0u &&
                hal_time_diff(now, w->last_activity) >
@@ -348,7 +358,7 @@ int main(void)
     leds.fault_pattern = had_fault; /* BUS FAULT at 4 Hz until the card is in Data_Exch (below) */
     start_card(start_inverter_link());
 #ifdef DFP_BOARD_EXIT_SILENCE_MS
-    silence_watch_t silence = {.last_chars = 0, .last_activity = now_us()};
+    silence_watch_t silence = {.last_telegrams = 0, .last_activity = now_us()};
 #endif
 
     for (;;) {

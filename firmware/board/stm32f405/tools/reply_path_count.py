@@ -1,26 +1,28 @@
 #!/usr/bin/env python3
-"""Instructions from the last request character to the first reply character, per telegram type,
-counted on the target under QEMU (netduinoplus2, Cortex-M4 TCG).
+"""Instruction counts of the card's real-time paths on the target, under QEMU (netduinoplus2,
+Cortex-M4 TCG), against the budgets of docs/performance.md; exits 1 when one is exceeded.
 
 Method: QEMU runs the image with `-singlestep -d exec,nochain -D TRACE`: one trace line per
-executed instruction, with its PC. For every reply, count the instructions from the entry of the
-dfp21b_rx_char call that took the request's last character (in the PendSV drain) to the entry
-of rs485_uart_transmit (FCS/ED, FDL, DP service, DP-V1 SAP, encoding, FCB cache), leaving out
-SysTick (its own interrupt, at most one per reply), and add the driver's share for a lone
-character measured in the same trace: the largest USART1 interrupt that stored exactly one
-character (clock read included) and the largest PendSV drain that handed on exactly one. Not
-counted: the exception entries themselves (12 cycles, 6 for the tail-chain into PendSV) and a
-wait for the main loop when it held PendSV off (BASEPRI); that wait is reported on its own: the
-thread-mode instructions of each main-loop pass from its BASEPRI raise to the lower around
-dfp21b_poll (QEMU sets bit 0 of the trace's cs_base field in handler mode), interrupts left
-out. QEMU often hands a telegram over in one burst; the whole drain after such a telegram's last
-interrupt is reported separately. Then add each reply's transmit tail, without the min TSDR
-spin (a fresh not_before has already passed at 12 Mbit/s): transmit entry to its
-first clock read, one clock read, and from the spin's last clock read to the first DR write in
-tx_fill. Each reply is labelled by the core functions that ran between the last character and
-transmit (classify_funcs); the captures only give the count and the largest reply.
+executed instruction, with its PC and (bit 0 of cs_base) whether the core is in handler mode.
+SysTick's instructions are left out everywhere (its own interrupt, at most one per reply).
 
-usage: reply_path_count.py ELF TRACE CAPTURE.pcap [CAPTURE.pcap ...]
+- Per received character: each USART1 interrupt that took a character, from its entry to its
+  return (the functions it can call, RX_ISR_FUNCS). An interrupt that ran only the collector's
+  fast path is an interior character (budget PER_CHAR_BUDGET); one that ran the collector's slow
+  path or step (a start delimiter, LE, SD2) is reported beside it; one that handed a telegram
+  over belongs to the reply path.
+- Reply path: from the entry of the USART1 interrupt that handed the request over to the first
+  write of the reply into DR (tx_fill), handler-mode instructions only (thread-mode ones are the
+  main loop holding PendSV off, reported on their own), with the min TSDR spin
+  (rs485_wait_until) counted as one pass, as at 12 Mbit/s where a fresh deadline has passed.
+  Not counted: exception entries (12 cycles, 6 for the tail-chain into PendSV). Each reply is
+  labelled by the core functions that ran for it (classify_funcs).
+- Main-loop pass: thread-mode instructions from the main loop's BASEPRI raise to its lower
+  around dfp21b_poll, interrupts left out.
+- RAM (.data + .bss + .noinit + the .stack reservation) and flash (.isr_vector + .text +
+  .rodata + .data's load image) of the card image, when --card ELF is given.
+
+usage: reply_path_count.py [--card CARD.elf] ELF TRACE CAPTURE.pcap [CAPTURE.pcap ...]
 """
 import re
 import struct
@@ -162,188 +164,187 @@ def pairs(paths):
     return out
 
 
+PER_CHAR_BUDGET = 40
+FAST_REPLY_BUDGET = 600  # FDL status, Slave_Diag, Data_Exchange, FCB repeat
+FAST_REPLY_KINDS = ("FDL status (SD1)", "Slave_Diag", "Data_Exchange", "repeat from the FCB cache")
+REPLY_BUDGET = 1330      # every reply: 95 bit times at 12 Mbit/s on a 168 MHz Cortex-M4 (VPC3+)
+LOOP_BUDGET = 500        # a main-loop section that can hold a reply off
+RAM_BUDGET = 6 * 1024
+FLASH_BUDGET = 24 * 1024
+RX_ISR_FUNCS = ("USART1_IRQHandler", "fdl_collect_slow", "fdl_collect_step", "rs485_uart_isr_other",
+                "rs485_uart_rx_hand_over", "rx_take_telegram", "rx_queue_put", "rx_queue_full",
+                "rx_queue_error", "rx_buf_index", "rx_char_with_error", "uart_rx_pending",
+                "tx_fill", "tx_finish", "de_set")
+SLOW_FUNCS = ("fdl_collect_slow", "fdl_collect_step", "rs485_uart_isr_other")
+
+
+def ranges(s, names):
+    return [(s[n][0], s[n][0] + s[n][1]) for n in names if n in s]
+
+
+def inside(pc, rs):
+    return any(a <= pc < b for a, b in rs)
+
+
+def image_sizes(elf):
+    out = subprocess.run(["arm-none-eabi-size", "-A", elf], capture_output=True, text=True).stdout
+    sec = {}
+    for l in out.splitlines():
+        p = l.split()
+        if len(p) == 3 and p[1].isdigit():
+            sec[p[0]] = int(p[1])
+    ram = sum(sec.get(n, 0) for n in (".data", ".bss", ".noinit", ".stack"))
+    flash = sum(sec.get(n, 0) for n in (".isr_vector", ".text", ".rodata", ".ARM.exidx", ".data"))
+    return ram, flash, sec
+
+
+class Trace:
+    """Walks the trace once and collects every figure."""
+
+    def __init__(self, elf):
+        s = symbols(elf)
+        for need in ("fdl_station_reply_plain", "fdl_station_reply_sap", "dp_slave_build_diag",
+                     "hook_prm_check", "hook_cfg_check", "hook_outputs", "dpv1_sap_request",
+                     "conn_close", "fcb_touch", "rs485_uart_rx_hand_over", "rs485_wait_until",
+                     "rs485_uart_transmit", "tx_fill", "USART1_IRQHandler"):
+            if not any(n == need or n.startswith(need + ".") for n in s):
+                sys.exit("reply_path_count: no function %s in the image; the tool needs updating"
+                         % need)
+        self.isr = s["USART1_IRQHandler"][0]
+        self.isr_ranges = ranges(s, RX_ISR_FUNCS)
+        self.slow_ranges = ranges(s, SLOW_FUNCS)
+        self.hand_over = s["rs485_uart_rx_hand_over"][0]
+        self.wait = s["rs485_wait_until"]
+        self.tx = s["rs485_uart_transmit"][0]
+        self.dr_store = first_dr_store(elf, *s["tx_fill"])
+        self.excl = ranges(s, ("SysTick_Handler", "timebase_tick", "board_leds_tick"))
+        self.masked = basepri_writes(elf, *s["main"])
+        if self.masked is None:
+            sys.exit("reply_path_count: no BASEPRI raise/lower around dfp21b_poll in main")
+        self.interior, self.slow, self.results, self.passes = [], [], [], []
+        self.isr_n = None      # instructions of the USART1 interrupt running
+        self.isr_kind = None   # "interior", "slow" or "hand-over"
+        self.reply = None      # the reply path being counted
+        self.masked_at = None
+
+    def end_isr(self):
+        if self.isr_kind == "interior":
+            self.interior.append(self.isr_n)
+        elif self.isr_kind == "slow":
+            self.slow.append(self.isr_n)
+        self.isr_n = None
+
+    def step(self, pc, handler, func):
+        if not handler and pc == self.masked[0]:
+            self.masked_at = 0
+        elif self.masked_at is not None and not handler:
+            if pc == self.masked[1]:
+                self.passes.append(self.masked_at)
+                self.masked_at = None
+            else:
+                self.masked_at += 1
+        if inside(pc, self.excl):
+            return
+        if pc == self.isr:
+            if self.isr_n is not None:
+                self.end_isr()
+            self.isr_n, self.isr_kind = 0, "interior"
+        elif self.isr_n is not None and not inside(pc, self.isr_ranges):
+            self.end_isr()
+        if self.isr_n is not None:
+            self.isr_n += 1
+            if pc == self.hand_over:
+                self.isr_kind = "hand-over"
+                self.reply = {"n": self.isr_n, "funcs": set(), "wait": 0, "wait_last": 0,
+                              "sent": False}
+            elif self.isr_kind == "interior" and inside(pc, self.slow_ranges):
+                self.isr_kind = "slow"
+        r = self.reply
+        if r is None or not handler or pc == self.hand_over:
+            return
+        r["n"] += 1
+        r["funcs"].add(func)
+        if self.wait[0] <= pc < self.wait[0] + self.wait[1]:
+            r["wait"] += 1
+            r["wait_last"] = 1 if pc == self.wait[0] else r["wait_last"] + 1
+        if pc == self.tx:
+            r["sent"] = True
+        if r["sent"] and pc == self.dr_store:
+            n = r["n"] - r["wait"] + r["wait_last"]
+            self.results.append((classify_funcs(r["funcs"]), n))
+            self.reply = None
+
+
+def report(t, caps, card):
+    failures = []
+
+    def check(what, value, budget):
+        ok = value <= budget
+        if not ok:
+            failures.append("%s: %d > %d" % (what, value, budget))
+        return "%d (budget %d%s)" % (value, budget, "" if ok else ", EXCEEDED")
+
+    ps = pairs(caps)
+    largest = max((len(rsp), kind) for kind, _, rsp in ps) if ps else (0, "")
+    print("Real-time paths on the target (QEMU netduinoplus2, TCG single-step); %d replies in the "
+          "trace, %d in the captures, the largest %d octets (%s)"
+          % (len(t.results), len(ps), largest[0], largest[1]))
+    if not t.interior:
+        sys.exit("reply_path_count: no interior character in the trace")
+    print("per received character (USART1 interrupt, collector fast path): worst %s, median %d, "
+          "%d characters" % (check("per character", max(t.interior), PER_CHAR_BUDGET),
+                             sorted(t.interior)[len(t.interior) // 2], len(t.interior)))
+    if t.slow:
+        print("once per telegram (start delimiter, LE/LEr, SD2; the collector's slow path): worst "
+              "%d, median %d, %d interrupts (one character time at 12 Mbit/s is 154)"
+              % (max(t.slow), sorted(t.slow)[len(t.slow) // 2], len(t.slow)))
+    core = defaultdict(list)
+    for kind, n in t.results:
+        core[kind].append(n)
+    hdr = "| telegram → reply | n | instr. worst | instr. min | µs at %d MHz | bit times at " % MHZ
+    hdr += " / ".join("%g M" % (b / 1e6) if b >= 1e6 else "%g k" % (b / 1e3) for b in BAUDS[:5])
+    print(hdr + " | budget |")
+    print("|---|---:|---:|---:|---:|---:|---|")
+    for kind in sorted(core, key=lambda k: -max(core[k])):
+        w = max(core[kind])
+        budget = FAST_REPLY_BUDGET if kind.startswith(FAST_REPLY_KINDS) else REPLY_BUDGET
+        us = w / MHZ
+        bits = " / ".join("%.1f" % (us * b / 1e6) for b in BAUDS[:5])
+        print("| %s | %d | %d | %d | %.2f | %s | %s |" % (
+            kind, len(core[kind]), w, min(core[kind]), us, bits,
+            check("reply " + kind, w, budget).split(" (")[1].rstrip(")")))
+    if not t.passes:
+        sys.exit("reply_path_count: no complete main-loop pass in the trace")
+    print("main-loop pass holding PendSV off (BASEPRI around dfp21b_poll and the SBus link): "
+          "worst %s, median %d, %d passes"
+          % (check("main-loop pass", max(t.passes), LOOP_BUDGET),
+             sorted(t.passes)[len(t.passes) // 2], len(t.passes)))
+    if card:
+        ram, flash, sec = image_sizes(card)
+        print("card image: RAM %s (.data %d + .bss %d + .noinit %d + .stack %d), flash %s"
+              % (check("RAM", ram, RAM_BUDGET), sec.get(".data", 0), sec.get(".bss", 0),
+                 sec.get(".noinit", 0), sec.get(".stack", 0), check("flash", flash, FLASH_BUDGET)))
+    for f in failures:
+        print("reply_path_count: over budget: " + f, file=sys.stderr)
+    return 1 if failures else 0
+
+
 def main():
-    elf, trace, caps = sys.argv[1], sys.argv[2], sys.argv[3:]
-    s = symbols(elf)
-    for need in ("fdl_station_reply_plain", "fdl_station_reply_sap", "dp_slave_build_diag", "hook_prm_check",
-                 "hook_cfg_check", "hook_outputs", "dpv1_sap_request", "conn_close", "fcb_touch"):
-        if not any(n == need or n.startswith(need + ".") for n in s):
-            sys.exit("reply_path_count: no function %s in the image; the labels need updating" % need)
-    isr = s["USART1_IRQHandler"][0]
-    pendsv = s["PendSV_Handler"][0] if "PendSV_Handler" in s else None
-    rx_char = s["dfp21b_rx_char"][0]
-    # The driver's share for a lone character, as on a real line (QEMU often hands over several
-    # at once): the largest USART1 interrupt that stored exactly one (its clock read included),
-    # and the largest PendSV drain that handed on exactly one.
-    drain_funcs = [(s[n][0], s[n][0] + s[n][1]) for n in
-                   ("PendSV_Handler", "rs485_uart_rx_drain", "uart_rx") if n in s]
-    isr_one = []
-    drain_one = []
-    cur_isr = None    # [instructions, characters] of the interrupt running
-    cur_drain = None  # same for the last PendSV
-    rx_calls = 0
-    last_char_at = 0
-    gi = 0  # instructions so far, SysTick left out
-    isr_funcs = [(s[n][0], s[n][0] + s[n][1]) for n in
-                 ("USART1_IRQHandler", "rs485_uart_isr", "rx_store", "uart_rx_pending", "now_us",
-                  "timebase_now_us") if n in s]
-    tx = s["rs485_uart_transmit"][0]
-    fill_a, fill_n = s["tx_fill"]
-    now_a = s["now_us"][0] if "now_us" in s else s["timebase_now_us"][0]
-    dr_store = first_dr_store(elf, fill_a, fill_n)
-    excl = []
-    for n in ("SysTick_Handler", "timebase_tick", "board_leds_tick"):
-        if n in s:
-            excl.append((s[n][0], s[n][0] + s[n][1]))
-    # The first field is QEMU's cs_base; for M-profile its bit 0 is set in handler mode.
+    args = sys.argv[1:]
+    card = None
+    if args[:1] == ["--card"]:
+        card, args = args[1], args[2:]
+    if len(args) < 3:
+        sys.exit(__doc__.strip().splitlines()[-1])
+    elf, trace, caps = args[0], args[1], args[2:]
+    t = Trace(elf)
     line_re = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[([0-9a-f]+)/([0-9a-f]+)/[0-9a-f]+/[0-9a-f]+\] ?(\S*)")
-    funcs = set()  # functions run since the last dfp21b_rx_char call
-    masked = basepri_writes(elf, *s["main"])
-    if masked is None:
-        sys.exit("reply_path_count: no BASEPRI raise/lower around dfp21b_poll in main")
-    masked_at = None  # thread-mode instructions of the main-loop pass holding PendSV off
-    masked_irq = 0    # interrupt instructions that ran inside it (QEMU's pace, not the line's)
-    passes = []
-    results = []
-    count = None
-    tail = None
-    tails = []
-    state = None
-    in_isr = False
-    chained = False
-    chars = 0
-    refused = 0
-    pending = None
     with open(trace, errors="replace") as f:
         for l in f:
             m = line_re.match(l)
-            if not m:
-                continue
-            pc = int(m.group(2), 16)
-            handler = int(m.group(1), 16) & 1
-            if pc == isr and not handler:
-                sys.exit("reply_path_count: USART1_IRQHandler runs with cs_base bit 0 clear; this "
-                         "QEMU does not mark handler mode there (QEMU >= 6.1 does)")
-            if not handler and pc == masked[0]:
-                masked_at, masked_irq = 0, 0
-            elif masked_at is not None:
-                if not handler and pc == masked[1]:
-                    passes.append((masked_at, masked_irq))
-                    masked_at = None
-                elif handler:
-                    masked_irq += 1
-                else:
-                    masked_at += 1
-            if any(a <= pc < b for a, b in excl):
-                continue
-            if pc == isr:
-                count = 0
-                chars = 0
-                in_isr = True
-                chained = pendsv is None
-                cur_isr = [0, 0]
-            elif in_isr and not any(a <= pc < b for a, b in isr_funcs):
-                in_isr = False
-                chained = pc == pendsv
-                if cur_isr[1] == 1:
-                    isr_one.append(cur_isr[0])
-            if in_isr:
-                cur_isr[0] += 1
-                if pc == now_a:
-                    cur_isr[1] += 1
-            if pendsv is not None and pc == pendsv:
-                if cur_drain is not None and cur_drain[1] == 1:
-                    drain_one.append(cur_drain[0])
-                cur_drain = [0, 0]
-            if cur_drain is not None and any(a <= pc < b for a, b in drain_funcs):
-                cur_drain[0] += 1
-            gi += 1
-            if pc == rx_char:
-                funcs = set()
-            funcs.add(m.group(3))
-            if pc == rx_char:
-                rx_calls += 1
-                last_char_at = gi
-                if cur_drain is not None:
-                    cur_drain[1] += 1
-            if count is not None:
-                count += 1
-                if pc == rx_char:
-                    chars += 1
-            if tail is not None and pc in (isr, rx_char, tx):
-                refused += 1  # transmit returned without sending (late: characters waiting)
-                tail = None
-            if pc == tx:
-                # "whole" (the drain of a burst) only when a USART interrupt came since the last
-                # transmit; the reply path itself counts from the last character in any case
-                burst = count is not None and chained
-                pending = (count - 1 if burst else None, chars if count is not None else 0,
-                           gi - last_char_at, classify_funcs(funcs))
-                count = None
-                tail = {"n": 0, "nows": []}
-                continue
-            if tail is not None:
-                tail["n"] += 1
-                if pc == now_a:
-                    tail["nows"].append(tail["n"])
-                if dr_store is not None and pc == dr_store:
-                    nows = tail["nows"]
-                    if len(nows) >= 2:
-                        per_call = nows[1] - nows[0]
-                        t = nows[0] + per_call + (tail["n"] - nows[-1])
-                    else:
-                        t = tail["n"]
-                    tails.append(t)
-                    results.append(pending + (t,))
-                    tail = None
-    tail_max = max(tails) if tails else 0
-    ps = pairs(caps)
-    largest = max((len(rsp), kind) for kind, _, rsp in ps) if ps else (0, "")
-    per_char = [max(isr_one) if isr_one else 0, max(drain_one) if drain_one else 0]
-    driver_cost = per_char[0] + per_char[1]
-    core = defaultdict(list)
-    backlog = []
-    for whole, chars, last, kind, own_tail in results:
-        core[kind].append(last + own_tail)
-        if whole is not None and chars > 1:
-            backlog.append((whole + own_tail, chars, kind))
-    print("Reply path on the target (QEMU netduinoplus2, TCG single-step), per telegram type "
-          "(told by the core functions that ran for it): the request's last character through "
-          "the driver (USART1 interrupt into the ring, PendSV "
-          "drain) and the core to the first reply character")
-    print("driver for a lone character: USART1 interrupt storing it %d (of %d such), PendSV "
-          "drain handing it on %d (of %d such) instructions; transmit tail (clock read, DE, RE "
-          "off, first DR write; it grows with the frame, which transmit copies first): %d to %d, "
-          "each reply counted with its own; %d characters in all; %d replies in the trace, %d in "
-          "the captures, the largest %d octets (%s)"
-          % (per_char[0], len(isr_one), per_char[1], len(drain_one), min(tails) if tails else 0,
-             tail_max, rx_calls, len(results), len(ps), largest[0], largest[1]))
-    hdr = "| telegram | n | instr. worst | instr. min | µs at %d MHz (1 instr./cycle) |" % MHZ
-    hdr += " bit times at " + " / ".join("%g" % (b / 1e6) if b >= 1e6 else "%gk" % (b / 1e3)
-                                          for b in BAUDS[:5]) + " |"
-    print(hdr)
-    print("|---|---:|---:|---:|---:|---:|")
-    for kind in sorted(core, key=lambda k: -max(core[k])):
-        w = max(core[kind]) + driver_cost
-        us = w / MHZ
-        bits = " / ".join("%.1f" % (us * b / 1e6) for b in BAUDS[:5])
-        print("| %s | %d | %d | %d | %.2f | %s |" % (kind, len(core[kind]), w,
-                                                   min(core[kind]) + driver_cost, us, bits))
-    if refused:
-        print("replies not sent because characters after the request were waiting: %d" % refused)
-    for n, c, kind in sorted(backlog, reverse=True)[:2]:
-        print("QEMU hands a telegram over in one burst: %s with %d characters drained at once took "
-              "%d instructions from its last interrupt (%.2f µs)" % (kind, c, n, n / MHZ))
-    if not passes:
-        sys.exit("reply_path_count: no complete main-loop pass in the trace")
-    worst, irq = max(passes)
-    print("main-loop pass holding PendSV off (BASEPRI: dfp21b_poll, the SBus link, here the "
-          "SBus stand-in inverter; on a card with a CAN bus the CAN drain instead): "
-          "worst %d instructions of its own (%.2f µs), median %d, %d passes; interrupts that "
-          "ran inside the worst: %d instructions at QEMU's single-step pace"
-          % (worst, worst / MHZ, sorted(p[0] for p in passes)[len(passes) // 2], len(passes),
-             irq))
-    return 0
+            if m:
+                t.step(int(m.group(2), 16), int(m.group(1), 16) & 1, m.group(3))
+    return report(t, caps, card)
 
 
 if __name__ == "__main__":

@@ -163,6 +163,14 @@ typedef struct can_regs {
 #define CAN_RIR_RTR (1u << 1)
 #define CAN_FMR_FINIT (1u << 0)
 
+/* ---- TIM2, a 32-bit general-purpose timer (RM0090 §18.4) ------------------------------------ */
+typedef struct tim_regs {
+    REG CR1, CR2, SMCR, DIER, SR, EGR, CCMR1, CCMR2, CCER, CNT, PSC, ARR;
+} tim_regs_t;
+#define TIM_CR1_CEN (1u << 0)
+#define TIM_EGR_UG (1u << 0)
+#define RCC_APB1ENR_TIM2 (1u << 0)
+
 /* ---- Cortex-M4 system control (PM0214 §4) -------------------------------------------------- */
 typedef struct systick_regs {
     REG CTRL, LOAD, VAL, CALIB;
@@ -183,6 +191,7 @@ typedef struct systick_regs {
 #define RCC ((rcc_regs_t *)0x40023800u)
 #define FLASH_IF ((flash_regs_t *)0x40023C00u)
 #define CAN1 ((can_regs_t *)0x40006400u)
+#define TIM2 ((tim_regs_t *)0x40000000u)
 #define SYSTICK ((systick_regs_t *)0xE000E010u)
 #define SCB_ICSR (*(volatile uint32_t *)0xE000ED04u)
 #define SCB_VTOR (*(volatile uint32_t *)0xE000ED08u)
