@@ -6,9 +6,8 @@
 #include "dp_slave/fdl_wire.h"
 #include "sim_hal/host_clock.h"
 
-/* The ring keeps a few more than REPLAY_CONTEXT telegrams: when a request's window closes, the
- * request and the card's answer are the newest entries, and the context lies before them. */
-#define RING_SIZE (sizeof(((replay_t *)0)->ring) / sizeof(((replay_t *)0)->ring[0]))
+#include "judge.h"
+
 
 static uint64_t bits_ns(uint32_t baud, uint32_t bits)
 {
@@ -235,66 +234,6 @@ static bool run_to(replay_t *r, uint64_t t)
         give_service_turn(r);
     }
     return true;
-}
-
-static void close_window(replay_t *r)
-{
-    if (!r->pending) {
-        return;
-    }
-    r->pending = false;
-    replay_counts_t *c = &r->svc[r->pend_service];
-    c->requests++;
-    if (!r->pend_expected) c->capture_silent++;
-    if (!r->pend_actual) c->card_silent++;
-    bool same = r->pend_expected == r->pend_actual &&
-                (!r->pend_expected ||
-                 (r->pend_expected_rec.len == r->pend_actual_rec.len &&
-                  memcmp(r->pend_expected_rec.data, r->pend_actual_rec.data,
-                         r->pend_actual_rec.len) == 0));
-    if (same) {
-        c->matched++;
-        return;
-    }
-    c->differ++;
-    r->mismatches++;
-    if (r->first.valid) {
-        return;
-    }
-    replay_mismatch_t *m = &r->first;
-    m->valid = true;
-    m->service = r->pend_service;
-    m->request = r->pend_request;
-    snprintf(m->request_problem, sizeof m->request_problem, "%s", r->pend_request_problem);
-    m->expected_present = r->pend_expected;
-    m->expected = r->pend_expected_rec;
-    snprintf(m->expected_problem, sizeof m->expected_problem, "%s", r->pend_expected_problem);
-    m->actual_present = r->pend_actual;
-    m->actual = r->pend_actual_rec;
-    m->fcb_repeat = r->pend_fcb_repeat;
-    m->card_state = r->pend_card_state;
-    /* The rate as the request ended: still searching means the card did not take it. */
-    m->baud_state = dp_slave_baud_state(&r->cs->card.dp);
-    m->card_baud = dp_slave_baud(&r->cs->card.dp);
-    m->set_prm_seen = r->set_prm_seen;
-    const dfp21b_t *card = &r->cs->card;
-    m->layout.known = card->pd.valid;
-    m->layout.param_channel = card->pd.param_channel;
-    /* The newest ring entries are the request and (if any) the card's answer. */
-    unsigned skip = 1u + (r->pend_actual ? 1u : 0u);
-    unsigned n = 0;
-    if (r->ring_len > skip) {
-        n = r->ring_len - skip;
-    }
-    if (n > REPLAY_CONTEXT) {
-        n = REPLAY_CONTEXT;
-    }
-    for (unsigned i = 0; i < n; i++) {
-        unsigned back = skip + n - i; /* 1 = newest */
-        unsigned idx = (unsigned)((r->ring_next + RING_SIZE - back) % RING_SIZE);
-        m->before[i] = r->ring[idx];
-    }
-    m->n_before = n;
 }
 
 static void note_damage(replay_t *r, const cap_record_t *rec)
@@ -602,7 +541,7 @@ static void request_to_card(replay_t *r, const cap_record_t *rec, const replay_f
 static void inject(replay_t *r, const cap_record_t *rec, const replay_frame_t *m, uint64_t t,
                    uint32_t baud)
 {
-    close_window(r);
+    replay_judge(r);
     if (baud != r->inj_baud) {
         r->inj_baud = baud;
         (void)r->inj_uart.ops->set_baud(r->inj_uart.ctx, baud);
@@ -693,5 +632,5 @@ void replay_finish(replay_t *r)
         r->tail_record = r->pend_request.record;
         r->tail_position = r->pend_request.position;
     }
-    close_window(r);
+    replay_judge(r);
 }

@@ -1,20 +1,12 @@
 /* The replay report (format in docs/replay.md). */
 #include <string.h>
 
+#include "replay/infer.h"
 #include "replay/param_text.h"
 #include "replay/replay.h"
+#include "report_out.h"
 
-static const char *baud_text(uint32_t baud, char *buf, size_t max)
-{
-    if (baud >= 1000000u) {
-        snprintf(buf, max, "%g Mbit/s", (double)baud / 1e6);
-    } else {
-        snprintf(buf, max, "%g kbit/s", (double)baud / 1e3);
-    }
-    return buf;
-}
-
-static void where(const replay_report_info_t *info, uint64_t record, uint64_t position,
+void replay_where(const replay_report_info_t *info, uint64_t record, uint64_t position,
                   char *out, size_t max)
 {
     snprintf(out, max, "record %llu (%s %llu)", (unsigned long long)record,
@@ -33,7 +25,7 @@ static void print_kept(FILE *out, const replay_report_info_t *info, const replay
     if (k->source == REPLAY_FROM_CARD) {
         snprintf(at, sizeof at, "card");
     } else {
-        where(info, k->record, k->position, at, sizeof at);
+        replay_where(info, k->record, k->position, at, sizeof at);
     }
     fprintf(out, "%s%12.6f s  %-26s %s\n%s%16s %s\n", indent, (double)k->t_ns / 1e9, at, hex,
             indent, "", text);
@@ -124,7 +116,7 @@ static void explain(FILE *out, const replay_t *r, const replay_mismatch_t *m)
         WHY("the card had not found the bus rate when the request ended (listening at %s): it "
             "heard the request garbled. The card powers up at the first record and searches "
             "from 12 Mbit/s down; if the real card was on the bus earlier, replay with "
-            "--fixed-baud", baud_text(m->card_baud, b, sizeof b));
+            "--fixed-baud", replay_baud_text(m->card_baud, b, sizeof b));
     } else if (m->card_state != DP_STATE_DATA_EXCH && !m->set_prm_seen && !state_free) {
         WHY("the card is in %s and the capture has no Set_Prm to it before this request: the "
             "capture starts after the real card was parameterised (by this or an earlier "
@@ -148,7 +140,9 @@ static void explain(FILE *out, const replay_t *r, const replay_mismatch_t *m)
     } else if (m->expected_present && m->actual_present) {
         size_t n = m->expected.len < m->actual.len ? m->expected.len : m->actual.len;
         size_t i = 0;
-        while (i < n && m->expected.data[i] == m->actual.data[i]) i++;
+        while (i < n && (m->expected.data[i] == m->actual.data[i] || replay_bit(m->mask, i))) {
+            i++;
+        }
         if (i < n) {
             WHY("first difference at octet %zu: expected %02X, the card sent %02X", i,
                 m->expected.data[i], m->actual.data[i]);
@@ -174,26 +168,60 @@ static void print_bus(FILE *out, const replay_t *r, const replay_report_info_t *
     char b3[32];
     if (r->opt.baud_override && r->min_baud_seen != 0u && r->rate_overridden == 0u) {
         fprintf(out, "  bus       %s (%s, the rate the capture records too)\n",
-                baud_text(r->opt.baud, b, sizeof b), or_given(info->baud_source));
+                replay_baud_text(r->opt.baud, b, sizeof b), or_given(info->baud_source));
     } else if (r->opt.baud_override && r->min_baud_seen != 0u) {
         fprintf(out, "  bus       %s (%s; it overrides the capture's own rate, %s%s%s, for "
                      "every record)\n",
-                baud_text(r->opt.baud, b, sizeof b), or_given(info->baud_source),
-                baud_text(r->min_baud_seen, b2, sizeof b2),
+                replay_baud_text(r->opt.baud, b, sizeof b), or_given(info->baud_source),
+                replay_baud_text(r->min_baud_seen, b2, sizeof b2),
                 r->max_baud_seen != r->min_baud_seen ? " .. " : "",
-                r->max_baud_seen != r->min_baud_seen ? baud_text(r->max_baud_seen, b3, sizeof b3)
+                r->max_baud_seen != r->min_baud_seen ? replay_baud_text(r->max_baud_seen, b3, sizeof b3)
                                                      : "");
     } else if (r->min_baud_seen != 0u && r->min_baud_seen == r->max_baud_seen) {
         fprintf(out, "  bus       %s (recorded in the capture)\n",
-                baud_text(r->min_baud_seen, b, sizeof b));
+                replay_baud_text(r->min_baud_seen, b, sizeof b));
     } else if (r->min_baud_seen != 0u) {
         fprintf(out, "  bus       %s .. %s (recorded per telegram)\n",
-                baud_text(r->min_baud_seen, b, sizeof b), baud_text(r->max_baud_seen, b2,
+                replay_baud_text(r->min_baud_seen, b, sizeof b), replay_baud_text(r->max_baud_seen, b2,
                                                                      sizeof b2));
     } else {
-        fprintf(out, "  bus       %s (%s)\n", baud_text(r->opt.baud, b, sizeof b),
+        fprintf(out, "  bus       %s (%s)\n", replay_baud_text(r->opt.baud, b, sizeof b),
                 or_given(info->baud_source));
     }
+}
+
+/* The card line: address, how it starts, the inverter; each with why when it was inferred. */
+static void print_card(FILE *out, const replay_t *r, const replay_report_info_t *info)
+{
+    const replay_inferred_t *inf = info->inferred;
+    fprintf(out, "  card      DFP21B at address %u (%s), ", r->opt.address,
+            or_given(info->address_source));
+    if (!r->opt.fixed_card_baud) {
+        fputs("automatic baud search from the first record", out);
+    } else if (inf != NULL && inf->fixed_source[0] != '\0') {
+        fprintf(out, "fixed at the bus rate (%s)", inf->fixed_source);
+    } else {
+        fputs("fixed at the bus rate", out);
+    }
+    if (r->opt.inverter != CARD_INVERTER_SIM) {
+        fputs("; inverter: none (PI echoes PO)\n", out);
+    } else if (r->opt.inverter_delay_us != REPLAY_INVERTER_DELAY_US_DEFAULT && inf != NULL) {
+        fprintf(out, "; inverter: emulated MOVIDRIVE, %u us per parameter service (%s)\n",
+                r->opt.inverter_delay_us, inf->delay_source);
+    } else {
+        fputs("; inverter: emulated MOVIDRIVE\n", out);
+    }
+}
+
+/* How the capture's times were taken, when it is not a line's or the command line said. */
+static void print_timing_mode(FILE *out, const replay_report_info_t *info)
+{
+    const replay_inferred_t *inf = info->inferred;
+    if (inf == NULL || (inf->timing == REPLAY_TIMING_LINE && !inf->timing_given)) {
+        return;
+    }
+    fprintf(out, "  timing    %s (%s%s)\n", inf->timing == REPLAY_TIMING_RELAXED ? "relaxed" : "line",
+            inf->timing_inferred ? "inferred: " : "", inf->timing_source);
 }
 
 /* What was replayed against what: the file, the card, the bus, the records, the card's end. */
@@ -204,12 +232,9 @@ static void print_header(FILE *out, const replay_t *r, const replay_report_info_
             info->file != NULL ? info->file : "(records)",
             info->format != NULL ? info->format : "?", (unsigned long long)r->records,
             (double)r->last_record_ns / 1e9);
-    fprintf(out, "  card      DFP21B at address %u (%s), %s; inverter: %s\n", r->opt.address,
-            or_given(info->address_source),
-            r->opt.fixed_card_baud ? "fixed at the bus rate"
-                                   : "automatic baud search from the first record",
-            r->opt.inverter == CARD_INVERTER_SIM ? "emulated MOVIDRIVE" : "none (PI echoes PO)");
+    print_card(out, r, info);
     print_bus(out, r, info);
+    print_timing_mode(out, info);
     if (info->source_note != NULL && info->source_note[0] != '\0') {
         fprintf(out, "  source    %s\n", info->source_note);
     }
@@ -227,7 +252,7 @@ static void print_header(FILE *out, const replay_t *r, const replay_report_info_
     fprintf(out, "  card sent %llu telegrams; state at the end: %s, %s %s\n",
             (unsigned long long)r->card_tx, dp_state_name(dp_slave_state(&r->cs->card.dp)),
             dp_baud_state_name(dp_slave_baud_state(&r->cs->card.dp)),
-            baud_text(dp_slave_baud(&r->cs->card.dp), b, sizeof b));
+            replay_baud_text(dp_slave_baud(&r->cs->card.dp), b, sizeof b));
 }
 
 /* Records the replay treated specially: odd rates, stray answers, an unanswered last request. */
@@ -238,7 +263,7 @@ static void print_notes(FILE *out, const replay_t *r, const replay_report_info_t
         fprintf(out, "  note      %llu records carry a rate that is not a PROFIBUS rate (first: "
                      "%u bit/s): they went onto the bus at %s\n",
                 (unsigned long long)r->odd_rate_records, r->first_odd_rate,
-                baud_text(r->opt.baud, b, sizeof b));
+                replay_baud_text(r->opt.baud, b, sizeof b));
     }
     if (r->stray_answers > 0u) {
         fprintf(out, "  note      %llu answers from station %u in the capture follow no request "
@@ -247,7 +272,7 @@ static void print_notes(FILE *out, const replay_t *r, const replay_report_info_t
     }
     if (r->tail_unchecked) {
         char at[96];
-        where(info, r->tail_record, r->tail_position, at, sizeof at);
+        replay_where(info, r->tail_record, r->tail_position, at, sizeof at);
         fprintf(out, "  note      the capture ends with a request to the card (%s, %s): its "
                      "answer is not in the file, so it is not compared\n", at,
                 replay_service_name(r->tail_service));
@@ -257,7 +282,7 @@ static void print_notes(FILE *out, const replay_t *r, const replay_report_info_t
 static void print_backwards(FILE *out, const replay_t *r, const replay_report_info_t *info)
 {
     char at[96];
-    where(info, r->first_back_record, r->first_back_position, at, sizeof at);
+    replay_where(info, r->first_back_record, r->first_back_position, at, sizeof at);
     fprintf(out, "  timing    %llu records stamped earlier than the record before (first: %s; "
                  "at most %.6f s back)", (unsigned long long)r->backwards, at,
             (double)r->max_back_ns / 1e9);
@@ -282,18 +307,18 @@ static void print_timing(FILE *out, const replay_t *r, const replay_report_info_
     char at[96];
     if (r->deferred_beyond_resolution > 0u) {
         char b[32];
-        where(info, r->first_conflict_record, r->first_conflict_position, at, sizeof at);
+        replay_where(info, r->first_conflict_record, r->first_conflict_position, at, sizeof at);
         fprintf(out, "  timing    %llu telegrams would have overlapped the one before at %s "
                      "and went onto the bus later (at most %.1f us; first: %s): does the rate "
                      "fit the capture? (--baud)\n",
                 (unsigned long long)r->deferred_beyond_resolution,
-                baud_text(r->opt.baud, b, sizeof b), (double)r->max_defer_ns / 1e3, at);
+                replay_baud_text(r->opt.baud, b, sizeof b), (double)r->max_defer_ns / 1e3, at);
     }
     if (r->backwards > 0u) {
         print_backwards(out, r, info);
     }
     if (r->gaps_cut > 0u) {
-        where(info, r->first_cut_record, r->first_cut_position, at, sizeof at);
+        replay_where(info, r->first_cut_record, r->first_cut_position, at, sizeof at);
         fprintf(out, "  timing    %llu idle gaps shortened, by %.6f s of bus time in all (first: "
                      "before %s): after at least %.1f s of each the card had settled (rate "
                      "lost or fixed, no watchdog, drive at rest) and whole baud-search cycles "
@@ -323,7 +348,7 @@ static int print_unchecked_result(FILE *out, const replay_t *r, const replay_rep
         fprintf(out, "damaged records: %llu\n", (unsigned long long)r->damaged_count);
         for (uint64_t i = 0; i < r->damaged_count && i < REPLAY_DAMAGED_LISTED; i++) {
             char at[96];
-            where(info, r->damaged[i].record, r->damaged[i].position, at, sizeof at);
+            replay_where(info, r->damaged[i].record, r->damaged[i].position, at, sizeof at);
             fprintf(out, "  %s: %s\n", at, r->damaged[i].problem);
         }
     }
@@ -339,13 +364,13 @@ static void print_first_mismatch(FILE *out, const replay_t *r, const replay_repo
     const replay_mismatch_t *m = &r->first;
     replay_param_ctx_t pc = {0};
     replay_param_ctx_t expected_pc;
-    where(info, m->request.record, m->request.position, at, sizeof at);
+    replay_where(info, m->request.record, m->request.position, at, sizeof at);
     fprintf(out, "\nfirst mismatch: %s, t = %.6f s, %s\n", at, (double)m->request.t_ns / 1e9,
             replay_service_name(m->service));
     print_octets(out, "request", &m->request, &m->layout, &pc);
     expected_pc = pc; /* both answers belong to the one request */
     if (m->expected_present) {
-        where(info, m->expected.record, m->expected.position, at, sizeof at);
+        replay_where(info, m->expected.record, m->expected.position, at, sizeof at);
         fprintf(out, "  expected  %s:\n", at);
         print_octets(out, "", &m->expected, &m->layout, &expected_pc);
     } else {
@@ -361,7 +386,7 @@ static void print_first_mismatch(FILE *out, const replay_t *r, const replay_repo
     fprintf(out, "  card      %s when the request began; %s %s when it ended\n",
             dp_state_name(m->card_state),
             m->baud_state == DP_BAUD_SEARCH ? "searching the rate, listening at" : "rate",
-            baud_text(m->card_baud, b, sizeof b));
+            replay_baud_text(m->card_baud, b, sizeof b));
     explain(out, r, m);
     if (m->n_before > 0u) {
         fprintf(out, "  before it:\n");
@@ -407,13 +432,14 @@ static void print_check_details(FILE *out, const replay_t *r, const replay_repor
 {
     char at[96];
     fprintf(out, "mismatches: %llu\n", (unsigned long long)r->mismatches);
+    replay_print_list(out, r, info);
     if (r->unsolicited > 0u) {
         fprintf(out, "card telegrams outside any request's window: %llu\n",
                 (unsigned long long)r->unsolicited);
     }
     fprintf(out, "damaged records: %llu\n", (unsigned long long)r->damaged_count);
     for (uint64_t i = 0; i < r->damaged_count && i < REPLAY_DAMAGED_LISTED; i++) {
-        where(info, r->damaged[i].record, r->damaged[i].position, at, sizeof at);
+        replay_where(info, r->damaged[i].record, r->damaged[i].position, at, sizeof at);
         fprintf(out, "  %s: %s\n", at, r->damaged[i].problem);
     }
     if (r->damaged_count > REPLAY_DAMAGED_LISTED) {
@@ -428,28 +454,50 @@ static void print_check_details(FILE *out, const replay_t *r, const replay_repor
     }
 }
 
-/* The verdict of --check; returns the exit status. */
-static int print_verdict(FILE *out, const replay_t *r, bool file_ok)
+const char *replay_verdict(const replay_t *r, const replay_report_info_t *info, int *status)
 {
-    uint64_t total = replay_total_requests(r);
-    if (total == 0u) {
-        fprintf(out, "result: NOTHING CHECKED: no request to station %u in the capture\n",
-                r->opt.address);
-        return 1;
+    bool file_ok = info->file_error == NULL && !info->interrupted;
+    const char *v = "MATCH";
+    int st = 1;
+    if (!r->opt.check) {
+        v = file_ok ? "replayed" : "replay incomplete";
+        st = file_ok ? 0 : 1;
+    } else if (replay_total_requests(r) == 0u) {
+        v = "NOTHING CHECKED";
+    } else if (r->mismatches > 0u) {
+        v = "DIFFERENT";
+    } else if (!file_ok) {
+        v = "INCOMPLETE";
+    } else {
+        st = 0;
     }
-    if (r->mismatches > 0u) {
-        fprintf(out, "result: DIFFERENT: %llu of %llu replies differ%s\n",
+    if (status != NULL) {
+        *status = st;
+    }
+    return v;
+}
+
+/* The verdict of --check; returns the exit status. */
+static int print_verdict(FILE *out, const replay_t *r, const replay_report_info_t *info)
+{
+    int status = 0;
+    const char *v = replay_verdict(r, info, &status);
+    uint64_t total = replay_total_requests(r);
+    bool file_ok = info->file_error == NULL && !info->interrupted;
+    if (total == 0u) {
+        fprintf(out, "result: %s: no request to station %u in the capture\n", v,
+                r->opt.address);
+    } else if (r->mismatches > 0u) {
+        fprintf(out, "result: %s: %llu of %llu replies differ%s\n", v,
                 (unsigned long long)r->mismatches, (unsigned long long)total,
                 file_ok ? "" : " (and the file was not read to its end)");
-        return 1;
+    } else if (!file_ok) {
+        fprintf(out, "result: %s: the %llu replies checked match, but the file was not read "
+                     "to its end\n", v, (unsigned long long)total);
+    } else {
+        fprintf(out, "result: %s: all %llu replies match\n", v, (unsigned long long)total);
     }
-    if (!file_ok) {
-        fprintf(out, "result: INCOMPLETE: the %llu replies checked match, but the file was not "
-                     "read to its end\n", (unsigned long long)total);
-        return 1;
-    }
-    fprintf(out, "result: MATCH: all %llu replies match\n", (unsigned long long)total);
-    return 0;
+    return status;
 }
 
 int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out)
@@ -466,5 +514,5 @@ int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out
     }
     print_service_table(out, r);
     print_check_details(out, r, info);
-    return print_verdict(out, r, file_ok);
+    return print_verdict(out, r, info);
 }

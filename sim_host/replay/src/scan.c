@@ -22,11 +22,42 @@ static void scan_keep_pair(replay_scan_t *s, const replay_scan_pair_t *p)
     }
 }
 
+/* A request to station addr followed by its answer, gap_ns from start to start: at which rates
+ * a line could have carried it. On a line the answer begins no earlier than min TSDR after the
+ * request's end and (from the DFP21B) no later than its max TSDR; a microsecond of slack either
+ * way for rounded timestamps. */
+static void station_pair(replay_scan_t *s, uint8_t addr, uint64_t gap_ns, size_t req_len)
+{
+    replay_scan_station_t *st = &s->station[addr & 0x7Fu];
+    if (st->pairs == 0u || gap_ns < st->min_gap_ns) {
+        st->min_gap_ns = gap_ns;
+    }
+    if (gap_ns > st->max_gap_ns) {
+        st->max_gap_ns = gap_ns;
+    }
+    st->pairs++;
+    for (unsigned i = 0; i < HAL_UART_NUM_BAUDS; i++) {
+        uint64_t baud = hal_uart_bauds[i];
+        uint64_t req_ns = 11u * (uint64_t)req_len * 1000000000ull / baud;
+        uint64_t min_tsdr_ns = FDL_MIN_TSDR_DEFAULT_BITS * 1000000000ull / baud;
+        uint64_t max_tsdr_ns = REPLAY_CARD_MAX_TSDR_MIN_BITS * 1000000000ull / baud;
+        if (max_tsdr_ns < REPLAY_CARD_MAX_TSDR_NS) {
+            max_tsdr_ns = REPLAY_CARD_MAX_TSDR_NS;
+        }
+        bool early = gap_ns + 1000u < req_ns + min_tsdr_ns;
+        bool late = gap_ns > req_ns + max_tsdr_ns + 1000u;
+        if (early || late) {
+            st->off_line[i]++;
+        }
+    }
+}
+
 /* The recorded timing bounds the rate from below: a telegram cannot begin before the one before
  * it ended, nor an answer before min TSDR (11 bit times) after its request. Timestamps may be
  * rounded to microseconds: one is added to every gap. A pair whose time goes back (a clock
  * step, a record out of order) bounds nothing: it is counted and left out. */
-static void scan_timing(replay_scan_t *s, const cap_record_t *rec, bool answers_prev)
+static void scan_timing(replay_scan_t *s, const cap_record_t *rec, bool answers_prev,
+                        uint8_t answerer)
 {
     if (replay_is_profibus_baud(rec->baud)) {
         s->recorded_baud = rec->baud;
@@ -50,6 +81,7 @@ static void scan_timing(replay_scan_t *s, const cap_record_t *rec, bool answers_
         s->timed_pairs++;
         if (answers_prev) {
             s->timed_answers++;
+            station_pair(s, answerer, gap_ns, s->prev_len);
         }
     }
     s->have_prev_time = true;
@@ -105,10 +137,14 @@ void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec)
     bool was_request = s->prev_request;
     uint8_t da = s->prev_da;
     s->prev_request = false;
-    bool answers_prev = was_request && rec->problem[0] == '\0' &&
-                        (m.kind == REPLAY_KIND_SC ||
-                         (m.kind == REPLAY_KIND_RESPONSE && m.has_header && m.sa == da));
-    scan_timing(s, rec, answers_prev);
+    bool answered = was_request && (m.kind == REPLAY_KIND_SC ||
+                                    (m.kind == REPLAY_KIND_RESPONSE && m.has_header &&
+                                     m.sa == da));
+    if (was_request && s->station[da].first == 1u) {
+        s->station[da].first = answered ? 2u : 3u;
+    }
+    bool answers_prev = answered && rec->problem[0] == '\0';
+    scan_timing(s, rec, answers_prev, da);
     if (rec->problem[0] != '\0') {
         return; /* a damaged record says nothing reliable about who is who */
     }
@@ -117,6 +153,10 @@ void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec)
         s->master[m.sa] = true;
         s->prev_request = m.da != FDL_ADDR_BROADCAST && replay_expects_answer(&m);
         s->prev_da = m.da;
+        if (s->prev_request && s->station[m.da].first == 0u) {
+            s->station[m.da].first = 1u;
+            s->station[m.da].first_record = rec->index;
+        }
         return;
     case REPLAY_KIND_TOKEN:
         if (m.has_header) {
@@ -152,4 +192,36 @@ unsigned replay_scan_result(const replay_scan_t *s, uint8_t *out, unsigned max)
         }
     }
     return n;
+}
+
+replay_timing_t replay_scan_timing(const replay_scan_t *s, uint8_t address, uint32_t baud,
+                                   replay_scan_timing_t *why)
+{
+    replay_scan_timing_t w;
+    memset(&w, 0, sizeof w);
+    w.baud = baud;
+    const replay_scan_station_t *st = &s->station[address & 0x7Fu];
+    for (unsigned i = 0; i < HAL_UART_NUM_BAUDS; i++) {
+        if (hal_uart_bauds[i] == baud) {
+            w.pairs = st->pairs;
+            w.off_line = st->off_line[i];
+            w.min_gap_ns = st->min_gap_ns;
+            w.max_gap_ns = st->max_gap_ns;
+        }
+    }
+    /* A majority, so that a few late answers (a slow recorder's hiccup) do not decide. */
+    w.mode = w.pairs > 0u && 2u * w.off_line > w.pairs ? REPLAY_TIMING_RELAXED : REPLAY_TIMING_LINE;
+    if (why != NULL) {
+        *why = w;
+    }
+    return w.mode;
+}
+
+bool replay_scan_first_answered(const replay_scan_t *s, uint8_t address, uint64_t *record)
+{
+    const replay_scan_station_t *st = &s->station[address & 0x7Fu];
+    if (record != NULL) {
+        *record = st->first_record;
+    }
+    return st->first == 2u;
 }

@@ -12,7 +12,9 @@
  * With check on, every request addressed to the card (DA == address, not broadcast) is matched
  * with the record that follows it when that is the card's answer (SC, or a response with SA ==
  * address), else "no answer", and with what the card transmitted before the next injected
- * telegram (seen through the bus tap). Octets are compared exactly.
+ * telegram (seen through the bus tap). Octets are compared exactly, except those an --ignore
+ * mask leaves out (replay/mask.h); every mismatch goes to on_mismatch (replay/mismatch.h keeps
+ * a list of them for the reports).
  *
  * Memory is fixed: a few telegrams of context, the first mismatch, counters, the first damaged
  * records. Nothing grows with the capture. */
@@ -26,6 +28,8 @@
 
 #include "capture/record.h"
 #include "replay/decode.h"
+#include "replay/mask.h"
+#include "replay/mismatch.h"
 #include "rig/rig.h"
 #include "sim_hal/membus.h"
 #include "sim_stations/stations.h"
@@ -98,6 +102,11 @@ typedef struct replay_options {
      * (rig_ctl_service). Optional. */
     void (*service)(void *ctx);
     void *service_ctx;
+    /* Octets left out of the check (--ignore); NULL: every octet is compared. */
+    const replay_mask_t *mask;
+    /* Every mismatch as it is found (replay_list_add keeps them for the reports). Optional. */
+    void (*on_mismatch)(void *ctx, const replay_listed_t *m);
+    void *mismatch_ctx;
 } replay_options_t;
 
 typedef struct replay_counts {
@@ -106,6 +115,9 @@ typedef struct replay_counts {
     uint64_t differ;
     uint64_t capture_silent; /* the capture shows no answer */
     uint64_t card_silent;    /* the card gave none */
+    uint64_t missing;        /* the capture shows an answer, the card gave none */
+    uint64_t extra;          /* the card answered, the capture shows none */
+    uint64_t masked_octets;  /* octets of compared answers left out (mask, with their FCS) */
 } replay_counts_t;
 
 /* A telegram kept for the report (copied: the record is gone by then). */
@@ -135,6 +147,7 @@ typedef struct replay_mismatch {
     uint32_t card_baud;
     bool set_prm_seen;         /* a Set_Prm to the card occurred earlier in the capture */
     replay_dx_layout_t layout;
+    uint8_t mask[CAP_MAX_RECORD / 8u]; /* octets not compared (replay_mask_answer) */
     replay_kept_t before[REPLAY_CONTEXT];
     unsigned n_before;
 } replay_mismatch_t;
@@ -196,6 +209,8 @@ typedef struct replay {
     /* results */
     replay_counts_t svc[REPLAY_SVC_COUNT];
     uint64_t mismatches;
+    uint64_t masked_octets;  /* all services */
+    replay_listed_t listed;  /* the mismatch being handed to on_mismatch */
     replay_mismatch_t first;
     replay_kept_t ring[REPLAY_CONTEXT + 2u]; /* + the request and its answer */
     unsigned ring_next;
@@ -279,11 +294,24 @@ typedef struct replay_report_info {
     const char *file_error;     /* the reader's error, NULL if the file was read to its end */
     const char *source_note;    /* what the reader chose on its own (an LCM log's channel) */
     bool interrupted;
+    /* What the first pass inferred and why (replay/infer.h); NULL: nothing to say. */
+    const struct replay_inferred *inferred;
+    /* The kept mismatches, listed below the table and in the report files; NULL: none. */
+    replay_list_t *list;
 } replay_report_info_t;
 
 /* The report of docs/replay.md. Returns the exit status it stands for: 0 every reply matched
  * (and the file was read to its end), 1 otherwise. */
 int replay_report(const replay_t *r, const replay_report_info_t *info, FILE *out);
+/* The verdict in one word or two: with the check "MATCH", "DIFFERENT", "INCOMPLETE" or "NOTHING
+ * CHECKED", without it "replayed" or "replay incomplete"; *status (may be NULL) the exit status
+ * it stands for. */
+const char *replay_verdict(const replay_t *r, const replay_report_info_t *info, int *status);
+/* The check as a JSON object (docs/replay.md "Report files"). Returns -1 when out has an error. */
+int replay_report_json(const replay_t *r, const replay_report_info_t *info, FILE *out);
+/* The check as JUnit XML: one testsuite, one testcase per service with requests (a failure
+ * listing its kept mismatches) and one for the capture as a whole. -1 when out has an error. */
+int replay_report_junit(const replay_t *r, const replay_report_info_t *info, FILE *out);
 
 /* ---- which station answers: the first pass over a file ----------------------------------- */
 
@@ -309,6 +337,23 @@ typedef struct replay_scan_rate {
     replay_scan_pair_t ignored;
 } replay_scan_rate_t;
 
+/* How a station's answers are timed, for telling a line's capture from a tty's. */
+typedef struct replay_scan_station {
+    uint64_t pairs;      /* timed requests to it followed directly by its answer */
+    uint64_t off_line[HAL_UART_NUM_BAUDS]; /* ... that no line at hal_uart_bauds[i] produces:
+                                              the answer begins before the request could have
+                                              ended, or later than the card's max TSDR after */
+    uint64_t min_gap_ns; /* from a request's start to its answer's */
+    uint64_t max_gap_ns;
+    uint8_t first;       /* its first request: 0 none yet, 1 waiting, 2 answered, 3 not */
+    uint64_t first_record;
+} replay_scan_station_t;
+
+/* The DFP21B's latest answer (its GSD's MaxTsdr: 63.8 us, never below 15 bit times), with a
+ * microsecond of slack for rounded timestamps. */
+#define REPLAY_CARD_MAX_TSDR_NS 63800u
+#define REPLAY_CARD_MAX_TSDR_MIN_BITS 15u
+
 typedef struct replay_scan {
     uint64_t answers[REPLAY_SCAN_MAX]; /* answers seen from each address (slaves only) */
     bool master[REPLAY_SCAN_MAX];      /* sent a request or a token: a master */
@@ -326,6 +371,7 @@ typedef struct replay_scan {
     uint64_t backward_pairs;  /* ... whose time does: they say nothing about the rate */
     replay_scan_pair_t need;  /* the pair of records needing the highest rate */
     replay_scan_pair_t need2; /* the pair needing the highest rate after it */
+    replay_scan_station_t station[REPLAY_SCAN_MAX];
 } replay_scan_t;
 
 void replay_scan_init(replay_scan_t *s);
@@ -339,6 +385,33 @@ unsigned replay_scan_result(const replay_scan_t *s, uint8_t *out, unsigned max);
  * are left out, and with REPLAY_SCAN_OUTLIER_MIN_ANSWERS answers also a single pair that alone
  * needs a higher rate than every other (why says which). why may be NULL. */
 uint32_t replay_scan_rate(const replay_scan_t *s, replay_scan_rate_t *why);
+
+/* How the capture's times were taken. On a line (LINE) the times are the line's: every answer
+ * of the card begins within min TSDR .. max TSDR after its request ended. On a tty or PTY
+ * (RELAXED: dfp-sim slave/master/param --port --capture) the operating system times the
+ * telegrams: octets arrive in bursts, answers come when the process gets to them. */
+typedef enum replay_timing {
+    REPLAY_TIMING_LINE = 0,
+    REPLAY_TIMING_RELAXED,
+} replay_timing_t;
+
+typedef struct replay_scan_timing {
+    replay_timing_t mode;
+    uint32_t baud;       /* the rate the answers were judged at */
+    uint64_t pairs;      /* the station's timed answers */
+    uint64_t off_line;   /* ... that no line at that rate produces */
+    uint64_t min_gap_ns; /* from a request's start to its answer's */
+    uint64_t max_gap_ns;
+} replay_scan_timing_t;
+
+/* RELAXED when more than half of the timed answers of station address are off the line at
+ * baud (one of hal_uart_bauds[]); LINE otherwise, also without any timed answer. why may be
+ * NULL. */
+replay_timing_t replay_scan_timing(const replay_scan_t *s, uint8_t address, uint32_t baud,
+                                   replay_scan_timing_t *why);
+/* Did the capture's first request to address (one that asks for an answer) get its answer?
+ * *record (may be NULL): that request's record. False also without any request to it. */
+bool replay_scan_first_answered(const replay_scan_t *s, uint8_t address, uint64_t *record);
 
 /* ---- files ------------------------------------------------------------------------------- */
 

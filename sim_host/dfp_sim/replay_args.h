@@ -1,0 +1,42 @@
+/* The command line of dfp-sim replay (docs/replay.md): what to replay, what the user gives
+ * instead of letting the capture say it, and what the check reports where. */
+#ifndef DFP_SIM_REPLAY_ARGS_H
+#define DFP_SIM_REPLAY_ARGS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "capture/capture.h"
+#include "replay/infer.h"
+#include "replay/mask.h"
+#include "replay/replay.h"
+
+/* --report json|junit FILE, at most this many. */
+#define REPLAY_MAX_REPORTS 4u
+
+typedef struct replay_report_file {
+    bool junit; /* else JSON */
+    const char *path;
+} replay_report_file_t;
+
+typedef struct replay_args {
+    const char *file;
+    replay_given_t given; /* --address, --baud, --fixed-baud, --inverter-delay, --timing */
+    bool check;
+    bool verbose;
+    cap_format_t format;
+    const char *lcm_channel;
+    card_inverter_t inverter;
+    replay_speed_t speed;
+    const char *lcm_url;
+    const char *http;
+    uint64_t max_listed;  /* --max-mismatches (0 given: REPLAY_LIST_ALL) */
+    replay_mask_t mask;   /* --ignore */
+    unsigned n_reports;
+    replay_report_file_t reports[REPLAY_MAX_REPORTS];
+} replay_args_t;
+
+/* Parses and checks argv[2..]: 0, or EXIT_USAGE after one line on stderr. */
+int replay_parse_args(int argc, char **argv, replay_args_t *a);
+
+#endif
