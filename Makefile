@@ -40,9 +40,11 @@ deps-apt:
 # pyprofibus is the independent DP master of the interoperability tests; pytest runs the Python
 # client's tests (python/, installed editable), selenium drives chromium for the panel test,
 # lizard measures function lengths for the repository's size limits (tests/repo), lcm is LCM 1.5
-# (liblcm, its headers, lcm-gen, lcm-logger, the Python module; cmake/dfp_lcm.cmake). The
-# stamp's number goes up whenever this list changes, so an older venv is topped up.
-VENV_STAMP := $(VENV)/.deps-4
+# (liblcm, its headers, lcm-gen, lcm-logger, the Python module; cmake/dfp_lcm.cmake); the
+# editable install of python/ puts its console script dfp-lcm-view into $(VENV)/bin. The
+# stamp's number goes up whenever this list or that script list changes, so an older venv is
+# topped up.
+VENV_STAMP := $(VENV)/.deps-5
 $(VENV_STAMP):
 	@mkdir -p build
 	[ -x $(PYTHON) ] || python3 -m venv $(VENV) || { apt-get install -y -qq python3-venv && python3 -m venv $(VENV); }

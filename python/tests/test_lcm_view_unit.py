@@ -1,0 +1,115 @@
+"""dfp-lcm-view's parts without a network: the FDL header reader and service names
+(dfpsim.fdl_text), and the viewer's lines for messages built with the generated LCM types
+(skipped without the lcm module). The viewer against dfp-sim: tests/lcm/test_lcm_view.sh."""
+
+import io
+
+import pytest
+
+from dfpsim import fdl_text
+from dfpsim.lcm_view import Viewer, baud_text, parse_args
+
+
+def frame(hexstr):
+    return fdl_text.parse(bytes.fromhex(hexstr))
+
+
+def test_sd2_with_saps():
+    f = frame("68 05 05 68 84 82 6D 3C 3E ED 16")
+    assert (f.sd, f.da, f.sa, f.fc, f.dsap, f.ssap, f.du, f.fault) == \
+        ("SD2", 4, 2, 0x6D, 60, 62, b"", "")
+    assert fdl_text.request_service(f) == "Slave_Diag"
+
+
+def test_sd1_sd3_sd4_sc():
+    assert (frame("10 04 02 49 4F 16").fc, frame("10 04 02 49 4F 16").fault) == (0x49, "")
+    f = frame("A2 82 84 08 3E 3C 02 05 00 FF 60 03 F1 16")
+    assert (f.sd, f.da, f.sa, f.dsap, f.ssap, f.du.hex(), f.is_reply) == \
+        ("SD3", 2, 4, 62, 60, "020500ff6003", True)
+    assert (frame("DC 04 02").sd, frame("DC 04 02").da) == ("SD4", 4)
+    assert (frame("E5").sd, frame("E5").is_reply, frame("E5").da) == ("SC", True, None)
+
+
+@pytest.mark.parametrize("octets, fault", [
+    ("10 04 02 49 4E 16", "bad FCS"),
+    ("10 04 02 49 4F 17", "no end delimiter"),
+    ("68 05 05 68 84 82 6D 3C 3E ED", "10 octets, the header says 11"),
+    ("68 05 06 68 84 82 6D 3C 3E ED 16", "LE 5, LEr 6"),
+    ("10 04", "cut short"),
+    ("33 04 02", "unknown start delimiter 33"),
+    ("", "no octets"),
+])
+def test_damaged_frames_keep_what_they_have(octets, fault):
+    f = frame(octets)
+    assert f.fault == fault
+    if octets.startswith("10 04 02") or octets.startswith("68"):
+        assert (f.da, f.sa) == (4, 2)
+
+
+def test_address_extension_chain_skips_the_segment_octet():
+    # DAE: segment address 0x45 (bit 6) with "more" (bit 7), then SAP 51; SAE: SAP 50.
+    du = bytes([0xC5, 0x33, 0x32, 0x5E, 0x00, 0x2F, 0xF0])
+    body = bytes([0x84, 0x82, 0x6D]) + du
+    octets = bytes([0x68, len(body), len(body), 0x68]) + body + bytes([sum(body) & 0xFF, 0x16])
+    f = fdl_text.parse(octets)
+    assert (f.dsap, f.ssap, f.du, f.fault) == (51, 50, bytes([0x5E, 0x00, 0x2F, 0xF0]), "")
+    assert fdl_text.request_service(f) == "MSAC1 read"
+
+
+@pytest.mark.parametrize("octets, service", [
+    ("68 07 07 68 84 82 7D 3E 3E F3 F2 E4 16", "Chk_Cfg"),
+    ("68 05 05 68 04 02 7D 00 00 83 16", "Data_Exchange"),
+    ("10 04 02 4E 54 16", "Request Ident"),
+    ("68 06 06 68 84 82 56 3A 3E 00 00 00 16", "Global_Control"),
+    ("68 05 05 68 84 82 7D 33 33 00 16", "MSAC1 poll"),
+    ("68 06 06 68 84 82 7D 31 30 57 00 00 16", "MSAC2 initiate"),
+    ("68 06 06 68 84 82 7D 14 30 48 00 00 16", "MSAC2 idle"),
+])
+def test_request_services(octets, service):
+    assert fdl_text.request_service(frame(octets)) == service
+
+
+def test_replies_are_named_after_the_request_on_their_channel():
+    t = fdl_text.ServiceTracker()
+    assert t.name("A", frame("68 05 05 68 04 02 7D 00 00 83 16"), 4, False) == "Data_Exchange"
+    assert t.name("A", frame("68 05 05 68 02 04 08 00 00 0E 16"), 4, True) == \
+        "Data_Exchange reply"
+    assert t.name("A", frame("E5"), 4, True) == "Data_Exchange reply"
+    assert t.name("A", frame("E5"), 4, False) == "reply"          # not the publisher's answer
+    assert t.name("B", frame("E5"), 4, True) == "reply"           # another channel
+    assert t.name("B", frame("A2 82 84 08 3E 3C 02 05 00 FF 60 03 F1 16"), 4, True) == \
+        "Slave_Diag reply"                                        # from its SSAP
+    assert t.name("A", frame("DC 04 02"), 4, True) == "token"
+
+
+def test_baud_text():
+    assert [baud_text(b) for b in (0, 9600, 187500, 1500000, 12000000, 300)] == \
+        ["searching", "9.6 kbit/s", "187.5 kbit/s", "1.5 Mbit/s", "12 Mbit/s", "300 bit/s"]
+
+
+def test_bad_options_exit_2():
+    for argv in (["--count", "0"], ["--duration", "-1"], ["--status", "x"], ["--nope"]):
+        with pytest.raises(SystemExit) as e:
+            parse_args(argv)
+        assert e.value.code == 2
+
+
+def test_viewer_lines_through_the_generated_types():
+    pytest.importorskip("lcm")
+    from dfpsim import lcm_types
+    types = lcm_types.load()
+    out = io.StringIO()
+    v = Viewer(types, out)
+    tg = types["telegram_t"]()
+    tg.utime, tg.station, tg.direction, tg.error_flags = 0, 4, 2, 1
+    tg.data = bytes.fromhex("10 04 02 49 4E 16")
+    tg.length = len(tg.data)
+    v.on_message("DFP_TELEGRAM", tg.encode())
+    v.on_message("DFP_TELEGRAM", tg.encode()[:20])            # cut short: undecodable
+    v.on_message("OTHER", b"\x01" * 16)                       # another type
+    line = out.getvalue().splitlines()[0]
+    assert line.split(None, 1)[1] == ("DFP_TELEGRAM     4 RX SD1 DA   4 SA   2 FC 49  "
+                                      "FDL_Status           10 04 02 49 4E 16  ! parity, bad FCS")
+    assert v.counts == {"telegram": 1, "state": 0, "param": 0, "undecodable": 1, "other": 1}
+    assert v.summary_lines(1.0)[1] == "station 4: no card state; 1 telegrams, " \
+                                      "Data_Exchange sent 0, errors 1"
