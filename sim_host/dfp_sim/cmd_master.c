@@ -267,9 +267,11 @@ static void report_missing(const dp_master_t *m, uint32_t cycles, const char *wh
 {
     if (m->num_slaves == 1u) {
         const dpm_slave_t *sl = &m->slaves[0];
+        bool fault = sl->phase == DPM_PHASE_BACKOFF && sl->fault[0] != '\0';
         cli_error("master: slave %u did not complete %u Data_Exchange cycles (%s; reached %u, "
-                  "phase %s)",
-                  sl->cfg.address, cycles, why, sl->cycles, dpm_phase_name(sl->phase));
+                  "phase %s%s%s)",
+                  sl->cfg.address, cycles, why, sl->cycles, dpm_phase_name(sl->phase),
+                  fault ? ": " : "", fault ? sl->fault : "");
         return;
     }
     char list[1024];

@@ -255,9 +255,10 @@ static void timeout_text(uint32_t timeout_s)
 {
     dpm_slave_t *s = master->num_slaves > 0u ? &master->slaves[0] : NULL;
     if (run.stage == ST_START && s != NULL) {
+        bool why = s->phase == DPM_PHASE_BACKOFF && s->fault[0] != '\0';
         set_result_error("timeout", "no result within %u s: slave %u did not reach data "
-                         "exchange (phase %s)", timeout_s, s->cfg.address,
-                         dpm_phase_name(s->phase));
+                         "exchange (phase %s%s%s)", timeout_s, s->cfg.address,
+                         dpm_phase_name(s->phase), why ? ": " : "", why ? s->fault : "");
     } else if (run.stage == ST_START) {
         set_result_error("timeout", "no result within %u s: the class-2 connection did not "
                          "open (%s)", timeout_s, dpm_c2_state_name(dpm_c2_state(&run.c2)));
@@ -448,7 +449,8 @@ static bool param_operation(const param_opts_t *o)
     if (!o->via_given) {
         run.via = VIA_MOVILINK; /* class 1 */
     } else if (run.via == VIA_CHANNEL) {
-        cli_error("param: im0 needs DP-V1: --via movilink, profidrive (class 1) or c2");
+        cli_error("param: im0 needs DP-V1, which --via channel does not use: leave --via out "
+                  "(im0 then uses movilink) or give --via movilink, profidrive or c2");
         return false;
     }
     return true;

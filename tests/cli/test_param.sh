@@ -126,8 +126,9 @@ expect_exit 1 "P302 = 99000000 via c2" -- param write 8517 99000000 --via c2 --j
 expect_exit 1 "index 1 does not exist" -- param read 1 --via movilink
 expect_in "illegal index" "error 0x0810: class 8, additional code 0x10: illegal parameter index" "$out"
 
-# I&M0 by class 1 and class 2.
+# I&M0 by class 1 and class 2; without --via it goes through movilink and says so.
 expect_exit 0 "im0 (class 1)" -- param im0
+[ "$(head -n 1 <<<"$out")" = "im0 via movilink:" ] && ok || bad "im0 without --via names its path: $out"
 expect_in "im0 manufacturer" "manufacturer id    0x010A" "$out"
 expect_in "im0 order id" "order id           824 240 2" "$out"
 expect_in "im0 serial" "serial number      DFP-SIM-004" "$out"
@@ -136,6 +137,12 @@ expect_exit 0 "im0 via c2 --json" -- param im0 --via c2 --json
 [ "$(json_get "$out" manufacturer_id)" = 266 ] && ok || bad "im0 manufacturer_id: $out"
 [ "$(json_get "$out" order_id)" = "824 240 2" ] && ok || bad "im0 order_id: $out"
 [ "$(json_get "$out" im_supported)" = 0x001E ] && ok || bad "im0 im_supported: $out"
+[ "$(json_get "$out" via)" = c2 ] && ok || bad "im0 via c2: $out"
+expect_exit 0 "im0 --json without --via" -- param im0 --json
+[ "$(json_get "$out" via)" = movilink ] && ok || bad "im0 default path in JSON: $out"
+expect_exit 0 "im0 via profidrive" -- param im0 --via profidrive
+expect_in "im0 via profidrive" "serial number      DFP-SIM-004" "$out"
+[ "$(head -n 1 <<<"$out")" = "im0 via profidrive:" ] && ok || bad "im0 via profidrive: $out"
 
 # Nobody at address 5: exit 1 within the timeout, with the reason (for each index asked).
 expect_exit 1 "no slave at 5, two indices" -- "$sim" param --port "$tmp/b" --address 5 --timeout 1 read 8300 8301 --via movilink
@@ -168,7 +175,7 @@ usage "value not a number" "VALUE 'x12' is not a number for P160" "${P[@]}" writ
 usage "unknown path" "--via 'usb'" "${P[@]}" read 8300 --via usb
 usage "volatile on read" "--volatile belongs to write" "${P[@]}" read 8300 --volatile
 usage "volatile via profidrive" "--volatile works with --via movilink or channel" "${P[@]}" write 8489 1 --via profidrive --volatile
-usage "im0 via channel" "im0 needs DP-V1" "${P[@]}" im0 --via channel
+usage "im0 via channel" "dfp-sim: param: im0 needs DP-V1, which --via channel does not use: leave --via out (im0 then uses movilink) or give --via movilink, profidrive or c2" "${P[@]}" --via channel im0
 usage "unknown operation" "unknown operation 'frob'" "${P[@]}" frob 1
 usage "unknown option" "unknown option '--fast'" "${P[@]}" read 8300 --fast
 usage "bad baud" "--baud" "${P[@]}" read 8300 --baud 1234

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # dfp-sim param as a master on a virtual segment over LCM (--bus lcm:CHANNEL): against
 # `dfp-sim slave --bus lcm:...` it reads P100 by name on every path, writes a value by name and
-# reads it back by another path, reads I&M0, times out on an address nobody has, and refuses
+# reads it back by another path, reads I&M0, times out on an address nobody has, is refused by
+# the card's diagnosis while a PLC owns it (class 2 still works), and refuses
 # --port with --bus, --lcm-url without --bus and a bad channel (exit 2). udpm on loopback needs a
 # multicast route, so the test runs in a private network namespace (tests/lcm/netns.sh).
 sim=$1
@@ -31,6 +32,26 @@ expect_in "im0 serial" "  serial number      DFP-SIM-004" "$out"
 expect_exit 1 "nobody at 5 on the segment" -- "$sim" param --bus lcm:PARAM --lcm-url "$url" --address 5 --timeout 1 read P100 --via movilink
 [ "$out" = "read 8461 via movilink: error timeout: no result within 1 s: slave 5 did not reach data exchange (phase FDL status)" ] &&
   ok || bad "timeout on the segment: $out"
+
+# A PLC (class-1 master 1) owns the card: the card refuses another class-1 master through its
+# diagnosis (Master_Add 1), never with RS, and the timeout says so; class 2 still works.
+"$sim" master --bus lcm:PARAM --lcm-url "$url" --address 4 --config F3F2 --master-address 1 \
+  --cycles 0 >"$tmp/plc.out" 2>&1 &
+plc=$!; pids+=($plc)
+for _ in $(seq 50); do grep -q "slave 4 is in data exchange" "$tmp/plc.out" && break; sleep 0.1; done
+expect_in "PLC in data exchange" "slave 4 is in data exchange" "$(cat "$tmp/plc.out")"
+expect_exit 1 "class 1 beside the PLC" -- param --timeout 2 read P100 --via movilink
+[ "$out" = "read 8461 via movilink: error timeout: no result within 2 s: slave 4 did not reach data exchange (phase back-off: slave is locked by master 1)" ] &&
+  ok || bad "class 1 beside the PLC: $out"
+expect_exit 1 "a second master beside the PLC" -- "$sim" master --bus lcm:PARAM --lcm-url "$url" \
+  --address 4 --config F3F2 --master-address 3 --cycles 5 --timeout 2 --quiet
+[ "$(tail -n 1 <<<"$out")" = "dfp-sim: master: slave 4 did not complete 5 Data_Exchange cycles (timeout; reached 0, phase back-off: slave is locked by master 1)" ] &&
+  ok || bad "second master: $out"
+expect_exit 0 "class 2 beside the PLC" -- param read P100 --via c2 --master-address 3
+kill -INT "$plc"; wait "$plc"; rc=$?
+[ "$rc" = 0 ] && ok || bad "PLC exit $rc"
+expect_in "PLC kept data exchange" "stopped: outputs cleared" "$(cat "$tmp/plc.out")"
+if grep -q "RS:" "$tmp/plc.out"; then bad "the PLC saw RS: $(cat "$tmp/plc.out")"; else ok; fi
 
 expect_exit 2 "--port and --bus" -- "$sim" param --port /dev/null --bus lcm:PARAM --address 4 read P100
 [ "$out" = "dfp-sim: param: --port and --bus exclude each other" ] && ok || bad "--port and --bus: $out"

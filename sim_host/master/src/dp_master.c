@@ -1,5 +1,6 @@
 #include "dp_master/dp_master.h"
 
+#include <stdio.h>
 #include <string.h>
 
 #include "dp_master/dpv1_c2.h"
@@ -110,7 +111,8 @@ static void restart_slave(dp_master_t *m, unsigned idx, hal_time_us_t t, const c
 {
     dpm_slave_t *s = &m->slaves[idx];
     bool lost = s->phase == DPM_PHASE_FDL_STATUS;
-    dpm_event_t ev = {.type = DPM_EV_FAULT, .t = t, .slave = s->cfg.address, .text = why,
+    (void)snprintf(s->fault, sizeof s->fault, "%s", why);
+    dpm_event_t ev = {.type = DPM_EV_FAULT, .t = t, .slave = s->cfg.address, .text = s->fault,
                       .old_phase = s->phase, .new_phase = DPM_PHASE_BACKOFF};
     emit(m, &ev);
     s->restarts++;
@@ -420,7 +422,11 @@ static void diag_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, ha
         } else if (d[DP_DIAG_MASTER_ADD] != DP_MASTER_ADD_NONE &&
                    d[DP_DIAG_MASTER_ADD] != m->cfg.address &&
                    (d[DP_DIAG_STATUS_2] & DP_DIAG2_PRM_REQ) == 0u) {
-            restart_slave(m, idx, t, "slave is locked by another master");
+            /* The card does not refuse us with RS: its diagnosis names the owner. */
+            char why[48];
+            (void)snprintf(why, sizeof why, "slave is locked by master %u",
+                           (unsigned)d[DP_DIAG_MASTER_ADD]);
+            restart_slave(m, idx, t, why);
         } else {
             set_phase(m, idx, DPM_PHASE_SET_PRM, t);
         }

@@ -111,6 +111,9 @@ typedef struct dpm_slave {
     uint8_t last_diag_len;
     uint32_t cycles;
     uint32_t restarts;
+    /* Why the slave was last restarted ("" before that): kept so a timeout can say what
+     * held the slave back instead of only the phase it ended in. */
+    char fault[64];
     /* DP-V1 class 1 */
     dpm_xfer_t c1;
     bool c1_turn; /* a Data_Exchange completed since the last acyclic telegram */
