@@ -103,16 +103,20 @@ static const help_cmd_t commands[] = {
      "(P100), a name or a unique part of one (\"setpoint source\"), or an IPOS variable\n"
      "(H12 = 11012). VALUE: a raw number (3, -5, 0x10), an enumeration text (FIELDBUS) or\n"
      "a value in the parameter's unit (300.5, \"300 rpm\"). Results name the parameter\n"
-     "(P100 setpoint source = 3 (FIELDBUS)). channel (default) brings the slave up with\n"
-     "Param + 3 PD and uses the cyclic 8-byte channel; movilink / profidrive bring it up\n"
-     "with DP-V1 parameters and use class-1 data set 47 (request id 0x40 / 0x01, write\n"
-     "0x02 non-volatile); c2 opens a class-2 connection (no start-up), id 0x40, aborts it.\n"
-     "im0 reads I&M0 (class 1, or --via c2). --volatile: write to RAM only (movilink,\n"
-     "channel). read with up to 19 indices: one data set 47 request (not channel), one\n"
-     "result line each. --master-address: default 2 (1 with c2). Exit 0 when every result\n"
-     "is positive, 1 on a negative one or none within --timeout (default 10 s), 2 on a bad\n"
-     "command line or an unknown PARAM; --json: one JSON object per result (p_number,\n"
-     "name, value, text ...)",
+     "(P100 setpoint source = 3 (FIELDBUS)). channel (default for read and write) brings\n"
+     "the slave up with Param + 3 PD and uses the cyclic 8-byte channel; movilink /\n"
+     "profidrive bring it up with DP-V1 parameters and use class-1 data set 47 (request id\n"
+     "0x40 / 0x01, write 0x02 non-volatile); c2 opens a class-2 connection (no start-up),\n"
+     "id 0x40, aborts it. im0 reads I&M0 over DP-V1: class 1 via movilink (the default for\n"
+     "im0) or profidrive, or class 2 via c2; --via channel im0 is refused (exit 2).\n"
+     "--volatile: write to RAM only (movilink, channel). read with up to 19 indices: one\n"
+     "data set 47 request (not channel), one result line each. --master-address: default\n"
+     "2 (1 with c2): use one no other master on the bus has (the card takes two masters\n"
+     "with one address for one). A slave owned by another class-1 master is refused by\n"
+     "its diagnosis: the timeout names that master. Exit 0 when every result is positive,\n"
+     "1 on a negative one or none within --timeout (default 10 s), 2 on a bad command\n"
+     "line or an unknown PARAM; --json: one JSON object per result (p_number, name,\n"
+     "value, text ...)",
      NOTE_RATE | NOTE_CAPTURE},
     {"convert",
      "IN OUT [--format pcap|pcapng|text] [--linktype profibus|user0] [--ns]\n"
@@ -124,14 +128,20 @@ static const help_cmd_t commands[] = {
     {"replay",
      "FILE [--address N] [--check] [--speed real|max] [--baud RATE]\n"
      "[--format pcap|pcapng|text|lcm] [--inverter sim|none] [--inverter-delay US]\n"
-     "[--fixed-baud] [--verbose] [--lcm URL] [--channel NAME]\n"
-     "[--http [ADDR:]PORT]",
+     "[--fixed-baud] [--timing auto|line|relaxed] [--verbose] [--lcm URL]\n"
+     "[--channel NAME] [--http [ADDR:]PORT] [--max-mismatches N] [--ignore MASK]\n"
+     "[--report json|junit FILE]",
      "a bus capture played against the emulated card at its recorded times (the card's\n"
      "own recorded answers are left out: it makes its own); --check compares every reply\n"
-     "with the recorded one and reports the first difference and counts per service\n"
-     "(exit 0: all match, 1: a difference or a damaged file, 2: bad command line or\n"
-     "unreadable file). The address comes from the capture unless given; the rate from\n"
-     "--baud, else the capture, else the lowest its timing allows. --lcm publishes the\n"
+     "with the recorded one and reports the first difference in detail, every difference\n"
+     "(up to --max-mismatches, default 10, 0: all) and counts per service (exit 0: all\n"
+     "match, 1: a difference or a damaged file, 2: bad command line or unreadable file).\n"
+     "--ignore PI2,PI3 or SERVICE:N-M (dx:4-7, diag:6; repeatable) leaves plant-dependent\n"
+     "octets out; --report json|junit FILE (repeatable) writes the check for CI. The\n"
+     "address comes from the capture unless given; the rate from --baud, else the\n"
+     "capture, else the lowest its timing allows. A capture from a tty/PTY (answers later\n"
+     "than a line allows) is recognised: 12 Mbit/s, the card at its rate, the inverter\n"
+     "at once (--timing line to replay it as a line's). --lcm publishes the\n"
      "replay's telegrams, card state and parameter services with the capture's times\n"
      "(file://OUT.lcm?mode=w writes an LCM log at any speed). --channel: an LCM log's\n"
      "telegram channel to read ('*' all; default DFP_TELEGRAM when the log has it beside\n"
@@ -302,6 +312,22 @@ const char *help_command_names(void)
         }
     }
     return names;
+}
+
+void help_each_command(help_command_fn *fn, void *ctx)
+{
+    for (size_t i = 0; i < COUNT(commands); i++) {
+        const char *texts[1u + 2u * COUNT(notes)];
+        size_t n = 0;
+        texts[n++] = commands[i].synopsis;
+        for (size_t k = 0; k < COUNT(notes); k++) {
+            if ((notes[k].bit & commands[i].notes) != 0u) {
+                texts[n++] = notes[k].term;
+                texts[n++] = notes[k].text;
+            }
+        }
+        fn(ctx, commands[i].name, texts, n);
+    }
 }
 
 /* ---- man(7) ---- */
