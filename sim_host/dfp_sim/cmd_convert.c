@@ -253,7 +253,7 @@ int cmd_convert(int argc, char **argv)
     }
     if (records == 0 && c.damaged > 0) {
         cli_error("%s: none of its %" PRIu64 " records is a telegram", o.in, c.damaged);
-        return 1;
+        return 2; /* not a capture at all: as replay says of the same file */
     }
     if (!o.quiet) {
         print_summary(&o, in_fmt, &written, records, &c);

@@ -59,7 +59,8 @@ expect_in "summary counts" "2 records, 1 without octets left out, 2 damaged" "$o
 head -c 1000 d.pcap >cut.pcap
 expect_exit 1 "truncated pcap" -- "$sim" convert cut.pcap cut2.pcap
 expect_in "position of the truncation" "record 38 at byte 967: truncated" "$out"
-expect_exit 1 "no telegram at all" -- "$sim" convert /etc/hostname x.pcap
+expect_exit 2 "no telegram at all: not a capture" -- "$sim" convert /etc/hostname x.pcap
+expect_exit 2 "replay says the same of that file" -- "$sim" replay /etc/hostname --check
 
 # Bad command lines.
 expect_exit 2 "no files" -- "$sim" convert
