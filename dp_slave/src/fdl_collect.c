@@ -1,11 +1,11 @@
 #include "dp_slave/fdl_collect.h"
 
+#include "dp_slave/fdl_gap.h"
 #include "hal/hal_uart.h"
 
 static void set_thresholds(fdl_collect_t *c)
 {
-    /* fdl_rx's strict pause: idle = gap - one character > tolerance, in whole microseconds. */
-    c->pause_us = c->strict ? (c->char_ns + FDL_RX_GAP_TOLERANCE_NS) / 1000u : c->relaxed_gap_us;
+    c->pause_us = fdl_gap_pause_us(c->strict, c->char_ns, c->relaxed_gap_us);
 }
 
 void fdl_collect_init(fdl_collect_t *c, uint8_t *buf, uint32_t baud, bool strict)
@@ -37,9 +37,10 @@ static unsigned drop(fdl_collect_t *c, fdl_rx_error_t e, hal_time_us_t t)
     return FDL_COLLECT_ERROR;
 }
 
-static unsigned complete(fdl_collect_t *c, hal_time_us_t t)
+/* buf is c->buf, passed so that it is not read again after an octet was stored through it */
+static unsigned complete(fdl_collect_t *c, const uint8_t *buf, hal_time_us_t t)
 {
-    c->telegram = (fdl_rx_telegram_t){.buf = c->buf, .len = c->len, .error = FDL_RX_OK,
+    c->telegram = (fdl_rx_telegram_t){.buf = buf, .len = c->len, .error = FDL_RX_OK,
                                       .end_t = t, .idle_before_ns = c->idle_before_ns};
     c->len = 0;
     c->synced = true;
@@ -63,7 +64,7 @@ unsigned fdl_collect_step(fdl_collect_t *c, hal_time_us_t t)
         c->expected = (uint16_t)(b[1] + FDL_SD2_OVERHEAD);
         return 0u;
     }
-    return complete(c, t);
+    return complete(c, b, t);
 }
 
 /* Octets up to the slow path's next look; SD2 first stops at LE/LEr. 0: not a start delimiter. */
@@ -81,27 +82,22 @@ static uint16_t first_look(uint8_t sd)
 
 unsigned fdl_collect_slow(fdl_collect_t *c, uint8_t byte, uint8_t flags, hal_time_us_t t)
 {
-    /* The gap, judged as fdl_rx_char judges it. A gap fdl_rx_poll() would have forgotten is an
-     * idle line of unknown length; so is a difference below -FDL_RX_FORGET_US, which on a
-     * monotonic counter can only be 2^31 µs or more of silence, wrapped. A smaller negative
-     * difference is clock jitter (two clocks, relaxed timing): no gap, but a resync, as in
-     * fdl_rx_char. */
-    uint32_t idle_ns = UINT32_MAX;
-    bool paused = true;
-    bool resync = true;
-    int32_t dt_raw = hal_time_diff(t, c->last_t);
-    if (c->have_last && dt_raw < (int32_t)FDL_RX_FORGET_US && dt_raw > -(int32_t)FDL_RX_FORGET_US) {
-        uint32_t dt_us = dt_raw < 0 ? 0u : (uint32_t)dt_raw;
-        uint64_t dt_ns = (uint64_t)dt_us * 1000u;
-        idle_ns = dt_ns > c->char_ns ? (uint32_t)(dt_ns - c->char_ns) : 0u;
-        paused = c->strict ? idle_ns > FDL_RX_GAP_TOLERANCE_NS : dt_us > c->relaxed_gap_us;
-        resync = c->strict ? paused : (dt_raw < 0 || dt_us >= c->relaxed_resync_us);
+    /* The gap, judged as fdl_rx_char judges it (fdl_gap.h). A gap fdl_rx_poll() would have
+     * forgotten is an idle line of unknown length; so is a difference below -FDL_RX_FORGET_US,
+     * which on a monotonic counter can only be 2^31 µs or more of silence, wrapped. A smaller
+     * negative difference is clock jitter, which fdl_gap_judge() handles. */
+    int32_t dt = hal_time_diff(t, c->last_t);
+    bool known = c->have_last && /* -FDL_RX_FORGET_US < dt < FDL_RX_FORGET_US, in one compare */
+                 (uint32_t)dt + (FDL_RX_FORGET_US - 1u) < 2u * FDL_RX_FORGET_US - 1u;
+    fdl_gap_t gap = fdl_gap_judge(known, dt, c->strict, c->char_ns, c->pause_us,
+                                  c->relaxed_resync_us);
+    if (!known) {
+        c->have_last = true; /* known implies it already: no store on the usual path (ISR) */
     }
-    c->have_last = true;
     c->last_t = t;
 
     unsigned out = 0;
-    if (c->len != 0u && paused) {
+    if (c->len != 0u && gap.pause) {
         out = drop(c, FDL_RX_ERR_GAP, t); /* the character may start the next telegram */
     }
     if ((flags & (HAL_UART_RX_PARITY_ERR | HAL_UART_RX_FRAMING_ERR | HAL_UART_RX_OVERRUN_ERR)) !=
@@ -112,16 +108,17 @@ unsigned fdl_collect_slow(fdl_collect_t *c, uint8_t byte, uint8_t flags, hal_tim
         c->buf[c->len++] = byte;
         return c->len == c->expected ? fdl_collect_step(c, t) : 0u;
     }
-    if (!c->synced && !resync) {
+    if (!c->synced && !gap.resync) {
         return out; /* still inside garbage: ignore until the line pauses */
     }
     uint16_t look = first_look(byte);
     if (look == 0u) {
         return drop(c, FDL_RX_ERR_SD, t);
     }
-    c->buf[0] = byte;
+    uint8_t *buf = c->buf;
+    buf[0] = byte;
     c->len = 1;
     c->expected = look;
-    c->idle_before_ns = idle_ns;
-    return look == 1u ? (out | complete(c, t)) : out;
+    c->idle_before_ns = gap.idle_ns;
+    return look == 1u ? (out | complete(c, buf, t)) : out;
 }

@@ -1,6 +1,7 @@
 #include "dp_slave/fdl_rx.h"
 
 #include "dp_slave/fdl_frame.h"
+#include "dp_slave/fdl_gap.h"
 #include "hal/hal_uart.h"
 
 void fdl_rx_init(fdl_rx_t *rx, uint32_t baud, bool strict)
@@ -163,33 +164,15 @@ hal_time_us_t fdl_rx_poll(fdl_rx_t *rx, hal_time_us_t now)
 
 fdl_rx_result_t fdl_rx_char(fdl_rx_t *rx, uint8_t byte, uint8_t flags, hal_time_us_t t)
 {
-    /* How long the line was idle between the previous character and this one. */
-    uint32_t idle_ns = UINT32_MAX;
-    bool paused = true;
-    if (rx->have_last) {
-        int32_t dt_us = hal_time_diff(t, rx->last_char_t);
-        if (dt_us < 0) {
-            dt_us = 0;
-        }
-        uint64_t dt_ns = (uint64_t)(uint32_t)dt_us * 1000u;
-        idle_ns = dt_ns > rx->char_ns ? (uint32_t)((dt_ns - rx->char_ns) > UINT32_MAX - 1u
-                                                       ? UINT32_MAX - 1u
-                                                       : (dt_ns - rx->char_ns))
-                                      : 0u;
-        if (rx->strict) {
-            paused = idle_ns > FDL_RX_GAP_TOLERANCE_NS;
-        } else {
-            paused = (uint32_t)dt_us > rx->relaxed_gap_us;
-        }
-    }
-    bool resync_pause = rx->strict ? paused
-                                   : (!rx->have_last ||
-                                      (uint32_t)hal_time_diff(t, rx->last_char_t) >=
-                                          rx->relaxed_resync_us);
+    /* The collector judges the same way (fdl_gap.h); fdl_rx_poll() clears have_last. */
+    fdl_gap_t gap = fdl_gap_judge(rx->have_last, hal_time_diff(t, rx->last_char_t), rx->strict,
+                                  rx->char_ns,
+                                  fdl_gap_pause_us(rx->strict, rx->char_ns, rx->relaxed_gap_us),
+                                  rx->relaxed_resync_us);
     rx->have_last = true;
     rx->last_char_t = t;
 
-    if (rx->collecting && paused) {
+    if (rx->collecting && gap.pause) {
         (void)fail(rx, FDL_RX_ERR_GAP);
         /* the character after the pause may begin the next telegram: fall through */
     }
@@ -199,7 +182,7 @@ fdl_rx_result_t fdl_rx_char(fdl_rx_t *rx, uint8_t byte, uint8_t flags, hal_time_
     }
 
     if (!rx->collecting) {
-        if (!rx->synced && !resync_pause) {
+        if (!rx->synced && !gap.resync) {
             return FDL_RX_NOTHING; /* still inside garbage: ignore until the line pauses */
         }
         uint16_t need = length_for_sd(byte);
@@ -207,7 +190,7 @@ fdl_rx_result_t fdl_rx_char(fdl_rx_t *rx, uint8_t byte, uint8_t flags, hal_time_
             return fail(rx, FDL_RX_ERR_SD);
         }
         rx->collecting = true;
-        rx->idle_before_pending_ns = idle_ns;
+        rx->idle_before_pending_ns = gap.idle_ns;
         rx->buf[0] = byte;
         rx->len = 1;
         rx->expected = need;

@@ -8,13 +8,14 @@
  * character error, the end) is the slow path, once per telegram. FCS and ED are left to
  * fdl_rx_telegram() in the core, which gets the finished telegram with its idle-before time.
  *
- * The rules are fdl_rx's (fdl_rx.h, strict and relaxed timing alike), with two differences a
- * per-telegram check brings: a telegram with a bad FCS or ED does not make the collector wait
- * for a pause before the next start delimiter (in strict timing the core still refuses a request
- * without TSYN idle before it), and when a pause ends a telegram and the character after it is
- * refused too (an error flag, or not a start delimiter), only that second error is reported
- * (fdl_rx counts both and reports the second). Without a poll, the collector reads a silence of
- * 2^31 µs or more from the wrapped counter difference (below -1 s) as fdl_rx_poll would.
+ * The rules are fdl_rx's (fdl_rx.h, strict and relaxed timing alike; the time between characters
+ * is judged by the same code, fdl_gap.h), with two differences a per-telegram check brings: a
+ * telegram with a bad FCS or ED does not make the collector wait for a pause before the next
+ * start delimiter (in strict timing the core still refuses a request without TSYN idle before
+ * it), and when a pause ends a telegram and the character after it is refused too (an error
+ * flag, or not a start delimiter), only that second error is reported (fdl_rx counts both and
+ * reports the second). Without a poll, the collector reads a silence of 2^31 µs or more from the
+ * wrapped counter difference (below -1 s) as fdl_rx_poll would.
  *
  * The caller owns the buffers: after FDL_COLLECT_TELEGRAM it must give a new one with
  * fdl_collect_give_buffer() before the next character (the telegram's stays the caller's until
@@ -38,7 +39,7 @@ typedef struct fdl_collect {
     uint16_t len;      /* octets so far; 0 between telegrams */
     uint16_t expected; /* the count at which the slow path looks again (LE, SD2, the end) */
     hal_time_us_t last_t;
-    uint32_t pause_us; /* a gap above this ends a telegram (strict: a character + tolerance) */
+    uint32_t pause_us; /* a gap above this ends a telegram (fdl_gap_pause_us) */
     bool have_last;
     bool synced; /* between telegrams, or a pause followed the last error */
     bool strict;

@@ -4,7 +4,7 @@
  * telegram. Whether a request had TSYN idle before it is recorded (idle_before_ns) and judged by
  * the FDL layer, because a response may follow a request after only min TSDR.
  *
- * Two timing models:
+ * Two timing models (the rule itself is fdl_gap.h, shared with the MCU's collector):
  *  - strict: character timestamps are exact (MCU, in-memory bus); any pause longer than
  *    FDL_RX_GAP_TOLERANCE_NS inside a telegram aborts it;
  *  - relaxed: timestamps come from an OS that delivers bytes in chunks (PTY, USB adapter);
