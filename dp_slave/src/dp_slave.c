@@ -36,11 +36,38 @@ void dp_slave_emit(dp_slave_t *s, dp_event_type_t type, hal_time_us_t t, uint32_
     if (s->cfg.hooks.event == NULL) {
         return;
     }
-    dp_event_t ev = {
-        .type = type, .t = t, .old_state = s->state, .new_state = s->state,
-        .master = master, .value = value,
-    };
+    dp_event_t ev; /* field by field: a zeroing initialiser is a memset call on the reply path */
+    ev.type = type;
+    ev.t = t;
+    ev.old_state = s->state;
+    ev.new_state = s->state;
+    ev.master = master;
+    ev.value = value;
     s->cfg.hooks.event(s->cfg.hooks.ctx, &ev);
+}
+
+/* The Data_Exchange reply's DU and its octet sum, for the current inputs and input length. */
+static void frame_inputs(dp_slave_t *s)
+{
+    /* Into a buffer that neither the newest inputs nor a cached reply (the one a retry or the
+     * transmitter may be reading) occupy; three buffers always leave one. */
+    uint8_t i = s->dx_current;
+    for (uint8_t k = 1; k < DP_DX_BUFFERS; k++) {
+        i = (uint8_t)((s->dx_current + k) % DP_DX_BUFFERS);
+        if (!fdl_station_references(s, s->dx[i].buf, false)) {
+            break;
+        }
+    }
+    if (i == s->dx_current || fdl_station_references(s, s->dx[i].buf, false)) {
+        /* Only masters that owned the slave before point at the others: a retry of theirs runs
+         * anew (and is refused) instead of being answered from a buffer about to change. */
+        i = (uint8_t)((s->dx_current + 1u) % DP_DX_BUFFERS);
+        (void)fdl_station_references(s, s->dx[i].buf, true);
+    }
+    dp_dx_buffer_t *dx = &s->dx[i];
+    memcpy(&dx->buf[FDL_TX_HEADROOM], s->inputs, sizeof s->inputs);
+    dx->sum = fdl_fcs(&dx->buf[FDL_TX_HEADROOM], s->in_len);
+    s->dx_current = i;
 }
 
 static void give_outputs(dp_slave_t *s, const uint8_t *out, size_t len, dp_outputs_reason_t why)
@@ -53,8 +80,7 @@ static void give_outputs(dp_slave_t *s, const uint8_t *out, size_t len, dp_outpu
 static void clear_outputs(dp_slave_t *s, dp_outputs_reason_t why)
 {
     memset(s->outputs, 0, sizeof s->outputs);
-    memset(s->latched_outputs, 0, sizeof s->latched_outputs);
-    s->sync_latched = false;
+    s->sync_latched = false; /* latched_outputs is written whole before it is latched again */
     give_outputs(s, s->outputs, s->out_len, why);
 }
 
@@ -77,8 +103,13 @@ static void set_state(dp_slave_t *s, dp_state_t next, hal_time_us_t t)
         s->dpv1_mode = false;
     }
     if (s->cfg.hooks.event != NULL) {
-        dp_event_t ev = {.type = DP_EV_STATE, .t = t, .old_state = prev, .new_state = next,
-                         .master = s->master_add, .value = 0};
+        dp_event_t ev;
+        ev.type = DP_EV_STATE;
+        ev.t = t;
+        ev.old_state = prev;
+        ev.new_state = next;
+        ev.master = s->master_add;
+        ev.value = 0;
         s->cfg.hooks.event(s->cfg.hooks.ctx, &ev);
     }
 }
@@ -245,6 +276,7 @@ static void svc_chk_cfg(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
     if (changed) {
         s->out_len = out_len;
         s->in_len = in_len;
+        frame_inputs(s);
         memset(s->frozen_inputs, 0, sizeof s->frozen_inputs);
         clear_outputs(s, DP_OUTPUTS_CLEAR);
     }
@@ -389,7 +421,12 @@ static void svc_data_exchange(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t
         }
         return;
     }
-    fdl_station_reply_plain(s, m, code, s->freeze_mode ? s->frozen_inputs : s->inputs, s->in_len);
+    if (s->freeze_mode) {
+        fdl_station_reply_plain(s, m, code, s->frozen_inputs, s->in_len);
+        return;
+    }
+    dp_dx_buffer_t *dx = &s->dx[s->dx_current];
+    fdl_station_reply_framed(s, m, code, false, dx->buf, s->in_len, dx->sum);
 }
 
 /* MSAC1S, MSAC2S (SAPs below 55): the device's DP-V1 layer decides, the FDL encodes. */
@@ -399,17 +436,27 @@ static void svc_msac(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
         fdl_station_reply_rs(s, m);
         return;
     }
-    uint8_t reply[DP_SAP_REPLY_MAX];
-    size_t len = 0;
+    dp_sap_reply_t r = {.buf = s->tx_buf};
     dp_sap_answer_t a = s->cfg.hooks.sap_request(s->cfg.hooks.ctx, m->sa, m->dsap, m->ssap,
-                                                 m->data, m->data_len, reply, &len, t);
+                                                 m->data, m->data_len, &r, t);
     switch (a) {
     case DP_SAP_ANSWER_SC:
         fdl_station_reply_sc(s);
         break;
-    case DP_SAP_ANSWER_DATA:
-        fdl_station_reply_sap(s, m, reply, len <= DP_SAP_REPLY_MAX ? len : DP_SAP_REPLY_MAX);
+    case DP_SAP_ANSWER_DATA: {
+        size_t len = r.len <= DP_SAP_REPLY_MAX ? r.len : DP_SAP_REPLY_MAX;
+        if (r.buf == s->tx_buf && len > DP_SAP_REPLY_SHORT) {
+            len = DP_SAP_REPLY_SHORT; /* more than the device may write into the slave's buffer */
+        }
+        uint8_t *du = &r.buf[FDL_TX_HEADROOM];
+        uint8_t sum = r.sum_known && len == r.len ? r.sum : fdl_fcs(du, len);
+        fdl_station_reply_framed(s, m, FDL_RSP_DL, true, r.buf, len, sum);
+        if (r.buf != s->tx_buf) {
+            s->tx_guard = r.guard;
+            s->tx_guard_value = r.guard_value;
+        }
         break;
+    }
     case DP_SAP_NOT_SERVED:
     default:
         fdl_station_reply_rs(s, m);
@@ -455,7 +502,7 @@ static const dp_service_fn service_fn[DP_SERVICE_COUNT] = {
 
 void dp_slave_request(dp_slave_t *s, const fdl_msg_t *m, bool sdn, hal_time_us_t t)
 {
-    s->reply_len = 0;
+    s->tx_len = 0;
     if (m->has_dsap && !m->has_ssap) {
         if (!sdn) {
             fdl_station_reply_rs(s, m); /* a DSAP needs its SSAP to be answered */
@@ -540,6 +587,7 @@ void dp_slave_set_inputs(dp_slave_t *s, const uint8_t *in, size_t len)
         len = DP_MAX_IO_LEN;
     }
     memcpy(s->inputs, in, len);
+    frame_inputs(s);
 }
 
 void dp_slave_set_ext_diag(dp_slave_t *s, const uint8_t *diag, size_t len)

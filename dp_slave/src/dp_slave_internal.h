@@ -15,16 +15,22 @@ void dp_slave_emit(dp_slave_t *s, dp_event_type_t type, hal_time_us_t t, uint32_
                    uint8_t master);
 
 /* DP slave machine: one request that passed the FDL station (addressed to this station, or a
- * broadcast SDN). sdn = sent without reply. Leaves the reply, if any, in s->reply. */
+ * broadcast SDN). sdn = sent without reply. Leaves the reply, if any, in s->tx. */
 void dp_slave_request(dp_slave_t *s, const fdl_msg_t *m, bool sdn, hal_time_us_t t);
 
-/* FDL station: replies encoded into s->reply. */
+/* FDL station: the reply to send (s->tx, s->tx_len), built in s->tx_buf or framed where its DU
+ * lies. */
 void fdl_station_reply_sc(dp_slave_t *s);
+void fdl_station_reply_framed(dp_slave_t *s, const fdl_msg_t *m, uint8_t code, bool saps,
+                              uint8_t *buf, size_t du_len, uint8_t du_sum);
 void fdl_station_reply_plain(dp_slave_t *s, const fdl_msg_t *m, uint8_t code,
                              const uint8_t *data, size_t len);
 void fdl_station_reply_sap(dp_slave_t *s, const fdl_msg_t *m, const uint8_t *data, size_t len);
 void fdl_station_reply_rs(dp_slave_t *s, const fdl_msg_t *m);
 
+/* True when a cached reply points into buf (one of the Data_Exchange buffers); with forget,
+ * those cached replies are dropped. */
+bool fdl_station_references(dp_slave_t *s, const uint8_t *buf, bool forget);
 /* FDL station: a complete telegram is in s->rx. */
 void fdl_station_frame(dp_slave_t *s);
 /* The rate or min TSDR changed: recompute what the reply path needs of them. */

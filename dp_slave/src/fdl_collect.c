@@ -40,8 +40,18 @@ static unsigned drop(fdl_collect_t *c, fdl_rx_error_t e, hal_time_us_t t)
 /* buf is c->buf, passed so that it is not read again after an octet was stored through it */
 static unsigned complete(fdl_collect_t *c, const uint8_t *buf, hal_time_us_t t)
 {
-    c->telegram = (fdl_rx_telegram_t){.buf = buf, .len = c->len, .error = FDL_RX_OK,
-                                      .end_t = t, .idle_before_ns = c->idle_before_ns};
+    /* DA..DU: the running sum without the delimiter (and LE, LEr, SD2 again), FCS and ED. */
+    uint16_t n = c->len;
+    uint32_t sum = c->sum;
+    if (n >= FDL_SD1_LEN) {
+        sum -= (uint32_t)buf[0] + buf[n - 2u] + buf[n - 1u];
+        if (buf[0] == FDL_SD2) {
+            sum -= (uint32_t)buf[1] + buf[2] + buf[3];
+        }
+    }
+    c->telegram = (fdl_rx_telegram_t){.buf = buf, .len = n, .error = FDL_RX_OK, .end_t = t,
+                                      .idle_before_ns = c->idle_before_ns,
+                                      .sum_known = true, .sum = (uint8_t)sum};
     c->len = 0;
     c->synced = true;
     return FDL_COLLECT_TELEGRAM;
@@ -105,6 +115,7 @@ unsigned fdl_collect_slow(fdl_collect_t *c, uint8_t byte, uint8_t flags, hal_tim
         return drop(c, FDL_RX_ERR_CHAR, t);
     }
     if (c->len != 0u) { /* inside a telegram, no pause: a plain character after all */
+        c->sum += byte;
         c->buf[c->len++] = byte;
         return c->len == c->expected ? fdl_collect_step(c, t) : 0u;
     }
@@ -117,6 +128,7 @@ unsigned fdl_collect_slow(fdl_collect_t *c, uint8_t byte, uint8_t flags, hal_tim
     }
     uint8_t *buf = c->buf;
     buf[0] = byte;
+    c->sum = byte;
     c->len = 1;
     c->expected = look;
     c->idle_before_ns = gap.idle_ns;

@@ -96,8 +96,14 @@ static size_t addressed_len(const uint8_t *frame)
 
 fdl_parse_result_t fdl_parse(const uint8_t *frame, size_t len, fdl_msg_t *msg)
 {
-    *msg = (fdl_msg_t){0};
+    /* Field by field: a zeroing struct assignment is a memset call on the reply path. */
     msg->sd = frame[0];
+    msg->has_dsap = false;
+    msg->has_ssap = false;
+    msg->dsap = 0;
+    msg->ssap = 0;
+    msg->data = NULL;
+    msg->data_len = 0;
     (void)len;
     size_t da_at = da_offset(frame[0]);
     if (da_at == 0u) {
@@ -271,5 +277,41 @@ size_t fdl_encode(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps, u
     out[p] = fdl_fcs(&out[start], p - start);
     p++;
     out[p++] = FDL_ED;
+    return p;
+}
+
+const uint8_t *fdl_frame_in_place(uint8_t *buf, size_t du_len, uint8_t du_sum, uint8_t da,
+                                  uint8_t sa, uint8_t fc, bool saps, uint8_t dsap, uint8_t ssap,
+                                  size_t *len)
+{
+    uint8_t *end = &buf[FDL_TX_HEADROOM + du_len];
+    uint8_t *p = &buf[FDL_TX_HEADROOM];
+    uint8_t addr_bits = saps ? FDL_ADDR_EXT : 0u;
+    uint32_t sum = du_sum;
+    if (saps) {
+        *--p = (uint8_t)(ssap & FDL_AE_SAP_MASK);
+        *--p = (uint8_t)(dsap & FDL_AE_SAP_MASK);
+        sum += p[0] + p[1];
+    }
+    *--p = fc;
+    *--p = (uint8_t)((sa & FDL_ADDR_MASK) | addr_bits);
+    *--p = (uint8_t)((da & FDL_ADDR_MASK) | addr_bits);
+    sum += (uint32_t)p[0] + p[1] + p[2];
+    size_t total_du = du_len + (saps ? 2u : 0u);
+    if (total_du == 0u) {
+        *--p = FDL_SD1;
+    } else if (total_du == FDL_SD3_DU_LEN) {
+        *--p = FDL_SD3;
+    } else {
+        uint8_t le = (uint8_t)(total_du + FDL_ADDR_FC_LEN);
+        p -= FDL_SD2_HEADER_LEN;
+        p[0] = FDL_SD2;
+        p[1] = le;
+        p[2] = le;
+        p[3] = FDL_SD2;
+    }
+    end[0] = (uint8_t)sum;
+    end[1] = FDL_ED;
+    *len = (size_t)(end + FDL_TRAILER_LEN - p);
     return p;
 }

@@ -49,22 +49,23 @@ static fdl_rx_result_t fail(fdl_rx_t *rx, fdl_rx_error_t e)
     return FDL_RX_ERROR;
 }
 
-/* The check octets of a telegram whose length already fits its start delimiter. */
-static fdl_rx_error_t check_octets(const uint8_t *b, uint16_t n)
+/* The check octets of a telegram whose length already fits its start delimiter; sum, when
+ * known, is the octet sum of DA..DU. */
+static fdl_rx_error_t check_octets(const uint8_t *b, uint16_t n, bool sum_known, uint8_t sum)
 {
     switch (b[0]) {
     case FDL_SD1:
-        if (fdl_fcs(&b[1], 3u) != b[4]) {
+        if ((sum_known ? sum : fdl_fcs(&b[1], 3u)) != b[4]) {
             return FDL_RX_ERR_FCS;
         }
         break;
     case FDL_SD3:
-        if (fdl_fcs(&b[1], 3u + FDL_SD3_DU_LEN) != b[12]) {
+        if ((sum_known ? sum : fdl_fcs(&b[1], 3u + FDL_SD3_DU_LEN)) != b[12]) {
             return FDL_RX_ERR_FCS;
         }
         break;
     case FDL_SD2:
-        if (fdl_fcs(&b[4], b[1]) != b[n - 2u]) {
+        if ((sum_known ? sum : fdl_fcs(&b[4], b[1])) != b[n - 2u]) {
             return FDL_RX_ERR_FCS;
         }
         break;
@@ -94,7 +95,7 @@ static fdl_rx_result_t accept(fdl_rx_t *rx, const uint8_t *frame, uint16_t n, ha
 
 static fdl_rx_result_t complete(fdl_rx_t *rx, hal_time_us_t t)
 {
-    fdl_rx_error_t e = check_octets(rx->buf, rx->len);
+    fdl_rx_error_t e = check_octets(rx->buf, rx->len, false, 0);
     if (e != FDL_RX_OK) {
         return fail(rx, e);
     }
@@ -139,7 +140,7 @@ fdl_rx_result_t fdl_rx_telegram(fdl_rx_t *rx, const fdl_rx_telegram_t *tg)
         e = check_length(tg->buf, tg->len);
     }
     if (e == FDL_RX_OK) {
-        e = check_octets(tg->buf, tg->len);
+        e = check_octets(tg->buf, tg->len, tg->sum_known, tg->sum);
     }
     if (e != FDL_RX_OK) {
         fdl_rx_result_t r = fail(rx, e);

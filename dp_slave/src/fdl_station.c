@@ -77,35 +77,56 @@ hal_time_us_t fdl_station_poll(dp_slave_t *s, hal_time_us_t now)
 
 /* ---- replies ------------------------------------------------------------------------------ */
 
+static const uint8_t short_ack = FDL_SC;
+
 void fdl_station_reply_sc(dp_slave_t *s)
 {
-    s->reply[0] = FDL_SC;
-    s->reply_len = 1;
+    s->tx = &short_ack;
+    s->tx_len = FDL_SC_LEN;
+}
+
+/* A reply whose DU lies at buf + FDL_TX_HEADROOM with the octet sum du_sum. */
+void fdl_station_reply_framed(dp_slave_t *s, const fdl_msg_t *m, uint8_t code, bool saps,
+                              uint8_t *buf, size_t du_len, uint8_t du_sum)
+{
+    size_t len;
+    s->tx = fdl_frame_in_place(buf, du_len, du_sum, m->sa, s->cfg.address, code, saps, m->ssap,
+                               m->dsap, &len);
+    s->tx_len = (uint16_t)len;
+}
+
+static void reply_copied(dp_slave_t *s, const fdl_msg_t *m, uint8_t code, bool saps,
+                         const uint8_t *data, size_t len)
+{
+    uint8_t *du = &s->tx_buf[FDL_TX_HEADROOM];
+    if (len > 0u) {
+        memcpy(du, data, len);
+    }
+    fdl_station_reply_framed(s, m, code, saps, s->tx_buf, len, fdl_fcs(du, len));
 }
 
 /* A reply without SAP octets: RS/RR/UE status or Data_Exchange data. */
 void fdl_station_reply_plain(dp_slave_t *s, const fdl_msg_t *m, uint8_t code,
                              const uint8_t *data, size_t len)
 {
-    s->reply_len = (uint16_t)fdl_encode(s->reply, m->sa, s->cfg.address, code, false, 0, 0, data,
-                                        len);
+    reply_copied(s, m, code, false, data, len);
 }
 
 /* A reply to a SAP request: SAPs swapped. */
 void fdl_station_reply_sap(dp_slave_t *s, const fdl_msg_t *m, const uint8_t *data, size_t len)
 {
-    s->reply_len = (uint16_t)fdl_encode(s->reply, m->sa, s->cfg.address, FDL_RSP_DL, true,
-                                        m->ssap, m->dsap, data, len);
+    reply_copied(s, m, FDL_RSP_DL, true, data, len);
 }
 
 void fdl_station_reply_rs(dp_slave_t *s, const fdl_msg_t *m)
 {
-    fdl_station_reply_plain(s, m, FDL_RSP_RS, NULL, 0);
+    fdl_station_reply_framed(s, m, FDL_RSP_RS, false, s->tx_buf, 0, 0);
 }
 
 /* ---- FCB retry cache (protocol.md §A1.5) -------------------------------------------------- */
 
-static fdl_fcb_slot_t *fcb_slot(dp_slave_t *s, uint8_t master, bool create)
+/* The master's slot, or the least recently used one taken over for it. */
+static fdl_fcb_slot_t *fcb_slot(dp_slave_t *s, uint8_t master)
 {
     fdl_fcb_slot_t *oldest = &s->fcb[0];
     for (size_t i = 0; i < FDL_FCB_SLOTS; i++) {
@@ -117,10 +138,10 @@ static fdl_fcb_slot_t *fcb_slot(dp_slave_t *s, uint8_t master, bool create)
             oldest = e;
         }
     }
-    if (!create) {
-        return NULL;
-    }
-    *oldest = (fdl_fcb_slot_t){.used = true, .master = master};
+    oldest->used = true;
+    oldest->master = master;
+    oldest->fcb_valid = false;
+    oldest->reply_len = 0;
     return oldest;
 }
 
@@ -132,6 +153,22 @@ static void fcb_touch(dp_slave_t *s, fdl_fcb_slot_t *e)
         }
     }
     e->age = 0;
+}
+
+bool fdl_station_references(dp_slave_t *s, const uint8_t *buf, bool forget)
+{
+    bool found = false;
+    for (size_t i = 0; i < FDL_FCB_SLOTS; i++) {
+        fdl_fcb_slot_t *e = &s->fcb[i];
+        if (e->used && e->reply_len > 0u &&
+            (uintptr_t)e->reply - (uintptr_t)buf < FDL_TX_HEADROOM) {
+            found = true;
+            if (forget) {
+                e->reply_len = 0;
+            }
+        }
+    }
+    return found;
 }
 
 /* ---- receive path ------------------------------------------------------------------------- */
@@ -201,26 +238,30 @@ static bool accept_request(dp_slave_t *s, fdl_msg_t *m, hal_time_us_t t)
 }
 
 /* SRD: a retry (same FCB, FCV set) gets the cached reply and is not executed again; anything
- * else runs and its reply is cached for the next retry. */
+ * else runs and its reply is cached, by reference, for the next retry. */
 static void serve_srd(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
 {
     bool fcv = (m->fc & FDL_FC_FCV) != 0u;
     uint8_t fcb = (m->fc & FDL_FC_FCB) != 0u ? 1u : 0u;
-    fdl_fcb_slot_t *slot = fcb_slot(s, m->sa, false);
-    if (fcv && slot != NULL && slot->fcb_valid && slot->fcb == fcb && slot->reply_len > 0u) {
-        fcb_touch(s, slot);
+    fdl_fcb_slot_t *slot = fcb_slot(s, m->sa);
+    fcb_touch(s, slot);
+    if (fcv && slot->fcb_valid && slot->fcb == fcb && slot->reply_len > 0u &&
+        (slot->guard == NULL || *slot->guard == slot->guard_value)) {
         dp_slave_emit(s, DP_EV_FCB_REPEAT, t, m->fc, m->sa);
         transmit(s, slot->reply, slot->reply_len, t);
         return;
     }
+    slot->reply_len = 0; /* its buffer is about to be written */
+    s->tx_buf = slot->buf;
+    s->tx_guard = NULL;
     dp_slave_request(s, m, false, t);
-    slot = fcb_slot(s, m->sa, true);
-    fcb_touch(s, slot);
     slot->fcb_valid = fcv || fcb != 0u;
     slot->fcb = fcb;
-    slot->reply_len = s->reply_len;
-    memcpy(slot->reply, s->reply, s->reply_len);
-    transmit(s, s->reply, s->reply_len, t);
+    slot->reply = s->tx;
+    slot->reply_len = s->tx_len;
+    slot->guard = s->tx_guard;
+    slot->guard_value = s->tx_guard_value;
+    transmit(s, s->tx, s->tx_len, t);
 }
 
 void fdl_station_frame(dp_slave_t *s)
@@ -235,12 +276,13 @@ void fdl_station_frame(dp_slave_t *s)
     switch ((uint8_t)(m.fc & FDL_FC_CODE_MASK)) {
     case FDL_REQ_FDL_STATUS:
         if (!broadcast) {
-            fdl_station_reply_plain(s, &m, FDL_RSP_OK, NULL, 0);
-            transmit(s, s->reply, s->reply_len, t);
+            fdl_station_reply_framed(s, &m, FDL_RSP_OK, false, s->tx_scratch, 0, 0);
+            transmit(s, s->tx, s->tx_len, t);
         }
         return;
     case FDL_REQ_SDN_LOW:
     case FDL_REQ_SDN_HIGH:
+        s->tx_buf = s->tx_scratch; /* an SDN has no reply; nothing may be built in a slot */
         dp_slave_request(s, &m, true, t);
         return;
     case FDL_REQ_SRD_LOW:
@@ -251,8 +293,9 @@ void fdl_station_frame(dp_slave_t *s)
         return;
     default:
         if (!broadcast) {
+            s->tx_buf = s->tx_scratch;
             fdl_station_reply_rs(s, &m);
-            transmit(s, s->reply, s->reply_len, t);
+            transmit(s, s->tx, s->tx_len, t);
         }
         return;
     }

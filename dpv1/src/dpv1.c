@@ -2,14 +2,15 @@
 
 #include <string.h>
 
+#include "dp_slave/fdl_frame.h"
 #include "dpv1/dpv1_wire.h"
 
 static void conn_close(dpv1_conn_t *c)
 {
     c->open = false;
     c->mailbox = DPV1_MB_EMPTY;
-    c->req_len = 0;
-    c->rsp_len = 0;
+    c->seq++;
+    c->pdu_len = 0;
     c->im_selected = IM_INDEX_0;
     ds47_reset(&c->ds47);
 }
@@ -24,6 +25,8 @@ void dpv1_init(dpv1_t *d, const dpv1_cfg_t *cfg)
         d->c2[i].im_selected = IM_INDEX_0;
     }
     im_init(&d->im, &cfg->identity, cfg->nvm, cfg->nvm_offset);
+    d->preempt = cfg->preempt;
+    d->preempt_ctx = cfg->preempt_ctx;
 }
 
 void dpv1_dp_state(dpv1_t *d, bool data_exch, bool dpv1_mode, uint8_t master)
@@ -42,42 +45,48 @@ void dpv1_dp_state(dpv1_t *d, bool data_exch, bool dpv1_mode, uint8_t master)
 
 /* A poll hands out a ready response; a PDU goes into the mailbox. Either way: no work here. */
 static dp_sap_answer_t mailbox_request(dpv1_conn_t *c, const uint8_t *data, size_t len,
-                                       uint8_t *reply, size_t *reply_len)
+                                       dp_sap_reply_t *reply)
 {
     if (len == 0u) {
         if (c->mailbox != DPV1_MB_RESPONSE) {
             return DP_SAP_ANSWER_SC;
         }
-        memcpy(reply, c->rsp, c->rsp_len);
-        *reply_len = c->rsp_len;
+        reply->buf = c->frame;
+        reply->len = c->pdu_len;
+        reply->sum_known = true;
+        reply->sum = c->pdu_sum;
+        reply->guard = &c->seq;
+        reply->guard_value = c->seq;
         c->mailbox = DPV1_MB_EMPTY;
         return DP_SAP_ANSWER_DATA;
     }
     if (len > DPV1_MAX_PDU) {
         len = DPV1_MAX_PDU;
     }
-    memcpy(c->req, data, len);
-    c->req_len = (uint8_t)len;
+    memcpy(dpv1_pdu(c), data, len);
+    c->pdu_len = (uint8_t)len;
+    c->seq++;
     c->mailbox = DPV1_MB_REQUEST; /* replaces an unfetched response */
     return DP_SAP_ANSWER_SC;
 }
 
-static dp_sap_answer_t abort_reply(uint8_t reason, uint8_t *reply, size_t *reply_len)
+static dp_sap_answer_t abort_reply(uint8_t reason, dp_sap_reply_t *reply)
 {
-    reply[0] = DPV1_FN_ABORT;
-    reply[1] = 0; /* subnet: none */
-    reply[2] = (uint8_t)(DPV1_ABORT_INSTANCE_C2 | reason);
-    reply[3] = 0;
-    *reply_len = 4;
+    uint8_t *du = &reply->buf[FDL_TX_HEADROOM];
+    du[0] = DPV1_FN_ABORT;
+    du[1] = 0; /* subnet: none */
+    du[2] = (uint8_t)(DPV1_ABORT_INSTANCE_C2 | reason);
+    du[3] = 0;
+    reply->len = 4;
     return DP_SAP_ANSWER_DATA;
 }
 
 static dp_sap_answer_t resource_manager(dpv1_t *d, uint8_t master, uint8_t ssap,
-                                        const uint8_t *data, size_t len, uint8_t *reply,
-                                        size_t *reply_len, hal_time_us_t t)
+                                        const uint8_t *data, size_t len, dp_sap_reply_t *reply,
+                                        hal_time_us_t t)
 {
     if (len < DPV1_INITIATE_MIN || data[0] != DPV1_FN_INITIATE) {
-        return abort_reply(0x02u, reply, reply_len); /* FE: bad request PDU */
+        return abort_reply(0x02u, reply); /* FE: bad request PDU */
     }
     int free_slot = -1;
     for (uint8_t i = 0; i < DPV1_C2_CONNECTIONS; i++) {
@@ -91,7 +100,7 @@ static dp_sap_answer_t resource_manager(dpv1_t *d, uint8_t master, uint8_t ssap,
     }
     if (free_slot < 0) {
         d->c2_refused++;
-        return abort_reply(DPV1_ABORT_REASON_RESOURCE, reply, reply_len);
+        return abort_reply(DPV1_ABORT_REASON_RESOURCE, reply);
     }
     dpv1_conn_t *c = &d->c2[free_slot];
     conn_close(c);
@@ -101,27 +110,28 @@ static dp_sap_answer_t resource_manager(dpv1_t *d, uint8_t master, uint8_t ssap,
     uint32_t timeout_10ms = (uint32_t)((data[4] << 8) | data[5]);
     c->send_timeout_us = (timeout_10ms == 0u ? 1u : timeout_10ms) * 10000u;
     c->last_rx = t;
-    (void)mailbox_request(c, data, len, reply, reply_len); /* Initiate.res comes from poll */
-    reply[0] = DPV1_FN_RM;
-    reply[1] = (uint8_t)(DPV1_C2_FIRST_SAP + (uint8_t)free_slot);
-    reply[2] = 0;
-    reply[3] = 0;
-    *reply_len = 4;
+    (void)mailbox_request(c, data, len, reply); /* Initiate.res comes from poll */
+    uint8_t *du = &reply->buf[FDL_TX_HEADROOM];
+    du[0] = DPV1_FN_RM;
+    du[1] = (uint8_t)(DPV1_C2_FIRST_SAP + (uint8_t)free_slot);
+    du[2] = 0;
+    du[3] = 0;
+    reply->len = 4;
     return DP_SAP_ANSWER_DATA;
 }
 
 dp_sap_answer_t dpv1_sap_request(dpv1_t *d, uint8_t master, uint8_t dsap, uint8_t ssap,
-                                 const uint8_t *data, size_t len, uint8_t *reply,
-                                 size_t *reply_len, hal_time_us_t t)
+                                 const uint8_t *data, size_t len, dp_sap_reply_t *reply,
+                                 hal_time_us_t t)
 {
     if (dsap == DPV1_SAP_C1) {
         if (!d->c1.open || d->c1.master != master || ssap != DPV1_SAP_C1) {
             return DP_SAP_NOT_SERVED;
         }
-        return mailbox_request(&d->c1, data, len, reply, reply_len);
+        return mailbox_request(&d->c1, data, len, reply);
     }
     if (dsap == DPV1_SAP_RM) {
-        return resource_manager(d, master, ssap, data, len, reply, reply_len, t);
+        return resource_manager(d, master, ssap, data, len, reply, t);
     }
     if (dsap < DPV1_C2_FIRST_SAP + DPV1_C2_CONNECTIONS) {
         dpv1_conn_t *c = &d->c2[dsap - DPV1_C2_FIRST_SAP];
@@ -143,11 +153,12 @@ dp_sap_answer_t dpv1_sap_request(dpv1_t *d, uint8_t master, uint8_t dsap, uint8_
         }
         if (len > 0u && data[0] == DPV1_FN_IDLE) {
             size_t n = len < DPV1_HEADER_LEN ? len : DPV1_HEADER_LEN;
-            memcpy(reply, data, n); /* keep-alive: echoed, the mailbox is left alone */
-            *reply_len = n;
+            /* keep-alive: echoed, the mailbox is left alone */
+            memcpy(&reply->buf[FDL_TX_HEADROOM], data, n);
+            reply->len = n;
             return DP_SAP_ANSWER_DATA;
         }
-        return mailbox_request(c, data, len, reply, reply_len);
+        return mailbox_request(c, data, len, reply);
     }
     return DP_SAP_NOT_SERVED;
 }
@@ -163,56 +174,89 @@ static size_t negative(uint8_t *rsp, uint8_t fn, uint8_t code)
     return 4;
 }
 
-static size_t do_read(dpv1_t *d, dpv1_conn_t *c, const uint8_t *pdu, size_t len, uint8_t *rsp)
+static void preempt(const dpv1_t *d)
 {
+    if (d->preempt != NULL) {
+        d->preempt(d->preempt_ctx);
+    }
+}
+
+/* The response is written over the request in pdu: function, slot and index stay in place.
+ * *data_sum: the octet sum of the data after the header. */
+static size_t do_read(dpv1_t *d, dpv1_conn_t *c, uint8_t *pdu, size_t len, uint8_t *data_sum)
+{
+    *data_sum = 0;
     if (len < DPV1_HEADER_LEN) {
-        return negative(rsp, DPV1_FN_READ, DPV1_ERR_INVALID_RANGE);
+        return negative(pdu, DPV1_FN_READ, DPV1_ERR_INVALID_RANGE);
     }
     uint8_t index = pdu[2];
     uint8_t want = pdu[3];
     if (want == 0u || want > DPV1_MAX_DATA) {
-        return negative(rsp, DPV1_FN_READ, DPV1_ERR_INVALID_RANGE);
+        return negative(pdu, DPV1_FN_READ, DPV1_ERR_INVALID_RANGE);
     }
     size_t n = 0;
     uint8_t err;
     if (index == DPV1_INDEX_DS47) {
-        err = ds47_read(&c->ds47, &rsp[DPV1_HEADER_LEN], want, &n);
+        *data_sum = c->ds47.rsp_sum; /* kept while the response was built: no pass over it */
+        err = ds47_read(&c->ds47, &pdu[DPV1_HEADER_LEN], want, &n);
     } else if (index == DPV1_INDEX_IM) {
-        err = im_read(&d->im, c->im_selected, &rsp[DPV1_HEADER_LEN], want, &n);
+        err = im_read(&d->im, c->im_selected, &pdu[DPV1_HEADER_LEN], want, &n);
+        *data_sum = fdl_fcs(&pdu[DPV1_HEADER_LEN], n);
     } else {
         err = DPV1_ERR_INVALID_INDEX;
     }
     if (err != 0u) {
-        return negative(rsp, DPV1_FN_READ, err);
+        return negative(pdu, DPV1_FN_READ, err);
     }
-    memcpy(rsp, pdu, 3);
-    rsp[3] = (uint8_t)n;
+    pdu[3] = (uint8_t)n;
     return DPV1_HEADER_LEN + n;
 }
 
-static size_t do_write(dpv1_t *d, dpv1_conn_t *c, const uint8_t *pdu, size_t len, uint8_t *rsp,
+/* Data set 47 in bounded steps with the caller's chance to reply in between; false when the
+ * request was replaced or the connection closed meanwhile (then nothing is answered). */
+static bool write_ds47(dpv1_t *d, dpv1_conn_t *c, uint8_t seq, const uint8_t *data, size_t n,
+                       hal_time_us_t now, uint8_t *err)
+{
+    *err = ds47_write_step(&c->ds47, data, n, now);
+    while (*err == DS47_IN_PROGRESS) {
+        preempt(d);
+        if (c->seq != seq) {
+            if (c->ds47.state == DS47_PARSING) {
+                ds47_reset(&c->ds47);
+            }
+            return false;
+        }
+        *err = ds47_write_step(&c->ds47, data, n, now);
+    }
+    return true;
+}
+
+/* The response (the request's header, or a negative one) over the request in pdu; 0 when the
+ * request was dropped meanwhile. */
+static size_t do_write(dpv1_t *d, dpv1_conn_t *c, uint8_t *pdu, size_t len, uint8_t seq,
                        hal_time_us_t now)
 {
     if (len < DPV1_HEADER_LEN) {
-        return negative(rsp, DPV1_FN_WRITE, DPV1_ERR_WRITE_LENGTH);
+        return negative(pdu, DPV1_FN_WRITE, DPV1_ERR_WRITE_LENGTH);
     }
     uint8_t index = pdu[2];
     uint8_t n = pdu[3];
     if (n == 0u || n > DPV1_MAX_DATA || (size_t)n != len - DPV1_HEADER_LEN) {
-        return negative(rsp, DPV1_FN_WRITE, DPV1_ERR_WRITE_LENGTH);
+        return negative(pdu, DPV1_FN_WRITE, DPV1_ERR_WRITE_LENGTH);
     }
     uint8_t err;
     if (index == DPV1_INDEX_DS47) {
-        err = ds47_write(&c->ds47, &pdu[DPV1_HEADER_LEN], n, now);
+        if (!write_ds47(d, c, seq, &pdu[DPV1_HEADER_LEN], n, now, &err)) {
+            return 0;
+        }
     } else if (index == DPV1_INDEX_IM) {
         err = im_write(&d->im, &pdu[DPV1_HEADER_LEN], n, &c->im_selected);
     } else {
         err = DPV1_ERR_INVALID_INDEX;
     }
     if (err != 0u) {
-        return negative(rsp, DPV1_FN_WRITE, err);
+        return negative(pdu, DPV1_FN_WRITE, err);
     }
-    memcpy(rsp, pdu, DPV1_HEADER_LEN);
     return DPV1_HEADER_LEN;
 }
 
@@ -232,29 +276,58 @@ static size_t do_initiate(uint8_t *rsp)
 
 static void serve(dpv1_t *d, dpv1_conn_t *c, bool class2, hal_time_us_t now)
 {
-    ds47_poll(&c->ds47, now);
+    if (c->ds47.state == DS47_BUSY) {
+        /* A reply may close the connection in preempt(): ds47_reset() then ends the loop. */
+        while (ds47_poll(&c->ds47, now)) {
+            preempt(d);
+        }
+        preempt(d);
+    }
     if (c->mailbox != DPV1_MB_REQUEST) {
         return;
     }
-    const uint8_t *pdu = c->req;
-    size_t len = c->req_len;
+    uint8_t seq = c->seq;
+    uint8_t *pdu = dpv1_pdu(c);
+    size_t len = c->pdu_len;
     size_t n;
+    uint8_t data_sum = 0;
     switch (pdu[0]) {
     case DPV1_FN_READ:
-        n = do_read(d, c, pdu, len, c->rsp);
+        n = do_read(d, c, pdu, len, &data_sum);
         break;
     case DPV1_FN_WRITE:
-        n = do_write(d, c, pdu, len, c->rsp, now);
+        n = do_write(d, c, pdu, len, seq, now);
+        if (n == 0u) {
+            return; /* replaced or closed while being parsed: the next pass serves what is new */
+        }
         break;
     case DPV1_FN_INITIATE:
-        n = class2 ? do_initiate(c->rsp) : negative(c->rsp, pdu[0], DPV1_ERR_NOT_SUPPORTED);
+        n = class2 ? do_initiate(pdu) : negative(pdu, pdu[0], DPV1_ERR_NOT_SUPPORTED);
         break;
     default:
-        n = negative(c->rsp, pdu[0], DPV1_ERR_NOT_SUPPORTED);
+        n = negative(pdu, pdu[0], DPV1_ERR_NOT_SUPPORTED);
         break;
     }
-    c->rsp_len = (uint8_t)n;
+    c->pdu_len = (uint8_t)n;
+    /* The reply path frames the response without adding it up; a read's data was summed where it
+     * was made. Every other response is a header of a few octets. */
+    size_t summed = n > DPV1_HEADER_LEN && pdu[0] == DPV1_FN_READ ? DPV1_HEADER_LEN : n;
+    c->pdu_sum = (uint8_t)(fdl_fcs(pdu, summed) + (summed < n ? data_sum : 0u));
     c->mailbox = DPV1_MB_RESPONSE;
+}
+
+/* Work is left when a request waits (one that replaced another during a parse). */
+static bool request_waiting(const dpv1_t *d)
+{
+    if (d->c1.open && d->c1.mailbox == DPV1_MB_REQUEST) {
+        return true;
+    }
+    for (uint8_t i = 0; i < DPV1_C2_CONNECTIONS; i++) {
+        if (d->c2[i].open && d->c2[i].mailbox == DPV1_MB_REQUEST) {
+            return true;
+        }
+    }
+    return false;
 }
 
 hal_time_us_t dpv1_poll(dpv1_t *d, hal_time_us_t now)
@@ -265,6 +338,7 @@ hal_time_us_t dpv1_poll(dpv1_t *d, hal_time_us_t now)
     }
     for (uint8_t i = 0; i < DPV1_C2_CONNECTIONS; i++) {
         dpv1_conn_t *c = &d->c2[i];
+        preempt(d);
         if (!c->open) {
             continue;
         }
@@ -277,5 +351,5 @@ hal_time_us_t dpv1_poll(dpv1_t *d, hal_time_us_t now)
         next = hal_time_earlier(next, deadline);
         serve(d, c, true, now);
     }
-    return next;
+    return request_waiting(d) ? now : next;
 }

@@ -3,6 +3,7 @@
 
 #include <string.h>
 
+#include "dp_slave/fdl_frame.h"
 #include "movilink/movilink_wire.h"
 
 void ds47_init(ds47_t *d, ml_client_t *ml, uint8_t channel)
@@ -15,6 +16,7 @@ void ds47_init(ds47_t *d, ml_client_t *ml, uint8_t channel)
 void ds47_reset(ds47_t *d)
 {
     d->state = DS47_IDLE;
+    d->building = false;
     d->rsp_len = 0;
     d->generation++;
 }
@@ -42,7 +44,7 @@ static void fail(ds47_t *d, uint8_t i, uint16_t profidrive, uint16_t movilink)
 {
     d->p[i].ok = false;
     d->p[i].service = ML_SVC_NONE;
-    d->p[i].error = d->id == DS47_ID_MOVILINK ? movilink : profidrive;
+    d->p[i].value = d->id == DS47_ID_MOVILINK ? movilink : profidrive;
 }
 
 static bool is_write(uint8_t service)
@@ -50,107 +52,117 @@ static bool is_write(uint8_t service)
     return service == ML_SVC_WRITE || service == ML_SVC_WRITE_VOLATILE;
 }
 
-/* Address blocks: attribute, elements, number, subindex. Returns false on a header error. */
-static bool parse_addresses(ds47_t *d, const uint8_t *req, size_t len, size_t *pos)
+static bool writes(const ds47_t *d, const ds47_param_t *p)
 {
-    for (uint8_t i = 0; i < d->n; i++) {
-        if (*pos + 6u > len) {
-            return false;
+    return d->id == DS47_ID_CHANGE || (d->id == DS47_ID_MOVILINK && is_write(p->service));
+}
+
+/* One address block: attribute, elements, number, subindex. */
+static void parse_address(ds47_t *d, uint8_t i, const uint8_t *a)
+{
+    ds47_param_t *p = &d->p[i];
+    *p = (ds47_param_t){.number = hal_get_be16(&a[2]), .ok = true};
+    uint8_t attr = a[0];
+    if (d->id == DS47_ID_MOVILINK) {
+        uint8_t svc = (uint8_t)(attr >> DS47_ATTR_ML_SERVICE_SHIFT);
+        p->service = svc;
+        if (svc != ML_SVC_READ && svc != ML_SVC_WRITE && svc != ML_SVC_WRITE_VOLATILE) {
+            fail(d, i, 0, 0x0505u);
+            p->service = svc; /* still decides whether a value block follows */
         }
-        const uint8_t *a = &req[*pos];
-        *pos += 6u;
-        ds47_param_t *p = &d->p[i];
-        *p = (ds47_param_t){.number = hal_get_be16(&a[2]), .ok = true};
-        uint8_t attr = a[0];
-        if (d->id == DS47_ID_MOVILINK) {
-            uint8_t svc = (uint8_t)(attr >> DS47_ATTR_ML_SERVICE_SHIFT);
-            p->service = svc;
-            if (svc != ML_SVC_READ && svc != ML_SVC_WRITE && svc != ML_SVC_WRITE_VOLATILE) {
-                fail(d, i, 0, 0x0505u);
-                p->service = svc; /* still decides whether a value block follows */
-            }
-        } else {
-            p->service = d->id == DS47_ID_CHANGE ? ML_SVC_WRITE : ML_SVC_READ;
-            if (attr != DS47_ATTR_VALUE) {
-                fail(d, i, 0x05u, 0);
-                p->service = d->id == DS47_ID_CHANGE ? ML_SVC_WRITE : ML_SVC_NONE;
-            }
-        }
-        if (p->ok && hal_get_be16(&a[4]) != 0u) {
-            fail(d, i, 0x03u, 0x0810u);
-        } else if (p->ok && a[1] > 1u) {
-            fail(d, i, 0x04u, 0x0810u);
+    } else {
+        p->service = d->id == DS47_ID_CHANGE ? ML_SVC_WRITE : ML_SVC_READ;
+        if (attr != DS47_ATTR_VALUE) {
+            fail(d, i, 0x05u, 0);
+            p->service = d->id == DS47_ID_CHANGE ? ML_SVC_WRITE : ML_SVC_NONE;
         }
     }
+    if (p->ok && hal_get_be16(&a[4]) != 0u) {
+        fail(d, i, 0x03u, 0x0810u);
+    } else if (p->ok && a[1] > 1u) {
+        fail(d, i, 0x04u, 0x0810u);
+    }
+}
+
+/* The value block of a writing parameter (value blocks follow the address blocks, in order).
+ * Returns false on a header error. */
+static bool parse_value(ds47_t *d, uint8_t i, const uint8_t *req, size_t len)
+{
+    ds47_param_t *p = &d->p[i];
+    if (!writes(d, p)) {
+        return true;
+    }
+    size_t pos = d->pos;
+    if (pos + 2u > len) {
+        return false;
+    }
+    uint8_t format = req[pos];
+    uint8_t count = req[pos + 1u];
+    pos += 2u;
+    size_t bytes = format == DS47_FORMAT_DWORD ? 4u * count : 2u * count;
+    if (pos + bytes > len) {
+        return false;
+    }
+    if (p->ok && format != DS47_FORMAT_DWORD) {
+        fail(d, i, 0x17u, 0x0810u);
+    } else if (p->ok && count != 1u) {
+        fail(d, i, 0x18u, 0x0810u);
+    } else if (p->ok) {
+        p->value = hal_get_be32(&req[pos]);
+    }
+    d->pos = (uint8_t)(pos + bytes);
     return true;
 }
 
-/* Value blocks, one per writing parameter, in order. */
-static bool parse_values(ds47_t *d, const uint8_t *req, size_t len, size_t *pos)
-{
-    for (uint8_t i = 0; i < d->n; i++) {
-        bool writes = d->id == DS47_ID_CHANGE ||
-                      (d->id == DS47_ID_MOVILINK && is_write(d->p[i].service));
-        if (!writes) {
-            continue;
-        }
-        if (*pos + 2u > len) {
-            return false;
-        }
-        uint8_t format = req[*pos];
-        uint8_t count = req[*pos + 1u];
-        *pos += 2u;
-        size_t bytes = format == DS47_FORMAT_DWORD ? 4u * count : 2u * count;
-        if (*pos + bytes > len) {
-            return false;
-        }
-        if (d->p[i].ok && format != DS47_FORMAT_DWORD) {
-            fail(d, i, 0x17u, 0x0810u);
-        } else if (d->p[i].ok && count != 1u) {
-            fail(d, i, 0x18u, 0x0810u);
-        } else if (d->p[i].ok) {
-            const uint8_t *v = &req[*pos];
-            d->p[i].value = ((uint32_t)hal_get_be16(v) << 16) | hal_get_be16(&v[2]);
-        }
-        *pos += bytes;
-    }
-    return true;
-}
-
-static void build_response(ds47_t *d)
+/* The response header; its entries follow in build_step(). Whether every parameter succeeded
+ * decides the Response ID and whether writes get an entry, so it is settled first. */
+static void start_build(ds47_t *d)
 {
     bool all_ok = true;
     for (uint8_t i = 0; i < d->n; i++) {
         all_ok = all_ok && d->p[i].ok;
     }
+    d->all_ok = all_ok;
+    d->rsp[0] = d->ref;
+    d->rsp[1] = all_ok ? d->id : (uint8_t)(d->id | DS47_ID_ERROR);
+    d->rsp[2] = d->axis;
+    d->rsp[3] = d->n;
+    d->rsp_len = 4;
+    d->rsp_sum = fdl_fcs(d->rsp, 4u);
+    d->next = 0;
+    d->building = true;
+}
+
+static void build_step(ds47_t *d)
+{
     uint8_t *r = d->rsp;
-    size_t n = 0;
-    r[n++] = d->ref;
-    r[n++] = all_ok ? d->id : (uint8_t)(d->id | DS47_ID_ERROR);
-    r[n++] = d->axis;
-    r[n++] = d->n;
-    for (uint8_t i = 0; i < d->n; i++) {
+    size_t n = d->rsp_len;
+    uint8_t end = (uint8_t)(d->n - d->next) > DS47_BUILD_STEP ? (uint8_t)(d->next + DS47_BUILD_STEP)
+                                                              : d->n;
+    for (uint8_t i = d->next; i < end; i++) {
         const ds47_param_t *p = &d->p[i];
-        bool wrote = d->id == DS47_ID_CHANGE ||
-                     (d->id == DS47_ID_MOVILINK && is_write(p->service));
         if (!p->ok) {
             r[n++] = DS47_FORMAT_ERROR;
             r[n++] = 1;
-            hal_put_be16(&r[n], p->error);
+            hal_put_be16(&r[n], (uint16_t)p->value);
             n += 2u;
-        } else if (!wrote) {
+        } else if (!writes(d, p)) {
             r[n++] = DS47_FORMAT_DWORD;
             r[n++] = 1;
-            hal_put_be16(&r[n], (uint16_t)(p->value >> 16));
-            hal_put_be16(&r[n + 2u], (uint16_t)p->value);
+            hal_put_be32(&r[n], p->value);
             n += 4u;
-        } else if (!all_ok) {
+        } else if (!d->all_ok) {
             r[n++] = DS47_FORMAT_ZERO;
             r[n++] = 0;
         }
     }
+    d->rsp_sum = (uint8_t)(d->rsp_sum + fdl_fcs(&r[d->rsp_len], n - d->rsp_len));
     d->rsp_len = (uint8_t)n;
-    d->state = DS47_DONE;
+    d->next = end;
+    if (end == d->n) {
+        d->building = false;
+        d->state = DS47_DONE;
+    }
 }
 
 static void run_next(ds47_t *d, hal_time_us_t now);
@@ -159,7 +171,7 @@ static void on_done(void *ctx, uint8_t channel, const uint8_t rsp[ML_TELEGRAM_LE
 {
     (void)channel;
     ds47_t *d = ctx;
-    if (d->state != DS47_BUSY || d->running_generation != d->generation) {
+    if (d->state != DS47_BUSY || d->building || d->running_generation != d->generation) {
         return; /* the request was dropped meanwhile */
     }
     ds47_param_t *p = &d->p[d->next];
@@ -184,7 +196,7 @@ static void run_next(ds47_t *d, hal_time_us_t now)
         d->next++;
     }
     if (d->next >= d->n) {
-        build_response(d);
+        start_build(d);
         return;
     }
     ds47_param_t *p = &d->p[d->next];
@@ -202,18 +214,27 @@ static void run_next(ds47_t *d, hal_time_us_t now)
     }
 }
 
-void ds47_poll(ds47_t *d, hal_time_us_t now)
+bool ds47_poll(ds47_t *d, hal_time_us_t now)
 {
-    if (d->state == DS47_BUSY && !d->waiting) {
+    if (d->state != DS47_BUSY) {
+        return false;
+    }
+    if (d->building) {
+        build_step(d);
+    } else if (!d->waiting) {
         run_next(d, now);
     }
+    return d->state == DS47_BUSY && d->building;
 }
 
-uint8_t ds47_write(ds47_t *d, const uint8_t *req, size_t len, hal_time_us_t now)
+/* The four header octets: Request Reference, Request ID, Axis, number of parameters. */
+static uint8_t start_write(ds47_t *d, const uint8_t *req, size_t len)
 {
     if (d->state == DS47_BUSY) {
         return DPV1_ERR_STATE_CONFLICT;
     }
+    d->state = DS47_IDLE; /* a new request drops an unread response */
+    d->rsp_len = 0;
     if (len < 4u) {
         return DPV1_ERR_INVALID_RANGE;
     }
@@ -225,29 +246,81 @@ uint8_t ds47_write(ds47_t *d, const uint8_t *req, size_t len, hal_time_us_t now)
         n > DS47_MAX_PARAMS) {
         return DPV1_ERR_INVALID_RANGE;
     }
-    ds47_t parsed = *d;
-    parsed.ref = req[0];
-    parsed.id = id;
-    parsed.axis = req[2];
-    parsed.n = n;
-    parsed.next = 0;
-    size_t pos = 4;
-    if (!parse_addresses(&parsed, req, len, &pos) || !parse_values(&parsed, req, len, &pos) ||
-        pos != len) {
-        return DPV1_ERR_INVALID_RANGE;
+    d->ref = req[0];
+    d->id = id;
+    d->axis = req[2];
+    d->n = n;
+    d->next = 0;
+    d->parse_pass = 0;
+    d->pos = 4;
+    d->state = DS47_PARSING;
+    return 0;
+}
+
+static uint8_t refuse(ds47_t *d)
+{
+    d->state = DS47_IDLE;
+    return DPV1_ERR_INVALID_RANGE;
+}
+
+/* Every block checked and nothing left over: the services start. */
+static uint8_t accept(ds47_t *d, size_t len, hal_time_us_t now)
+{
+    if (d->pos != len) {
+        return refuse(d);
     }
-    if (parsed.axis != 0u) {
-        for (uint8_t i = 0; i < n; i++) {
-            parsed.p[i].ok = false;
-            parsed.p[i].error = 0x0019u; /* axis nonexistent: the MOVIDRIVE has no sub-axes */
+    if (d->axis != 0u) {
+        for (uint8_t i = 0; i < d->n; i++) {
+            d->p[i].ok = false;
+            d->p[i].value = 0x0019u; /* axis nonexistent: the MOVIDRIVE has no sub-axes */
         }
     }
-    *d = parsed;
     d->generation++;
     d->state = DS47_BUSY;
     d->waiting = false;
+    d->building = false;
+    d->next = 0;
     run_next(d, now);
     return 0;
+}
+
+uint8_t ds47_write_step(ds47_t *d, const uint8_t *req, size_t len, hal_time_us_t now)
+{
+    if (d->state != DS47_PARSING) {
+        uint8_t rc = start_write(d, req, len);
+        if (rc != 0u) {
+            return rc;
+        }
+    }
+    for (uint8_t k = 0; k < DS47_PARSE_STEP; k++) {
+        if (d->parse_pass == 0u && d->next == d->n) {
+            d->parse_pass = 1;
+            d->next = 0;
+        }
+        if (d->parse_pass == 0u) {
+            if ((size_t)d->pos + 6u > len) {
+                return refuse(d);
+            }
+            parse_address(d, d->next, &req[d->pos]);
+            d->pos = (uint8_t)(d->pos + 6u);
+        } else if (d->next == d->n) {
+            /* Starting the first service is a step of its own (it sends a MOVILINK request). */
+            return k == 0u ? accept(d, len, now) : DS47_IN_PROGRESS;
+        } else if (!parse_value(d, d->next, req, len)) {
+            return refuse(d);
+        }
+        d->next++;
+    }
+    return DS47_IN_PROGRESS;
+}
+
+uint8_t ds47_write(ds47_t *d, const uint8_t *req, size_t len, hal_time_us_t now)
+{
+    uint8_t rc;
+    do {
+        rc = ds47_write_step(d, req, len, now);
+    } while (rc == DS47_IN_PROGRESS);
+    return rc;
 }
 
 uint8_t ds47_read(ds47_t *d, uint8_t *out, size_t max, size_t *len)

@@ -14,6 +14,8 @@
 #include <stdint.h>
 
 #include "dp_slave/dp_config.h"
+#include "dp_slave/dp_wire.h"
+#include "dp_slave/fdl_frame.h"
 #include "dp_slave/fdl_rx.h"
 #include "hal/hal_time.h"
 #include "hal/hal_uart.h"
@@ -79,20 +81,40 @@ typedef enum dp_sap_answer {
 } dp_sap_answer_t;
 
 #define DP_SAP_REPLY_MAX 244u
+/* Octets a SAP may always write for a short reply (DP-V1 Abort, RM, Idle, Initiate.res). */
+#define DP_SAP_REPLY_SHORT 12u
+
+/* Where the reply to a SAP request is. The DU lies at buf + FDL_TX_HEADROOM (fdl_frame.h) and
+ * is framed there in place, so a response the device prepared ahead goes out without a copy. */
+typedef struct dp_sap_reply {
+    /* In: a buffer with DP_SAP_REPLY_SHORT octets free for the DU. Out: that buffer, or the
+     * device's own with FDL_TX_HEADROOM octets before the DU and FDL_TRAILER_LEN after it. */
+    uint8_t *buf;
+    size_t len; /* DU octets, at most DP_SAP_REPLY_MAX */
+    /* The DU's octet sum mod 256 when the device knows it (sum_known), so the reply path does
+     * not add it up. */
+    bool sum_known;
+    uint8_t sum;
+    /* The device's own buffer stays unchanged while *guard == guard_value; a retry of the
+     * request is answered from it only then (else it is a new request). NULL: no guard. */
+    const volatile uint8_t *guard;
+    uint8_t guard_value;
+} dp_sap_reply_t;
 
 typedef struct dp_slave_hooks {
     void *ctx;
     /* A request (SRD) to a SAP below 55, i.e. everything DP-V1 uses. Called on the receive path:
-     * copy, do not work. reply holds DP_SAP_REPLY_MAX octets. Optional (without it: RS). */
+     * copy, do not work. Optional (without it: RS). */
     dp_sap_answer_t (*sap_request)(void *ctx, uint8_t master, uint8_t dsap, uint8_t ssap,
-                                   const uint8_t *data, size_t len, uint8_t *reply,
-                                   size_t *reply_len, hal_time_us_t t);
+                                   const uint8_t *data, size_t len, dp_sap_reply_t *reply,
+                                   hal_time_us_t t);
     /* Set_Prm octets from index 7 on (DP-V1 status and user parameters), len may be 0. */
     bool (*prm_check)(void *ctx, const uint8_t *prm, size_t len);
     /* Chk_Cfg identifiers; on success the output and input lengths in octets. */
     bool (*cfg_check)(void *ctx, const uint8_t *cfg, size_t len, uint8_t *out_len,
                       uint8_t *in_len);
-    /* Outputs for the application. Called on the receive path: copy, do not work. */
+    /* Outputs for the application (out is dp_slave_outputs()). Called on the receive path:
+     * note it, do not work. */
     void (*outputs)(void *ctx, const uint8_t *out, size_t len, dp_outputs_reason_t reason);
     /* Everything that happens, for LEDs, logs and monitoring. Optional. */
     void (*event)(void *ctx, const dp_event_t *ev);
@@ -115,15 +137,37 @@ typedef struct dp_slave_cfg {
 
 #define DP_BAUD_CONTROL_MS_DEFAULT 1000u
 
+/* The largest DU a reply is built from in a slot's own buffer: Slave_Diag, Get_Cfg, RD_Inp,
+ * RD_Outp, a short SAP reply (Data_Exchange and DP-V1 responses are framed where they lie). */
+#define DP_MAX2_(a, b) ((a) > (b) ? (a) : (b))
+#define FDL_SLOT_DU_MAX                                                                        \
+    DP_MAX2_(DP_MAX2_(DP_DIAG_STD_LEN + DP_MAX_EXT_DIAG_LEN, DP_MAX_CFG_LEN),                    \
+             DP_MAX2_(DP_MAX_IO_LEN, DP_SAP_REPLY_SHORT + 2u))
+
+/* One master's FCB state and its last reply (IEC 61158-4-3 frame count bit): a retry is
+ * answered by pointing the transmitter at the same octets again, never by building it anew. */
 typedef struct fdl_fcb_slot {
     bool used;
     bool fcb_valid;
     uint8_t master;
     uint8_t fcb;
     uint8_t age;
+    uint8_t guard_value;
     uint16_t reply_len; /* 0: no reply cached */
-    uint8_t reply[FDL_FRAME_MAX];
+    const uint8_t *reply; /* into buf, a Data_Exchange buffer or the device's (SAP) buffer */
+    const volatile uint8_t *guard; /* see dp_sap_reply_t */
+    uint8_t buf[FDL_TX_BUF_LEN(FDL_SLOT_DU_MAX)];
 } fdl_fcb_slot_t;
+
+/* Data_Exchange replies are framed ahead: dp_slave_set_inputs() writes the inputs into a buffer
+ * that no cached reply points at, with their octet sum; the reply path only adds the header.
+ * Three buffers: the newest inputs, the one the owner's last reply (and a retry) points at, and
+ * one to write. */
+#define DP_DX_BUFFERS 3u
+typedef struct dp_dx_buffer {
+    uint8_t sum;
+    uint8_t buf[FDL_TX_BUF_LEN(DP_MAX_IO_LEN)];
+} dp_dx_buffer_t;
 
 typedef struct dp_slave {
     dp_slave_cfg_t cfg;
@@ -139,8 +183,14 @@ typedef struct dp_slave {
     uint8_t min_tsdr_bits;
     uint32_t min_tsdr_us; /* min_tsdr_bits at baud, kept so the reply path does not divide */
     fdl_fcb_slot_t fcb[FDL_FCB_SLOTS];
-    uint8_t reply[FDL_FRAME_MAX];
-    uint16_t reply_len;
+    /* The reply of the request being served: where it is built (a slot's buffer, or scratch for
+     * replies that are never repeated) and, once built, the octets to send. */
+    uint8_t *tx_buf;
+    const uint8_t *tx;
+    uint16_t tx_len;
+    const volatile uint8_t *tx_guard;
+    uint8_t tx_guard_value;
+    uint8_t tx_scratch[FDL_TX_BUF_LEN(0u)];
 
     /* DP */
     dp_state_t state;
@@ -168,6 +218,8 @@ typedef struct dp_slave {
     uint8_t latched_outputs[DP_MAX_IO_LEN];
     uint8_t inputs[DP_MAX_IO_LEN];
     uint8_t frozen_inputs[DP_MAX_IO_LEN];
+    dp_dx_buffer_t dx[DP_DX_BUFFERS];
+    uint8_t dx_current; /* the buffer with the newest inputs */
 
     uint8_t ext_diag[DP_MAX_EXT_DIAG_LEN];
     uint8_t ext_diag_len;
@@ -198,6 +250,9 @@ void dp_slave_set_stat_diag(dp_slave_t *s, bool on);
 size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max);
 
 static inline dp_state_t dp_slave_state(const dp_slave_t *s) { return s->state; }
+/* The output image the latest outputs hook call handed over (zeros when cleared), valid until
+ * the next; DP_MAX_IO_LEN octets. */
+static inline const uint8_t *dp_slave_outputs(const dp_slave_t *s) { return s->outputs; }
 static inline uint32_t dp_slave_baud(const dp_slave_t *s) { return s->baud; }
 static inline dp_baud_state_t dp_slave_baud_state(const dp_slave_t *s) { return s->baud_state; }
 /* True once an error-free telegram was received at the current rate (the "baud found" of a

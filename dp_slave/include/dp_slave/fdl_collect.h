@@ -5,8 +5,10 @@
  * or, for SD2, from LE (LE + 6), so the end is known without waiting for idle. Per character the
  * fast path only measures the gap to the previous one, stores the octet and compares the count
  * (fdl_collect_char); everything else (a start delimiter, LE/LEr, the repeated SD2, a pause, a
- * character error, the end) is the slow path, once per telegram. FCS and ED are left to
- * fdl_rx_telegram() in the core, which gets the finished telegram with its idle-before time.
+ * character error, the end) is the slow path, once per telegram. Each octet is also added to a
+ * running sum, so the telegram is handed on with the sum its FCS must equal; comparing them,
+ * and the ED, is left to fdl_rx_telegram() in the core, which gets the finished telegram with
+ * its idle-before time.
  *
  * The rules are fdl_rx's (fdl_rx.h, strict and relaxed timing alike; the time between characters
  * is judged by the same code, fdl_gap.h), with two differences a per-telegram check brings: a
@@ -47,6 +49,7 @@ typedef struct fdl_collect {
     uint32_t relaxed_gap_us;
     uint32_t relaxed_resync_us;
     uint32_t idle_before_ns; /* of the telegram in progress */
+    uint32_t sum;            /* of its octets so far */
     fdl_rx_telegram_t telegram; /* after FDL_COLLECT_TELEGRAM */
     fdl_rx_error_t error;       /* after FDL_COLLECT_ERROR */
     hal_time_us_t error_t;
@@ -68,6 +71,7 @@ static inline unsigned fdl_collect_char(fdl_collect_t *c, uint8_t byte, hal_time
         return fdl_collect_slow(c, byte, 0u, t);
     }
     c->last_t = t;
+    c->sum += byte;
     c->buf[c->len++] = byte;
     return c->len == c->expected ? fdl_collect_step(c, t) : 0u;
 }

@@ -7,6 +7,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "dp_slave/fdl_wire.h"
+
 typedef struct fdl_msg {
     uint8_t sd;
     uint8_t da; /* 7-bit addresses */
@@ -73,5 +75,19 @@ size_t fdl_encode(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps, u
                   uint8_t ssap, const uint8_t *data, size_t data_len);
 
 uint8_t fdl_fcs(const uint8_t *p, size_t n);
+
+/* Room a reply buffer keeps ahead of its DU so that the longest header fits in front of it:
+ * 68 LE LEr 68 DA SA FC DSAP SSAP. */
+#define FDL_TX_HEADROOM 9u
+/* A buffer for a reply with a DU of up to du_max octets (SAP octets not counted). */
+#define FDL_TX_BUF_LEN(du_max) (FDL_TX_HEADROOM + (du_max) + FDL_TRAILER_LEN)
+
+/* Frames in place the du_len octets at buf + FDL_TX_HEADROOM, whose octet sum mod 256 is
+ * du_sum: the header goes in front, FCS and ED after. The octets are those fdl_encode() gives
+ * (SD1, SD3 or SD2 by length). Returns the frame's first octet inside buf; *len its length.
+ * du_len + SAP octets must not exceed FDL_DU_MAX. */
+const uint8_t *fdl_frame_in_place(uint8_t *buf, size_t du_len, uint8_t du_sum, uint8_t da,
+                                  uint8_t sa, uint8_t fc, bool saps, uint8_t dsap, uint8_t ssap,
+                                  size_t *len);
 
 #endif

@@ -83,6 +83,11 @@ typedef struct fdl_rx_telegram {
     fdl_rx_error_t error; /* what the collector found (then buf is not looked at), else FDL_RX_OK */
     hal_time_us_t end_t;
     uint32_t idle_before_ns; /* UINT32_MAX: unknown (long) */
+    /* The octet sum of DA..DU mod 256 when the receiver added it up as the characters came (an
+     * ASIC checks the FCS that way); then the FCS is compared with it instead of being summed
+     * on the reply path. */
+    bool sum_known;
+    uint8_t sum;
 } fdl_rx_telegram_t;
 fdl_rx_result_t fdl_rx_telegram(fdl_rx_t *rx, const fdl_rx_telegram_t *tg);
 /* Call at least once per 35 minutes of silence, best at the deadline it returns: after

@@ -22,6 +22,8 @@
 
 typedef enum dpv1_mailbox { DPV1_MB_EMPTY = 0, DPV1_MB_REQUEST, DPV1_MB_RESPONSE } dpv1_mailbox_t;
 
+/* One buffer per connection holds the request PDU and then, in its place, the response PDU:
+ * a connection has at most one service in progress (protocol.md §A4). */
 typedef struct dpv1_conn {
     bool open;
     uint8_t master;
@@ -29,16 +31,24 @@ typedef struct dpv1_conn {
     uint32_t send_timeout_us; /* C2 supervision; 0 for C1 */
     hal_time_us_t last_rx;
     volatile uint8_t mailbox; /* dpv1_mailbox_t */
-    uint8_t req[DPV1_MAX_PDU];
-    uint8_t req_len;
-    uint8_t rsp[DPV1_MAX_PDU];
-    uint8_t rsp_len;
+    volatile uint8_t seq;     /* bumped by the receive path for every new PDU and on close */
+    /* The PDU at FDL_TX_HEADROOM (dpv1_pdu()), so that the response is framed where it lies. */
+    uint8_t frame[FDL_TX_BUF_LEN(DPV1_MAX_PDU)];
+    uint8_t pdu_len;
+    uint8_t pdu_sum; /* RESPONSE: the octet sum of the response PDU */
     ds47_t ds47;
     uint16_t im_selected; /* FI_Index this connection's next Read of index 255 returns */
 } dpv1_conn_t;
 
+static inline uint8_t *dpv1_pdu(dpv1_conn_t *c) { return &c->frame[FDL_TX_HEADROOM]; }
+
 typedef struct dpv1_cfg {
     ml_client_t *ml;
+    /* Called between bounded pieces of main-loop work (a data set 47 parse step, one connection)
+     * so the caller may let the reply path run; the receive path may then have replaced or
+     * closed what was being worked on, which dpv1_poll checks afterwards. Optional. */
+    void (*preempt)(void *ctx);
+    void *preempt_ctx;
     uint8_t ch_c1;                        /* service-client channel of MSAC1's data set 47 */
     uint8_t ch_c2[DPV1_C2_CONNECTIONS];   /* ... of each C2 connection */
     im_identity_t identity;
@@ -47,6 +57,8 @@ typedef struct dpv1_cfg {
 } dpv1_cfg_t;
 
 typedef struct dpv1 {
+    void (*preempt)(void *ctx);
+    void *preempt_ctx;
     dpv1_conn_t c1;
     dpv1_conn_t c2[DPV1_C2_CONNECTIONS];
     im_t im;
@@ -56,10 +68,11 @@ typedef struct dpv1 {
 } dpv1_t;
 
 void dpv1_init(dpv1_t *d, const dpv1_cfg_t *cfg);
-/* The dp_slave sap_request hook (receive path). */
+/* The dp_slave sap_request hook (receive path). A response is handed out where it lies, in the
+ * connection's buffer, guarded by the connection's seq. */
 dp_sap_answer_t dpv1_sap_request(dpv1_t *d, uint8_t master, uint8_t dsap, uint8_t ssap,
-                                 const uint8_t *data, size_t len, uint8_t *reply,
-                                 size_t *reply_len, hal_time_us_t t);
+                                 const uint8_t *data, size_t len, dp_sap_reply_t *reply,
+                                 hal_time_us_t t);
 /* MSAC1 follows the DP state: open in Data_Exch after a DP-V1 parameterisation. */
 void dpv1_dp_state(dpv1_t *d, bool data_exch, bool dpv1_mode, uint8_t master);
 /* Main loop: PDUs, data set 47 progress, C2 supervision. Returns the next deadline. */

@@ -213,24 +213,23 @@ static bool hook_cfg_check(void *ctx, const uint8_t *cfg, size_t len, uint8_t *o
     return true;
 }
 
+/* No copy on the reply path: take_outputs() reads dp_slave's image, which holds what the
+ * latest call handed over until the next one. */
 static void hook_outputs(void *ctx, const uint8_t *out, size_t len, dp_outputs_reason_t why)
 {
     dfp21b_t *c = ctx;
-    if (len > sizeof c->out_image) {
-        len = sizeof c->out_image;
-    }
-    memcpy(c->out_image, out, len);
-    memset(&c->out_image[len], 0, sizeof c->out_image - len);
+    (void)out;
+    (void)len;
     c->outputs_new = true;
     c->outputs_reason = why;
 }
 
 static dp_sap_answer_t hook_sap_request(void *ctx, uint8_t master, uint8_t dsap, uint8_t ssap,
-                                        const uint8_t *data, size_t len, uint8_t *reply,
-                                        size_t *reply_len, hal_time_us_t t)
+                                        const uint8_t *data, size_t len, dp_sap_reply_t *reply,
+                                        hal_time_us_t t)
 {
     dfp21b_t *c = ctx;
-    return dpv1_sap_request(&c->dpv1, master, dsap, ssap, data, len, reply, reply_len, t);
+    return dpv1_sap_request(&c->dpv1, master, dsap, ssap, data, len, reply, t);
 }
 
 static void hook_event(void *ctx, const dp_event_t *ev)
@@ -326,6 +325,8 @@ void dfp21b_init(dfp21b_t *c, const dfp21b_cfg_t *cfg, hal_time_us_t now)
     ml_channel_init(&c->param, &c->ml, DFP21B_CH_CYCLIC);
     dpv1_cfg_t vcfg = {
         .ml = &c->ml,
+        .preempt = cfg->preempt,
+        .preempt_ctx = cfg->preempt_ctx,
         .ch_c1 = DFP21B_CH_C1,
         .ch_c2 = {DFP21B_CH_C2_FIRST, DFP21B_CH_C2_FIRST + 1u},
         .identity = {.manufacturer_id = DFP21B_MANUFACTURER_ID,
@@ -410,16 +411,17 @@ static bool have_inverter(const dfp21b_t *c)
 /* New outputs from the master: parameter channel and PO words go to the inverter. */
 static void take_outputs(dfp21b_t *c, hal_time_us_t now)
 {
+    const uint8_t *out = dp_slave_outputs(&c->dp);
     size_t off = c->pd.param_channel ? DFP21B_PARAM_LEN : 0u;
     uint8_t n = c->pd.valid ? c->pd.pd_words : 0u;
     if (c->pd.param_channel) {
-        memcpy(c->param_req, c->out_image, DFP21B_PARAM_LEN);
+        memcpy(c->param_req, out, DFP21B_PARAM_LEN);
     }
     for (uint8_t i = 0; i < DFP21B_MAX_PD; i++) {
         uint16_t w = 0u;
         if (i < n) {
             size_t at = off + 2u * (size_t)i;
-            w = (uint16_t)((c->out_image[at] << 8) | c->out_image[at + 1u]);
+            w = (uint16_t)((out[at] << 8) | out[at + 1u]);
         }
         c->po[i] = w;
     }
@@ -507,6 +509,13 @@ static void poll_inverter_status(dfp21b_t *c, hal_time_us_t now)
     }
 }
 
+static void preempt(const dfp21b_t *c)
+{
+    if (c->cfg.preempt != NULL) {
+        c->cfg.preempt(c->cfg.preempt_ctx);
+    }
+}
+
 hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now)
 {
     if (!c->on_bus) {
@@ -519,14 +528,18 @@ hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now)
     }
     c->now = now;
     hal_time_us_t next = dp_slave_poll(&c->dp, now);
+    preempt(c);
     if (c->outputs_new) {
         c->outputs_new = false;
         take_outputs(c, now);
     }
+    preempt(c);
     hal_time_us_t ml_next = ml_client_poll(&c->ml, now);
     next = hal_time_earlier(next, ml_next);
+    preempt(c);
     hal_time_us_t v1_next = dpv1_poll(&c->dpv1, now);
     next = hal_time_earlier(next, v1_next);
+    preempt(c);
     poll_inverter_status(c, now);
     if (have_inverter(c) && c->diag_alarm) {
         next = hal_time_earlier(next, c->next_status_poll);

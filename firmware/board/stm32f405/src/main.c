@@ -299,6 +299,38 @@ static ml_link_t start_inverter_link(void)
     return inverter;
 }
 
+/* The main loop's sections inside the core: PendSV (the USART's deferred work, the reply path)
+ * and CAN are held off between core_enter and core_leave. Out of line so that
+ * tools/reply_path_count.py finds every section's bounds by these two names. */
+__attribute__((noinline)) static void core_enter(void)
+{
+    board_basepri(BOARD_PRIO_CORE);
+}
+
+__attribute__((noinline)) static void core_leave(void)
+{
+    board_basepri(0);
+}
+
+/* dfp21b's preemption point between two bounded pieces of main-loop work: a reply that became
+ * due meanwhile is served here, not after the whole pass. */
+static void core_preempt(void *ctx)
+{
+    (void)ctx;
+    core_leave();
+    core_enter();
+}
+
+#ifdef DFP_BOARD_LOOPBACK_INVERTER
+/* The stand-in inverter's half of an exchange is not the card's work: the card's half (taking
+ * the delivered frame) runs in a section of its own. */
+static void loop_rx(void *ctx, const hal_can_frame_t *f)
+{
+    core_preempt(NULL);
+    can_rx(ctx, f);
+}
+#endif
+
 static void start_card(ml_link_t inverter)
 {
     rs485_uart_cfg_t ucfg = {.regs = USART1, .de_port = GPIOA, .de_pin = 8u,
@@ -319,7 +351,9 @@ static void start_card(ml_link_t inverter)
         .hardware_revision = 1,
         .software_revision = {FW_VERSION_MAJOR, FW_VERSION_MINOR, FW_VERSION_BUGFIX},
         .event = card_event,
+        .preempt = core_preempt,
     };
+    /* Not a core section: the USART interrupt is enabled only after it. */
     board_basepri(BOARD_PRIO_CORE);
     dfp21b_init(&card, &cfg, now_us());
     board_basepri(0);
@@ -364,27 +398,33 @@ int main(void)
     for (;;) {
         poll_request = false;
         hal_time_us_t now = now_us();
-        /* The one section that holds the USART's deferred work (PendSV) off: its length is the
-         * "main-loop pass" of docs/performance.md, counted by tools/reply_path_count.py. */
-        board_basepri(BOARD_PRIO_CORE);
+        /* The core's work, in sections that hold the USART's deferred work (PendSV) off; the
+         * longest section is the "main-loop section" of docs/performance.md, counted by
+         * tools/reply_path_count.py. */
+        core_enter();
         if (can.up) {
             (void)bxcan_drain(&can);
         }
 #ifdef DFP_BOARD_LOOPBACK_INVERTER
         if (!can.up && sbus_up) {
-            (void)loop_inverter_poll(&loop, now, can_rx, NULL);
+            (void)loop_inverter_poll(&loop, now, loop_rx, NULL);
+            core_preempt(NULL);
         }
 #endif
         hal_time_us_t next = dfp21b_poll(&card, now);
 #ifdef DFP_BOARD_LOOPBACK_INVERTER
-        if (!can.up && sbus_up && loop_inverter_poll(&loop, now, can_rx, NULL) != 0u) {
+        if (!can.up && sbus_up) {
+            core_preempt(NULL);
+        }
+        if (!can.up && sbus_up && loop_inverter_poll(&loop, now, loop_rx, NULL) != 0u) {
             poll_request = true; /* the stand-in answered within this pass: take it now */
         }
 #endif
         if (sbus_up) {
+            core_preempt(NULL);
             next = hal_time_earlier(next, sbus_card_link_poll(&sbus, now));
         }
-        board_basepri(0);
+        core_leave();
         if (had_fault && dp_slave_state(&card.dp) == DP_STATE_DATA_EXCH) {
             leds.fault_pattern = false;
         }

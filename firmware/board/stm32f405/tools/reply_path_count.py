@@ -17,8 +17,10 @@ SysTick's instructions are left out everywhere (its own interrupt, at most one p
   (rs485_wait_until) counted as one pass, as at 12 Mbit/s where a fresh deadline has passed.
   Not counted: exception entries (12 cycles, 6 for the tail-chain into PendSV). Each reply is
   labelled by the core functions that ran for it (classify_funcs).
-- Main-loop pass: thread-mode instructions from the main loop's BASEPRI raise to its lower
-  around dfp21b_poll, interrupts left out.
+- Main-loop section: thread-mode instructions from an entry of core_enter (BASEPRI raised,
+  PendSV held off) to the next entry of core_leave, interrupts left out. The main loop runs the
+  core in such sections and lowers BASEPRI between them (dfp21b's preempt hook), so the longest
+  section is what can hold a reply off.
 - RAM (.data + .bss + .noinit + the .stack reservation) and flash (.isr_vector + .text +
   .rodata + .data's load image) of the card image, when --card ELF is given.
 
@@ -56,42 +58,6 @@ def first_dr_store(elf, start, size):
     return None
 
 
-def basepri_writes(elf, start, size):
-    """(raise, lower) addresses of the main loop's BASEPRI writes around its dfp21b_poll call:
-    the nearest `msr BASEPRI, rN` before the `bl dfp21b_poll` where the last write to rN loads
-    a non-zero immediate, and the nearest after it where that write loads zero."""
-    out = subprocess.run(["arm-none-eabi-objdump", "-d", "--start-address=%d" % start,
-                          "--stop-address=%d" % (start + size), elf],
-                         capture_output=True, text=True).stdout
-    insns = []
-    for l in out.splitlines():
-        m = re.match(r"\s*([0-9a-f]+):\s+[0-9a-f]{4}(?: [0-9a-f]{4})?\s+(.*)$", l)
-        if m:
-            insns.append((int(m.group(1), 16), m.group(2).split("@")[0].strip()))
-    call = next((i for i, (_, t) in enumerate(insns) if re.match(r"bl\s+\S+ <dfp21b_poll>", t)),
-                None)
-    if call is None:
-        return None
-
-    def basepri_at(i, want_zero):
-        m = re.match(r"msr\s+BASEPRI, (r\d+)$", insns[i][1])
-        if not m:
-            return False
-        # the last instruction before it that writes the register must load an immediate
-        for j in range(i - 1, max(i - 9, -1), -1):
-            if re.match(r"\S+\s+%s(?:,|$)" % m.group(1), insns[j][1]):
-                k = re.match(r"movs?(?:\.w)?\s+%s, #(\d+)$" % m.group(1), insns[j][1])
-                return k is not None and (int(k.group(1)) == 0) == want_zero
-        return False
-
-    raise_at = next((insns[i][0] for i in range(call - 1, -1, -1) if basepri_at(i, False)), None)
-    lower_at = next((insns[i][0] for i in range(call + 1, len(insns)) if basepri_at(i, True)),
-                    None)
-    if raise_at is None or lower_at is None:
-        return None
-    return raise_at, lower_at
-
-
 def classify_funcs(funcs):
     """The request a reply answers, told by the core functions that ran for it (robust against
     replies QEMU's pace made the firmware drop, which pairing with the captures is not)."""
@@ -108,15 +74,16 @@ def classify_funcs(funcs):
     if "hook_outputs" in funcs:
         return "Data_Exchange"
     if "dpv1_sap_request" in funcs:
-        if ran("fdl_station_reply_sap"):
+        if ran("fdl_station_reply_framed"):
             # the resource manager frees the slot it opens (conn_close) before an Initiate
             return "DP-V1 MSAC2 Initiate (RM)" if "conn_close" in funcs else "DP-V1 response with data"
         if "conn_close" in funcs:
             return "DP-V1 Abort (SC)"
         return "DP-V1 request taken (SC)"
-    if "dp_slave_request" not in funcs and "fcb_touch" in funcs:
+    # a retry is answered by pointing the transmitter at the cached reply: nothing is framed
+    if "dp_slave_request" not in funcs and not ran("fdl_frame_in_place"):
         return "repeat from the FCB cache"
-    if "dp_slave_request" not in funcs and ran("fdl_station_reply_plain"):
+    if "dp_slave_request" not in funcs:
         return "FDL status (SD1)"
     return "other (Get_Cfg, Rd_Inp, Rd_Outp, ...)"
 
@@ -203,9 +170,10 @@ class Trace:
 
     def __init__(self, elf):
         s = symbols(elf)
-        for need in ("fdl_station_reply_plain", "fdl_station_reply_sap", "dp_slave_build_diag",
+        for need in ("fdl_station_reply_framed", "fdl_frame_in_place", "fdl_station_reply_rs",
+                     "dp_slave_request", "dp_slave_rx_telegram", "dp_slave_build_diag",
                      "hook_prm_check", "hook_cfg_check", "hook_outputs", "dpv1_sap_request",
-                     "conn_close", "fcb_touch", "rs485_uart_rx_hand_over", "rs485_wait_until",
+                     "conn_close", "rs485_uart_rx_hand_over", "rs485_wait_until",
                      "rs485_uart_transmit", "tx_fill", "USART1_IRQHandler"):
             if not any(n == need or n.startswith(need + ".") for n in s):
                 sys.exit("reply_path_count: no function %s in the image; the tool needs updating"
@@ -214,13 +182,16 @@ class Trace:
         self.isr_ranges = ranges(s, RX_ISR_FUNCS)
         self.slow_ranges = ranges(s, SLOW_FUNCS)
         self.hand_over = s["rs485_uart_rx_hand_over"][0]
+        self.core_rx = s["dp_slave_rx_telegram"][0]
+        self.backlog = 0
         self.wait = s["rs485_wait_until"]
         self.tx = s["rs485_uart_transmit"][0]
         self.dr_store = first_dr_store(elf, *s["tx_fill"])
         self.excl = ranges(s, ("SysTick_Handler", "timebase_tick", "board_leds_tick"))
-        self.masked = basepri_writes(elf, *s["main"])
-        if self.masked is None:
-            sys.exit("reply_path_count: no BASEPRI raise/lower around dfp21b_poll in main")
+        if "core_enter" not in s or "core_leave" not in s:
+            sys.exit("reply_path_count: no core_enter/core_leave in the image; the tool needs "
+                     "updating")
+        self.masked = (s["core_enter"][0], s["core_leave"][0])
         self.interior, self.slow, self.results, self.passes = [], [], [], []
         self.isr_n = None      # instructions of the USART1 interrupt running
         self.isr_kind = None   # "interior", "slow" or "hand-over"
@@ -256,7 +227,7 @@ class Trace:
             if pc == self.hand_over:
                 self.isr_kind = "hand-over"
                 self.reply = {"n": self.isr_n, "funcs": set(), "wait": 0, "wait_last": 0,
-                              "sent": False}
+                              "sent": False, "telegrams": 0}
             elif self.isr_kind == "interior" and inside(pc, self.slow_ranges):
                 self.isr_kind = "slow"
         r = self.reply
@@ -269,9 +240,16 @@ class Trace:
             r["wait_last"] = 1 if pc == self.wait[0] else r["wait_last"] + 1
         if pc == self.tx:
             r["sent"] = True
+        if pc == self.core_rx:
+            r["telegrams"] += 1
         if r["sent"] and pc == self.dr_store:
             n = r["n"] - r["wait"] + r["wait_last"]
-            self.results.append((classify_funcs(r["funcs"]), n))
+            if r["telegrams"] > 1:
+                # an earlier telegram was still queued (QEMU's pace let the master time out and
+                # send again): its work is not this reply's
+                self.backlog += 1
+            else:
+                self.results.append((classify_funcs(r["funcs"]), n))
             self.reply = None
 
 
@@ -287,8 +265,9 @@ def report(t, caps, card):
     ps = pairs(caps)
     largest = max((len(rsp), kind) for kind, _, rsp in ps) if ps else (0, "")
     print("Real-time paths on the target (QEMU netduinoplus2, TCG single-step); %d replies in the "
-          "trace, %d in the captures, the largest %d octets (%s)"
-          % (len(t.results), len(ps), largest[0], largest[1]))
+          "trace, %d in the captures, the largest %d octets (%s); %d left out: another telegram "
+          "was still queued before the request (the master, slowed by QEMU, had sent again)"
+          % (len(t.results), len(ps), largest[0], largest[1], t.backlog))
     if not t.interior:
         sys.exit("reply_path_count: no interior character in the trace")
     print("per received character (USART1 interrupt, collector fast path): worst %s, median %d, "
@@ -314,10 +293,10 @@ def report(t, caps, card):
             kind, len(core[kind]), w, min(core[kind]), us, bits,
             check("reply " + kind, w, budget).split(" (")[1].rstrip(")")))
     if not t.passes:
-        sys.exit("reply_path_count: no complete main-loop pass in the trace")
-    print("main-loop pass holding PendSV off (BASEPRI around dfp21b_poll and the SBus link): "
-          "worst %s, median %d, %d passes"
-          % (check("main-loop pass", max(t.passes), LOOP_BUDGET),
+        sys.exit("reply_path_count: no complete main-loop section in the trace")
+    print("main-loop section holding PendSV off (core_enter .. core_leave): "
+          "worst %s, median %d, %d sections"
+          % (check("main-loop section", max(t.passes), LOOP_BUDGET),
              sorted(t.passes)[len(t.passes) // 2], len(t.passes)))
     if card:
         ram, flash, sec = image_sizes(card)

@@ -78,6 +78,11 @@ typedef struct dfp21b_cfg {
     /* Every DP event, after the personality has acted on it. Optional. */
     void (*event)(void *ctx, const dp_event_t *ev);
     void *event_ctx;
+    /* Called between the bounded pieces of dfp21b_poll's work, where the caller may let a
+     * waiting reply be served (on the MCU: lower and raise BASEPRI) so that no piece of main-loop
+     * work holds a reply off for longer than one piece. Optional. */
+    void (*preempt)(void *ctx);
+    void *preempt_ctx;
 } dfp21b_cfg_t;
 
 typedef struct dfp21b {
@@ -93,7 +98,6 @@ typedef struct dfp21b {
     dfp21b_pd_cfg_t pd_candidate; /* result of the last cfg_check */
     bool outputs_new;
     dp_outputs_reason_t outputs_reason;
-    uint8_t out_image[DFP21B_IO_MAX];
     uint8_t in_image[DFP21B_IO_MAX];
     uint16_t po[DFP21B_MAX_PD];
     uint16_t pi[DFP21B_MAX_PD];
