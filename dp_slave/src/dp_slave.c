@@ -546,6 +546,7 @@ void dp_slave_request(dp_slave_t *s, const fdl_msg_t *m, bool sdn, hal_time_us_t
     }
 }
 
+#if FDL_RX_CHAR_INPUT
 void dp_slave_rx_char(dp_slave_t *s, uint8_t byte, uint8_t flags, hal_time_us_t t)
 {
     fdl_rx_result_t r = fdl_rx_char(&s->rx, byte, flags, t);
@@ -555,6 +556,7 @@ void dp_slave_rx_char(dp_slave_t *s, uint8_t byte, uint8_t flags, hal_time_us_t 
         dp_slave_emit(s, DP_EV_RX_ERROR, t, (uint32_t)s->rx.last_error, 0);
     }
 }
+#endif
 
 void dp_slave_rx_telegram(dp_slave_t *s, const fdl_rx_telegram_t *tg)
 {

@@ -93,6 +93,7 @@ static fdl_rx_result_t accept(fdl_rx_t *rx, const uint8_t *frame, uint16_t n, ha
     return FDL_RX_FRAME;
 }
 
+#if FDL_RX_CHAR_INPUT
 static fdl_rx_result_t complete(fdl_rx_t *rx, hal_time_us_t t)
 {
     fdl_rx_error_t e = check_octets(rx->buf, rx->len, false, 0);
@@ -101,6 +102,7 @@ static fdl_rx_result_t complete(fdl_rx_t *rx, hal_time_us_t t)
     }
     return accept(rx, rx->buf, rx->len, t, rx->idle_before_pending_ns);
 }
+#endif
 
 static uint16_t length_for_sd(uint8_t sd)
 {
@@ -163,6 +165,7 @@ hal_time_us_t fdl_rx_poll(fdl_rx_t *rx, hal_time_us_t now)
     return now + HAL_TIME_NO_DEADLINE_US;
 }
 
+#if FDL_RX_CHAR_INPUT
 fdl_rx_result_t fdl_rx_char(fdl_rx_t *rx, uint8_t byte, uint8_t flags, hal_time_us_t t)
 {
     /* The collector judges the same way (fdl_gap.h); fdl_rx_poll() clears have_last. */
@@ -221,3 +224,4 @@ fdl_rx_result_t fdl_rx_char(fdl_rx_t *rx, uint8_t byte, uint8_t flags, hal_time_
     }
     return FDL_RX_NOTHING;
 }
+#endif

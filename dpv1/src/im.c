@@ -53,11 +53,12 @@ void im_init(im_t *im, const im_identity_t *id, hal_nvm_t nvm, size_t nvm_offset
     if (nvm.ops->read(nvm.ctx, nvm_offset, magic, sizeof magic) == 0 &&
         ((uint32_t)magic[0] << 24 | (uint32_t)magic[1] << 16 | (uint32_t)magic[2] << 8 |
          magic[3]) == IM_NVM_MAGIC &&
-        nvm.ops->read(nvm.ctx, nvm_offset + 4u, &im->records[0][0], sizeof im->records) == 0) {
+        nvm.ops->read(nvm.ctx, nvm_offset + 4u, im_record_at(im, 0), IM_WRITABLE * IM_RECORD_LEN) ==
+            0) {
         im->nvm_ok = true;
         return;
     }
-    memset(im->records, 0, sizeof im->records);
+    memset(im_record_at(im, 0), 0, IM_WRITABLE * IM_RECORD_LEN);
 }
 
 static int store(im_t *im)
@@ -65,14 +66,9 @@ static int store(im_t *im)
     if (im->nvm.ops == NULL) {
         return 0; /* no storage on this card: kept until power-off */
     }
-    uint8_t image[IM_NVM_SIZE];
-    image[0] = (uint8_t)(IM_NVM_MAGIC >> 24);
-    image[1] = (uint8_t)(IM_NVM_MAGIC >> 16);
-    image[2] = (uint8_t)(IM_NVM_MAGIC >> 8);
-    image[3] = (uint8_t)IM_NVM_MAGIC;
-    memcpy(&image[4], im->records, sizeof im->records);
+    hal_put_be32(im->image, IM_NVM_MAGIC);
     /* One write of the whole image: the backend keeps it all-old or all-new. */
-    return im->nvm.ops->write(im->nvm.ctx, im->nvm_offset, image, sizeof image);
+    return im->nvm.ops->write(im->nvm.ctx, im->nvm_offset, im->image, sizeof im->image);
 }
 
 uint8_t im_write(im_t *im, const uint8_t *data, size_t len, uint16_t *selected)
@@ -94,7 +90,7 @@ uint8_t im_write(im_t *im, const uint8_t *data, size_t len, uint16_t *selected)
     if (fi == IM_INDEX_0) {
         return DPV1_ERR_ACCESS_DENIED;
     }
-    uint8_t *rec = im->records[fi - IM_INDEX_0 - 1u];
+    uint8_t *rec = im_record_at(im, fi - IM_INDEX_0 - 1u);
     uint8_t old[IM_RECORD_LEN];
     memcpy(old, rec, sizeof old);
     memcpy(rec, &data[IM_CALL_HEADER_LEN], IM_RECORD_LEN);
@@ -121,8 +117,7 @@ uint8_t im_read(const im_t *im, uint16_t selected, uint8_t *out, size_t max, siz
     if (selected == IM_INDEX_0) {
         im_build_record0(&im->id, &out[IM_CALL_HEADER_LEN]);
     } else {
-        memcpy(&out[IM_CALL_HEADER_LEN], im->records[selected - IM_INDEX_0 - 1u],
-               IM_RECORD_LEN);
+        memcpy(&out[IM_CALL_HEADER_LEN], &im->image[4u + (selected - IM_INDEX_0 - 1u) * IM_RECORD_LEN], IM_RECORD_LEN);
     }
     *len = IM_CALL_HEADER_LEN + IM_RECORD_LEN;
     return 0;

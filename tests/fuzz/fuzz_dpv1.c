@@ -25,6 +25,7 @@
  *  - every MOVILINK service runs on the channel of an open connection (1 for C1, 2/3 for C2). */
 #include "dp_master/dpv1_ds47.h"
 #include "dp_master/dpv1_xfer.h"
+#include "dp_slave/fdl_frame.h"
 #include "dpv1/dpv1.h"
 #include "dpv1/dpv1_wire.h"
 #include "fuzz_link.h"
@@ -128,9 +129,10 @@ static void check_response(conn_model_t *m, const uint8_t *rsp, size_t len, bool
 /* One SRD to a DP-V1 SAP, with everything the FDL layer would check on the answer. */
 static void sap(uint8_t master, uint8_t dsap, uint8_t ssap, const uint8_t *data, size_t len)
 {
-    uint8_t reply[DP_SAP_REPLY_MAX + 16];
-    memset(reply, 0xA5, sizeof reply);
-    size_t rlen = 0;
+    /* The room dp_slave gives for a short reply: the DU after FDL_TX_HEADROOM octets. */
+    uint8_t given[FDL_TX_HEADROOM + DP_SAP_REPLY_SHORT + 16];
+    memset(given, 0xA5, sizeof given);
+    dp_sap_reply_t out = {.buf = given};
     bool c1_ok = r.c1_open && r.c1_master == master && ssap == DPV1_SAP_C1;
     int c2i = dsap < 2u ? (int)dsap : -1;
     conn_model_t *m2 = c2i >= 0 ? &r.c2[c2i] : NULL;
@@ -140,13 +142,23 @@ static void sap(uint8_t master, uint8_t dsap, uint8_t ssap, const uint8_t *data,
         TRACE("SRD m%u %u->%u t=%u ", master, ssap, dsap, r.now);
         fz_hex("req", data, len);
     }
-    dp_sap_answer_t a = dpv1_sap_request(&r.d, master, dsap, ssap, data, len, reply, &rlen, r.now);
+    dp_sap_answer_t a = dpv1_sap_request(&r.d, master, dsap, ssap, data, len, &out, r.now);
+    const uint8_t *reply = &out.buf[FDL_TX_HEADROOM];
+    size_t rlen = a == DP_SAP_ANSWER_DATA ? out.len : 0u;
     TRACE("  answer %d, %zu octets\n", (int)a, rlen);
     PROPERTY(a == DP_SAP_NOT_SERVED || a == DP_SAP_ANSWER_SC || a == DP_SAP_ANSWER_DATA,
              "answer %d", (int)a);
     if (a == DP_SAP_ANSWER_DATA) {
         PROPERTY(rlen >= 1u && rlen <= DP_SAP_REPLY_MAX, "reply of %zu octets", rlen);
-        PROPERTY(reply[DP_SAP_REPLY_MAX] == 0xA5u, "wrote past the reply buffer");
+        PROPERTY(out.buf != given || rlen <= DP_SAP_REPLY_SHORT,
+                 "%zu octets written into the %u-octet room for a short reply", rlen,
+                 (unsigned)DP_SAP_REPLY_SHORT);
+        PROPERTY(given[FDL_TX_HEADROOM + DP_SAP_REPLY_SHORT] == 0xA5u,
+                 "wrote past the room for a short reply");
+        PROPERTY(!out.sum_known || out.sum == fdl_fcs(reply, rlen),
+                 "octet sum %02X given, the response's is %02X", out.sum, fdl_fcs(reply, rlen));
+        PROPERTY(out.buf == given || out.guard != NULL, "a response in the device's buffer "
+                 "without a guard");
     }
     if (dsap == DPV1_SAP_C1) {
         PROPERTY(c1_ok || a == DP_SAP_NOT_SERVED, "MSAC1 served while closed or for master %u",

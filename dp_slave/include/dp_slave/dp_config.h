@@ -27,6 +27,13 @@
 #define FDL_FCB_SLOTS 3u
 #endif
 
+/* 1: telegrams may be fed character by character (fdl_rx_char, dp_slave_rx_char), which needs
+ * an assembly buffer per station. 0: only whole telegrams a receiver collected are fed
+ * (dp_slave_rx_telegram; the MCU's interrupt-level collector), and that buffer is left out. */
+#ifndef FDL_RX_CHAR_INPUT
+#define FDL_RX_CHAR_INPUT 1
+#endif
+
 #if DP_MAX_IO_LEN > 244u
 #error "DP_MAX_IO_LEN: a Data_Exchange DU carries at most 244 octets"
 #endif

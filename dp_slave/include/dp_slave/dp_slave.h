@@ -233,7 +233,9 @@ typedef struct dp_slave {
 /* Power-on: Wait_Prm, Master_Add none, baud search started (or fixed rate selected). */
 void dp_slave_init(dp_slave_t *s, const dp_slave_cfg_t *cfg, hal_time_us_t now);
 /* One received character; t = end of its stop bit. May transmit a reply. */
+#if FDL_RX_CHAR_INPUT
 void dp_slave_rx_char(dp_slave_t *s, uint8_t byte, uint8_t flags, hal_time_us_t t);
+#endif
 /* Instead of rx_char: a whole telegram a receiver collected (fdl_rx.h). May transmit a reply. */
 void dp_slave_rx_telegram(dp_slave_t *s, const fdl_rx_telegram_t *tg);
 /* Runs timers (watchdog, baud search/control). Returns the next deadline (absolute). */

@@ -17,6 +17,7 @@
 #include <stdint.h>
 
 #include "dp_slave/fdl_wire.h"
+#include "dp_slave/dp_config.h"
 #include "hal/hal_time.h"
 
 /* A timestamp in whole microseconds can be off by almost 1 µs; 12 Mbit/s characters are 917 ns. */
@@ -44,7 +45,9 @@ typedef enum fdl_rx_error {
 typedef enum fdl_rx_result { FDL_RX_NOTHING = 0, FDL_RX_FRAME, FDL_RX_ERROR } fdl_rx_result_t;
 
 typedef struct fdl_rx {
+#if FDL_RX_CHAR_INPUT
     uint8_t buf[FDL_FRAME_MAX];
+#endif
     uint16_t len;      /* octets collected of the telegram in progress */
     uint16_t expected; /* total length once known, else 0 */
     bool collecting;
@@ -70,7 +73,9 @@ void fdl_rx_init(fdl_rx_t *rx, uint32_t baud, bool strict);
 void fdl_rx_set_baud(fdl_rx_t *rx, uint32_t baud);
 /* Discard any telegram in progress, e.g. after the station transmitted or changed rate. */
 void fdl_rx_reset(fdl_rx_t *rx);
+#if FDL_RX_CHAR_INPUT
 fdl_rx_result_t fdl_rx_char(fdl_rx_t *rx, uint8_t byte, uint8_t flags, hal_time_us_t t);
+#endif
 
 /* A telegram whose characters a receiver collected itself (fdl_collect.h in an interrupt, DMA,
  * an ASIC): its length followed from SD and LE, gaps and character errors were judged as it

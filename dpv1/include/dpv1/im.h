@@ -31,9 +31,17 @@ typedef struct im {
     im_identity_t id;
     hal_nvm_t nvm;
     size_t nvm_offset;
-    uint8_t records[IM_WRITABLE][IM_RECORD_LEN];
+    /* As stored: the magic, then I&M1..4 (im_record_at()); written as it is, with no staging copy
+     * on the stack. */
+    uint8_t image[IM_NVM_SIZE];
     bool nvm_ok;
 } im_t;
+
+/* Record I&M1+i (i = 0..3). */
+static inline uint8_t *im_record_at(im_t *im, unsigned i)
+{
+    return &im->image[4u + i * IM_RECORD_LEN];
+}
 
 /* Loads I&M1..4 from nvm (blank records if there is none or it is not ours). */
 void im_init(im_t *im, const im_identity_t *id, hal_nvm_t nvm, size_t nvm_offset);

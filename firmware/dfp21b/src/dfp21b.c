@@ -297,32 +297,10 @@ static void hook_event(void *ctx, const dp_event_t *ev)
 
 /* ---- life cycle ---------------------------------------------------------------------------- */
 
-void dfp21b_init(dfp21b_t *c, const dfp21b_cfg_t *cfg, hal_time_us_t now)
+/* Out of line, as init_dp: each configuration struct lives only in its own frame, so they do
+ * not add up on the stack (the card's stack reservation comes from the deepest chain). */
+__attribute__((noinline)) static void init_dpv1(dfp21b_t *c, const dfp21b_cfg_t *cfg)
 {
-    memset(c, 0, sizeof *c);
-    c->cfg = *cfg;
-    uint8_t dip = 0;
-    if (cfg->dip.ops != NULL && cfg->dip.ops->read != NULL) {
-        dip = cfg->dip.ops->read(cfg->dip.ctx);
-    }
-    c->address = (uint8_t)(dip & 0x7Fu);
-    c->on_bus = c->address <= DFP21B_MAX_ADDRESS;
-    dp_slave_cfg_t dcfg = {
-        .address = c->address,
-        .ident = DFP21B_IDENT,
-        .fixed_baud = cfg->fixed_baud,
-        .strict_timing = cfg->strict_timing,
-        .baud_control_ms = cfg->baud_control_ms,
-        .sync_supported = true,
-        .freeze_supported = true,
-        .default_cfg = dfp21b_default_cfg,
-        .default_cfg_len = (uint8_t)sizeof dfp21b_default_cfg,
-        .uart = c->on_bus ? cfg->uart : (hal_uart_t){0},
-        .hooks = {.ctx = c, .prm_check = hook_prm_check, .cfg_check = hook_cfg_check,
-                  .outputs = hook_outputs, .event = hook_event, .sap_request = hook_sap_request},
-    };
-    ml_client_init(&c->ml, cfg->inverter, 0);
-    ml_channel_init(&c->param, &c->ml, DFP21B_CH_CYCLIC);
     dpv1_cfg_t vcfg = {
         .ml = &c->ml,
         .preempt = cfg->preempt,
@@ -346,19 +324,56 @@ void dfp21b_init(dfp21b_t *c, const dfp21b_cfg_t *cfg, hal_time_us_t now)
         }
     }
     dpv1_init(&c->dpv1, &vcfg);
+}
+
+__attribute__((noinline)) static void init_dp(dfp21b_t *c, const dfp21b_cfg_t *cfg,
+                                              hal_time_us_t now)
+{
+    dp_slave_cfg_t dcfg = {
+        .address = c->address,
+        .ident = DFP21B_IDENT,
+        .fixed_baud = cfg->fixed_baud,
+        .strict_timing = cfg->strict_timing,
+        .baud_control_ms = cfg->baud_control_ms,
+        .sync_supported = true,
+        .freeze_supported = true,
+        .default_cfg = dfp21b_default_cfg,
+        .default_cfg_len = (uint8_t)sizeof dfp21b_default_cfg,
+        .uart = c->on_bus ? cfg->uart : (hal_uart_t){0},
+        .hooks = {.ctx = c, .prm_check = hook_prm_check, .cfg_check = hook_cfg_check,
+                  .outputs = hook_outputs, .event = hook_event, .sap_request = hook_sap_request},
+    };
+    dp_slave_init(&c->dp, &dcfg, now);
+}
+
+void dfp21b_init(dfp21b_t *c, const dfp21b_cfg_t *cfg, hal_time_us_t now)
+{
+    memset(c, 0, sizeof *c);
+    c->cfg = *cfg;
+    uint8_t dip = 0;
+    if (cfg->dip.ops != NULL && cfg->dip.ops->read != NULL) {
+        dip = cfg->dip.ops->read(cfg->dip.ctx);
+    }
+    c->address = (uint8_t)(dip & 0x7Fu);
+    c->on_bus = c->address <= DFP21B_MAX_ADDRESS;
+    ml_client_init(&c->ml, cfg->inverter, 0);
+    ml_channel_init(&c->param, &c->ml, DFP21B_CH_CYCLIC);
+    init_dpv1(c, cfg);
     c->status_dirty = true;
     c->now = now;
     c->next_status_poll = now; /* a timestamp, never 0: see hal_time_diff() */
-    dp_slave_init(&c->dp, &dcfg, now);
+    init_dp(c, cfg, now);
     update_leds(c);
 }
 
+#if FDL_RX_CHAR_INPUT
 void dfp21b_rx_char(dfp21b_t *c, uint8_t byte, uint8_t flags, hal_time_us_t t)
 {
     if (c->on_bus) {
         dp_slave_rx_char(&c->dp, byte, flags, t);
     }
 }
+#endif
 
 void dfp21b_rx_telegram(dfp21b_t *c, const fdl_rx_telegram_t *tg)
 {

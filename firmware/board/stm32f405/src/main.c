@@ -249,7 +249,7 @@ static void report_and_exit(void)
 #endif
 
 /* A fault handler's record from before the reset (RAM kept over it): print it under test. */
-static bool take_previous_fault(void)
+__attribute__((noinline)) static bool take_previous_fault(void)
 {
     bool had_fault = board_fault.magic == BOARD_FAULT_MAGIC;
 #ifdef BOARD_SEMIHOSTING
@@ -272,7 +272,7 @@ static bool take_previous_fault(void)
 /* The card <-> inverter link: SBus on bxCAN, or the stand-in loop in test images. Without a
  * CAN controller (QEMU) or transceiver the card runs without inverter: PI words echo PO words
  * and parameter services answer "no response" (class 6 code 2). */
-static ml_link_t start_inverter_link(void)
+__attribute__((noinline)) static ml_link_t start_inverter_link(void)
 {
     bxcan_cfg_t ccfg = {.regs = CAN1, .pclk_hz = clocks.pclk1_hz,
                         .bitrate = DFP_BOARD_SBUS_BITRATE, .rx = can_rx, .rx_ctx = NULL};
@@ -331,7 +331,9 @@ static void loop_rx(void *ctx, const hal_can_frame_t *f)
 }
 #endif
 
-static void start_card(ml_link_t inverter)
+/* Out of line, as start_inverter_link: their configuration structs are then not part of main's
+ * frame, which is on every interrupt's stack chain (tools/stack_report.py). */
+__attribute__((noinline)) static void start_card(ml_link_t inverter)
 {
     rs485_uart_cfg_t ucfg = {.regs = USART1, .de_port = GPIOA, .de_pin = 8u,
                              .pclk_hz = clocks.pclk2_hz,

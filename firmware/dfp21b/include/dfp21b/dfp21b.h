@@ -119,7 +119,9 @@ typedef struct dfp21b {
 
 /* Power-up: reads the DIP switches once. Address > 125: the card stays off the bus. */
 void dfp21b_init(dfp21b_t *c, const dfp21b_cfg_t *cfg, hal_time_us_t now);
+#if FDL_RX_CHAR_INPUT
 void dfp21b_rx_char(dfp21b_t *c, uint8_t byte, uint8_t flags, hal_time_us_t t);
+#endif
 void dfp21b_rx_telegram(dfp21b_t *c, const fdl_rx_telegram_t *tg);
 /* Main-loop work: timers, process data to and from the inverter. Returns the next deadline. */
 hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now);
