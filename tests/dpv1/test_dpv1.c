@@ -990,6 +990,31 @@ static void test_msac2_rm_decisions(void)
     EXPECT_RS(6);
 }
 
+/* The FCB cache points at a fetched response in its connection's buffer; once that buffer holds
+ * another master's PDU, the old master's retry must not get those octets as its answer. */
+static void test_msac2_retry_after_buffer_reused(void)
+{
+    setup(0);
+    c2_open(__LINE__, 3, 0);
+    send_b(3, 0, SSAP_C2, B(0x5E, 0x00, 0x2F, 0xF0)); /* Read 47: nothing to read, B5 */
+    EXPECT_SC();
+    main_loop();
+    send_sap(3, 0, SSAP_C2, NULL, 0);
+    EXPECT_DU(3, 0, SSAP_C2, 0xDE, 0x80, 0xB5, 0x00);
+    unsigned fetched = (R.ru.frames - 1u) % LOG_MAX;
+    /* A retry while the buffer still holds it: the same frame, nothing executed. */
+    send_sap_fc(3, tm_fc_retry(&R.m[3], FDL_REQ_SRD_HIGH), 0, SSAP_C2, NULL, 0);
+    expect_frame(__LINE__, R.ru.f[fetched], R.ru.len[fetched]);
+    /* Master 3 falls silent past its Send_Timeout (1 s): closed. Master 5 opens SAP 0, its
+     * Initiate PDU now in that buffer. */
+    run_us(1100000, 1000);
+    CHECK(!R.cs.card.dpv1.c2[0].open);
+    c2_open(__LINE__, 5, 0);
+    /* Master 3 repeats its old poll: not answered from the buffer, refused as a new request. */
+    send_sap_fc(3, tm_fc_retry(&R.m[3], FDL_REQ_SRD_HIGH), 0, SSAP_C2, NULL, 0);
+    EXPECT_RS(3);
+}
+
 static void test_msac2_supervision_idle_abort(void)
 {
     setup(0);
@@ -1341,6 +1366,7 @@ int main(void)
     RUN(test_msac1_other_master_watchdog_new_prm);
     RUN(test_msac2_connections);
     RUN(test_msac2_rm_decisions);
+    RUN(test_msac2_retry_after_buffer_reused);
     RUN(test_msac2_supervision_idle_abort);
     RUN(test_msac2_abort_while_service_runs);
     RUN(test_msac1_reopen_while_service_runs);
