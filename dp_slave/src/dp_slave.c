@@ -444,12 +444,12 @@ static void svc_msac(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
         fdl_station_reply_sc(s);
         break;
     case DP_SAP_ANSWER_DATA: {
-        size_t len = r.len <= DP_SAP_REPLY_MAX ? r.len : DP_SAP_REPLY_MAX;
-        if (r.buf == s->tx_buf && len > DP_SAP_REPLY_SHORT) {
-            len = DP_SAP_REPLY_SHORT; /* more than the device may write into the slave's buffer */
-        }
+        /* A device that claims more than it may write (into the slave's buffer) is cut short. */
+        size_t limit = r.buf == s->tx_buf ? DP_SAP_REPLY_SHORT : DP_SAP_REPLY_MAX;
+        bool whole = r.len <= limit;
+        size_t len = whole ? r.len : limit;
         uint8_t *du = &r.buf[FDL_TX_HEADROOM];
-        uint8_t sum = r.sum_known && len == r.len ? r.sum : fdl_fcs(du, len);
+        uint8_t sum = r.sum_known && whole ? r.sum : fdl_fcs(du, len);
         fdl_station_reply_framed(s, m, FDL_RSP_DL, true, r.buf, len, sum);
         if (r.buf != s->tx_buf) {
             s->tx_guard = r.guard;
