@@ -53,12 +53,11 @@ void im_init(im_t *im, const im_identity_t *id, hal_nvm_t nvm, size_t nvm_offset
     if (nvm.ops->read(nvm.ctx, nvm_offset, magic, sizeof magic) == 0 &&
         ((uint32_t)magic[0] << 24 | (uint32_t)magic[1] << 16 | (uint32_t)magic[2] << 8 |
          magic[3]) == IM_NVM_MAGIC &&
-        nvm.ops->read(nvm.ctx, nvm_offset + 4u, im_record_at(im, 0), IM_WRITABLE * IM_RECORD_LEN) ==
-            0) {
+        nvm.ops->read(nvm.ctx, nvm_offset + 4u, im_record_at(im, 0), sizeof im->image - 4u) == 0) {
         im->nvm_ok = true;
         return;
     }
-    memset(im_record_at(im, 0), 0, IM_WRITABLE * IM_RECORD_LEN);
+    memset(im_record_at(im, 0), 0, sizeof im->image - 4u);
 }
 
 static int store(im_t *im)
