@@ -65,7 +65,8 @@ static void frame_inputs(dp_slave_t *s)
         (void)fdl_station_references(s, s->dx[i].buf, true);
     }
     dp_dx_buffer_t *dx = &s->dx[i];
-    memcpy(&dx->buf[FDL_TX_HEADROOM], s->inputs, sizeof s->inputs);
+    /* Only what a reply carries: Chk_Cfg frames again when the length changes. */
+    memcpy(&dx->buf[FDL_TX_HEADROOM], s->inputs, s->in_len);
     dx->sum = fdl_fcs(&dx->buf[FDL_TX_HEADROOM], s->in_len);
     s->dx_current = i;
 }
