@@ -18,9 +18,12 @@ url="udpm://239.255.76.72:7672?ttl=0"
 
 # ---- demo --lcm, recorded by lcm-logger ----
 # lcm-logger says "Opening log file" before it subscribes; the exact counts below need every
-# message, so give it a generous moment on a loaded machine.
+# message, so give it a generous moment on a loaded machine. The demo publishes its 1 351
+# messages in a burst: with the default socket buffer (rmem_default, ~200 datagrams) a logger
+# that the other tests' load holds off loses datagrams in the kernel, so it asks for 4 MB
+# (LCM's recv_buf_size, capped by net.core.rmem_max).
 start_logger() { # start_logger LOG OUT
-  "$lcm_logger" --lcm-url="$url" --force "$1" >"$2" 2>&1 &
+  "$lcm_logger" --lcm-url="$url&recv_buf_size=4194304" --force "$1" >"$2" 2>&1 &
   logger=$!; pids+=($logger)
   for _ in $(seq 100); do grep -q "Opening log file" "$2" 2>/dev/null && break; sleep 0.1; done
   sleep 1
