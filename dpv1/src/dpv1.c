@@ -181,9 +181,33 @@ static void preempt(const dpv1_t *d)
     }
 }
 
+/* Data set 47's response, written into pdu from the parameters in bounded steps with the
+ * caller's chance to reply in between; false when the Read was replaced or the connection closed
+ * meanwhile (the response then stays unread). */
+static bool read_ds47(dpv1_t *d, dpv1_conn_t *c, uint8_t seq, uint8_t *out, uint8_t want,
+                      size_t *n, uint8_t *sum, uint8_t *err)
+{
+    ds47_read_cursor_t cur;
+    *err = ds47_read_begin(&c->ds47, out, want, &cur);
+    if (*err != 0u) {
+        return true;
+    }
+    while (ds47_read_step(&c->ds47, out, &cur)) {
+        preempt(d);
+        if (c->seq != seq) {
+            return false;
+        }
+    }
+    ds47_read_done(&c->ds47);
+    *n = cur.len;
+    *sum = cur.sum;
+    return true;
+}
+
 /* The response is written over the request in pdu: function, slot and index stay in place.
- * *data_sum: the octet sum of the data after the header. */
-static size_t do_read(dpv1_t *d, dpv1_conn_t *c, uint8_t *pdu, size_t len, uint8_t *data_sum)
+ * *data_sum: the octet sum of the data after the header. 0 when the request was dropped. */
+static size_t do_read(dpv1_t *d, dpv1_conn_t *c, uint8_t *pdu, size_t len, uint8_t seq,
+                      uint8_t *data_sum)
 {
     *data_sum = 0;
     if (len < DPV1_HEADER_LEN) {
@@ -197,8 +221,9 @@ static size_t do_read(dpv1_t *d, dpv1_conn_t *c, uint8_t *pdu, size_t len, uint8
     size_t n = 0;
     uint8_t err;
     if (index == DPV1_INDEX_DS47) {
-        *data_sum = c->ds47.rsp_sum; /* kept while the response was built: no pass over it */
-        err = ds47_read(&c->ds47, &pdu[DPV1_HEADER_LEN], want, &n);
+        if (!read_ds47(d, c, seq, &pdu[DPV1_HEADER_LEN], want, &n, data_sum, &err)) {
+            return 0;
+        }
     } else if (index == DPV1_INDEX_IM) {
         err = im_read(&d->im, c->im_selected, &pdu[DPV1_HEADER_LEN], want, &n);
         *data_sum = fdl_fcs(&pdu[DPV1_HEADER_LEN], n);
@@ -277,10 +302,7 @@ static size_t do_initiate(uint8_t *rsp)
 static void serve(dpv1_t *d, dpv1_conn_t *c, bool class2, hal_time_us_t now)
 {
     if (c->ds47.state == DS47_BUSY) {
-        /* A reply may close the connection in preempt(): ds47_reset() then ends the loop. */
-        while (ds47_poll(&c->ds47, now)) {
-            preempt(d);
-        }
+        ds47_poll(&c->ds47, now);
         preempt(d);
     }
     if (c->mailbox != DPV1_MB_REQUEST) {
@@ -293,7 +315,10 @@ static void serve(dpv1_t *d, dpv1_conn_t *c, bool class2, hal_time_us_t now)
     uint8_t data_sum = 0;
     switch (pdu[0]) {
     case DPV1_FN_READ:
-        n = do_read(d, c, pdu, len, &data_sum);
+        n = do_read(d, c, pdu, len, seq, &data_sum);
+        if (n == 0u) {
+            return; /* replaced or closed while being answered: the next pass serves what is new */
+        }
         break;
     case DPV1_FN_WRITE:
         n = do_write(d, c, pdu, len, seq, now);

@@ -16,8 +16,6 @@ void ds47_init(ds47_t *d, ml_client_t *ml, uint8_t channel)
 void ds47_reset(ds47_t *d)
 {
     d->state = DS47_IDLE;
-    d->building = false;
-    d->rsp_len = 0;
     d->generation++;
 }
 
@@ -114,55 +112,24 @@ static bool parse_value(ds47_t *d, uint8_t i, const uint8_t *req, size_t len)
     return true;
 }
 
-/* The response header; its entries follow in build_step(). Whether every parameter succeeded
- * decides the Response ID and whether writes get an entry, so it is settled first. */
-static void start_build(ds47_t *d)
+/* Every service done: whether all succeeded decides the Response ID and whether writes get an
+ * entry, and with it the response's length, which a Read checks before anything is written. */
+static void finish(ds47_t *d)
 {
-    bool all_ok = true;
+    unsigned failed = 0, read = 0, written = 0;
     for (uint8_t i = 0; i < d->n; i++) {
-        all_ok = all_ok && d->p[i].ok;
-    }
-    d->all_ok = all_ok;
-    d->rsp[0] = d->ref;
-    d->rsp[1] = all_ok ? d->id : (uint8_t)(d->id | DS47_ID_ERROR);
-    d->rsp[2] = d->axis;
-    d->rsp[3] = d->n;
-    d->rsp_len = 4;
-    d->rsp_sum = fdl_fcs(d->rsp, 4u);
-    d->next = 0;
-    d->building = true;
-}
-
-static void build_step(ds47_t *d)
-{
-    uint8_t *r = d->rsp;
-    size_t n = d->rsp_len;
-    uint8_t end = (uint8_t)(d->n - d->next) > DS47_BUILD_STEP ? (uint8_t)(d->next + DS47_BUILD_STEP)
-                                                              : d->n;
-    for (uint8_t i = d->next; i < end; i++) {
         const ds47_param_t *p = &d->p[i];
         if (!p->ok) {
-            r[n++] = DS47_FORMAT_ERROR;
-            r[n++] = 1;
-            hal_put_be16(&r[n], (uint16_t)p->value);
-            n += 2u;
-        } else if (!writes(d, p)) {
-            r[n++] = DS47_FORMAT_DWORD;
-            r[n++] = 1;
-            hal_put_be32(&r[n], p->value);
-            n += 4u;
-        } else if (!d->all_ok) {
-            r[n++] = DS47_FORMAT_ZERO;
-            r[n++] = 0;
+            failed++;
+        } else if (writes(d, p)) {
+            written++;
+        } else {
+            read++;
         }
     }
-    d->rsp_sum = (uint8_t)(d->rsp_sum + fdl_fcs(&r[d->rsp_len], n - d->rsp_len));
-    d->rsp_len = (uint8_t)n;
-    d->next = end;
-    if (end == d->n) {
-        d->building = false;
-        d->state = DS47_DONE;
-    }
+    d->all_ok = failed == 0u;
+    d->rsp_len = (uint8_t)(4u + 4u * failed + 6u * read + (d->all_ok ? 0u : 2u * written));
+    d->state = DS47_DONE;
 }
 
 static void run_next(ds47_t *d, hal_time_us_t now);
@@ -171,7 +138,7 @@ static void on_done(void *ctx, uint8_t channel, const uint8_t rsp[ML_TELEGRAM_LE
 {
     (void)channel;
     ds47_t *d = ctx;
-    if (d->state != DS47_BUSY || d->building || d->running_generation != d->generation) {
+    if (d->state != DS47_BUSY || d->running_generation != d->generation) {
         return; /* the request was dropped meanwhile */
     }
     ds47_param_t *p = &d->p[d->next];
@@ -196,7 +163,7 @@ static void run_next(ds47_t *d, hal_time_us_t now)
         d->next++;
     }
     if (d->next >= d->n) {
-        start_build(d);
+        finish(d);
         return;
     }
     ds47_param_t *p = &d->p[d->next];
@@ -214,17 +181,11 @@ static void run_next(ds47_t *d, hal_time_us_t now)
     }
 }
 
-bool ds47_poll(ds47_t *d, hal_time_us_t now)
+void ds47_poll(ds47_t *d, hal_time_us_t now)
 {
-    if (d->state != DS47_BUSY) {
-        return false;
-    }
-    if (d->building) {
-        build_step(d);
-    } else if (!d->waiting) {
+    if (d->state == DS47_BUSY && !d->waiting) {
         run_next(d, now);
     }
-    return d->state == DS47_BUSY && d->building;
 }
 
 /* The four header octets: Request Reference, Request ID, Axis, number of parameters. */
@@ -234,7 +195,6 @@ static uint8_t start_write(ds47_t *d, const uint8_t *req, size_t len)
         return DPV1_ERR_STATE_CONFLICT;
     }
     d->state = DS47_IDLE; /* a new request drops an unread response */
-    d->rsp_len = 0;
     if (len < 4u) {
         return DPV1_ERR_INVALID_RANGE;
     }
@@ -278,7 +238,6 @@ static uint8_t accept(ds47_t *d, size_t len, hal_time_us_t now)
     d->generation++;
     d->state = DS47_BUSY;
     d->waiting = false;
-    d->building = false;
     d->next = 0;
     run_next(d, now);
     return 0;
@@ -323,7 +282,7 @@ uint8_t ds47_write(ds47_t *d, const uint8_t *req, size_t len, hal_time_us_t now)
     return rc;
 }
 
-uint8_t ds47_read(ds47_t *d, uint8_t *out, size_t max, size_t *len)
+uint8_t ds47_read_begin(const ds47_t *d, uint8_t *out, size_t max, ds47_read_cursor_t *cur)
 {
     if (d->state != DS47_DONE) {
         return DPV1_ERR_STATE_CONFLICT;
@@ -331,8 +290,60 @@ uint8_t ds47_read(ds47_t *d, uint8_t *out, size_t max, size_t *len)
     if (max < d->rsp_len) {
         return DPV1_ERR_INVALID_RANGE;
     }
-    memcpy(out, d->rsp, d->rsp_len);
-    *len = d->rsp_len;
+    out[0] = d->ref;
+    out[1] = d->all_ok ? d->id : (uint8_t)(d->id | DS47_ID_ERROR);
+    out[2] = d->axis;
+    out[3] = d->n;
+    cur->entry = 0;
+    cur->len = 4;
+    cur->sum = fdl_fcs(out, 4u);
+    return 0;
+}
+
+bool ds47_read_step(const ds47_t *d, uint8_t *out, ds47_read_cursor_t *cur)
+{
+    size_t n = cur->len;
+    uint8_t end = (uint8_t)(d->n - cur->entry) > DS47_BUILD_STEP
+                      ? (uint8_t)(cur->entry + DS47_BUILD_STEP)
+                      : d->n;
+    for (uint8_t i = cur->entry; i < end; i++) {
+        const ds47_param_t *p = &d->p[i];
+        if (!p->ok) {
+            out[n++] = DS47_FORMAT_ERROR;
+            out[n++] = 1;
+            hal_put_be16(&out[n], (uint16_t)p->value);
+            n += 2u;
+        } else if (!writes(d, p)) {
+            out[n++] = DS47_FORMAT_DWORD;
+            out[n++] = 1;
+            hal_put_be32(&out[n], p->value);
+            n += 4u;
+        } else if (!d->all_ok) {
+            out[n++] = DS47_FORMAT_ZERO;
+            out[n++] = 0;
+        }
+    }
+    cur->sum = (uint8_t)(cur->sum + fdl_fcs(&out[cur->len], n - cur->len));
+    cur->len = (uint8_t)n;
+    cur->entry = end;
+    return end < d->n;
+}
+
+void ds47_read_done(ds47_t *d)
+{
     d->state = DS47_IDLE;
+}
+
+uint8_t ds47_read(ds47_t *d, uint8_t *out, size_t max, size_t *len)
+{
+    ds47_read_cursor_t cur;
+    uint8_t rc = ds47_read_begin(d, out, max, &cur);
+    if (rc != 0u) {
+        return rc;
+    }
+    while (ds47_read_step(d, out, &cur)) {
+    }
+    ds47_read_done(d);
+    *len = cur.len;
     return 0;
 }

@@ -728,6 +728,131 @@ static void test_19_parameters_and_mixed_results(void)
     CHECK_EQ(v, 200000);
 }
 
+/* The main loop's long DP-V1 work runs in steps with dpv1's preempt hook between them, where
+ * the card serves telegrams (PendSV on the MCU). These tests deliver a telegram from that hook. */
+typedef struct preempt_inject {
+    unsigned calls;
+    unsigned at;  /* deliver on this call */
+    bytes_t pdu;  /* on C1 */
+} preempt_inject_t;
+
+static preempt_inject_t PI;
+
+static void inject_on_preempt(void *ctx)
+{
+    (void)ctx;
+    if (++PI.calls == PI.at) {
+        R.ru.in_main_loop = false; /* the card's reply path, not its main loop, answers this */
+        send_b(M1, C1, C1, PI.pdu);
+        expect_frame(__LINE__, SC, 1);
+        R.ru.in_main_loop = true;
+    }
+}
+
+/* Data set 47 requests on IPOS H0..H18: a write of 100 + i to each, and a read of all with the
+ * response that write leads to. */
+static void nineteen_h(uint8_t wr[4 + 19 * 12], uint8_t rd[4 + 19 * 6], uint8_t rr[4 + 19 * 6])
+{
+    const uint8_t wh[4] = {0x32, 0x02, 0x00, 19}, rh[4] = {0x33, 0x01, 0x00, 19};
+    memcpy(wr, wh, 4);
+    memcpy(rd, rh, 4);
+    memcpy(rr, rh, 4);
+    for (unsigned i = 0; i < 19u; i++) {
+        uint16_t idx = (uint16_t)(MD_IDX_IPOS_H0 + i);
+        const uint8_t a[6] = {0x10, 0x00, (uint8_t)(idx >> 8), (uint8_t)idx, 0x00, 0x00};
+        const uint8_t val[6] = {0x43, 0x01, 0x00, 0x00, 0x00, (uint8_t)(100 + i)};
+        memcpy(&wr[4 + 6 * i], a, 6);
+        memcpy(&wr[4 + 19 * 6 + 6 * i], val, 6);
+        memcpy(&rd[4 + 6 * i], a, 6);
+        memcpy(&rr[4 + 6 * i], val, 6);
+    }
+}
+
+/* A Read 47 whose response is being written (DS47_BUILD_STEP entries per step) is replaced by a
+ * Read of I&M0 between two steps: the first is dropped unanswered, the I&M read is answered, and
+ * the data set 47 response stays unread for the next Read 47, which gets all of it, once. */
+static void test_ds47_read_replaced_between_steps(void)
+{
+    setup(0);
+    startup(USER_DPV1);
+    uint8_t wr[4 + 19 * 12], rd[4 + 19 * 6], rr[4 + 19 * 6];
+    nineteen_h(wr, rd, rr);
+    const uint8_t wres[4] = {0x32, 0x02, 0x00, 19};
+    (void)ds47(__LINE__, M1, C1, C1, BN(wr, sizeof wr), wres, sizeof wres);
+    uint8_t pdu[DPV1_MAX_PDU];
+    size_t pn = mk_write(pdu, DPV1_INDEX_DS47, rd, sizeof rd);
+    transact(__LINE__, M1, C1, C1, BN(pdu, pn), pdu, 4);
+    run_us(20000, 1000); /* 19 services done: the response is ready, not yet written anywhere */
+    CHECK_EQ(R.cs.card.dpv1.c1.ds47.state, DS47_DONE);
+    send_b(M1, C1, C1, B(0x5E, 0x00, 0x2F, 0xF0));
+    EXPECT_SC();
+    PI = (preempt_inject_t){.at = 1, .pdu = B(0x5E, 0x00, 0xFF, 0xF0)};
+    R.cs.card.dpv1.preempt = inject_on_preempt;
+    main_loop();
+    R.cs.card.dpv1.preempt = NULL;
+    CHECK_EQ(PI.calls >= 1u, 1);
+    send_sap(M1, C1, C1, NULL, 0);
+    fdl_msg_t m;
+    size_t dl = 0;
+    const uint8_t *du = reply_du(&R.ru.u, &dl, &m);
+    CHECK(du != NULL && dl == 4u + 4u + IM_RECORD_LEN);
+    if (du != NULL && dl >= 4u) {
+        CHECK_EQ(du[0], 0x5E);
+        CHECK_EQ(du[2], DPV1_INDEX_IM);
+        CHECK_EQ(du[3], 4u + IM_RECORD_LEN);
+    }
+    CHECK_EQ(R.cs.card.dpv1.c1.ds47.state, DS47_DONE);
+    send_b(M1, C1, C1, B(0x5E, 0x00, 0x2F, 0xF0));
+    EXPECT_SC();
+    main_loop();
+    uint8_t want[DPV1_MAX_PDU] = {0x5E, 0x00, 0x2F, (uint8_t)sizeof rr};
+    memcpy(&want[4], rr, sizeof rr);
+    send_sap(M1, C1, C1, NULL, 0);
+    expect_du(__LINE__, M1, C1, C1, want, 4u + sizeof rr);
+    /* read once: the next Read has nothing to answer */
+    send_b(M1, C1, C1, B(0x5E, 0x00, 0x2F, 0xF0));
+    EXPECT_SC();
+    main_loop();
+    send_sap(M1, C1, C1, NULL, 0);
+    EXPECT_DU(M1, C1, C1, 0xDE, 0x80, 0xB5, 0x00);
+}
+
+/* A Write 47 being checked in steps (DS47_PARSE_STEP parameters each) is replaced by another
+ * Write between two steps: the first is dropped (no service of it runs), the second runs. */
+static void test_ds47_write_replaced_between_steps(void)
+{
+    setup(0);
+    startup(USER_DPV1);
+    uint8_t wr[4 + 19 * 12], rd[4 + 19 * 6], rr[4 + 19 * 6];
+    nineteen_h(wr, rd, rr);
+    int32_t h0_before = 0;
+    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_IPOS_H0, &h0_before));
+    uint8_t first[DPV1_MAX_PDU], second[DPV1_MAX_PDU];
+    size_t fn = mk_write(first, DPV1_INDEX_DS47, wr, sizeof wr);
+    /* the second: one MOVILINK read of 8300 */
+    const uint8_t one[] = {0x34, 0x40, 0x00, 0x01, 0x10, 0x00, 0x20, 0x6C, 0x00, 0x00};
+    size_t sn = mk_write(second, DPV1_INDEX_DS47, one, sizeof one);
+    send_b(M1, C1, C1, BN(first, fn));
+    EXPECT_SC();
+    PI = (preempt_inject_t){.at = 1, .pdu = BN(second, sn)};
+    R.cs.card.dpv1.preempt = inject_on_preempt;
+    main_loop();
+    R.cs.card.dpv1.preempt = NULL;
+    CHECK_EQ(PI.calls >= 1u, 1);
+    send_sap(M1, C1, C1, NULL, 0);
+    EXPECT_DU(M1, C1, C1, 0x5F, 0x00, 0x2F, 0x0A); /* the second Write's response */
+    run_us(20000, 1000);
+    int32_t h0 = -1;
+    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_IPOS_H0, &h0));
+    CHECK_EQ(h0, h0_before); /* the dropped Write's services never ran */
+    send_b(M1, C1, C1, B(0x5E, 0x00, 0x2F, 0xF0));
+    EXPECT_SC();
+    main_loop();
+    send_sap(M1, C1, C1, NULL, 0);
+    EXPECT_DU(M1, C1, C1, 0x5E, 0x00, 0x2F, 0x0A, 0x34, 0x40, 0x00, 0x01, 0x43, 0x01, 0x31,
+              0x1C, 0x72, 0x89);
+}
+
 /* MOVILINK error values and their PROFIdrive numbers (docs/dpv1.md "Error values"). */
 static void test_error_mapping(void)
 {
@@ -1360,6 +1485,8 @@ int main(void)
     RUN(test_header_errors_b7);
     RUN(test_parameter_errors);
     RUN(test_19_parameters_and_mixed_results);
+    RUN(test_ds47_read_replaced_between_steps);
+    RUN(test_ds47_write_replaced_between_steps);
     RUN(test_error_mapping);
     RUN(test_inverter_timeout_0602);
     RUN(test_msac1_closed_without_dpv1_enable);

@@ -20,7 +20,7 @@ typedef enum ds47_state { DS47_IDLE = 0, DS47_PARSING, DS47_BUSY, DS47_DONE } ds
 #ifndef DS47_PARSE_STEP
 #define DS47_PARSE_STEP 5u
 #endif
-/* Response entries built per ds47_poll() call. */
+/* Response entries written per ds47_read_step() call. */
 #ifndef DS47_BUILD_STEP
 #define DS47_BUILD_STEP 6u
 #endif
@@ -28,6 +28,7 @@ typedef enum ds47_state { DS47_IDLE = 0, DS47_PARSING, DS47_BUSY, DS47_DONE } ds
 #define DS47_IN_PROGRESS 0x01u
 /* Header + one DWORD value block (format, count, 4 octets) per parameter. */
 #define DS47_RSP_MAX (4u + 6u * DS47_MAX_PARAMS)
+_Static_assert(DS47_RSP_MAX <= DPV1_MAX_DATA, "a data set 47 response fits one DP-V1 PDU");
 
 typedef struct ds47_param {
     uint16_t number;   /* MOVILINK index */
@@ -48,15 +49,19 @@ typedef struct ds47 {
     uint8_t parse_pass; /* PARSING: 0 address blocks, 1 value blocks */
     uint8_t pos;        /* PARSING: offset of the next block in the request */
     bool waiting; /* its MOVILINK service is outstanding */
-    bool building; /* BUSY: every service done, the response being built (next = entry) */
-    bool all_ok;
+    bool all_ok;  /* DONE: every parameter succeeded (Response ID, entries of writes) */
+    uint8_t rsp_len; /* DONE: the response's length; it is written only when read */
     ds47_param_t p[DS47_MAX_PARAMS];
-    uint8_t rsp[DS47_RSP_MAX];
-    uint8_t rsp_len;
-    uint8_t rsp_sum; /* octet sum of rsp mod 256, added up entry by entry while it is built */
     uint32_t generation; /* bumps on reset, so a late completion of a dropped request is ignored */
     uint32_t running_generation;
 } ds47_t;
+
+/* Where ds47_read_step() goes on: the caller keeps it while it answers one Read. */
+typedef struct ds47_read_cursor {
+    uint8_t entry;
+    uint8_t len;
+    uint8_t sum; /* octet sum of what was written, mod 256 */
+} ds47_read_cursor_t;
 
 void ds47_init(ds47_t *d, ml_client_t *ml, uint8_t channel);
 /* Drops whatever runs or waits (connection closed). */
@@ -68,12 +73,18 @@ uint8_t ds47_write(ds47_t *d, const uint8_t *req, size_t len, hal_time_us_t now)
  * DS47_IN_PROGRESS (then as ds47_write). Each call checks at most DS47_PARSE_STEP parameters.
  * A request replaced before its last step is dropped with ds47_reset(). */
 uint8_t ds47_write_step(ds47_t *d, const uint8_t *req, size_t len, hal_time_us_t now);
-/* Main loop: starts the next parameter's service once the previous one completed, or builds
- * DS47_BUILD_STEP entries of the response once all have. True when it should be called again
- * at once (the response is not finished); the caller may serve replies in between. */
-bool ds47_poll(ds47_t *d, hal_time_us_t now);
-/* A Read of data set 47: 0 with the response copied (and consumed), or B5 (still running or
- * nothing to answer), or B7 (the master asked for fewer octets than the response has). */
+/* Main loop: starts the next parameter's service once the previous one completed. */
+void ds47_poll(ds47_t *d, hal_time_us_t now);
+/* A Read of data set 47: 0 with the response written to out (and consumed), or B5 (still
+ * running or nothing to answer), or B7 (the master asked for fewer octets than it has). */
 uint8_t ds47_read(ds47_t *d, uint8_t *out, size_t max, size_t *len);
+/* The same in bounded steps. The response is not kept anywhere: it is written from the
+ * parameters straight into the Read's response buffer, DS47_BUILD_STEP entries per step.
+ * ds47_read_begin() checks (0, B5, B7) and writes the header; ds47_read_step() is called until
+ * it returns false, then ds47_read_done() consumes the response. A Read abandoned between steps
+ * leaves the response unread, for the next Read. */
+uint8_t ds47_read_begin(const ds47_t *d, uint8_t *out, size_t max, ds47_read_cursor_t *cur);
+bool ds47_read_step(const ds47_t *d, uint8_t *out, ds47_read_cursor_t *cur);
+void ds47_read_done(ds47_t *d);
 
 #endif
