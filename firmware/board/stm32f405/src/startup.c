@@ -38,9 +38,10 @@ __attribute__((noreturn, naked)) void Reset_Handler(void)
 __attribute__((noreturn, used)) void board_reset_c(void);
 __attribute__((noreturn, used)) void board_reset_c(void)
 {
-    /* FPU first: CP10/CP11 full access (CPACR bits 20..23), before any hard-float code. */
-    SCB_CPACR |= 0xFu << 20;
-    __asm volatile("dsb\n isb" ::: "memory");
+    /* The FPU stays off (CPACR CP10/CP11 "access denied"): the image has no floating-point
+     * instruction (tools/stack_report.py fails the build if one appears), so every exception
+     * frame is the basic 8 words instead of 26 with the FP context, which the stack reservation
+     * counts on. An FP instruction would raise a UsageFault (NOCP) at once, not grow the stack. */
     SCB_VTOR = 0x08000000u;
     uint32_t *src = &_sidata;
     for (uint32_t *dst = &_sdata; dst < &_edata;) {

@@ -11,8 +11,10 @@ resolved that way fails the report, as do recursion, a dynamic frame (VLA, alloc
 function linked into the image.
 
 Total: thread chain (reset -> main -> ...) + the worst chain of every interrupt that can nest on
-top of it (SysTick, USART1, PendSV, CAN1 RX0; fault handlers end the program) + one exception frame with
-FP context (26 words + alignment = 108 bytes) per nesting level. Library leaves that have no .ci
+top of it (SysTick, USART1, PendSV, CAN1 RX0; fault handlers end the program) + one basic exception
+frame (8 words + 4 bytes of alignment = 36 bytes) per nesting level. Basic, because the FPU stays
+off (startup.c) and the image holds no floating-point instruction, which this report checks (an
+FP instruction fails it: with the FPU on, each frame would take 108 bytes). Library leaves that have no .ci
 (memcpy, memset, memcmp, EABI helpers from newlib/libgcc) are charged LIB_LEAF bytes each.
 """
 import argparse
@@ -23,7 +25,7 @@ import subprocess
 import sys
 
 LIB_LEAF = 32
-EXC_FRAME = 108
+EXC_FRAME = 36
 ENTRIES_THREAD = ["board_reset_c"]
 ENTRIES_IRQ = ["SysTick_Handler", "USART1_IRQHandler", "PendSV_Handler", "CAN1_RX0_IRQHandler"]
 ENTRIES_FAULT = ["board_fault_entry"]
@@ -120,6 +122,14 @@ def call_member(site):
     return names[-1] if names else None
 
 
+def fp_instructions(elf):
+    """VFP/FPU instructions in the image: in Thumb-2 every one of them, and no integer
+    instruction, has a mnemonic that starts with 'v'."""
+    out = subprocess.run(["arm-none-eabi-objdump", "-d", elf], capture_output=True, text=True,
+                         check=True).stdout
+    return [l.strip() for l in out.splitlines() if re.match(r"\s*[0-9a-f]+:\s.*\tv[a-z]", l)]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--elf", required=True)
@@ -138,6 +148,10 @@ def main():
     heap = sorted(HEAP & linked)
     if heap:
         errors.append("heap functions linked: " + ", ".join(heap))
+    fp = fp_instructions(a.elf)
+    if fp:
+        errors.append("floating-point instructions in the image (the FPU is off; exception "
+                      "frames would be 108 B with it on): " + "; ".join(fp[:3]))
 
     nodes, edges, _ = load_graph(a.root, a.image)
     members = member_targets(src_dirs, [t for t in nodes if nodes[t][0] is not None])
