@@ -51,14 +51,13 @@ static void frame_inputs(dp_slave_t *s)
 {
     /* Into a buffer that neither the newest inputs nor a cached reply (the one a retry or the
      * transmitter may be reading) occupy; three buffers always leave one. */
-    uint8_t i = s->dx_current;
-    for (uint8_t k = 1; k < DP_DX_BUFFERS; k++) {
+    uint8_t i = 0;
+    bool free_found = false;
+    for (uint8_t k = 1; k < DP_DX_BUFFERS && !free_found; k++) {
         i = (uint8_t)((s->dx_current + k) % DP_DX_BUFFERS);
-        if (!fdl_station_references(s, s->dx[i].buf, false)) {
-            break;
-        }
+        free_found = !fdl_station_references(s, s->dx[i].buf, false);
     }
-    if (i == s->dx_current || fdl_station_references(s, s->dx[i].buf, false)) {
+    if (!free_found) {
         /* Only masters that owned the slave before point at the others: a retry of theirs runs
          * anew (and is refused) instead of being answered from a buffer about to change. */
         i = (uint8_t)((s->dx_current + 1u) % DP_DX_BUFFERS);
@@ -341,10 +340,14 @@ size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max)
 static void svc_slave_diag(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
 {
     (void)t;
-    uint8_t diag[DP_DIAG_STD_LEN + DP_MAX_EXT_DIAG_LEN];
-    size_t n = dp_slave_build_diag(s, diag, sizeof diag);
+    /* Built where the reply is framed, summed from the six standard octets and the extended
+     * diagnosis's sum kept since it was set: no copy, no second pass. */
+    _Static_assert(FDL_SLOT_DU_MAX >= DP_DIAG_STD_LEN + DP_MAX_EXT_DIAG_LEN, "diag fits a slot");
+    uint8_t *du = &s->tx_buf[FDL_TX_HEADROOM];
+    size_t n = dp_slave_build_diag(s, du, DP_DIAG_STD_LEN + DP_MAX_EXT_DIAG_LEN);
     s->diag_pending = false;
-    fdl_station_reply_sap(s, m, diag, n);
+    fdl_station_reply_framed(s, m, FDL_RSP_DL, true, s->tx_buf, n,
+                             (uint8_t)(fdl_fcs(du, DP_DIAG_STD_LEN) + s->ext_diag_sum));
 }
 
 /* DDLM_Global_Control (SAP 58, SDN), from the owner in Data_Exch (the table's rule). */
@@ -608,6 +611,7 @@ void dp_slave_set_ext_diag(dp_slave_t *s, const uint8_t *diag, size_t len)
         memcpy(s->ext_diag, diag, len);
     }
     s->ext_diag_len = (uint8_t)len;
+    s->ext_diag_sum = fdl_fcs(s->ext_diag, len);
     s->ext_diag_overflow = overflow;
     s->diag_pending = true;
 }

@@ -200,9 +200,8 @@ static void note_line_activity(dp_slave_t *s, uint8_t sd, hal_time_us_t t)
  * medium lets the receiver measure the gap (strict timing). */
 static bool tsyn_violated(const dp_slave_t *s)
 {
-    return s->rx.strict && s->rx.idle_before_ns != UINT32_MAX &&
-           (uint64_t)s->rx.idle_before_ns + FDL_RX_GAP_TOLERANCE_NS <
-               (uint64_t)FDL_TSYN_BITS * s->rx.char_ns / FDL_CHAR_BITS;
+    /* idle_before_ns is UINT32_MAX when unknown, never below the threshold */
+    return s->rx.strict && s->rx.idle_before_ns < s->rx.tsyn_short_ns;
 }
 
 /* Parses the telegram and keeps it if it is a request for this station or a broadcast. */

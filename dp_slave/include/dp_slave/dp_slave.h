@@ -223,6 +223,7 @@ typedef struct dp_slave {
 
     uint8_t ext_diag[DP_MAX_EXT_DIAG_LEN];
     uint8_t ext_diag_len;
+    uint8_t ext_diag_sum; /* octet sum of ext_diag, so a Slave_Diag reply adds up only 6 octets */
     bool ext_diag_overflow;
 
     bool dpv1_mode;   /* accepted Set_Prm had >= 10 octets and DPV1_Enable */

@@ -55,6 +55,9 @@ typedef struct fdl_rx {
     bool have_last;
     bool strict;
     uint32_t char_ns;
+    /* A request after less idle than this broke TSYN (33 bits less the gap tolerance), worked
+     * out once per rate so the reply path compares instead of dividing. */
+    uint32_t tsyn_short_ns;
     uint32_t relaxed_gap_us;
     uint32_t relaxed_resync_us;
     hal_time_us_t last_char_t;

@@ -562,6 +562,7 @@ hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now)
     if (c->status_dirty) {
         push_fieldbus_status(c);
     }
+    preempt(c);
     if (c->inputs_dirty) {
         build_inputs(c);
     }
