@@ -253,7 +253,10 @@ static void svc_set_prm(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
 /* DDLM_Chk_Cfg (SAP 62), in Wait_Cfg or Data_Exch (the table acknowledges it in Wait_Prm). */
 static void svc_chk_cfg(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
 {
+    /* Always SC, whatever the check finds (a fault shows in the diagnosis), so it goes out
+     * before the check and its events run. */
     fdl_station_reply_sc(s);
+    fdl_station_send_now(s, t);
     uint8_t out_len = 0;
     uint8_t in_len = 0;
     bool ok = m->data_len >= 1u && m->data_len <= DP_MAX_CFG_LEN &&
@@ -277,7 +280,10 @@ static void svc_chk_cfg(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
         s->out_len = out_len;
         s->in_len = in_len;
         frame_inputs(s);
-        memset(s->frozen_inputs, 0, sizeof s->frozen_inputs);
+        if (s->freeze_mode) {
+            /* Frozen inputs are read only in freeze mode; a Freeze copies them anew. */
+            memset(s->frozen_inputs, 0, sizeof s->frozen_inputs);
+        }
         clear_outputs(s, DP_OUTPUTS_CLEAR);
     }
     dp_slave_emit(s, DP_EV_CFG_OK, t, ((uint32_t)out_len << 8) | in_len, m->sa);
@@ -395,27 +401,9 @@ static void svc_global_control(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t 
     dp_slave_emit(s, DP_EV_GLOBAL_CONTROL, t, cmd, m->sa);
 }
 
-/* DDLM_Data_Exchange (no SAP), from the owner in Data_Exch (the table's rule). */
-static void svc_data_exchange(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
+/* The Data_Exchange reply: the inputs framed ahead (or frozen ones), DH while a diagnosis waits. */
+static void reply_inputs(dp_slave_t *s, const fdl_msg_t *m)
 {
-    if (m->data_len == s->out_len && s->out_len > 0u) {
-        if (s->sync_mode) {
-            memcpy(s->latched_outputs, m->data, s->out_len);
-            s->sync_latched = true;
-        } else {
-            memcpy(s->outputs, m->data, s->out_len);
-            give_outputs(s, s->outputs, s->out_len, DP_OUTPUTS_DATA);
-        }
-    } else if (m->data_len == 0u && s->out_len > 0u) {
-        /* Fail-safe masters send an empty telegram in the Clear state. */
-        clear_outputs(s, DP_OUTPUTS_CLEAR);
-    } else if (m->data_len != s->out_len) {
-        /* The master's configuration does not match what it parameterised: stop exchanging. */
-        s->master_add = DP_MASTER_ADD_NONE;
-        set_state(s, DP_STATE_WAIT_PRM, t);
-        fdl_station_reply_rs(s, m);
-        return;
-    }
     uint8_t code = s->diag_pending ? FDL_RSP_DH : FDL_RSP_DL;
     if (s->in_len == 0u) {
         if (s->diag_pending) {
@@ -423,14 +411,39 @@ static void svc_data_exchange(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t
         } else {
             fdl_station_reply_sc(s);
         }
-        return;
-    }
-    if (s->freeze_mode) {
+    } else if (s->freeze_mode) {
         fdl_station_reply_plain(s, m, code, s->frozen_inputs, s->in_len);
+    } else {
+        dp_dx_buffer_t *dx = &s->dx[s->dx_current];
+        fdl_station_reply_framed(s, m, code, false, dx->buf, s->in_len, dx->sum);
+    }
+}
+
+/* DDLM_Data_Exchange (no SAP), from the owner in Data_Exch (the table's rule). The reply does
+ * not depend on the outputs, so it goes out before they are taken. */
+static void svc_data_exchange(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
+{
+    bool take = m->data_len == s->out_len && s->out_len > 0u;
+    /* Fail-safe masters send an empty telegram in the Clear state. */
+    bool clear = m->data_len == 0u && s->out_len > 0u;
+    if (!take && !clear && m->data_len != s->out_len) {
+        /* The master's configuration does not match what it parameterised: stop exchanging. */
+        s->master_add = DP_MASTER_ADD_NONE;
+        set_state(s, DP_STATE_WAIT_PRM, t);
+        fdl_station_reply_rs(s, m);
         return;
     }
-    dp_dx_buffer_t *dx = &s->dx[s->dx_current];
-    fdl_station_reply_framed(s, m, code, false, dx->buf, s->in_len, dx->sum);
+    reply_inputs(s, m);
+    fdl_station_send_now(s, t);
+    if (take && s->sync_mode) {
+        memcpy(s->latched_outputs, m->data, s->out_len);
+        s->sync_latched = true;
+    } else if (take) {
+        memcpy(s->outputs, m->data, s->out_len);
+        give_outputs(s, s->outputs, s->out_len, DP_OUTPUTS_DATA);
+    } else if (clear) {
+        clear_outputs(s, DP_OUTPUTS_CLEAR);
+    }
 }
 
 /* MSAC1S, MSAC2S (SAPs below 55): the device's DP-V1 layer decides, the FDL encodes. */
@@ -579,6 +592,7 @@ hal_time_us_t dp_slave_poll(dp_slave_t *s, hal_time_us_t now)
         if (hal_time_reached(now, s->wd_deadline)) {
             dp_slave_emit(s, DP_EV_WD_EXPIRED, now, s->wd_time_ms, s->master_add);
             s->master_add = DP_MASTER_ADD_NONE;
+            s->addressed_reported = false;
             set_state(s, DP_STATE_WAIT_PRM, now);
         } else {
             next = hal_time_earlier(next, s->wd_deadline);

@@ -21,6 +21,9 @@ void dp_slave_request(dp_slave_t *s, const fdl_msg_t *m, bool sdn, hal_time_us_t
 /* FDL station: the reply to send (s->tx, s->tx_len), built in s->tx_buf or framed where its DU
  * lies. */
 void fdl_station_reply_sc(dp_slave_t *s);
+/* Sends the reply built so far at once, before the service's remaining work; the SRD path then
+ * caches it without sending it again. Only for a reply the remaining work cannot change. */
+void fdl_station_send_now(dp_slave_t *s, hal_time_us_t request_end);
 void fdl_station_reply_framed(dp_slave_t *s, const fdl_msg_t *m, uint8_t code, bool saps,
                               uint8_t *buf, size_t du_len, uint8_t du_sum);
 void fdl_station_reply_plain(dp_slave_t *s, const fdl_msg_t *m, uint8_t code,

@@ -64,6 +64,7 @@ hal_time_us_t fdl_station_poll(dp_slave_t *s, hal_time_us_t now)
             s->baud_state = DP_BAUD_SEARCH;
             s->baud_index = 0;
             s->line_active = false;
+            s->addressed_reported = false;
             dp_slave_emit(s, DP_EV_BAUD_LOST, now, s->baud, 0);
         } else {
             s->baud_index = (uint8_t)((s->baud_index + 1u) % HAL_UART_NUM_BAUDS);
@@ -227,7 +228,10 @@ static bool accept_request(dp_slave_t *s, fdl_msg_t *m, hal_time_us_t t)
         if (s->baud_state == DP_BAUD_CONTROL) {
             s->baud_deadline = t + baud_control_us(s);
         }
-        dp_slave_emit(s, DP_EV_ADDRESSED, t, m->fc, m->sa);
+        if (!s->addressed_reported) {
+            s->addressed_reported = true;
+            dp_slave_emit(s, DP_EV_ADDRESSED, t, m->fc, m->sa);
+        }
     }
     /* The DP watchdog counts any telegram of the owning master, whatever its service. */
     if (s->wd_on && s->state != DP_STATE_WAIT_PRM && m->sa == s->master_add) {
@@ -253,6 +257,7 @@ static void serve_srd(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
     slot->reply_len = 0; /* its buffer is about to be written */
     s->tx_buf = slot->buf;
     s->tx_guard = NULL;
+    s->tx_sent = false;
     dp_slave_request(s, m, false, t);
     slot->fcb_valid = fcv || fcb != 0u;
     slot->fcb = fcb;
@@ -260,7 +265,18 @@ static void serve_srd(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
     slot->reply_len = s->tx_len;
     slot->guard = s->tx_guard;
     slot->guard_value = s->tx_guard_value;
-    transmit(s, s->tx, s->tx_len, t);
+    if (!s->tx_sent) {
+        transmit(s, s->tx, s->tx_len, t);
+    }
+}
+
+void fdl_station_send_now(dp_slave_t *s, hal_time_us_t request_end)
+{
+    if (s->tx_buf == s->tx_scratch) {
+        return; /* an SDN: nothing is answered */
+    }
+    s->tx_sent = true;
+    transmit(s, s->tx, s->tx_len, request_end);
 }
 
 void fdl_station_frame(dp_slave_t *s)

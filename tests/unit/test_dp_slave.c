@@ -37,6 +37,9 @@ typedef struct app {
     size_t prm_len;
     unsigned cfg_calls;
     bool cfg_refuse;
+    const unsigned *tx_count;   /* the UART's, to see what was sent when a hook ran */
+    unsigned tx_at_outputs;     /* replies sent when the outputs hook last ran */
+    unsigned tx_at_cfg_check;   /* replies sent when the Chk_Cfg hook last ran */
 } app_t;
 
 static bool h_prm(void *ctx, const uint8_t *prm, size_t len)
@@ -55,6 +58,7 @@ static bool h_cfg(void *ctx, const uint8_t *cfg, size_t len, uint8_t *out_len, u
 {
     app_t *a = ctx;
     a->cfg_calls++;
+    a->tx_at_cfg_check = *a->tx_count;
     if (a->cfg_refuse) {
         return false;
     }
@@ -81,6 +85,7 @@ static void h_out(void *ctx, const uint8_t *out, size_t len, dp_outputs_reason_t
 {
     app_t *a = ctx;
     a->outputs_calls++;
+    a->tx_at_outputs = *a->tx_count;
     a->out_len = len;
     memcpy(a->out, out, len);
     a->out_reason = why;
@@ -116,6 +121,7 @@ static void rx_dp(void *st, uint8_t b, uint8_t flags, hal_time_us_t t)
 static void rig_init(uint32_t fixed_baud, uint32_t baud_control_ms)
 {
     memset(&R, 0, sizeof R);
+    R.a.tx_count = &R.u.tx_count;
     line_init(&R.l, fixed_baud != 0u ? fixed_baud : 12000000u, rx_dp, &R.s, &R.u);
     dp_slave_cfg_t cfg = {
         .address = SLAVE,
@@ -715,6 +721,44 @@ static void test_watchdog_10ms_base(void)
     /* Data_Exchange is refused now. */
     CHECK(dx(&R.m2, DX14, sizeof DX14));
     LAST_IS(0x10, 0x02, 0x04, 0x03, 0x09, 0x16);
+}
+
+/* DP_EV_ADDRESSED: once, for the first telegram to this station since start-up, the rate's
+ * loss or the watchdog's expiry; not one per telegram. */
+static void test_addressed_once_per_loss(void)
+{
+    rig_init(BAUD, 0);
+    bring_up(0x88, 2, 5, 0, CFG_P3PD, sizeof CFG_P3PD); /* 100 ms watchdog */
+    CHECK(dx(&R.m2, DX14, sizeof DX14));
+    CHECK(dx(&R.m2, DX14, sizeof DX14));
+    CHECK_EQ(ev_count(&R.a.log, DP_EV_ADDRESSED), 0u); /* reported during the start-up */
+    unsigned outputs = R.a.outputs_calls;
+    check_expiry(100u, outputs);
+    uint32_t counted = R.s.telegrams_for_me;
+    DIAG_IS(&R.m2, 0x02, 0x05, 0x00, 0xFF, 0x60, 0x03);
+    CHECK_EQ(ev_count(&R.a.log, DP_EV_ADDRESSED), 1u);
+    CHECK_EQ(ev_last(&R.a.log, DP_EV_ADDRESSED)->master, 2);
+    DIAG_IS(&R.m2, 0x02, 0x05, 0x00, 0xFF, 0x60, 0x03);
+    CHECK_EQ(ev_count(&R.a.log, DP_EV_ADDRESSED), 1u);
+    CHECK_EQ(R.s.telegrams_for_me, counted + 2u); /* every telegram is still counted */
+}
+
+/* The ASIC's order: a reply that the service's remaining work cannot change goes out first.
+ * Chk_Cfg is SC whatever the check finds; Data_Exchange carries inputs framed ahead. */
+static void test_reply_before_the_work(void)
+{
+    rig_init(BAUD, 0);
+    bring_up(0x80, 0, 0, 0, CFG_P3PD, sizeof CFG_P3PD);
+    unsigned before = R.u.tx_count;
+    CHECK(dx(&R.m2, DX14, sizeof DX14));
+    CHECK_EQ(R.u.tx_count, before + 1u);
+    CHECK_EQ(R.a.tx_at_outputs, before + 1u); /* the reply was out when the outputs were given */
+    CHECK(memcmp(R.a.out, DX14, sizeof DX14) == 0);
+    before = R.u.tx_count;
+    CHECK(chk_cfg(&R.m2, CFG_P3PD, sizeof CFG_P3PD));
+    LAST_IS(0xE5);
+    CHECK_EQ(R.a.tx_at_cfg_check, before + 1u);
+    CHECK_EQ(R.u.tx_count, before + 1u); /* once: the SRD path does not send it again */
 }
 
 static void test_watchdog_1ms_base(void)
@@ -1354,6 +1398,8 @@ int main(void)
     RUN_TEST(test_fcb_retry);
     RUN_TEST(test_locked_by_other_master);
     RUN_TEST(test_watchdog_10ms_base);
+    RUN_TEST(test_addressed_once_per_loss);
+    RUN_TEST(test_reply_before_the_work);
     RUN_TEST(test_watchdog_1ms_base);
     RUN_TEST(test_watchdog_in_wait_cfg);
     RUN_TEST(test_no_watchdog);

@@ -46,7 +46,11 @@ typedef enum dp_event_type {
     DP_EV_LOCKED_OUT,      /* a request of another master was refused; master = its address */
     DP_EV_RX_ERROR,        /* value = fdl_rx_error_t */
     DP_EV_FCB_REPEAT,      /* a retry was answered from the reply cache */
-    DP_EV_ADDRESSED,       /* a valid telegram for this station arrived (any service) */
+    /* The first valid telegram for this station (any service) since start-up, since the rate
+     * was lost or since the DP watchdog expired: what tells the bus fault LED that a master is
+     * back. Not one per telegram, which would put a hook call on every reply path;
+     * telegrams_for_me counts them all. */
+    DP_EV_ADDRESSED,
 } dp_event_type_t;
 
 typedef enum dp_prm_fault {
@@ -188,6 +192,7 @@ typedef struct dp_slave {
     uint8_t *tx_buf;
     const uint8_t *tx;
     uint16_t tx_len;
+    bool tx_sent; /* the SRD's reply went out early (fdl_station_send_now) */
     const volatile uint8_t *tx_guard;
     uint8_t tx_guard_value;
     uint8_t tx_scratch[FDL_TX_BUF_LEN(0u)];
@@ -228,6 +233,7 @@ typedef struct dp_slave {
 
     bool dpv1_mode;   /* accepted Set_Prm had >= 10 octets and DPV1_Enable */
     bool line_active; /* an error-free telegram was heard since power-up or the last baud loss */
+    bool addressed_reported; /* DP_EV_ADDRESSED went out since the last loss */
     uint32_t telegrams_for_me;
 } dp_slave_t;
 

@@ -67,11 +67,13 @@ def classify_funcs(funcs):
         return "refused (RS)"
     if "hook_prm_check" in funcs:
         return "Set_Prm (SC)"
-    if "hook_cfg_check" in funcs:
+    # Chk_Cfg and Data_Exchange send their reply before the device's hooks run
+    # (fdl_station_send_now): their service function is what tells them apart
+    if "hook_cfg_check" in funcs or ran("svc_chk_cfg"):
         return "Chk_Cfg (SC)"
     if ran("dp_slave_build_diag"):
         return "Slave_Diag"
-    if "hook_outputs" in funcs:
+    if "hook_outputs" in funcs or ran("svc_data_exchange"):
         return "Data_Exchange"
     if "dpv1_sap_request" in funcs:
         if ran("fdl_station_reply_framed"):
@@ -173,6 +175,7 @@ class Trace:
         for need in ("fdl_station_reply_framed", "fdl_frame_in_place", "fdl_station_reply_rs",
                      "dp_slave_request", "dp_slave_rx_telegram", "dp_slave_build_diag",
                      "hook_prm_check", "hook_cfg_check", "hook_outputs", "dpv1_sap_request",
+                     "svc_chk_cfg", "svc_data_exchange",
                      "conn_close", "rs485_uart_rx_hand_over", "rs485_wait_until",
                      "rs485_uart_transmit", "tx_fill", "USART1_IRQHandler"):
             if not any(n == need or n.startswith(need + ".") for n in s):
