@@ -79,7 +79,8 @@ static void give_outputs(dp_slave_t *s, const uint8_t *out, size_t len, dp_outpu
 
 static void clear_outputs(dp_slave_t *s, dp_outputs_reason_t why)
 {
-    memset(s->outputs, 0, sizeof s->outputs);
+    /* Octets past out_len are never given or read, and a new out_len clears again. */
+    memset(s->outputs, 0, s->out_len);
     s->sync_latched = false; /* latched_outputs is written whole before it is latched again */
     give_outputs(s, s->outputs, s->out_len, why);
 }

@@ -84,10 +84,14 @@ hal_can_t loop_inverter_card_can(loop_inverter_t *l)
     return (hal_can_t){.ops = &card_ops, .ctx = l};
 }
 
-unsigned loop_inverter_poll(loop_inverter_t *l, hal_time_us_t now, hal_can_rx_fn rx, void *ctx)
+unsigned loop_inverter_poll(loop_inverter_t *l, hal_time_us_t now, hal_can_rx_fn rx, void *ctx,
+                            void (*between)(void *ctx))
 {
     unsigned n = 0;
     while (l->to_inverter.tail != l->to_inverter.head) {
+        if (n > 0u && between != NULL) {
+            between(ctx);
+        }
         hal_can_frame_t f = l->to_inverter.f[l->to_inverter.tail % LOOP_INVERTER_QUEUE];
         l->to_inverter.tail++;
         sbus_inverter_rx(&l->inv, &f, now);

@@ -409,7 +409,7 @@ int main(void)
         }
 #ifdef DFP_BOARD_LOOPBACK_INVERTER
         if (!can.up && sbus_up) {
-            (void)loop_inverter_poll(&loop, now, loop_rx, NULL);
+            (void)loop_inverter_poll(&loop, now, loop_rx, NULL, core_preempt);
             core_preempt(NULL);
         }
 #endif
@@ -418,7 +418,7 @@ int main(void)
         if (!can.up && sbus_up) {
             core_preempt(NULL);
         }
-        if (!can.up && sbus_up && loop_inverter_poll(&loop, now, loop_rx, NULL) != 0u) {
+        if (!can.up && sbus_up && loop_inverter_poll(&loop, now, loop_rx, NULL, core_preempt) != 0u) {
             poll_request = true; /* the stand-in answered within this pass: take it now */
         }
 #endif

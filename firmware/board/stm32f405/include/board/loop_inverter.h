@@ -33,6 +33,9 @@ void loop_inverter_init(loop_inverter_t *l, uint8_t sbus_address);
 /* The CAN the card's SBus link sends on. */
 hal_can_t loop_inverter_card_can(loop_inverter_t *l);
 /* Moves frames both ways; card frames go to rx(ctx, frame). Returns how many moved. */
-unsigned loop_inverter_poll(loop_inverter_t *l, hal_time_us_t now, hal_can_rx_fn rx, void *ctx);
+/* between(ctx), if set, runs between two frames the stand-in takes, so that the main loop's
+ * sections stay short (each frame is one section of the stand-in's work). */
+unsigned loop_inverter_poll(loop_inverter_t *l, hal_time_us_t now, hal_can_rx_fn rx, void *ctx,
+                            void (*between)(void *ctx));
 
 #endif
