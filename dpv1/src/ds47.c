@@ -116,7 +116,9 @@ static bool parse_value(ds47_t *d, uint8_t i, const uint8_t *req, size_t len)
  * entry, and with it the response's length, which a Read checks before anything is written. */
 static void finish(ds47_t *d)
 {
-    unsigned failed = 0, read = 0, written = 0;
+    unsigned failed = 0;
+    unsigned read = 0;
+    unsigned written = 0;
     for (uint8_t i = 0; i < d->n; i++) {
         const ds47_param_t *p = &d->p[i];
         if (!p->ok) {
