@@ -27,36 +27,38 @@ static void enqueue(membus_t *bus, const membus_char_t *c)
     bus->queue_len++;
 }
 
-static int membus_transmit(void *ctx, const uint8_t *frame, size_t len, hal_time_us_t not_before)
+static membus_whole_t *whole_in_flight(membus_t *bus)
 {
-    membus_port_t *p = ctx;
-    membus_t *bus = p->bus;
-    if (len == 0u || p->baud == 0u) {
-        return -1;
+    membus_whole_t *w = &bus->whole[bus->whole_slot];
+    return w->active ? w : NULL;
+}
+
+static uint64_t whole_end(const membus_whole_t *w)
+{
+    return w->start_ns + (uint64_t)w->char_ns * w->len;
+}
+
+/* The telegram goes on as characters from here: none of them has reached anyone yet. */
+static void split(membus_t *bus, membus_whole_t *w)
+{
+    w->active = false;
+    bus->telegrams_split++;
+    for (uint16_t i = 0; i < w->len; i++) {
+        membus_char_t c = {
+            .t_end_ns = w->start_ns + (uint64_t)w->char_ns * (i + 1u),
+            .baud = w->baud,
+            .byte = w->data[i],
+            .sender = w->sender,
+            .last_of_frame = i + 1u == w->len,
+        };
+        enqueue(bus, &c);
     }
-    if (p->silenced) {
-        return 0;
-    }
-    hal_time_us_t now_us = (hal_time_us_t)(bus->now_ns / 1000u);
-    int32_t wait_us = hal_time_diff(not_before, now_us);
-    uint64_t start = bus->now_ns;
-    if (wait_us > 0) {
-        uint64_t nb = (bus->now_ns / 1000u + (uint64_t)wait_us) * 1000u;
-        if (nb > start) {
-            start = nb;
-        }
-    }
+}
+
+static void put_characters(membus_t *bus, const membus_port_t *p, const uint8_t *frame,
+                           size_t len, uint64_t start, bool collision)
+{
     uint64_t char_ns = hal_uart_char_ns(p->baud);
-    uint64_t end = start + char_ns * len;
-    bool collision = bus->line_busy_until_ns > start && bus->line_busy_sender != p->index;
-    if (collision) {
-        bus->collisions++;
-        for (size_t i = 0; i < bus->queue_len; i++) {
-            if (bus->queue[i].t_end_ns > start) {
-                bus->queue[i].corrupt = true;
-            }
-        }
-    }
     for (size_t i = 0; i < len; i++) {
         membus_char_t c = {
             .t_end_ns = start + char_ns * (i + 1u),
@@ -67,6 +69,63 @@ static int membus_transmit(void *ctx, const uint8_t *frame, size_t len, hal_time
             .last_of_frame = i + 1u == len,
         };
         enqueue(bus, &c);
+    }
+}
+
+/* Alone on a quiet line: the telegram may go whole (the listeners are asked later). */
+static void put_whole(membus_t *bus, const membus_port_t *p, const uint8_t *frame, size_t len,
+                      uint64_t start)
+{
+    bus->whole_slot ^= 1u; /* the other slot may be in the middle of its delivery */
+    membus_whole_t *w = &bus->whole[bus->whole_slot];
+    w->active = true;
+    w->asked = false;
+    w->sender = p->index;
+    w->baud = p->baud;
+    w->char_ns = hal_uart_char_ns(p->baud);
+    w->start_ns = start;
+    w->len = (uint16_t)len;
+    memcpy(w->data, frame, len);
+}
+
+static int membus_transmit(void *ctx, const uint8_t *frame, size_t len, hal_time_us_t not_before)
+{
+    membus_port_t *p = ctx;
+    membus_t *bus = p->bus;
+    if (len == 0u || p->baud == 0u) {
+        return -1;
+    }
+    if (p->silenced) {
+        return 0;
+    }
+    membus_whole_t *w = whole_in_flight(bus);
+    if (w != NULL) {
+        split(bus, w); /* two transmissions overlap or follow closely: characters decide */
+    }
+    hal_time_us_t now_us = (hal_time_us_t)(bus->now_ns / 1000u);
+    int32_t wait_us = hal_time_diff(not_before, now_us);
+    uint64_t start = bus->now_ns;
+    if (wait_us > 0) {
+        uint64_t nb = (bus->now_ns / 1000u + (uint64_t)wait_us) * 1000u;
+        if (nb > start) {
+            start = nb;
+        }
+    }
+    uint64_t end = start + (uint64_t)hal_uart_char_ns(p->baud) * len;
+    bool collision = bus->line_busy_until_ns > start && bus->line_busy_sender != p->index;
+    if (collision) {
+        bus->collisions++;
+        for (size_t i = 0; i < bus->queue_len; i++) {
+            if (bus->queue[i].t_end_ns > start) {
+                bus->queue[i].corrupt = true;
+            }
+        }
+    }
+    if (!bus->characters_only && bus->queue_len == 0u && !collision &&
+        len <= MEMBUS_TELEGRAM_MAX) {
+        put_whole(bus, p, frame, len, start);
+    } else {
+        put_characters(bus, p, frame, len, start, collision);
     }
     if (end > bus->line_busy_until_ns) {
         bus->line_busy_until_ns = end;
@@ -128,50 +187,142 @@ static void poll_port(membus_t *bus, membus_port_t *p)
     }
 }
 
-void membus_run_until_ns(membus_t *bus, uint64_t t_ns)
+void membus_set_whole_rx(membus_port_t *port, const membus_whole_rx_t *whole)
 {
-    for (;;) {
-        uint64_t next = t_ns;
-        if (bus->queue_len > 0u && bus->queue[0].t_end_ns < next) {
-            next = bus->queue[0].t_end_ns;
+    port->whole = *whole;
+}
+
+static bool listens(const membus_port_t *p, uint8_t sender)
+{
+    return p->index != sender && !p->silenced && p->station.rx_char != NULL;
+}
+
+static membus_telegram_t view_of(const membus_whole_t *w)
+{
+    return (membus_telegram_t){.data = w->data, .len = w->len, .start_ns = w->start_ns,
+                               .char_ns = w->char_ns, .baud = w->baud};
+}
+
+/* The end of the first character: every listener takes the telegram whole, or it is split. */
+static void ask_listeners(membus_t *bus, membus_whole_t *w)
+{
+    membus_telegram_t tg = view_of(w);
+    for (uint8_t i = 0; i < bus->num_ports; i++) {
+        membus_port_t *p = &bus->ports[i];
+        if (!listens(p, w->sender)) {
+            continue;
         }
-        for (uint8_t i = 0; i < bus->num_ports; i++) {
-            if (bus->ports[i].deadline_ns < next) {
-                next = bus->ports[i].deadline_ns;
-            }
+        if (p->whole.rx == NULL || p->baud != w->baud || !p->whole.takes(p->whole.ctx, &tg)) {
+            split(bus, w);
+            return;
         }
-        if (next > bus->now_ns) {
-            bus->now_ns = next;
+    }
+    w->asked = true;
+}
+
+static void deliver_whole(membus_t *bus, membus_whole_t *w)
+{
+    w->active = false;
+    bus->telegrams_whole++;
+    membus_telegram_t tg = view_of(w);
+    for (uint8_t i = 0; i < bus->num_ports; i++) {
+        membus_port_t *p = &bus->ports[i];
+        if (!listens(p, w->sender)) {
+            continue;
         }
-        bool did = false;
-        if (bus->queue_len > 0u && bus->queue[0].t_end_ns <= bus->now_ns) {
-            membus_char_t c = bus->queue[0];
-            memmove(&bus->queue[0], &bus->queue[1], (bus->queue_len - 1u) * sizeof c);
-            bus->queue_len--;
-            hal_time_us_t t_us = (hal_time_us_t)(c.t_end_ns / 1000u);
-            for (uint8_t i = 0; i < bus->num_ports; i++) {
-                membus_port_t *p = &bus->ports[i];
-                if (i == c.sender || p->silenced || p->station.rx_char == NULL) {
-                    continue;
-                }
-                bool garbled = c.corrupt || p->baud != c.baud;
-                p->station.rx_char(p->station.ctx, garbled ? (uint8_t)0xFFu : c.byte,
-                                   garbled ? HAL_UART_RX_FRAMING_ERR : 0u, t_us);
-                bus->chars_delivered++;
-                if (c.last_of_frame) {
-                    p->deadline_ns = bus->now_ns; /* let it work on the telegram at once */
-                }
-            }
+        p->whole.rx(p->whole.ctx, &tg);
+        bus->chars_delivered += w->len;
+        p->deadline_ns = bus->now_ns; /* let it work on the telegram at once */
+    }
+}
+
+static void deliver_char(membus_t *bus)
+{
+    membus_char_t c = bus->queue[0];
+    memmove(&bus->queue[0], &bus->queue[1], (bus->queue_len - 1u) * sizeof c);
+    bus->queue_len--;
+    hal_time_us_t t_us = (hal_time_us_t)(c.t_end_ns / 1000u);
+    for (uint8_t i = 0; i < bus->num_ports; i++) {
+        membus_port_t *p = &bus->ports[i];
+        if (i == c.sender || p->silenced || p->station.rx_char == NULL) {
+            continue;
+        }
+        bool garbled = c.corrupt || p->baud != c.baud;
+        p->station.rx_char(p->station.ctx, garbled ? (uint8_t)0xFFu : c.byte,
+                           garbled ? HAL_UART_RX_FRAMING_ERR : 0u, t_us);
+        bus->chars_delivered++;
+        if (c.last_of_frame) {
+            p->deadline_ns = bus->now_ns; /* let it work on the telegram at once */
+        }
+    }
+}
+
+static uint64_t next_event(const membus_t *bus, uint64_t t_ns)
+{
+    uint64_t next = t_ns;
+    if (bus->queue_len > 0u && bus->queue[0].t_end_ns < next) {
+        next = bus->queue[0].t_end_ns;
+    }
+    for (uint8_t i = 0; i < bus->num_ports; i++) {
+        if (bus->ports[i].deadline_ns < next) {
+            next = bus->ports[i].deadline_ns;
+        }
+    }
+    return next;
+}
+
+/* The whole telegram before the other events (next): asked at the end of its first character
+ * when nothing comes earlier, split when something comes before its end. False: it has gone
+ * on as characters. */
+static bool whole_first(membus_t *bus, membus_whole_t *w, uint64_t next)
+{
+    uint64_t first_end = w->start_ns + w->char_ns;
+    if (!w->asked && next >= first_end) {
+        if (first_end > bus->now_ns) {
+            bus->now_ns = first_end;
+        }
+        ask_listeners(bus, w);
+    }
+    if (w->active && w->asked && next < whole_end(w)) {
+        /* something happens while its characters come in: they must have come */
+        split(bus, w);
+    }
+    return w->active;
+}
+
+/* One step at the next event. False when there was nothing to do at or before t_ns. */
+static bool step(membus_t *bus, uint64_t t_ns)
+{
+    uint64_t next = next_event(bus, t_ns);
+    membus_whole_t *w = whole_in_flight(bus);
+    if (w != NULL && !whole_first(bus, w, next)) {
+        return true; /* decide again: the split's first character may be due now */
+    }
+    if (w != NULL && w->asked && whole_end(w) < next) {
+        next = whole_end(w);
+    }
+    if (next > bus->now_ns) {
+        bus->now_ns = next;
+    }
+    bool did = false;
+    if (w != NULL && w->asked && whole_end(w) <= bus->now_ns) {
+        deliver_whole(bus, w);
+        did = true;
+    } else if (bus->queue_len > 0u && bus->queue[0].t_end_ns <= bus->now_ns) {
+        deliver_char(bus);
+        did = true;
+    }
+    for (uint8_t i = 0; i < bus->num_ports; i++) {
+        if (bus->ports[i].deadline_ns <= bus->now_ns) {
+            poll_port(bus, &bus->ports[i]);
             did = true;
         }
-        for (uint8_t i = 0; i < bus->num_ports; i++) {
-            if (bus->ports[i].deadline_ns <= bus->now_ns) {
-                poll_port(bus, &bus->ports[i]);
-                did = true;
-            }
-        }
-        if (!did && bus->now_ns >= t_ns) {
-            break;
-        }
+    }
+    return did || bus->now_ns < t_ns;
+}
+
+void membus_run_until_ns(membus_t *bus, uint64_t t_ns)
+{
+    while (step(bus, t_ns)) {
     }
 }

@@ -527,23 +527,47 @@ static void reply_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, b
     }
 }
 
+/* The slot time bounds the first character of the answer; once it is coming, give the rest of
+ * the telegram the time its characters need. t: a character that left the assembler collecting. */
+static void answer_coming(dp_master_t *m, hal_time_us_t t)
+{
+    hal_time_us_t until = t + 2u * (hal_uart_char_ns(m->cfg.baud) / 1000u + 1u) +
+                          (m->cfg.strict_timing ? 0u : m->rx.relaxed_gap_us);
+    if (hal_time_diff(until, m->reply_deadline) > 0) {
+        m->reply_deadline = until;
+    }
+}
+
+static void frame_received(dp_master_t *m);
+
 void dp_master_rx_char(dp_master_t *m, uint8_t byte, uint8_t flags, hal_time_us_t t)
 {
     fdl_rx_result_t r = fdl_rx_char(&m->rx, byte, flags, t);
     if (m->waiting && m->rx.collecting) {
-        /* The slot time bounds the first character of the answer; once it is coming, give
-         * the rest of the telegram the time its characters need. */
-        hal_time_us_t until = t + 2u * (hal_uart_char_ns(m->cfg.baud) / 1000u + 1u) +
-                              (m->cfg.strict_timing ? 0u : m->rx.relaxed_gap_us);
-        if (hal_time_diff(until, m->reply_deadline) > 0) {
-            m->reply_deadline = until;
-        }
+        answer_coming(m, t);
     }
-    if (r != FDL_RX_FRAME || !m->waiting) {
-        return;
+    if (r == FDL_RX_FRAME && m->waiting) {
+        frame_received(m);
     }
+}
+
+void dp_master_rx_telegram(dp_master_t *m, const dpm_whole_t *w)
+{
+    fdl_rx_telegram_t tg = dpm_whole_take(&m->rx, w);
+    if (m->waiting && w->len > 1u) {
+        /* rx_char would have moved the deadline at each character but the last; the one before
+         * the last moves it furthest */
+        answer_coming(m, w->before_last_t);
+    }
+    if (fdl_rx_telegram(&m->rx, &tg) == FDL_RX_FRAME && m->waiting) {
+        frame_received(m);
+    }
+}
+
+static void frame_received(dp_master_t *m)
+{
     unsigned idx = m->waiting_for;
-    const uint8_t *f = m->rx.buf;
+    const uint8_t *f = m->rx.frame;
     fdl_msg_t msg = {0};
     bool sc = f[0] == FDL_SC;
     if (!sc) {

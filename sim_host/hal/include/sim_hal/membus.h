@@ -4,7 +4,17 @@
  * when its stop bit ends. A station whose UART is set to another rate receives it with a
  * framing error (that is all the baud search needs to see). Two transmissions that overlap in
  * time corrupt each other's overlapping characters, as on a real line. A station never hears its
- * own characters. Time advances only in membus_run_until(), jumping from event to event. */
+ * own characters. Time advances only in membus_run_until(), jumping from event to event.
+ *
+ * Two paths give the same result. A station that can take a telegram whole (membus_whole_rx_t)
+ * gets it as one event at the end of its last character, with the character times computed, as
+ * long as nothing can tell the difference: one telegram on the line, every listener at its
+ * rate, between telegrams and willing (asked at the end of the first character), and nothing else
+ * happening until the last character ends. Anything else — another transmission (a collision),
+ * a station polled or the caller's run ending inside the telegram, a listener that wants
+ * characters (baud search, a receiver inside garbage, a damaged telegram) — splits it into
+ * characters before that moment, which then go one by one as before. characters_only turns
+ * the telegram path off (the reference the tests compare it with). */
 #ifndef SIM_HAL_MEMBUS_H
 #define SIM_HAL_MEMBUS_H
 
@@ -17,7 +27,35 @@
 #define MEMBUS_MAX_INFLIGHT 2048u
 #endif
 
+#ifndef MEMBUS_TELEGRAM_MAX
+#define MEMBUS_TELEGRAM_MAX 256u /* longer transmissions go as characters */
+#endif
+
 typedef struct membus membus_t;
+
+/* A telegram on its way as a whole: character k (1..len) ends at start_ns + k * char_ns. */
+typedef struct membus_telegram {
+    const uint8_t *data;
+    size_t len;
+    uint64_t start_ns;
+    uint32_t char_ns;
+    uint32_t baud;
+} membus_telegram_t;
+
+/* The timestamp rx_char would have been given for character k (1..len). */
+static inline hal_time_us_t membus_char_us(const membus_telegram_t *tg, size_t k)
+{
+    return (hal_time_us_t)((tg->start_ns + (uint64_t)tg->char_ns * k) / 1000u);
+}
+
+/* What a station needs to take telegrams whole. takes: asked when the first character ends;
+ * true only if rx() at the last character's end leaves the station exactly as rx_char for each
+ * character would. */
+typedef struct membus_whole_rx {
+    void *ctx;
+    bool (*takes)(void *ctx, const membus_telegram_t *tg);
+    void (*rx)(void *ctx, const membus_telegram_t *tg);
+} membus_whole_rx_t;
 
 typedef struct membus_port {
     membus_t *bus;
@@ -26,6 +64,7 @@ typedef struct membus_port {
     uint64_t deadline_ns;
     uint8_t index;
     bool silenced; /* cut off the bus: transmits nothing, hears nothing (a pulled connector) */
+    membus_whole_rx_t whole; /* rx NULL: characters only */
 } membus_port_t;
 
 typedef struct membus_char {
@@ -37,6 +76,18 @@ typedef struct membus_char {
     bool last_of_frame;
 } membus_char_t;
 
+/* The telegram in flight as a whole (at most one). */
+typedef struct membus_whole {
+    bool active;
+    bool asked; /* the listeners said yes at the end of the first character */
+    uint8_t sender;
+    uint32_t baud;
+    uint32_t char_ns;
+    uint64_t start_ns;
+    uint16_t len;
+    uint8_t data[MEMBUS_TELEGRAM_MAX];
+} membus_whole_t;
+
 struct membus {
     uint64_t now_ns;
     membus_port_t ports[MEMBUS_MAX_STATIONS];
@@ -45,9 +96,15 @@ struct membus {
     size_t queue_len;
     uint64_t line_busy_until_ns;
     uint8_t line_busy_sender;
+    /* Two slots: a listener may answer from inside the delivery of the other. */
+    membus_whole_t whole[2];
+    uint8_t whole_slot;
+    bool characters_only;
     sim_frame_tap_t tap;
     void *tap_ctx;
     uint64_t chars_delivered;
+    uint64_t telegrams_whole; /* delivered as one event */
+    uint64_t telegrams_split; /* started whole, went on as characters */
     uint64_t frames_sent;
     uint64_t collisions;
     uint64_t dropped_overflow;
@@ -59,6 +116,8 @@ membus_port_t *membus_attach(membus_t *bus, const sim_station_t *station, hal_ua
 /* The station's state changed outside its callbacks (a command from the user): poll it now. */
 static inline void membus_wake(membus_port_t *port) { port->deadline_ns = port->bus->now_ns; }
 void membus_set_tap(membus_t *bus, sim_frame_tap_t tap, void *ctx);
+/* The port's station takes telegrams whole (see above). */
+void membus_set_whole_rx(membus_port_t *port, const membus_whole_rx_t *whole);
 /* Runs every station until simulated time t_ns (absolute, from bus start). */
 void membus_run_until_ns(membus_t *bus, uint64_t t_ns);
 static inline void membus_run_for_us(membus_t *bus, uint64_t us)

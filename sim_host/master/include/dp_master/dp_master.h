@@ -25,6 +25,7 @@
 
 #include "dp_master/dpv1_xfer.h"
 #include "dp_slave/fdl_rx.h"
+#include "dp_master/rx_whole.h"
 #include "hal/hal_time.h"
 #include "hal/hal_uart.h"
 
@@ -184,6 +185,9 @@ void dp_master_stop(dp_master_t *m);
 void dp_master_start(dp_master_t *m, hal_time_us_t now);
 
 void dp_master_rx_char(dp_master_t *m, uint8_t byte, uint8_t flags, hal_time_us_t t);
+/* Instead of rx_char for each character: a whole telegram for which dpm_whole_clean() said
+ * yes (rx_whole.h). */
+void dp_master_rx_telegram(dp_master_t *m, const dpm_whole_t *w);
 hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now);
 
 const char *dpm_phase_name(dpm_phase_t p);
