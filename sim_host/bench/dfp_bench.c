@@ -253,10 +253,22 @@ static void bench_rig(uint32_t baud, card_inverter_t inverter, uint32_t inverter
     dp_master_add_slave(bmaster, &sc);
 }
 
+/* The rate as the tables in docs/performance.md name it (any other in bit/s). */
+static const char *rate_name(uint32_t baud, char buf[24])
+{
+    switch (baud) {
+    case 12000000u: return "12 Mbit/s";
+    case 1500000u: return "1.5 Mbit/s";
+    case 19200u: return "19.2 kbit/s";
+    default: snprintf(buf, 24, "%u bit/s", (unsigned)baud); return buf;
+    }
+}
+
 static void bench_membus(unsigned cycles, uint32_t baud)
 {
+    char name[24];
+    uint64_t w0 = host_clock_mono_ns(); /* building the rig is part of the start-up */
     bench_rig(baud, CARD_INVERTER_NONE, 0, 100);
-    uint64_t w0 = host_clock_mono_ns();
     uint64_t startup_ns = 0;
     while (bmaster->slaves[0].cycles < cycles && brig.bus.now_ns < 600000000000ull) {
         membus_run_for_us(&brig.bus, startup_ns == 0u ? 50u : 1000u);
@@ -268,10 +280,12 @@ static void bench_membus(unsigned cycles, uint32_t baud)
     double sim_ms = (double)brig.bus.now_ns / 1e6;
     printf("  %-12s start-up %8.3f ms, %u cycles in %9.1f ms bus time = %7.0f cycles/s on "
            "the bus; simulated in %6.1f ms wall (%.0fx real time)\n",
-           baud == 12000000u ? "12 Mbit/s" : baud == 1500000u ? "1.5 Mbit/s" : "19.2 kbit/s",
-           (double)startup_ns / 1e6, bmaster->slaves[0].cycles, sim_ms,
+           rate_name(baud, name), (double)startup_ns / 1e6, bmaster->slaves[0].cycles, sim_ms,
            bmaster->slaves[0].cycles / (sim_ms / 1000.0), (double)wall / 1e6,
            sim_ms / ((double)wall / 1e6));
+    printf("  %-12s bus: %llu telegrams delivered whole, %llu split into characters\n", "",
+           (unsigned long long)brig.bus.telegrams_whole,
+           (unsigned long long)brig.bus.telegrams_split);
 }
 
 /* ---- 2b. parameter service latency through the cyclic channel ---------------------------- */
@@ -281,6 +295,7 @@ static void bench_membus(unsigned cycles, uint32_t baud)
  * inverter_us is how long the inverter takes per service (0: answers within the card's poll). */
 static void bench_param_latency(uint32_t baud, uint32_t inverter_us, unsigned n)
 {
+    char name[24];
     bench_rig(baud, CARD_INVERTER_SIM, inverter_us, 1000);
     membus_run_for_us(&brig.bus, 200000);
     dpm_param_t p = {0};
@@ -311,9 +326,8 @@ static void bench_param_latency(uint32_t baud, uint32_t inverter_us, unsigned n)
     }
     printf("  %-12s inverter %5u us: %u/%u reads of 8300 correct, %5.2f cycles (max %u), "
            "%7.1f us (max %7.1f us) bus time each\n",
-           baud == 12000000u ? "12 Mbit/s" : baud == 1500000u ? "1.5 Mbit/s" : "19.2 kbit/s",
-           inverter_us, done, n, (double)sum_cycles / n, max_cycles, (double)sum_ns / n / 1e3,
-           (double)max_ns / 1e3);
+           rate_name(baud, name), inverter_us, done, n, (double)sum_cycles / n, max_cycles,
+           (double)sum_ns / n / 1e3, (double)max_ns / 1e3);
 }
 
 /* ---- 2c. DP-V1 data set 47 through class 1 and class 2 ------------------------------------- */
@@ -350,8 +364,8 @@ static void bench_dpv1(uint32_t baud, uint32_t inverter_us, unsigned n)
 {
     static dpm_c2_t c2;
     uint32_t step_us = baud >= 1500000u ? 5u : 200u;
-    const char *rate = baud == 12000000u ? "12 Mbit/s" : baud == 1500000u ? "1.5 Mbit/s"
-                                                                          : "19.2 kbit/s";
+    char name[24];
+    const char *rate = rate_name(baud, name);
     for (int cls = 1; cls <= 2; cls++) {
         bench_rig(baud, CARD_INVERTER_SIM, inverter_us, 1000);
         dpm_slave_cfg_t sc = bmaster->slaves[0].cfg;
@@ -493,37 +507,73 @@ static long parse_count(const char *s, long max)
     return v;
 }
 
-int main(int argc, char **argv)
+typedef struct bench_args {
+    unsigned iterations;
+    int only;
+    bool instructions;
+    unsigned cycles; /* --cycles: only start-up + this many cycles on the in-memory bus */
+    uint32_t baud;
+} bench_args_t;
+
+static bool is_profibus_baud(long v)
 {
-    unsigned iterations = 100000;
-    int only = -1;
-    bool instructions = access("/usr/bin/valgrind", X_OK) == 0;
-    for (int i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "--only") == 0 && i + 1 < argc) {
-            long v = parse_count(argv[++i], 1000);
-            if (v < 0) {
-                fprintf(stderr, "dfp-bench: --only wants a case number\n");
-                return 2;
-            }
-            only = (int)v;
-        } else if (strcmp(argv[i], "--iterations") == 0 && i + 1 < argc) {
-            long v = parse_count(argv[++i], 100000000);
-            if (v < 1) {
-                fprintf(stderr, "dfp-bench: --iterations wants a number 1..100000000\n");
-                return 2;
-            }
-            iterations = (unsigned)v;
-        } else if (strcmp(argv[i], "--no-instructions") == 0) {
-            instructions = false;
-        } else {
-            fprintf(stderr, "usage: dfp-bench [--iterations N] [--no-instructions]\n");
-            return 2;
+    for (unsigned i = 0; i < HAL_UART_NUM_BAUDS; i++) {
+        if (hal_uart_bauds[i] == (uint32_t)v) {
+            return true;
         }
     }
-    if (only >= 0) {
+    return false;
+}
+
+/* One option with its value at argv[*i]; returns 0, or 2 after an error message. */
+static int parse_option(int argc, char **argv, int *i, bench_args_t *a)
+{
+    const char *opt = argv[*i];
+    if (strcmp(opt, "--no-instructions") == 0) {
+        a->instructions = false;
+        return 0;
+    }
+    long v = *i + 1 < argc ? parse_count(argv[*i + 1], 100000000) : -1;
+    (*i)++;
+    if (strcmp(opt, "--only") == 0 && v >= 0 && v <= 1000) {
+        a->only = (int)v;
+    } else if (strcmp(opt, "--iterations") == 0 && v >= 1) {
+        a->iterations = (unsigned)v;
+    } else if (strcmp(opt, "--cycles") == 0 && v >= 1) {
+        a->cycles = (unsigned)v;
+    } else if (strcmp(opt, "--baud") == 0 && is_profibus_baud(v)) {
+        a->baud = (uint32_t)v;
+    } else {
+        fprintf(stderr, "dfp-bench: %s: %s\n"
+                        "usage: dfp-bench [--iterations N] [--no-instructions] | --only CASE | "
+                        "--cycles N [--baud RATE]\n",
+                opt, *i < argc ? "bad value" : "needs a value");
+        return 2;
+    }
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    bench_args_t a = {.iterations = 100000, .only = -1, .baud = 12000000u,
+                      .instructions = access("/usr/bin/valgrind", X_OK) == 0};
+    for (int i = 1; i < argc; i++) {
+        int rc = parse_option(argc, argv, &i, &a);
+        if (rc != 0) {
+            return rc;
+        }
+    }
+    unsigned iterations = a.iterations;
+    bool instructions = a.instructions;
+    if (a.cycles > 0u) {
+        /* what tools/bench/ratio_bench.py compares with pyprofibus */
+        bench_membus(a.cycles, a.baud);
+        return 0;
+    }
+    if (a.only >= 0) {
         bool ok;
-        if ((unsigned)only < NUM_CASES) {
-            run_case(&cases[only], iterations, &ok);
+        if ((unsigned)a.only < NUM_CASES) {
+            run_case(&cases[a.only], iterations, &ok);
         }
         return 0;
     }

@@ -23,6 +23,8 @@
 #define PCAPNG_OPT_IF_SPEED 8u
 #define PCAPNG_OPT_IF_TSRESOL 9u
 #define PCAPNG_OPT_EPB_FLAGS 2u
+#define PCAP_FILE_HEADER_LEN 24u   /* pcap: magic, version, zone, sigfigs, snaplen, link type */
+#define PCAP_RECORD_HEADER_LEN 16u /* pcap: seconds, fraction, captured and wire length */
 
 const char *cap_format_name(cap_format_t f)
 {
@@ -181,6 +183,9 @@ static int open_pcap(cap_reader_t *r, char *err, size_t errlen)
     }
     r->linktype = (uint32_t)dlt;
     r->pcap = p;
+    if (r->format == CAP_FORMAT_PCAP) {
+        r->file_pos = PCAP_FILE_HEADER_LEN; /* positions follow from the lengths (next_pcap) */
+    }
     return 0;
 }
 
@@ -269,8 +274,11 @@ static void fill_record(cap_reader_t *r, cap_record_t *rec, const uint8_t *data,
 static int next_pcap(cap_reader_t *r, cap_record_t *rec)
 {
     pcap_t *p = r->pcap;
-    FILE *f = pcap_file(p);
-    long at = f != NULL ? ftell(f) : -1;
+    /* A pcap file is its header and then records of a header and the captured octets, so the
+     * position is counted; ftell() on every record was a third of a replay's time. pcapng has
+     * blocks libpcap skips, so it asks the file. */
+    FILE *f = r->format == CAP_FORMAT_PCAPNG ? pcap_file(p) : NULL;
+    long at = f != NULL ? ftell(f) : (long)r->file_pos;
     struct pcap_pkthdr *h;
     const u_char *data;
     int rc = pcap_next_ex(p, &h, &data);
@@ -298,7 +306,12 @@ static int next_pcap(cap_reader_t *r, cap_record_t *rec)
                  "record header damaged: %u octets captured of %u on the wire", h->caplen,
                  h->len);
     }
-    r->file_pos = f != NULL && ftell(f) >= 0 ? (uint64_t)ftell(f) : r->file_pos;
+    if (f == NULL) {
+        r->file_pos += PCAP_RECORD_HEADER_LEN + h->caplen;
+    } else {
+        long after = ftell(f);
+        r->file_pos = after >= 0 ? (uint64_t)after : r->file_pos;
+    }
     return 1;
 }
 

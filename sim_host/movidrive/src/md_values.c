@@ -7,20 +7,20 @@
 
 int md_find_def(const movidrive_t *md, uint16_t index)
 {
-    size_t lo = 0;
-    size_t hi = md->num_defs;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (md->defs[mid].index == index) {
-            return (int)mid;
-        }
-        if (md->defs[mid].index < index) {
-            lo = mid + 1;
-        } else {
-            hi = mid;
-        }
+    /* The drive model looks up a dozen parameters on every tick (a quarter of a replay's time
+     * went here): a binary search without a branch on the comparison, which the CPU cannot
+     * predict, ending on the last entry at or below index. */
+    size_t n = md->num_defs;
+    if (n == 0u) {
+        return -1;
     }
-    return -1;
+    const md_param_def_t *base = md->defs;
+    while (n > 1u) {
+        size_t half = n / 2u;
+        base = base[half].index <= index ? base + half : base;
+        n -= half;
+    }
+    return base->index == index ? (int)(base - md->defs) : -1;
 }
 
 int32_t md_ram_value(const movidrive_t *md, uint16_t index)

@@ -25,6 +25,15 @@ static void keep(replay_kept_t *k, replay_source_t src, uint64_t t, uint64_t rec
     memcpy(k->data, data, k->len);
 }
 
+/* A problem text kept with a pending telegram; nearly always empty, and kept twice per cycle
+ * (snprintf's formatting was a few per cent of a replay). */
+static void keep_text(char *dst, size_t size, const char *src)
+{
+    size_t n = strnlen(src, size - 1u);
+    memcpy(dst, src, n);
+    dst[n] = '\0';
+}
+
 static void ring_push(replay_t *r, replay_source_t src, uint64_t t, uint64_t record,
                       uint64_t position, const uint8_t *data, size_t len)
 {
@@ -505,8 +514,7 @@ static void own_answer_recorded(replay_t *r, const cap_record_t *rec)
         r->pend_expected = true;
         keep(&r->pend_expected_rec, REPLAY_FROM_CAPTURE, 0, rec->index, rec->position, rec->data,
              rec->len);
-        (void)snprintf(r->pend_expected_problem, sizeof r->pend_expected_problem, "%s",
-                       rec->problem);
+        keep_text(r->pend_expected_problem, sizeof r->pend_expected_problem, rec->problem);
     }
     r->prev_request_to_card = false;
 }
@@ -521,8 +529,7 @@ static void request_to_card(replay_t *r, const cap_record_t *rec, const replay_f
         r->pend_service = replay_service_of(m);
         keep(&r->pend_request, REPLAY_FROM_CAPTURE, t, rec->index, rec->position, rec->data,
              rec->len);
-        (void)snprintf(r->pend_request_problem, sizeof r->pend_request_problem, "%s",
-                       rec->problem);
+        keep_text(r->pend_request_problem, sizeof r->pend_request_problem, rec->problem);
         r->pend_expected = false;
         r->pend_actual = false;
         r->pend_card_state = dp_slave_state(&r->cs->card.dp);

@@ -1,0 +1,211 @@
+#!/usr/bin/env python3
+"""The three speed ratios of docs/performance.md ("Against other tools"), each measured side by
+side in one run: prints figures and ratios, asserts nothing.
+
+  1. replay: `dfp-sim replay FILE --check --speed max` on a capture of about 10^6 telegrams
+     (written by `dfp-sim record --baud 12M`, Param + 3 PD) against a
+     `tshark -r FILE -T fields -e frame.len` pass over the same capture converted to USER0;
+  2. in process: start-up + Data_Exchange cycles of the built-in master with the card on the
+     in-memory bus (`dfp-bench --cycles N --baud 12000000`) against pyprofibus's master with its
+     in-process dummy slave (CpPhyDummySlave), the same configuration Param + 3 PD;
+  3. PTY: `dfp-sim master` against `dfp-sim slave` over a socat PTY pair at a nominal
+     1.5 Mbit/s, against pyprofibus's master with the same `dfp-sim slave`, Data_Exchange cycles
+     per second of wall time (a PTY has no bit timing: the rate only sets the timeouts).
+
+Each figure is the best of --runs runs (the machine's other load only ever slows a run down).
+
+    tools/bench/ratio_bench.py [--build DIR] [--python PY] [--telegrams N] [--cycles N]
+                               [--pty-cycles N] [--baud RATE] [--runs N] [--dir DIR]
+"""
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "tests", "interop"))
+# pyprofibus's configuration and the PTY plumbing, as the interop tests use them
+from test_pyprofibus_interop import (MASTER_ADDR, SLAVE_ADDR, stop_process,  # noqa: E402
+                                     wait_for, write_conf)
+
+CFG = "F3F2"  # Param + 3 PD: 14 octets each way
+IO_LEN = 14
+
+
+def timed(cmd, **kw):
+    """Wall time and output of one command; a failure ends the benchmark."""
+    t0 = time.monotonic()
+    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kw)
+    dt = time.monotonic() - t0
+    if r.returncode != 0:
+        sys.exit("ratio_bench: %s failed (exit %d): %s" % (" ".join(cmd), r.returncode,
+                                                          r.stderr.strip()[-400:]))
+    return dt, r.stdout
+
+
+def best(runs, fn):
+    return min(fn() for _ in range(runs))
+
+
+# ---- 1. replay against tshark ----------------------------------------------------------------
+
+def ratio_replay(a, dfp_sim, tmp):
+    cap = os.path.join(tmp, "bench.pcap")
+    user0 = os.path.join(tmp, "bench_user0.pcap")
+    timed([dfp_sim, "record", "--capture", cap, "--cycles", str(a.telegrams // 2),
+           "--baud", "12M", "--param-every", "10"])
+    timed([dfp_sim, "convert", cap, user0, "--linktype", "user0", "--quiet"])
+    _, out = timed(["tshark", "-r", user0, "-T", "fields", "-e", "frame.len"])
+    n = len(out.split())
+    replay = best(a.runs, lambda: timed([dfp_sim, "replay", cap, "--check", "--speed", "max",
+                                         "--address", str(SLAVE_ADDR), "--baud", "12M"])[0])
+    tshark = best(a.runs, lambda: timed(["tshark", "-r", user0, "-T", "fields", "-e",
+                                         "frame.len"])[0])
+    print("replay:     %d telegrams: dfp-sim replay --check --speed max %.2f s = %.0f "
+          "telegrams/s; tshark -T fields -e frame.len (USER0) %.2f s" % (n, replay, n / replay,
+                                                                         tshark))
+    return tshark / replay
+
+
+# ---- 2. in process against pyprofibus with its dummy slave ---------------------------------
+
+def dfp_inprocess_rate(dfp_bench, cycles):
+    _, out = timed([dfp_bench, "--cycles", str(cycles), "--baud", "12000000"])
+    m = re.search(r"(\d+) cycles in .* simulated in\s+([\d.]+) ms wall", out)
+    if m is None:
+        sys.exit("ratio_bench: unexpected dfp-bench output: %s" % out.strip())
+    return int(m.group(1)) / (float(m.group(2)) / 1000.0)
+
+
+# pyprofibus's master for N Data_Exchange cycles, start-up included: with its in-process dummy
+# slave (DEV "dummy") or over a serial device. Run by the venv's interpreter, which has it.
+PYPROFIBUS_MASTER = r"""
+import sys, time
+sys.path.insert(0, sys.argv[1])
+from test_pyprofibus_interop import write_conf
+import pyprofibus, pyprofibus.phy_dummy, pyprofibus.phy_serial
+conf, dev, gsd, baud, cycles = sys.argv[2], sys.argv[3], sys.argv[4], int(sys.argv[5]), int(sys.argv[6])
+write_conf(conf, dev, baud, gsd, "Param + 3 PD", 14)
+config = pyprofibus.PbConf.fromFile(conf)
+t0 = time.monotonic()
+if dev == "dummy":
+    phy = pyprofibus.phy_dummy.CpPhyDummySlave(debug=False, echoDX=True, echoDXSize=14)
+else:
+    phy = pyprofibus.phy_serial.CpPhySerial(port=config.phyDev, debug=False)
+phy.setConfig(baudrate=config.phyBaud)
+master = config.makeDPM(phy=phy)
+desc = config.slaveConfs[0].makeDpSlaveDesc()
+master.addSlave(desc)
+master.initialize()
+n = 0
+out = bytearray(14)
+while n < cycles and time.monotonic() - t0 < 120:
+    desc.setMasterOutData(out)
+    if master.run() is desc and desc.getMasterInData() is not None:
+        n += 1
+dt = time.monotonic() - t0
+master.destroy()
+print(n, dt)
+"""
+
+
+def pyprofibus_rate(a, conf, dev, baud, cycles):
+    gsd = os.path.join(ROOT, "firmware", "gsd", "SEW_6003.GSD")
+    _, out = timed([a.python, "-c", PYPROFIBUS_MASTER, os.path.join(ROOT, "tests", "interop"),
+                    conf, dev, gsd, str(baud), str(cycles)])
+    n, dt = out.split()[-2:]
+    return int(n) / float(dt)
+
+
+def ratio_inprocess(a, dfp_bench, tmp):
+    conf = os.path.join(tmp, "dummy.conf")
+    ours = max(dfp_inprocess_rate(dfp_bench, a.cycles) for _ in range(a.runs))
+    n = max(a.cycles // 100, 1000)
+    theirs = max(pyprofibus_rate(a, conf, "dummy", 12000000, n) for _ in range(a.runs))
+    print("in process: start-up + Data_Exchange cycles, Param + 3 PD: dfp-sim master + card on "
+          "the in-memory bus %.0f cycles/s (%d cycles at 12 Mbit/s); pyprofibus master + "
+          "CpPhyDummySlave %.0f cycles/s (%d cycles)" % (ours, a.cycles, theirs, n))
+    return ours / theirs
+
+
+# ---- 3. PTY: dfp-sim master against pyprofibus, both with dfp-sim slave ---------------------
+
+def with_slave(a, dfp_sim, tmp, fn):
+    """A fresh socat PTY pair with dfp-sim slave on one end; fn(other end) runs the master."""
+    pa, pb = os.path.join(tmp, "pty_a"), os.path.join(tmp, "pty_b")
+    socat = subprocess.Popen(["socat", "pty,raw,echo=0,link=" + pa, "pty,raw,echo=0,link=" + pb],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    slave = None
+    try:
+        if not wait_for(lambda: os.path.exists(pa) and os.path.exists(pb), 5.0):
+            sys.exit("ratio_bench: socat did not make the PTY pair")
+        slave = subprocess.Popen([dfp_sim, "slave", "--port", pa, "--address", str(SLAVE_ADDR),
+                                  "--baud", str(a.baud), "--inverter", "none", "--quiet"],
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(0.3)
+        return fn(pb)
+    finally:
+        stop_process(slave)
+        stop_process(socat)
+
+
+def ratio_pty(a, dfp_sim, tmp):
+    conf = os.path.join(tmp, "pty.conf")
+
+    def ours_once(dev):
+        dt, _ = timed([dfp_sim, "master", "--port", dev, "--address", str(SLAVE_ADDR),
+                       "--master-address", str(MASTER_ADDR), "--config", CFG, "--baud",
+                       str(a.baud), "--cycles", str(a.pty_cycles), "--quiet"])
+        return a.pty_cycles / dt
+
+    def theirs_once(dev):
+        return pyprofibus_rate(a, conf, dev, a.baud, a.pty_cycles)
+
+    ours = max(with_slave(a, dfp_sim, tmp, ours_once) for _ in range(a.runs))
+    theirs = max(with_slave(a, dfp_sim, tmp, theirs_once) for _ in range(a.runs))
+    print("PTY:        %d Data_Exchange cycles against dfp-sim slave at a nominal %d bit/s, "
+          "start-up included: dfp-sim master %.0f cycles/s; pyprofibus master %.0f cycles/s"
+          % (a.pty_cycles, a.baud, ours, theirs))
+    return ours / theirs
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--build", default=os.path.join(ROOT, "build", "host"))
+    ap.add_argument("--python", default=os.path.join(ROOT, "build", "venv", "bin", "python3"))
+    ap.add_argument("--telegrams", type=int, default=1000000)
+    ap.add_argument("--cycles", type=int, default=1000000)
+    ap.add_argument("--pty-cycles", type=int, default=2000)
+    ap.add_argument("--baud", type=int, default=1500000)
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--dir", help="for the captures (default: a temporary directory)")
+    a = ap.parse_args()
+    if min(a.telegrams, a.cycles, a.pty_cycles, a.runs) < 1:
+        ap.error("--telegrams, --cycles, --pty-cycles and --runs must be at least 1")
+    dfp_sim = os.path.join(a.build, "sim_host", "dfp_sim", "dfp-sim")
+    dfp_bench = os.path.join(a.build, "sim_host", "bench", "dfp-bench")
+    for tool in (dfp_sim, dfp_bench, a.python):
+        if not os.access(tool, os.X_OK):
+            sys.exit("ratio_bench: %s is not executable (build first, or --build DIR)" % tool)
+    for tool in ("tshark", "socat"):
+        if shutil.which(tool) is None:
+            sys.exit("ratio_bench: %s not found" % tool)
+    tmp = tempfile.mkdtemp(prefix="dfp-ratio-", dir=a.dir)
+    try:
+        r1 = ratio_replay(a, dfp_sim, tmp)
+        r2 = ratio_inprocess(a, dfp_bench, tmp)
+        r3 = ratio_pty(a, dfp_sim, tmp)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    print("ratio replay / tshark:               %.1fx" % r1)
+    print("ratio in-process / pyprofibus dummy: %.1fx" % r2)
+    print("ratio PTY master / pyprofibus:       %.2fx" % r3)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
