@@ -680,6 +680,25 @@ static void test_parameter_errors(void)
     CHECK_EQ(v, 150000); /* none of the refused writes reached the inverter */
 }
 
+/* Data set 47 requests on IPOS H0..H18: a write of 100 + i to each, and a read of all with the
+ * response that write leads to. */
+static void nineteen_h(uint8_t wr[4 + 19 * 12], uint8_t rd[4 + 19 * 6], uint8_t rr[4 + 19 * 6])
+{
+    const uint8_t wh[4] = {0x32, 0x02, 0x00, 19}, rh[4] = {0x33, 0x01, 0x00, 19};
+    memcpy(wr, wh, 4);
+    memcpy(rd, rh, 4);
+    memcpy(rr, rh, 4);
+    for (unsigned i = 0; i < 19u; i++) {
+        uint16_t idx = (uint16_t)(MD_IDX_IPOS_H0 + i);
+        const uint8_t a[6] = {0x10, 0x00, (uint8_t)(idx >> 8), (uint8_t)idx, 0x00, 0x00};
+        const uint8_t val[6] = {0x43, 0x01, 0x00, 0x00, 0x00, (uint8_t)(100 + i)};
+        memcpy(&wr[4 + 6 * i], a, 6);
+        memcpy(&wr[4 + 19 * 6 + 6 * i], val, 6);
+        memcpy(&rd[4 + 6 * i], a, 6);
+        memcpy(&rr[4 + 6 * i], val, 6);
+    }
+}
+
 static void test_19_parameters_and_mixed_results(void)
 {
     setup(0);
@@ -695,18 +714,8 @@ static void test_19_parameters_and_mixed_results(void)
     }
     (void)ds47(__LINE__, M1, C1, C1, BN(req, sizeof req), rsp, sizeof rsp);
     /* 19 PROFIdrive reads of different parameters: H0..H18 after writing H0..H18 = 100 + i. */
-    uint8_t wr[4 + 19 * 6 + 19 * 6] = {0x32, 0x02, 0x00, 19};
-    uint8_t rd[4 + 19 * 6] = {0x33, 0x01, 0x00, 19};
-    uint8_t rr[4 + 19 * 6] = {0x33, 0x01, 0x00, 19};
-    for (unsigned i = 0; i < 19u; i++) {
-        uint16_t idx = (uint16_t)(MD_IDX_IPOS_H0 + i);
-        const uint8_t a[6] = {0x10, 0x00, (uint8_t)(idx >> 8), (uint8_t)idx, 0x00, 0x00};
-        const uint8_t val[6] = {0x43, 0x01, 0x00, 0x00, 0x00, (uint8_t)(100 + i)};
-        memcpy(&wr[4 + 6 * i], a, 6);
-        memcpy(&wr[4 + 19 * 6 + 6 * i], val, 6);
-        memcpy(&rd[4 + 6 * i], a, 6);
-        memcpy(&rr[4 + 6 * i], val, 6);
-    }
+    uint8_t wr[4 + 19 * 12], rd[4 + 19 * 6], rr[4 + 19 * 6];
+    nineteen_h(wr, rd, rr);
     const uint8_t wres[4] = {0x32, 0x02, 0x00, 19};
     (void)ds47(__LINE__, M1, C1, C1, BN(wr, sizeof wr), wres, sizeof wres);
     (void)ds47(__LINE__, M1, C1, C1, BN(rd, sizeof rd), rr, sizeof rr);
@@ -746,25 +755,6 @@ static void inject_on_preempt(void *ctx)
         send_b(M1, C1, C1, PI.pdu);
         expect_frame(__LINE__, SC, 1);
         R.ru.in_main_loop = true;
-    }
-}
-
-/* Data set 47 requests on IPOS H0..H18: a write of 100 + i to each, and a read of all with the
- * response that write leads to. */
-static void nineteen_h(uint8_t wr[4 + 19 * 12], uint8_t rd[4 + 19 * 6], uint8_t rr[4 + 19 * 6])
-{
-    const uint8_t wh[4] = {0x32, 0x02, 0x00, 19}, rh[4] = {0x33, 0x01, 0x00, 19};
-    memcpy(wr, wh, 4);
-    memcpy(rd, rh, 4);
-    memcpy(rr, rh, 4);
-    for (unsigned i = 0; i < 19u; i++) {
-        uint16_t idx = (uint16_t)(MD_IDX_IPOS_H0 + i);
-        const uint8_t a[6] = {0x10, 0x00, (uint8_t)(idx >> 8), (uint8_t)idx, 0x00, 0x00};
-        const uint8_t val[6] = {0x43, 0x01, 0x00, 0x00, 0x00, (uint8_t)(100 + i)};
-        memcpy(&wr[4 + 6 * i], a, 6);
-        memcpy(&wr[4 + 19 * 6 + 6 * i], val, 6);
-        memcpy(&rd[4 + 6 * i], a, 6);
-        memcpy(&rr[4 + 6 * i], val, 6);
     }
 }
 
