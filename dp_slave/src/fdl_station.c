@@ -126,34 +126,40 @@ void fdl_station_reply_rs(dp_slave_t *s, const fdl_msg_t *m)
 
 /* ---- FCB retry cache (protocol.md §A1.5) -------------------------------------------------- */
 
-/* The master's slot, or the least recently used one taken over for it. */
+/* The master's slot, or the least recently used one taken over for it. The clock ticks when
+ * the master served changes, not per request, so the usual case (one owner polling) is a single
+ * comparison; a slot's age is the clock minus its stamp, which survives the clock's wrap. */
 static fdl_fcb_slot_t *fcb_slot(dp_slave_t *s, uint8_t master)
 {
-    fdl_fcb_slot_t *oldest = &s->fcb[0];
+    fdl_fcb_slot_t *e = &s->fcb[s->fcb_last];
+    if (e->used && e->master == master) {
+        return e;
+    }
+    uint32_t now = ++s->fcb_clock;
+    size_t take = 0;
+    uint32_t oldest_age = 0;
     for (size_t i = 0; i < FDL_FCB_SLOTS; i++) {
-        fdl_fcb_slot_t *e = &s->fcb[i];
+        e = &s->fcb[i];
         if (e->used && e->master == master) {
-            return e;
+            take = i;
+            break;
         }
-        if (!e->used || (oldest->used && e->age > oldest->age)) {
-            oldest = e;
-        }
-    }
-    oldest->used = true;
-    oldest->master = master;
-    oldest->fcb_valid = false;
-    oldest->reply_len = 0;
-    return oldest;
-}
-
-static void fcb_touch(dp_slave_t *s, fdl_fcb_slot_t *e)
-{
-    for (size_t i = 0; i < FDL_FCB_SLOTS; i++) {
-        if (s->fcb[i].used && s->fcb[i].age < UINT8_MAX) {
-            s->fcb[i].age++;
+        uint32_t age = e->used ? now - e->stamp : UINT32_MAX;
+        if (age > oldest_age) {
+            oldest_age = age;
+            take = i;
         }
     }
-    e->age = 0;
+    e = &s->fcb[take];
+    if (!e->used || e->master != master) {
+        e->used = true;
+        e->master = master;
+        e->fcb_valid = false;
+        e->reply_len = 0;
+    }
+    e->stamp = now;
+    s->fcb_last = (uint8_t)take;
+    return e;
 }
 
 bool fdl_station_references(dp_slave_t *s, const uint8_t *buf, bool forget)
@@ -247,7 +253,6 @@ static void serve_srd(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
     bool fcv = (m->fc & FDL_FC_FCV) != 0u;
     uint8_t fcb = (m->fc & FDL_FC_FCB) != 0u ? 1u : 0u;
     fdl_fcb_slot_t *slot = fcb_slot(s, m->sa);
-    fcb_touch(s, slot);
     if (fcv && slot->fcb_valid && slot->fcb == fcb && slot->reply_len > 0u &&
         (slot->guard == NULL || *slot->guard == slot->guard_value)) {
         dp_slave_emit(s, DP_EV_FCB_REPEAT, t, m->fc, m->sa);

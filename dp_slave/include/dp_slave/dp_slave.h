@@ -155,9 +155,9 @@ typedef struct fdl_fcb_slot {
     bool fcb_valid;
     uint8_t master;
     uint8_t fcb;
-    uint8_t age;
     uint8_t guard_value;
     uint16_t reply_len; /* 0: no reply cached */
+    uint32_t stamp; /* dp_slave_t.fcb_clock when this master was last served */
     const uint8_t *reply; /* into buf, a Data_Exchange buffer or the device's (SAP) buffer */
     const volatile uint8_t *guard; /* see dp_sap_reply_t */
     uint8_t buf[FDL_TX_BUF_LEN(FDL_SLOT_DU_MAX)];
@@ -187,6 +187,8 @@ typedef struct dp_slave {
     uint8_t min_tsdr_bits;
     uint32_t min_tsdr_us; /* min_tsdr_bits at baud, kept so the reply path does not divide */
     fdl_fcb_slot_t fcb[FDL_FCB_SLOTS];
+    uint8_t fcb_last; /* the slot served last: the one fcb_slot() tries first */
+    uint32_t fcb_clock; /* ticks when the master served changes (least recently used order) */
     /* The reply of the request being served: where it is built (a slot's buffer, or scratch for
      * replies that are never repeated) and, once built, the octets to send. */
     uint8_t *tx_buf;
