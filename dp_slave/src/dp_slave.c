@@ -291,12 +291,11 @@ static void svc_chk_cfg(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
     set_state(s, DP_STATE_DATA_EXCH, t);
 }
 
-size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max)
+/* Diag.Station_Status_1..3 and Diag.Master_Add in one word (octet 0 in the low byte): the part
+ * of the diagnosis that follows the machine, compared whole to tell a framed one still current. */
+static uint32_t diag_status_word(const dp_slave_t *s)
 {
-    if (max < DP_DIAG_STD_LEN) {
-        return 0;
-    }
-    uint8_t st1 = 0;
+    uint32_t st1 = 0;
     if (s->state != DP_STATE_DATA_EXCH) {
         st1 |= DP_DIAG1_STATION_NOT_READY;
     }
@@ -312,7 +311,7 @@ size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max)
     if (s->prm_fault) {
         st1 |= DP_DIAG1_PRM_FAULT;
     }
-    uint8_t st2 = DP_DIAG2_ALWAYS_ONE;
+    uint32_t st2 = DP_DIAG2_ALWAYS_ONE;
     if (s->state == DP_STATE_WAIT_PRM) {
         st2 |= DP_DIAG2_PRM_REQ;
     }
@@ -328,12 +327,26 @@ size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max)
     if (s->sync_mode) {
         st2 |= DP_DIAG2_SYNC_MODE;
     }
-    out[DP_DIAG_STATUS_1] = st1;
-    out[DP_DIAG_STATUS_2] = st2;
-    out[DP_DIAG_STATUS_3] = s->ext_diag_overflow ? DP_DIAG3_EXT_DIAG_OVERFLOW : 0u;
-    out[DP_DIAG_MASTER_ADD] = s->master_add;
-    out[DP_DIAG_IDENT_HIGH] = (uint8_t)(s->cfg.ident >> 8);
-    out[DP_DIAG_IDENT_LOW] = (uint8_t)(s->cfg.ident & 0xFFu);
+    uint32_t st3 = s->ext_diag_overflow ? DP_DIAG3_EXT_DIAG_OVERFLOW : 0u;
+    return st1 | (st2 << 8) | (st3 << 16) | ((uint32_t)s->master_add << 24);
+}
+
+static void put_diag_status(uint8_t *out, uint32_t status, uint16_t ident)
+{
+    out[DP_DIAG_STATUS_1] = (uint8_t)status;
+    out[DP_DIAG_STATUS_2] = (uint8_t)(status >> 8);
+    out[DP_DIAG_STATUS_3] = (uint8_t)(status >> 16);
+    out[DP_DIAG_MASTER_ADD] = (uint8_t)(status >> 24);
+    out[DP_DIAG_IDENT_HIGH] = (uint8_t)(ident >> 8);
+    out[DP_DIAG_IDENT_LOW] = (uint8_t)(ident & 0xFFu);
+}
+
+size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max)
+{
+    if (max < DP_DIAG_STD_LEN) {
+        return 0;
+    }
+    put_diag_status(out, diag_status_word(s), s->cfg.ident);
     size_t n = DP_DIAG_STD_LEN;
     size_t ext = s->ext_diag_len;
     if (ext > max - n) {
@@ -343,18 +356,75 @@ size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max)
     return n + ext;
 }
 
-/* DDLM_Slave_Diag (SAP 60). */
+/* Where the requester's address (DA) sits in a framed reply: behind SD1/SD3 or SD2 LE LEr SD2. */
+static size_t reply_da_at(const uint8_t *frame)
+{
+    return frame[0] == FDL_SD2 ? FDL_SD2_HEADER_LEN : FDL_SD1_SD3_HEADER_LEN;
+}
+
+/* Frames the diagnosis with DA and DSAP 0 into a buffer no cached reply points at. forget: on
+ * the reply path, where the transmitter is done (a request came in after it), a buffer only a
+ * retry points at may be taken; the retry then runs anew. The main loop waits instead. */
+static bool frame_diag(dp_slave_t *s, uint32_t status, bool forget)
+{
+    uint8_t i = (uint8_t)(s->diag_current ^ 1u);
+    if (fdl_station_references(s, s->diag[i].buf, false)) {
+        if (!fdl_station_references(s, s->diag[i ^ 1u].buf, false)) {
+            i ^= 1u;
+        } else if (forget) {
+            (void)fdl_station_references(s, s->diag[i].buf, true);
+        } else {
+            return false;
+        }
+    }
+    dp_diag_buffer_t *d = &s->diag[i];
+    uint8_t *du = &d->buf[FDL_TX_HEADROOM];
+    put_diag_status(du, status, s->cfg.ident);
+    memcpy(&du[DP_DIAG_STD_LEN], s->ext_diag, s->ext_diag_len);
+    size_t len;
+    const uint8_t *frame = fdl_frame_in_place(
+        d->buf, DP_DIAG_STD_LEN + (size_t)s->ext_diag_len,
+        (uint8_t)(fdl_fcs(du, DP_DIAG_STD_LEN) + s->ext_diag_sum), 0u, s->cfg.address,
+        FDL_RSP_DL, true, 0u, DP_SAP_SLAVE_DIAG, &len);
+    d->start = (uint8_t)(frame - d->buf);
+    d->len = (uint8_t)len;
+    d->sum_base = (uint8_t)(frame[len - FDL_TRAILER_LEN] - FDL_ADDR_EXT);
+    s->diag_current = i;
+    s->diag_framed = true;
+    s->diag_status = status;
+    return true;
+}
+
+void dp_slave_prepare(dp_slave_t *s)
+{
+    uint32_t status = diag_status_word(s);
+    if (!s->diag_framed || status != s->diag_status) {
+        (void)frame_diag(s, status, false);
+    }
+}
+
+/* DDLM_Slave_Diag (SAP 60): the framed diagnosis, addressed to the requester. The slot's guard
+ * is the DA octet, so a retry of another master is not answered from a frame since addressed
+ * to someone else. */
 static void svc_slave_diag(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
 {
     (void)t;
-    /* Built where the reply is framed, summed from the six standard octets and the extended
-     * diagnosis's sum kept since it was set: no copy, no second pass. */
-    _Static_assert(FDL_SLOT_DU_MAX >= DP_DIAG_STD_LEN + DP_MAX_EXT_DIAG_LEN, "diag fits a slot");
-    uint8_t *du = &s->tx_buf[FDL_TX_HEADROOM];
-    size_t n = dp_slave_build_diag(s, du, DP_DIAG_STD_LEN + DP_MAX_EXT_DIAG_LEN);
+    uint32_t status = diag_status_word(s);
+    if (!s->diag_framed || status != s->diag_status) {
+        (void)frame_diag(s, status, true);
+    }
+    dp_diag_buffer_t *d = &s->diag[s->diag_current];
+    uint8_t *frame = &d->buf[d->start];
+    uint8_t *da = &frame[reply_da_at(frame)];
+    uint8_t dsap = (uint8_t)(m->ssap & FDL_AE_SAP_MASK);
+    da[0] = (uint8_t)(m->sa | FDL_ADDR_EXT);
+    da[FDL_ADDR_FC_LEN] = dsap;
+    frame[d->len - FDL_TRAILER_LEN] = (uint8_t)(d->sum_base + da[0] + dsap);
     s->diag_pending = false;
-    fdl_station_reply_framed(s, m, FDL_RSP_DL, true, s->tx_buf, n,
-                             (uint8_t)(fdl_fcs(du, DP_DIAG_STD_LEN) + s->ext_diag_sum));
+    s->tx = frame;
+    s->tx_len = d->len;
+    s->tx_guard = da;
+    s->tx_guard_value = da[0];
 }
 
 /* DDLM_Global_Control (SAP 58, SDN), from the owner in Data_Exch (the table's rule). */
@@ -570,6 +640,7 @@ void dp_slave_rx_char(dp_slave_t *s, uint8_t byte, uint8_t flags, hal_time_us_t 
     fdl_rx_result_t r = fdl_rx_char(&s->rx, byte, flags, t);
     if (r == FDL_RX_FRAME) {
         fdl_station_frame(s);
+        dp_slave_prepare(s);
     } else if (r == FDL_RX_ERROR) {
         dp_slave_emit(s, DP_EV_RX_ERROR, t, (uint32_t)s->rx.last_error, 0);
     }
@@ -581,6 +652,9 @@ void dp_slave_rx_telegram(dp_slave_t *s, const fdl_rx_telegram_t *tg)
     fdl_rx_result_t r = fdl_rx_telegram(&s->rx, tg);
     if (r == FDL_RX_FRAME) {
         fdl_station_frame(s);
+        /* After the reply: a master asks for the diagnosis right after the Set_Prm or Chk_Cfg
+         * that changed it, sooner than the main loop could frame it at 12 Mbit/s. */
+        dp_slave_prepare(s);
     } else if (r == FDL_RX_ERROR) {
         dp_slave_emit(s, DP_EV_RX_ERROR, tg->end_t, (uint32_t)s->rx.last_error, 0);
     }
@@ -628,6 +702,7 @@ void dp_slave_set_ext_diag(dp_slave_t *s, const uint8_t *diag, size_t len)
     s->ext_diag_len = (uint8_t)len;
     s->ext_diag_sum = fdl_fcs(s->ext_diag, len);
     s->ext_diag_overflow = overflow;
+    s->diag_framed = false;
     s->diag_pending = true;
 }
 

@@ -1029,6 +1029,30 @@ static void test_ext_diag_dh(void)
     DIAG_IS(&R.m2, 0x00, 0x0E, 0x00, 0x02, 0x60, 0x03);
 }
 
+/* The diagnosis is framed once, ahead, and addressed on the reply path: each requester gets its
+ * own DA, DSAP and check octet, and a retry of one master after another master's request is
+ * never answered with the frame addressed to the other. */
+static void test_diag_addressed_per_requester(void)
+{
+    rig_init(BAUD, 0);
+    bring_up(0x88, 1, 100, 0, CFG_P3PD, sizeof CFG_P3PD);
+    CHECK(sap(&R.m3, DP_SAP_SLAVE_DIAG, NULL, 0));
+    LAST_IS(0xA2, 0x83, 0x84, 0x08, 0x3E, 0x3C, 0x00, 0x0C, 0x00, 0x02, 0x60, 0x03, 0xFA, 0x16);
+    save_reply();
+    CHECK(sap(&R.m2, DP_SAP_SLAVE_DIAG, NULL, 0));
+    LAST_IS(0xA2, 0x82, 0x84, 0x08, 0x3E, 0x3C, 0x00, 0x0C, 0x00, 0x02, 0x60, 0x03, 0xF9, 0x16);
+    /* Master 3 did not hear its reply and repeats (same FCB): its own frame again. */
+    size_t n = mk_sap_req(R.f, SLAVE, 3, tm_fc_retry(&R.m3, FDL_REQ_SRD_HIGH), DP_SAP_SLAVE_DIAG,
+                          NULL, 0);
+    CHECK(req(R.f, n));
+    CHECK(R.u.last_len == R.saved_len && memcmp(R.u.last, R.saved, R.saved_len) == 0);
+    /* A class-2 master's own SSAP comes back as DSAP, counted in the check octet. */
+    n = fdl_encode(R.f, SLAVE, 3, tm_fc(&R.m3, FDL_REQ_SRD_HIGH), true, DP_SAP_SLAVE_DIAG, 50,
+                   NULL, 0);
+    CHECK(req(R.f, n));
+    LAST_IS(0xA2, 0x83, 0x84, 0x08, 0x32, 0x3C, 0x00, 0x0C, 0x00, 0x02, 0x60, 0x03, 0xEE, 0x16);
+}
+
 /* ---- timing ------------------------------------------------------------------------------- */
 
 static void test_tsyn_violation(void)
@@ -1411,6 +1435,7 @@ int main(void)
     RUN_TEST(test_gc_sync_freeze_not_requested);
     RUN_TEST(test_set_prm_sync_unsupported);
     RUN_TEST(test_ext_diag_dh);
+    RUN_TEST(test_diag_addressed_per_requester);
     RUN_TEST(test_tsyn_violation);
     RUN_TEST(test_min_tsdr);
     RUN_TEST(test_min_tsdr_12m);

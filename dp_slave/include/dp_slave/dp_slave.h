@@ -141,12 +141,10 @@ typedef struct dp_slave_cfg {
 
 #define DP_BAUD_CONTROL_MS_DEFAULT 1000u
 
-/* The largest DU a reply is built from in a slot's own buffer: Slave_Diag, Get_Cfg, RD_Inp,
- * RD_Outp, a short SAP reply (Data_Exchange and DP-V1 responses are framed where they lie). */
+/* The largest DU a reply is built from in a slot's own buffer: Get_Cfg, RD_Inp, RD_Outp, a
+ * short SAP reply (Data_Exchange, Slave_Diag and DP-V1 responses are framed where they lie). */
 #define DP_MAX2_(a, b) ((a) > (b) ? (a) : (b))
-#define FDL_SLOT_DU_MAX                                                                        \
-    DP_MAX2_(DP_MAX2_(DP_DIAG_STD_LEN + DP_MAX_EXT_DIAG_LEN, DP_MAX_CFG_LEN),                    \
-             DP_MAX2_(DP_MAX_IO_LEN, DP_SAP_REPLY_SHORT + 2u))
+#define FDL_SLOT_DU_MAX DP_MAX2_(DP_MAX2_(DP_MAX_CFG_LEN, DP_MAX_IO_LEN), DP_SAP_REPLY_SHORT + 2u)
 
 /* One master's FCB state and its last reply (IEC 61158-4-3 frame count bit): a retry is
  * answered by pointing the transmitter at the same octets again, never by building it anew. */
@@ -172,6 +170,18 @@ typedef struct dp_dx_buffer {
     uint8_t sum;
     uint8_t buf[FDL_TX_BUF_LEN(DP_MAX_IO_LEN)];
 } dp_dx_buffer_t;
+
+/* The Slave_Diag reply is framed ahead too, by dp_slave_prepare() in the main loop, for no
+ * master in particular: the reply path writes the requester's address and SAP into it and adds
+ * them to the check octet, as an ASIC inserts the header. Two buffers: the one a cached reply
+ * (a retry, or the transmitter) may be reading and the one to write. */
+#define DP_DIAG_BUFFERS 2u
+typedef struct dp_diag_buffer {
+    uint8_t start;    /* the frame's first octet in buf */
+    uint8_t len;      /* its length */
+    uint8_t sum_base; /* its check octet without the requester's address and SAP */
+    uint8_t buf[FDL_TX_BUF_LEN(DP_DIAG_STD_LEN + DP_MAX_EXT_DIAG_LEN)];
+} dp_diag_buffer_t;
 
 typedef struct dp_slave {
     dp_slave_cfg_t cfg;
@@ -232,6 +242,10 @@ typedef struct dp_slave {
     uint8_t ext_diag_len;
     uint8_t ext_diag_sum; /* octet sum of ext_diag, so a Slave_Diag reply adds up only 6 octets */
     bool ext_diag_overflow;
+    dp_diag_buffer_t diag[DP_DIAG_BUFFERS];
+    uint8_t diag_current;  /* the buffer with the newest framed diagnosis */
+    bool diag_framed;      /* diag[diag_current] holds ext_diag as it is now */
+    uint32_t diag_status;  /* the status octets and Master_Add framed there (diag_status_word) */
 
     bool dpv1_mode;   /* accepted Set_Prm had >= 10 octets and DPV1_Enable */
     bool line_active; /* an error-free telegram was heard since power-up or the last baud loss */
@@ -256,6 +270,11 @@ void dp_slave_set_inputs(dp_slave_t *s, const uint8_t *in, size_t len);
  * makes the next Data_Exchange reply DH so the master reads it. */
 void dp_slave_set_ext_diag(dp_slave_t *s, const uint8_t *diag, size_t len);
 void dp_slave_set_stat_diag(dp_slave_t *s, bool on);
+
+/* Frames ahead the replies whose content changed (the diagnosis), so the reply path only
+ * addresses them. The receive path calls it after each reply; the main loop calls it after
+ * changing the extended diagnosis. Without it the replies are right, only slower. */
+void dp_slave_prepare(dp_slave_t *s);
 
 /* Builds the Slave_Diag DU as the master would read it now. Returns its length. */
 size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max);

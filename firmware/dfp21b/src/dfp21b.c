@@ -566,6 +566,8 @@ hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now)
     if (c->inputs_dirty) {
         build_inputs(c);
     }
+    preempt(c);
+    dp_slave_prepare(&c->dp);
     update_leds(c);
     return next;
 }

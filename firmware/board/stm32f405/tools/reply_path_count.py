@@ -71,7 +71,7 @@ def classify_funcs(funcs):
     # (fdl_station_send_now): their service function is what tells them apart
     if "hook_cfg_check" in funcs or ran("svc_chk_cfg"):
         return "Chk_Cfg (SC)"
-    if ran("dp_slave_build_diag"):
+    if ran("svc_slave_diag"):
         return "Slave_Diag"
     if "hook_outputs" in funcs or ran("svc_data_exchange"):
         return "Data_Exchange"
@@ -173,7 +173,7 @@ class Trace:
     def __init__(self, elf):
         s = symbols(elf)
         for need in ("fdl_station_reply_framed", "fdl_frame_in_place", "fdl_station_reply_rs",
-                     "dp_slave_request", "dp_slave_rx_telegram", "dp_slave_build_diag",
+                     "dp_slave_request", "dp_slave_rx_telegram", "svc_slave_diag",
                      "hook_prm_check", "hook_cfg_check", "hook_outputs", "dpv1_sap_request",
                      "svc_chk_cfg", "svc_data_exchange",
                      "conn_close", "rs485_uart_rx_hand_over", "rs485_wait_until",
