@@ -46,7 +46,15 @@ void dp_slave_emit(dp_slave_t *s, dp_event_type_t type, hal_time_us_t t, uint32_
     s->cfg.hooks.event(s->cfg.hooks.ctx, &ev);
 }
 
-/* The Data_Exchange reply's DU and its octet sum, for the current inputs and input length. */
+/* Where the requester's address (DA) sits in a framed reply: behind SD1/SD3 or SD2 LE LEr SD2. */
+static size_t reply_da_at(const uint8_t *frame)
+{
+    return frame[0] == FDL_SD2 ? FDL_SD2_HEADER_LEN : FDL_SD1_SD3_HEADER_LEN;
+}
+
+/* The Data_Exchange reply for the current inputs and input length, framed with DA and FC 0:
+ * the reply path writes the master's address and DL/DH into it and adds them to the check
+ * octet, as the ASIC's header insertion does. */
 static void frame_inputs(dp_slave_t *s)
 {
     /* Into a buffer that neither the newest inputs nor a cached reply (the one a retry or the
@@ -65,8 +73,14 @@ static void frame_inputs(dp_slave_t *s)
     }
     dp_dx_buffer_t *dx = &s->dx[i];
     /* Only what a reply carries: Chk_Cfg frames again when the length changes. */
-    memcpy(&dx->buf[FDL_TX_HEADROOM], s->inputs, s->in_len);
-    dx->sum = fdl_fcs(&dx->buf[FDL_TX_HEADROOM], s->in_len);
+    uint8_t *du = &dx->buf[FDL_TX_HEADROOM];
+    memcpy(du, s->inputs, s->in_len);
+    size_t len;
+    const uint8_t *frame = fdl_frame_in_place(dx->buf, s->in_len, fdl_fcs(du, s->in_len), 0u,
+                                              s->cfg.address, 0u, false, 0u, 0u, &len);
+    dx->start = (uint8_t)(frame - dx->buf);
+    dx->len = (uint8_t)len;
+    dx->sum_base = frame[len - FDL_TRAILER_LEN];
     s->dx_current = i;
 }
 
@@ -356,12 +370,6 @@ size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max)
     return n + ext;
 }
 
-/* Where the requester's address (DA) sits in a framed reply: behind SD1/SD3 or SD2 LE LEr SD2. */
-static size_t reply_da_at(const uint8_t *frame)
-{
-    return frame[0] == FDL_SD2 ? FDL_SD2_HEADER_LEN : FDL_SD1_SD3_HEADER_LEN;
-}
-
 /* Frames the diagnosis with DA and DSAP 0 into a buffer no cached reply points at. forget: on
  * the reply path, where the transmitter is done (a request came in after it), a buffer only a
  * retry points at may be taken; the retry then runs anew. The main loop waits instead. */
@@ -485,8 +493,18 @@ static void reply_inputs(dp_slave_t *s, const fdl_msg_t *m)
     } else if (s->freeze_mode) {
         fdl_station_reply_plain(s, m, code, s->frozen_inputs, s->in_len);
     } else {
+        /* Only the owner exchanges data, but a former owner's retry may still point here:
+         * the DA octet guards it. */
         dp_dx_buffer_t *dx = &s->dx[s->dx_current];
-        fdl_station_reply_framed(s, m, code, false, dx->buf, s->in_len, dx->sum);
+        uint8_t *frame = &dx->buf[dx->start];
+        uint8_t *da = &frame[reply_da_at(frame)];
+        da[0] = m->sa;
+        da[FDL_FC_FROM_DA] = code;
+        frame[dx->len - FDL_TRAILER_LEN] = (uint8_t)(dx->sum_base + m->sa + code);
+        s->tx = frame;
+        s->tx_len = dx->len;
+        s->tx_guard = da;
+        s->tx_guard_value = m->sa;
     }
 }
 

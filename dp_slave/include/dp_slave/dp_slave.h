@@ -161,13 +161,15 @@ typedef struct fdl_fcb_slot {
     uint8_t buf[FDL_TX_BUF_LEN(FDL_SLOT_DU_MAX)];
 } fdl_fcb_slot_t;
 
-/* Data_Exchange replies are framed ahead: dp_slave_set_inputs() writes the inputs into a buffer
- * that no cached reply points at, with their octet sum; the reply path only adds the header.
+/* Data_Exchange replies are framed ahead: dp_slave_set_inputs() frames the inputs in a buffer
+ * that no cached reply points at; the reply path only writes the master's address and the FC.
  * Three buffers: the newest inputs, the one the owner's last reply (and a retry) points at, and
  * one to write. */
 #define DP_DX_BUFFERS 3u
 typedef struct dp_dx_buffer {
-    uint8_t sum;
+    uint8_t start;    /* the frame's first octet in buf */
+    uint8_t len;      /* its length */
+    uint8_t sum_base; /* its check octet without the master's address and the FC */
     uint8_t buf[FDL_TX_BUF_LEN(DP_MAX_IO_LEN)];
 } dp_dx_buffer_t;
 

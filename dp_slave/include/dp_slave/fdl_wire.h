@@ -20,6 +20,7 @@
 #define FDL_SD1_SD3_HEADER_LEN 1u /* the delimiter: DA follows at offset 1 */
 #define FDL_SD2_HEADER_LEN 4u     /* 68 LE LEr 68: DA follows at offset 4 */
 #define FDL_ADDR_FC_LEN 3u        /* DA SA FC */
+#define FDL_FC_FROM_DA 2u         /* FC follows DA and SA */
 #define FDL_TRAILER_LEN 2u        /* FCS ED */
 #define FDL_SD2_OVERHEAD 6u /* 68 LE LEr 68 ... FCS 16 */
 #define FDL_LE_MIN 4u       /* DA SA FC + at least one DU octet (LE counts DA..DU) */
