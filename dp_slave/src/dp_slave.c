@@ -113,8 +113,10 @@ static void set_state(dp_slave_t *s, dp_state_t next, hal_time_us_t t)
         s->freeze_mode = false;
     }
     s->state = next;
+    s->diag_framed = false; /* the watchdog's expiry changes the state outside the receive path */
     if (next == DP_STATE_WAIT_PRM) {
         s->wd_on = false;
+        fdl_station_watchdog_changed(s);
         s->dpv1_mode = false;
     }
     if (s->cfg.hooks.event != NULL) {
@@ -142,6 +144,7 @@ void dp_slave_init(dp_slave_t *s, const dp_slave_cfg_t *cfg, hal_time_us_t now)
     }
     fdl_rx_init(&s->rx, cfg->fixed_baud != 0u ? cfg->fixed_baud : hal_uart_bauds[0],
                 cfg->strict_timing);
+    fdl_station_watchdog_changed(s);
     fdl_station_start_baud(s, now);
 }
 
@@ -226,7 +229,9 @@ static void adopt_prm(dp_slave_t *s, const fdl_msg_t *m, const uint8_t dpv1[3], 
     s->wd_on = wd_on;
     uint32_t base_ms = (dpv1[0] & DP_DPV1_1_WD_BASE_1MS) != 0u ? 1u : 10u;
     s->wd_time_ms = wd_on ? base_ms * p[DP_PRM_WD_FACT_1] * p[DP_PRM_WD_FACT_2] : 0u;
-    s->wd_deadline = t + s->wd_time_ms * 1000u;
+    s->wd_time_us = s->wd_time_ms * 1000u;
+    s->wd_deadline = t + s->wd_time_us;
+    fdl_station_watchdog_changed(s);
     dp_slave_emit(s, DP_EV_PRM_OK, t, s->wd_time_ms, m->sa);
 }
 
@@ -411,15 +416,16 @@ void dp_slave_prepare(dp_slave_t *s)
     }
 }
 
-/* DDLM_Slave_Diag (SAP 60): the framed diagnosis, addressed to the requester. The slot's guard
+/* DDLM_Slave_Diag (SAP 60): the framed diagnosis, addressed to the requester. It is current:
+ * the receive path frames again after each telegram that changed it, and what changes it
+ * elsewhere (set_state, the Ext_Diag and Stat_Diag setters) clears diag_framed. The slot's guard
  * is the DA octet, so a retry of another master is not answered from a frame since addressed
  * to someone else. */
 static void svc_slave_diag(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
 {
     (void)t;
-    uint32_t status = diag_status_word(s);
-    if (!s->diag_framed || status != s->diag_status) {
-        (void)frame_diag(s, status, true);
+    if (!s->diag_framed) {
+        (void)frame_diag(s, diag_status_word(s), true);
     }
     dp_diag_buffer_t *d = &s->diag[s->diag_current];
     uint8_t *frame = &d->buf[d->start];
@@ -728,6 +734,7 @@ void dp_slave_set_stat_diag(dp_slave_t *s, bool on)
 {
     if (s->stat_diag != on) {
         s->stat_diag = on;
+        s->diag_framed = false;
         s->diag_pending = true;
     }
 }

@@ -38,6 +38,8 @@ bool fdl_station_references(dp_slave_t *s, const uint8_t *buf, bool forget);
 void fdl_station_frame(dp_slave_t *s);
 /* The rate or min TSDR changed: recompute what the reply path needs of them. */
 void fdl_station_timing_changed(dp_slave_t *s);
+/* After wd_on or wd_time_ms changed: the baud control time follows the watchdog. */
+void fdl_station_watchdog_changed(dp_slave_t *s);
 /* FDL station: baud search start and its timers; returns the merged next deadline. */
 void fdl_station_start_baud(dp_slave_t *s, hal_time_us_t now);
 hal_time_us_t fdl_station_poll(dp_slave_t *s, hal_time_us_t now);

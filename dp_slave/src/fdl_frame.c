@@ -57,6 +57,17 @@ static fdl_parse_result_t parse_addressing(const uint8_t *addr, size_t du_len, f
     msg->sa = (uint8_t)(sa & FDL_ADDR_MASK);
     msg->fc = addr[2];
     const uint8_t *du = &addr[FDL_ADDR_FC_LEN];
+    /* Every DP SAP request: both extensions, one octet each, plain SAPs. */
+    if ((da & sa & FDL_ADDR_EXT) != 0u && du_len >= 2u &&
+        ((du[0] | du[1]) & (FDL_AE_MORE | FDL_AE_SEGMENT)) == 0u) {
+        msg->has_dsap = true;
+        msg->dsap = du[0];
+        msg->has_ssap = true;
+        msg->ssap = du[1];
+        msg->data = &du[2];
+        msg->data_len = (uint8_t)(du_len - 2u);
+        return FDL_PARSE_OK;
+    }
     size_t pos = 0;
     fdl_parse_result_t r = FDL_PARSE_OK;
     if ((da & FDL_ADDR_EXT) != 0u) {

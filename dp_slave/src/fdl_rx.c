@@ -52,35 +52,6 @@ static fdl_rx_result_t fail(fdl_rx_t *rx, fdl_rx_error_t e)
     return FDL_RX_ERROR;
 }
 
-/* The check octets of a telegram whose length already fits its start delimiter; sum, when
- * known, is the octet sum of DA..DU. */
-static fdl_rx_error_t check_octets(const uint8_t *b, uint16_t n, bool sum_known, uint8_t sum)
-{
-    switch (b[0]) {
-    case FDL_SD1:
-        if ((sum_known ? sum : fdl_fcs(&b[1], 3u)) != b[4]) {
-            return FDL_RX_ERR_FCS;
-        }
-        break;
-    case FDL_SD3:
-        if ((sum_known ? sum : fdl_fcs(&b[1], 3u + FDL_SD3_DU_LEN)) != b[12]) {
-            return FDL_RX_ERR_FCS;
-        }
-        break;
-    case FDL_SD2:
-        if ((sum_known ? sum : fdl_fcs(&b[4], b[1])) != b[n - 2u]) {
-            return FDL_RX_ERR_FCS;
-        }
-        break;
-    default: /* SD4 and SC carry no check octets */
-        break;
-    }
-    if ((b[0] == FDL_SD1 || b[0] == FDL_SD2 || b[0] == FDL_SD3) && b[n - 1u] != FDL_ED) {
-        return FDL_RX_ERR_ED;
-    }
-    return FDL_RX_OK;
-}
-
 static fdl_rx_result_t accept(fdl_rx_t *rx, const uint8_t *frame, uint16_t n, hal_time_us_t t,
                               uint32_t idle_before_ns)
 {
@@ -96,17 +67,6 @@ static fdl_rx_result_t accept(fdl_rx_t *rx, const uint8_t *frame, uint16_t n, ha
     return FDL_RX_FRAME;
 }
 
-#if FDL_RX_CHAR_INPUT
-static fdl_rx_result_t complete(fdl_rx_t *rx, hal_time_us_t t)
-{
-    fdl_rx_error_t e = check_octets(rx->buf, rx->len, false, 0);
-    if (e != FDL_RX_OK) {
-        return fail(rx, e);
-    }
-    return accept(rx, rx->buf, rx->len, t, rx->idle_before_pending_ns);
-}
-#endif
-
 static uint16_t length_for_sd(uint8_t sd)
 {
     switch (sd) {
@@ -119,33 +79,65 @@ static uint16_t length_for_sd(uint8_t sd)
     }
 }
 
-/* The length rules the collector applied, checked again: a telegram handed over by a driver is
- * input like any other, and a wrong length here would read past its end. */
-static fdl_rx_error_t check_length(const uint8_t *b, uint16_t n)
+/* A telegram's length (the collector's rules, checked again: a telegram handed over by a driver
+ * is input like any other, and a wrong length here would read past its end), then its check
+ * octets, in one pass over the header as the delimiter directs. sum, when known, is the octet
+ * sum of DA..DU. Errors in the order a receiver meets them: length, FCS, ED. */
+static fdl_rx_error_t check_telegram(const uint8_t *b, uint16_t n, bool sum_known, uint8_t sum)
 {
     if (n == 0u || n > FDL_FRAME_MAX) {
         return FDL_RX_ERR_SD;
     }
-    if (b[0] != FDL_SD2) {
+    size_t from = FDL_SD1_SD3_HEADER_LEN;
+    switch (b[0]) {
+    case FDL_SD1:
+        if (n != FDL_SD1_LEN) {
+            return FDL_RX_ERR_SD;
+        }
+        break;
+    case FDL_SD3:
+        if (n != FDL_SD3_LEN) {
+            return FDL_RX_ERR_SD;
+        }
+        break;
+    case FDL_SD2:
+        if (n < FDL_SD2_OVERHEAD || b[1] != b[2] || b[1] < FDL_LE_MIN || b[1] > FDL_LE_MAX) {
+            return FDL_RX_ERR_LE;
+        }
+        if (b[3] != FDL_SD2) {
+            return FDL_RX_ERR_SD_REPEAT;
+        }
+        if (n != b[1] + FDL_SD2_OVERHEAD) {
+            return FDL_RX_ERR_LE;
+        }
+        from = FDL_SD2_HEADER_LEN;
+        break;
+    default: /* SD4 and SC carry no check octets */
         return length_for_sd(b[0]) == n ? FDL_RX_OK : FDL_RX_ERR_SD;
     }
-    if (n < FDL_SD2_OVERHEAD || b[1] != b[2] || b[1] < FDL_LE_MIN || b[1] > FDL_LE_MAX) {
-        return FDL_RX_ERR_LE;
+    size_t fcs_at = n - FDL_TRAILER_LEN;
+    if ((sum_known ? sum : fdl_fcs(&b[from], fcs_at - from)) != b[fcs_at]) {
+        return FDL_RX_ERR_FCS;
     }
-    if (b[3] != FDL_SD2) {
-        return FDL_RX_ERR_SD_REPEAT;
-    }
-    return n == b[1] + FDL_SD2_OVERHEAD ? FDL_RX_OK : FDL_RX_ERR_LE;
+    return b[n - 1u] == FDL_ED ? FDL_RX_OK : FDL_RX_ERR_ED;
 }
+
+#if FDL_RX_CHAR_INPUT
+static fdl_rx_result_t complete(fdl_rx_t *rx, hal_time_us_t t)
+{
+    fdl_rx_error_t e = check_telegram(rx->buf, rx->len, false, 0);
+    if (e != FDL_RX_OK) {
+        return fail(rx, e);
+    }
+    return accept(rx, rx->buf, rx->len, t, rx->idle_before_pending_ns);
+}
+#endif
 
 fdl_rx_result_t fdl_rx_telegram(fdl_rx_t *rx, const fdl_rx_telegram_t *tg)
 {
     fdl_rx_error_t e = tg->error;
     if (e == FDL_RX_OK) {
-        e = check_length(tg->buf, tg->len);
-    }
-    if (e == FDL_RX_OK) {
-        e = check_octets(tg->buf, tg->len, tg->sum_known, tg->sum);
+        e = check_telegram(tg->buf, tg->len, tg->sum_known, tg->sum);
     }
     if (e != FDL_RX_OK) {
         fdl_rx_result_t r = fail(rx, e);

@@ -30,13 +30,13 @@ static void select_baud(dp_slave_t *s, uint32_t baud)
     }
 }
 
-static uint32_t baud_control_us(const dp_slave_t *s)
+void fdl_station_watchdog_changed(dp_slave_t *s)
 {
     uint32_t ms = s->cfg.baud_control_ms != 0u ? s->cfg.baud_control_ms : DP_BAUD_CONTROL_MS_DEFAULT;
     if (s->wd_on && s->wd_time_ms * 2u > ms) {
         ms = s->wd_time_ms * 2u; /* never lose the rate before the DP watchdog could expire */
     }
-    return ms * 1000u;
+    s->baud_control_us = ms * 1000u;
 }
 
 void fdl_station_start_baud(dp_slave_t *s, hal_time_us_t now)
@@ -198,7 +198,7 @@ static void note_line_activity(dp_slave_t *s, uint8_t sd, hal_time_us_t t)
     s->line_active = true;
     if (s->baud_state == DP_BAUD_SEARCH) {
         s->baud_state = DP_BAUD_CONTROL;
-        s->baud_deadline = t + baud_control_us(s);
+        s->baud_deadline = t + s->baud_control_us;
         dp_slave_emit(s, DP_EV_BAUD_FOUND, t, s->baud, 0);
     }
 }
@@ -232,7 +232,7 @@ static bool accept_request(dp_slave_t *s, fdl_msg_t *m, hal_time_us_t t)
     if (!broadcast) {
         s->telegrams_for_me++;
         if (s->baud_state == DP_BAUD_CONTROL) {
-            s->baud_deadline = t + baud_control_us(s);
+            s->baud_deadline = t + s->baud_control_us;
         }
         if (!s->addressed_reported) {
             s->addressed_reported = true;
@@ -241,7 +241,7 @@ static bool accept_request(dp_slave_t *s, fdl_msg_t *m, hal_time_us_t t)
     }
     /* The DP watchdog counts any telegram of the owning master, whatever its service. */
     if (s->wd_on && s->state != DP_STATE_WAIT_PRM && m->sa == s->master_add) {
-        s->wd_deadline = t + s->wd_time_ms * 1000u;
+        s->wd_deadline = t + s->wd_time_us;
     }
     return true;
 }

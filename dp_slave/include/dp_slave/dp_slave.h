@@ -194,6 +194,7 @@ typedef struct dp_slave {
     uint8_t baud_index;
     uint32_t baud;
     hal_time_us_t baud_deadline;
+    uint32_t baud_control_us; /* how long the rate holds without a telegram for this station */
 
     /* FDL */
     uint8_t min_tsdr_bits;
@@ -219,6 +220,7 @@ typedef struct dp_slave {
     uint8_t dpv1_status[3];
     bool wd_on;
     uint32_t wd_time_ms;
+    uint32_t wd_time_us; /* kept, like baud_control_us, so the receive path does not multiply */
     hal_time_us_t wd_deadline;
     bool prm_fault;
     bool cfg_fault;
@@ -246,7 +248,8 @@ typedef struct dp_slave {
     bool ext_diag_overflow;
     dp_diag_buffer_t diag[DP_DIAG_BUFFERS];
     uint8_t diag_current;  /* the buffer with the newest framed diagnosis */
-    bool diag_framed;      /* diag[diag_current] holds ext_diag as it is now */
+    bool diag_framed; /* diag[diag_current] is the diagnosis as it is now: cleared by any
+                       * change made outside the receive path (which frames after each reply) */
     uint32_t diag_status;  /* the status octets and Master_Add framed there (diag_status_word) */
 
     bool dpv1_mode;   /* accepted Set_Prm had >= 10 octets and DPV1_Enable */

@@ -17,6 +17,17 @@ SysTick's instructions are left out everywhere (its own interrupt, at most one p
   (rs485_wait_until) counted as one pass, as at 12 Mbit/s where a fresh deadline has passed.
   Not counted: exception entries (12 cycles, 6 for the tail-chain into PendSV). Each reply is
   labelled by the core functions that ran for it (classify_funcs).
+- Work after the reply: a service that sends its reply early (Chk_Cfg, Data_Exchange) goes on
+  with the rest of its work, and the receive path frames the diagnosis again. Counted from the
+  reply's first DR write until the receive path is back in the queue drain, handler-mode
+  instructions outside the USART interrupt and outside tx_fill/tx_finish (POST_REPLY_BUDGET):
+  QEMU's USART takes the whole frame at once, so tx_fill's loop runs it out right after the
+  first write, where a real USART raises one TXE interrupt per character. On a line it cannot delay the
+  next reply: the next request cannot end sooner than our reply's first character, TSYN and the
+  shortest request (11 + 33 + 66 = 110 bit times at 12 Mbit/s, 1 540 cycles), and the budget
+  leaves room for that request's six character interrupts. QEMU's USART, though, delivers the
+  next request at once, so a reply whose request came in during that work would count it; those
+  instructions are counted here, not there.
 - Main-loop section: thread-mode instructions from an entry of core_enter (BASEPRI raised,
   PendSV held off) to the next entry of core_leave, interrupts left out. The main loop runs the
   core in such sections and lowers BASEPRI between them (dfp21b's preempt hook), so the longest
@@ -138,6 +149,7 @@ FAST_REPLY_BUDGET = 600  # FDL status, Slave_Diag, Data_Exchange, FCB repeat
 FAST_REPLY_KINDS = ("FDL status (SD1)", "Slave_Diag", "Data_Exchange", "repeat from the FCB cache")
 REPLY_BUDGET = 1330      # every reply: 95 bit times at 12 Mbit/s on a 168 MHz Cortex-M4 (VPC3+)
 LOOP_BUDGET = 500        # a main-loop section that can hold a reply off
+POST_REPLY_BUDGET = 1330 # work after a reply: done before the next request can end (see above)
 RAM_BUDGET = 6 * 1024
 FLASH_BUDGET = 24 * 1024
 RX_ISR_FUNCS = ("USART1_IRQHandler", "fdl_collect_slow", "fdl_collect_step", "rs485_uart_isr_other",
@@ -185,6 +197,12 @@ class Trace:
         self.isr_ranges = ranges(s, RX_ISR_FUNCS)
         self.slow_ranges = ranges(s, SLOW_FUNCS)
         self.hand_over = s["rs485_uart_rx_hand_over"][0]
+        drain = s["rs485_uart_rx_drain"]
+        self.drain = [(drain[0], drain[0] + drain[1])]
+        self.tx_isr_work = ranges(s, ("tx_fill", "tx_finish"))
+        self.post = None       # instructions after the last reply, until back in the drain
+        self.post_work = []
+        self.post_kind = None
         self.core_rx = s["dp_slave_rx_telegram"][0]
         self.backlog = 0
         self.wait = s["rs485_wait_until"]
@@ -233,6 +251,14 @@ class Trace:
                               "sent": False, "telegrams": 0}
             elif self.isr_kind == "interior" and inside(pc, self.slow_ranges):
                 self.isr_kind = "slow"
+        if self.post is not None and handler and self.isr_n is None:
+            if inside(pc, self.drain):
+                self.post_work.append((self.post, self.post_kind))
+                self.post = None
+            else:
+                if not inside(pc, self.tx_isr_work):
+                    self.post += 1
+                return
         r = self.reply
         if r is None or not handler or pc == self.hand_over:
             return
@@ -253,6 +279,8 @@ class Trace:
                 self.backlog += 1
             else:
                 self.results.append((classify_funcs(r["funcs"]), n))
+            self.post = 0
+            self.post_kind = classify_funcs(r["funcs"])
             self.reply = None
 
 
@@ -295,6 +323,12 @@ def report(t, caps, card):
         print("| %s | %d | %d | %d | %.2f | %s | %s |" % (
             kind, len(core[kind]), w, min(core[kind]), us, bits,
             check("reply " + kind, w, budget).split(" (")[1].rstrip(")")))
+    if t.post_work:
+        worst = max(t.post_work)
+        print("work after a reply, until the receive path is free for the next request: worst %s "
+              "(after %s), median %d, %d replies"
+              % (check("work after a reply", worst[0], POST_REPLY_BUDGET), worst[1],
+                 sorted(t.post_work)[len(t.post_work) // 2][0], len(t.post_work)))
     if not t.passes:
         sys.exit("reply_path_count: no complete main-loop section in the trace")
     print("main-loop section holding PendSV off (core_enter .. core_leave): "
