@@ -13,7 +13,7 @@
  * Python client and the dissector print "Rd_Inp"/"Rd_Outp" where the standard writes
  * "DDLM_RD_Inp"/"DDLM_RD_Outp", and "MSAC1"/"MSAC2" (the dissector's names of the SAPs) for the
  * slave-side MSAC1S/MSAC2S. Every other label is the name without "DDLM_". */
-static const dp_service_rule_t rules[DP_SERVICE_COUNT] = {
+const dp_service_rule_t dp_service_rules[DP_SERVICE_COUNT] = {
     /* Outputs are only taken from the master that parameterised the slave, in Data_Exch. */
     [DDLM_DATA_EXCHANGE] = {"DDLM_Data_Exchange", "Data_Exchange", false, DP_LOCK_OWNER_OR_RS,
                             {RS, RS, X}},
@@ -44,31 +44,6 @@ static const dp_service_rule_t rules[DP_SERVICE_COUNT] = {
 
 #undef X
 #undef RS
-
-dp_service_t dp_service_of(bool has_dsap, uint8_t dsap)
-{
-    if (!has_dsap) {
-        return DDLM_DATA_EXCHANGE;
-    }
-    switch (dsap) {
-    case DP_SAP_SET_PRM: return DDLM_SET_PRM;
-    case DP_SAP_CHK_CFG: return DDLM_CHK_CFG;
-    case DP_SAP_SLAVE_DIAG: return DDLM_SLAVE_DIAG;
-    case DP_SAP_GET_CFG: return DDLM_GET_CFG;
-    case DP_SAP_GLOBAL_CONTROL: return DDLM_GLOBAL_CONTROL;
-    case DP_SAP_RD_OUTP: return DDLM_RD_OUTP;
-    case DP_SAP_RD_INP: return DDLM_RD_INP;
-    case DP_SAP_SET_SLAVE_ADD: return DDLM_SET_SLAVE_ADD;
-    case DP_SAP_MSAC1: return MSAC1S;
-    default: break;
-    }
-    return dsap < DP_SAP_SET_SLAVE_ADD ? MSAC2S : DP_SERVICE_UNKNOWN;
-}
-
-const dp_service_rule_t *dp_service_rule(dp_service_t svc)
-{
-    return &rules[svc < DP_SERVICE_COUNT ? svc : DP_SERVICE_UNKNOWN];
-}
 
 const char *dp_service_name(dp_service_t svc)
 {

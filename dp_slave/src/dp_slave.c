@@ -93,8 +93,12 @@ static void give_outputs(dp_slave_t *s, const uint8_t *out, size_t len, dp_outpu
 
 static void clear_outputs(dp_slave_t *s, dp_outputs_reason_t why)
 {
-    /* Octets past out_len are never given or read, and a new out_len clears again. */
-    memset(s->outputs, 0, s->out_len);
+    /* Octets past out_len are never given or read, and a new out_len clears again. By words,
+     * not memset(): a watchdog expiry does this in a main-loop section with a budget. */
+    uint32_t *w = s->outputs_words;
+    for (size_t n = (s->out_len + 3u) / 4u; n > 0u; n--) {
+        *w++ = 0u;
+    }
     s->sync_latched = false; /* latched_outputs is written whole before it is latched again */
     give_outputs(s, s->outputs, s->out_len, why);
 }
@@ -116,7 +120,7 @@ static void set_state(dp_slave_t *s, dp_state_t next, hal_time_us_t t)
     s->diag_framed = false; /* the watchdog's expiry changes the state outside the receive path */
     if (next == DP_STATE_WAIT_PRM) {
         s->wd_on = false;
-        fdl_station_watchdog_changed(s);
+        s->baud_control_us = s->baud_control_base_us; /* what the rate holds without a watchdog */
         s->dpv1_mode = false;
     }
     if (s->cfg.hooks.event != NULL) {
@@ -138,6 +142,9 @@ void dp_slave_init(dp_slave_t *s, const dp_slave_cfg_t *cfg, hal_time_us_t now)
     s->state = DP_STATE_WAIT_PRM;
     s->master_add = DP_MASTER_ADD_NONE;
     s->min_tsdr_bits = FDL_MIN_TSDR_DEFAULT_BITS;
+    for (size_t i = 0; i < FDL_FCB_SLOTS; i++) {
+        s->fcb[i].master = FDL_FCB_FREE;
+    }
     if (cfg->default_cfg != NULL && cfg->default_cfg_len <= DP_MAX_CFG_LEN) {
         memcpy(s->cfg_data, cfg->default_cfg, cfg->default_cfg_len);
         s->cfg_len = cfg->default_cfg_len;
@@ -375,44 +382,66 @@ size_t dp_slave_build_diag(const dp_slave_t *s, uint8_t *out, size_t max)
     return n + ext;
 }
 
-/* Frames the diagnosis with DA and DSAP 0 into a buffer no cached reply points at. forget: on
- * the reply path, where the transmitter is done (a request came in after it), a buffer only a
- * retry points at may be taken; the retry then runs anew. The main loop waits instead. */
-static bool frame_diag(dp_slave_t *s, uint32_t status, bool forget)
+/* Frames the diagnosis with DA and DSAP 0 into the buffer the transmitter is not reading; a
+ * retry that pointed there runs anew and reads the diagnosis as it is now. */
+static void frame_diag(dp_slave_t *s, uint32_t status)
 {
     uint8_t i = (uint8_t)(s->diag_current ^ 1u);
-    if (fdl_station_references(s, s->diag[i].buf, false)) {
-        if (!fdl_station_references(s, s->diag[i ^ 1u].buf, false)) {
-            i ^= 1u;
-        } else if (forget) {
-            (void)fdl_station_references(s, s->diag[i].buf, true);
-        } else {
-            return false;
-        }
+    if (fdl_station_sending_from(s, s->diag[i].buf)) {
+        i ^= 1u;
     }
+    (void)fdl_station_references(s, s->diag[i].buf, true);
+    /* Written directly rather than by fdl_frame_in_place(): a watchdog expiry frames it in the
+     * main-loop section that changes the state, which must stay within its budget. Its length
+     * alone decides the delimiter: the six standard octets and the two SAPs make an SD3
+     * telegram, anything more an SD2 one (protocol.md §A1.2). */
+    _Static_assert(DP_DIAG_STD_LEN + 2u == FDL_SD3_DU_LEN, "a bare diagnosis is an SD3 telegram");
     dp_diag_buffer_t *d = &s->diag[i];
+    uint8_t ext = s->ext_diag_len;
     uint8_t *du = &d->buf[FDL_TX_HEADROOM];
     put_diag_status(du, status, s->cfg.ident);
-    memcpy(&du[DP_DIAG_STD_LEN], s->ext_diag, s->ext_diag_len);
-    size_t len;
-    const uint8_t *frame = fdl_frame_in_place(
-        d->buf, DP_DIAG_STD_LEN + (size_t)s->ext_diag_len,
-        (uint8_t)(fdl_fcs(du, DP_DIAG_STD_LEN) + s->ext_diag_sum), 0u, s->cfg.address,
-        FDL_RSP_DL, true, 0u, DP_SAP_SLAVE_DIAG, &len);
-    d->start = (uint8_t)(frame - d->buf);
-    d->len = (uint8_t)len;
-    d->sum_base = (uint8_t)(frame[len - FDL_TRAILER_LEN] - FDL_ADDR_EXT);
+    if (ext > 0u) {
+        memcpy(&du[DP_DIAG_STD_LEN], s->ext_diag, ext);
+    }
+    uint8_t *da = du - FDL_ADDR_FC_LEN - 2u;
+    da[0] = FDL_ADDR_EXT; /* DA and DSAP are the requester's, written per request */
+    da[1] = (uint8_t)(s->cfg.address | FDL_ADDR_EXT);
+    da[FDL_FC_FROM_DA] = FDL_RSP_DL;
+    da[FDL_ADDR_FC_LEN] = 0u;
+    da[FDL_ADDR_FC_LEN + 1u] = DP_SAP_SLAVE_DIAG;
+    uint8_t *start;
+    if (ext == 0u) {
+        start = da - FDL_SD1_SD3_HEADER_LEN;
+        start[0] = FDL_SD3;
+    } else {
+        start = da - FDL_SD2_HEADER_LEN;
+        start[0] = FDL_SD2;
+        start[1] = (uint8_t)(FDL_ADDR_FC_LEN + 2u + DP_DIAG_STD_LEN + ext);
+        start[2] = start[1];
+        start[3] = FDL_SD2;
+    }
+    /* The status word's four octets summed by one multiply (into its top octet). */
+    uint32_t sum = ((status * 0x01010101u) >> 24) + (s->cfg.ident >> 8) +
+                   (s->cfg.ident & 0xFFu) + s->ext_diag_sum + da[1] + FDL_RSP_DL +
+                   DP_SAP_SLAVE_DIAG;
+    uint8_t *end = &du[DP_DIAG_STD_LEN + ext];
+    end[0] = (uint8_t)(sum + FDL_ADDR_EXT);
+    end[1] = FDL_ED;
+    d->start = (uint8_t)(start - d->buf);
+    d->da_at = (uint8_t)(da - d->buf);
+    d->len = (uint8_t)(end + FDL_TRAILER_LEN - start);
+    d->sum_base = (uint8_t)sum;
     s->diag_current = i;
     s->diag_framed = true;
     s->diag_status = status;
-    return true;
 }
 
 void dp_slave_prepare(dp_slave_t *s)
 {
+    fdl_station_prepare(s);
     uint32_t status = diag_status_word(s);
     if (!s->diag_framed || status != s->diag_status) {
-        (void)frame_diag(s, status, false);
+        frame_diag(s, status);
     }
 }
 
@@ -425,11 +454,11 @@ static void svc_slave_diag(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
 {
     (void)t;
     if (!s->diag_framed) {
-        (void)frame_diag(s, diag_status_word(s), true);
+        frame_diag(s, diag_status_word(s));
     }
     dp_diag_buffer_t *d = &s->diag[s->diag_current];
     uint8_t *frame = &d->buf[d->start];
-    uint8_t *da = &frame[reply_da_at(frame)];
+    uint8_t *da = &d->buf[d->da_at];
     uint8_t dsap = (uint8_t)(m->ssap & FDL_AE_SAP_MASK);
     da[0] = (uint8_t)(m->sa | FDL_ADDR_EXT);
     da[FDL_ADDR_FC_LEN] = dsap;
@@ -693,6 +722,8 @@ hal_time_us_t dp_slave_poll(dp_slave_t *s, hal_time_us_t now)
             s->master_add = DP_MASTER_ADD_NONE;
             s->addressed_reported = false;
             set_state(s, DP_STATE_WAIT_PRM, now);
+            /* In the same section as the change: the first request after it may be waiting. */
+            dp_slave_prepare(s);
         } else {
             next = hal_time_earlier(next, s->wd_deadline);
         }

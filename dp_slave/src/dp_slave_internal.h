@@ -38,6 +38,14 @@ bool fdl_station_references(dp_slave_t *s, const uint8_t *buf, bool forget);
 void fdl_station_frame(dp_slave_t *s);
 /* The rate or min TSDR changed: recompute what the reply path needs of them. */
 void fdl_station_timing_changed(dp_slave_t *s);
+/* Whether the frame last handed to the transmitter (which it may still be sending) lies in the
+ * reply buffer buf: one a new request has not yet proven finished. */
+static inline bool fdl_station_sending_from(const dp_slave_t *s, const uint8_t *buf)
+{
+    return (uintptr_t)s->tx_last - (uintptr_t)buf < FDL_TX_HEADROOM;
+}
+/* After a reply: the FCB slot a new master would take over. */
+void fdl_station_prepare(dp_slave_t *s);
 /* After wd_on or wd_time_ms changed: the baud control time follows the watchdog. */
 void fdl_station_watchdog_changed(dp_slave_t *s);
 /* FDL station: baud search start and its timers; returns the merged next deadline. */

@@ -49,7 +49,9 @@ static fdl_parse_result_t take_extension(const uint8_t *du, size_t du_len, size_
 
 /* DA SA FC at addr[0..2] and the du_len octets after them: DAE octets come first, then SAE
  * octets (protocol.md §A1.3). The first error found is returned. */
-static fdl_parse_result_t parse_addressing(const uint8_t *addr, size_t du_len, fdl_msg_t *msg)
+/* Inlined into fdl_parse(): it is on every reply path. */
+static inline __attribute__((always_inline)) fdl_parse_result_t
+parse_addressing(const uint8_t *addr, size_t du_len, fdl_msg_t *msg)
 {
     uint8_t da = addr[0];
     uint8_t sa = addr[1];

@@ -59,9 +59,11 @@ static fdl_rx_result_t accept(fdl_rx_t *rx, const uint8_t *frame, uint16_t n, ha
     rx->frame_len = n;
     rx->frame_end_t = t;
     rx->idle_before_ns = idle_before_ns;
-    rx->collecting = false;
+#if FDL_RX_CHAR_INPUT
+    rx->collecting = false; /* the character assembler's state; whole telegrams never touch it */
     rx->len = 0;
     rx->expected = 0;
+#endif
     rx->synced = true;
     rx->last_error = FDL_RX_OK;
     return FDL_RX_FRAME;

@@ -33,6 +33,7 @@ static void select_baud(dp_slave_t *s, uint32_t baud)
 void fdl_station_watchdog_changed(dp_slave_t *s)
 {
     uint32_t ms = s->cfg.baud_control_ms != 0u ? s->cfg.baud_control_ms : DP_BAUD_CONTROL_MS_DEFAULT;
+    s->baud_control_base_us = ms * 1000u;
     if (s->wd_on && s->wd_time_ms * 2u > ms) {
         ms = s->wd_time_ms * 2u; /* never lose the rate before the DP watchdog could expire */
     }
@@ -126,49 +127,57 @@ void fdl_station_reply_rs(dp_slave_t *s, const fdl_msg_t *m)
 
 /* ---- FCB retry cache (protocol.md §A1.5) -------------------------------------------------- */
 
-/* The master's slot, or the least recently used one taken over for it. The clock ticks when
- * the master served changes, not per request, so the usual case (one owner polling) is a single
- * comparison; a slot's age is the clock minus its stamp, which survives the clock's wrap. */
+/* The master's slot, or the least recently used one taken over for it (fcb_victim, worked out
+ * after the reply by fdl_station_prepare()). The clock ticks when the master served changes, not
+ * per request, so the usual case (one owner polling) is a single comparison; a slot's age is the
+ * clock minus its stamp, which survives the clock's wrap. */
 static fdl_fcb_slot_t *fcb_slot(dp_slave_t *s, uint8_t master)
 {
-    fdl_fcb_slot_t *e = &s->fcb[s->fcb_last];
-    if (e->used && e->master == master) {
-        return e;
+    fdl_fcb_slot_t *take = &s->fcb[s->fcb_last];
+    if (take->master == master) {
+        return take;
     }
-    uint32_t now = ++s->fcb_clock;
-    size_t take = 0;
-    uint32_t oldest_age = 0;
-    for (size_t i = 0; i < FDL_FCB_SLOTS; i++) {
-        e = &s->fcb[i];
-        if (e->used && e->master == master) {
-            take = i;
-            break;
+    uint8_t i = 0;
+    while (i < FDL_FCB_SLOTS && s->fcb[i].master != master) {
+        i++; /* a master switching back (class 1 and class 2 in turn) */
+    }
+    if (i == FDL_FCB_SLOTS) {
+        i = s->fcb_victim;
+        take = &s->fcb[i];
+        take->master = master;
+        take->fcb_valid = false;
+        take->reply_len = 0;
+    }
+    take = &s->fcb[i];
+    take->stamp = ++s->fcb_clock;
+    s->fcb_last = i;
+    s->fcb_victim_stale = true;
+    return take;
+}
+
+void fdl_station_prepare(dp_slave_t *s)
+{
+    if (!s->fcb_victim_stale) {
+        return;
+    }
+    /* A free slot (master FDL_FCB_FREE, stamp 0) is older than any used one until the clock
+     * first wraps, and no slot is free by then. */
+    uint32_t now = s->fcb_clock;
+    uint8_t victim = 0;
+    for (uint8_t i = 1; i < FDL_FCB_SLOTS; i++) {
+        if (now - s->fcb[i].stamp > now - s->fcb[victim].stamp) {
+            victim = i;
         }
-        uint32_t age = e->used ? now - e->stamp : UINT32_MAX;
-        if (age > oldest_age) {
-            oldest_age = age;
-            take = i;
-        }
     }
-    e = &s->fcb[take];
-    if (!e->used || e->master != master) {
-        e->used = true;
-        e->master = master;
-        e->fcb_valid = false;
-        e->reply_len = 0;
-    }
-    e->stamp = now;
-    s->fcb_last = (uint8_t)take;
-    return e;
+    s->fcb_victim = victim;
+    s->fcb_victim_stale = false;
 }
 
 bool fdl_station_references(dp_slave_t *s, const uint8_t *buf, bool forget)
 {
     bool found = false;
-    for (size_t i = 0; i < FDL_FCB_SLOTS; i++) {
-        fdl_fcb_slot_t *e = &s->fcb[i];
-        if (e->used && e->reply_len > 0u &&
-            (uintptr_t)e->reply - (uintptr_t)buf < FDL_TX_HEADROOM) {
+    for (fdl_fcb_slot_t *e = &s->fcb[0]; e < &s->fcb[FDL_FCB_SLOTS]; e++) {
+        if (e->reply_len > 0u && (uintptr_t)e->reply - (uintptr_t)buf < FDL_TX_HEADROOM) {
             found = true;
             if (forget) {
                 e->reply_len = 0;
@@ -186,6 +195,7 @@ static void transmit(dp_slave_t *s, const uint8_t *frame, size_t len, hal_time_u
         return;
     }
     hal_time_us_t not_before = request_end + s->min_tsdr_us;
+    s->tx_last = frame;
     (void)s->cfg.uart.ops->transmit(s->cfg.uart.ctx, frame, len, not_before);
 }
 
@@ -212,7 +222,7 @@ static bool tsyn_violated(const dp_slave_t *s)
 }
 
 /* Parses the telegram and keeps it if it is a request for this station or a broadcast. */
-static bool accept_request(dp_slave_t *s, fdl_msg_t *m, hal_time_us_t t)
+static bool accept_request(dp_slave_t *s, fdl_msg_t *m, hal_time_us_t t, bool *first)
 {
     if (fdl_parse(s->rx.frame, s->rx.frame_len, m) != FDL_PARSE_OK) {
         return false;
@@ -236,7 +246,7 @@ static bool accept_request(dp_slave_t *s, fdl_msg_t *m, hal_time_us_t t)
         }
         if (!s->addressed_reported) {
             s->addressed_reported = true;
-            dp_slave_emit(s, DP_EV_ADDRESSED, t, m->fc, m->sa);
+            *first = true; /* reported after the reply, which does not wait for the LEDs */
         }
     }
     /* The DP watchdog counts any telegram of the owning master, whatever its service. */
@@ -255,8 +265,8 @@ static void serve_srd(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
     fdl_fcb_slot_t *slot = fcb_slot(s, m->sa);
     if (fcv && slot->fcb_valid && slot->fcb == fcb && slot->reply_len > 0u &&
         (slot->guard == NULL || *slot->guard == slot->guard_value)) {
-        dp_slave_emit(s, DP_EV_FCB_REPEAT, t, m->fc, m->sa);
         transmit(s, slot->reply, slot->reply_len, t);
+        dp_slave_emit(s, DP_EV_FCB_REPEAT, t, m->fc, m->sa); /* after: the reply does not wait */
         return;
     }
     slot->reply_len = 0; /* its buffer is about to be written */
@@ -289,7 +299,8 @@ void fdl_station_frame(dp_slave_t *s)
     hal_time_us_t t = s->rx.frame_end_t;
     note_line_activity(s, s->rx.frame[0], t);
     fdl_msg_t m;
-    if (!accept_request(s, &m, t)) {
+    bool first = false;
+    if (!accept_request(s, &m, t, &first)) {
         return;
     }
     bool broadcast = m.da == FDL_ADDR_BROADCAST;
@@ -299,24 +310,27 @@ void fdl_station_frame(dp_slave_t *s)
             fdl_station_reply_framed(s, &m, FDL_RSP_OK, false, s->tx_scratch, 0, 0);
             transmit(s, s->tx, s->tx_len, t);
         }
-        return;
+        break;
     case FDL_REQ_SDN_LOW:
     case FDL_REQ_SDN_HIGH:
         s->tx_buf = s->tx_scratch; /* an SDN has no reply; nothing may be built in a slot */
         dp_slave_request(s, &m, true, t);
-        return;
+        break;
     case FDL_REQ_SRD_LOW:
     case FDL_REQ_SRD_HIGH:
         if (!broadcast) { /* a request with reply cannot go to everybody */
             serve_srd(s, &m, t);
         }
-        return;
+        break;
     default:
         if (!broadcast) {
             s->tx_buf = s->tx_scratch;
             fdl_station_reply_rs(s, &m);
             transmit(s, s->tx, s->tx_len, t);
         }
-        return;
+        break;
+    }
+    if (first) {
+        dp_slave_emit(s, DP_EV_ADDRESSED, t, m.fc, m.sa);
     }
 }

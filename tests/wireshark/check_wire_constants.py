@@ -8,8 +8,8 @@ takes them from fdl_wire.h, dp_wire.h, dpv1_wire.h and movilink_wire.h. Each C m
 looked up in its Lua table by the name the dissector shows for it, and the two values must
 agree; where a Lua table should hold nothing but header codes, every entry must be claimed by a
 macro. The names of the DDLM services are not listed here: they are the labels of the card's
-service table (dp_slave/src/dp_services.c), looked up at the SAP dp_service_of() maps to that
-service, so the dissector, the host tools and the card name a service alike. Exit status 1 and
+service table (dp_slave/src/dp_services.c), looked up at the SAP dp_service_of() (inline in
+dp_services.h) maps to that service, so the dissector, the host tools and the card name a service alike. Exit status 1 and
 one line per disagreement otherwise.
 
 Usage: check_wire_constants.py REPO_ROOT
@@ -194,7 +194,9 @@ def service_table(root, problems):
             problems.append("%s %s: label %s is not a string macro of %s" % (
                 SERVICES_C, svc, macro, SERVICES_H))
         rows[svc] = (name, literals.get(macro, "") if macro else label)
-    body = re.search(r"dp_service_of\s*\([^)]*\)\s*\{(.*?)\n\}", text, flags=re.S)
+    # dp_service_of() is inline in the header: it is on the slave's reply path.
+    body = re.search(r"dp_service_of\s*\([^)]*\)\s*\{(.*?)\n\}", c_source(root, SERVICES_H),
+                     flags=re.S)
     cases = re.findall(r"case\s+(DP_SAP_\w+)\s*:\s*return\s+(\w+)\s*;",
                        body.group(1) if body else "")
     if not rows or not cases:

@@ -12,6 +12,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "dp_slave/dp_wire.h"
+
 typedef enum dp_service {
     DDLM_DATA_EXCHANGE = 0, /* no SAP ("default SAP") */
     DDLM_SET_PRM,           /* SAP 61 */
@@ -54,9 +56,34 @@ typedef struct dp_service_rule {
     dp_state_rule_t in_state[DP_STATE_COUNT];
 } dp_service_rule_t;
 
+/* The table (dp_services.c); inline lookups, as they are on every reply path. */
+extern const dp_service_rule_t dp_service_rules[DP_SERVICE_COUNT];
+
 /* The service a request addresses: by its DSAP, or Data_Exchange when it has none. */
-dp_service_t dp_service_of(bool has_dsap, uint8_t dsap);
-const dp_service_rule_t *dp_service_rule(dp_service_t svc);
+static inline dp_service_t dp_service_of(bool has_dsap, uint8_t dsap)
+{
+    if (!has_dsap) {
+        return DDLM_DATA_EXCHANGE;
+    }
+    switch (dsap) {
+    case DP_SAP_SET_PRM: return DDLM_SET_PRM;
+    case DP_SAP_CHK_CFG: return DDLM_CHK_CFG;
+    case DP_SAP_SLAVE_DIAG: return DDLM_SLAVE_DIAG;
+    case DP_SAP_GET_CFG: return DDLM_GET_CFG;
+    case DP_SAP_GLOBAL_CONTROL: return DDLM_GLOBAL_CONTROL;
+    case DP_SAP_RD_OUTP: return DDLM_RD_OUTP;
+    case DP_SAP_RD_INP: return DDLM_RD_INP;
+    case DP_SAP_SET_SLAVE_ADD: return DDLM_SET_SLAVE_ADD;
+    case DP_SAP_MSAC1: return MSAC1S;
+    default: break;
+    }
+    return dsap < DP_SAP_SET_SLAVE_ADD ? MSAC2S : DP_SERVICE_UNKNOWN;
+}
+
+static inline const dp_service_rule_t *dp_service_rule(dp_service_t svc)
+{
+    return &dp_service_rules[(unsigned)svc < DP_SERVICE_COUNT ? svc : DP_SERVICE_UNKNOWN];
+}
 const char *dp_service_name(dp_service_t svc);
 /* The short name host tools print (logs, replay report, dissector): the standard's name without
  * "DDLM_", in the spelling those tools have always used. */

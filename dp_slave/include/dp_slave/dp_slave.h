@@ -148,8 +148,8 @@ typedef struct dp_slave_cfg {
 
 /* One master's FCB state and its last reply (IEC 61158-4-3 frame count bit): a retry is
  * answered by pointing the transmitter at the same octets again, never by building it anew. */
+#define FDL_FCB_FREE 0xFFu /* the master of a slot no master used yet */
 typedef struct fdl_fcb_slot {
-    bool used;
     bool fcb_valid;
     uint8_t master;
     uint8_t fcb;
@@ -180,6 +180,7 @@ typedef struct dp_dx_buffer {
 #define DP_DIAG_BUFFERS 2u
 typedef struct dp_diag_buffer {
     uint8_t start;    /* the frame's first octet in buf */
+    uint8_t da_at;    /* where in buf the requester's address goes */
     uint8_t len;      /* its length */
     uint8_t sum_base; /* its check octet without the requester's address and SAP */
     uint8_t buf[FDL_TX_BUF_LEN(DP_DIAG_STD_LEN + DP_MAX_EXT_DIAG_LEN)];
@@ -195,12 +196,15 @@ typedef struct dp_slave {
     uint32_t baud;
     hal_time_us_t baud_deadline;
     uint32_t baud_control_us; /* how long the rate holds without a telegram for this station */
+    uint32_t baud_control_base_us; /* the same without a watchdog */
 
     /* FDL */
     uint8_t min_tsdr_bits;
     uint32_t min_tsdr_us; /* min_tsdr_bits at baud, kept so the reply path does not divide */
     fdl_fcb_slot_t fcb[FDL_FCB_SLOTS];
     uint8_t fcb_last; /* the slot served last: the one fcb_slot() tries first */
+    uint8_t fcb_victim; /* the least recently used slot, which a new master takes over */
+    bool fcb_victim_stale;
     uint32_t fcb_clock; /* ticks when the master served changes (least recently used order) */
     /* The reply of the request being served: where it is built (a slot's buffer, or scratch for
      * replies that are never repeated) and, once built, the octets to send. */
@@ -208,6 +212,7 @@ typedef struct dp_slave {
     const uint8_t *tx;
     uint16_t tx_len;
     bool tx_sent; /* the SRD's reply went out early (fdl_station_send_now) */
+    const uint8_t *tx_last; /* the frame last handed to the transmitter */
     const volatile uint8_t *tx_guard;
     uint8_t tx_guard_value;
     uint8_t tx_scratch[FDL_TX_BUF_LEN(0u)];
@@ -235,7 +240,10 @@ typedef struct dp_slave {
     uint8_t cfg_len;
     uint8_t out_len;
     uint8_t in_len;
-    uint8_t outputs[DP_MAX_IO_LEN];
+    union { /* words, so clear_outputs() zeroes four octets a step */
+        uint8_t outputs[DP_MAX_IO_LEN];
+        uint32_t outputs_words[(DP_MAX_IO_LEN + 3u) / 4u];
+    };
     uint8_t latched_outputs[DP_MAX_IO_LEN];
     uint8_t inputs[DP_MAX_IO_LEN];
     uint8_t frozen_inputs[DP_MAX_IO_LEN];
@@ -277,7 +285,7 @@ void dp_slave_set_ext_diag(dp_slave_t *s, const uint8_t *diag, size_t len);
 void dp_slave_set_stat_diag(dp_slave_t *s, bool on);
 
 /* Frames ahead the replies whose content changed (the diagnosis), so the reply path only
- * addresses them. The receive path calls it after each reply; the main loop calls it after
+ * addresses them, and picks the FCB slot a new master would take over. The receive path calls it after each reply; the main loop calls it after
  * changing the extended diagnosis. Without it the replies are right, only slower. */
 void dp_slave_prepare(dp_slave_t *s);
 

@@ -244,6 +244,7 @@ static void hook_event(void *ctx, const dp_event_t *ev)
     }
     switch (ev->type) {
     case DP_EV_WD_EXPIRED:
+        leds_change = false; /* the state change that always follows updates them */
         c->master_lost = true;
         c->fieldbus_timeout = true;
         if (c->cfg.app.fieldbus_timeout != NULL) {
@@ -463,8 +464,9 @@ static void take_outputs(dfp21b_t *c, hal_time_us_t now)
     c->inputs_dirty = true;
 }
 
-/* The input image the next Data_Exchange reply carries: parameter reply + PI words. */
-static void build_inputs(dfp21b_t *c)
+/* The input image the next Data_Exchange reply carries: parameter reply + PI words. Returns its
+ * length. */
+static size_t build_inputs(dfp21b_t *c)
 {
     size_t off = c->pd.param_channel ? DFP21B_PARAM_LEN : 0u;
     uint8_t n = c->pd.valid ? c->pd.pd_words : 0u;
@@ -475,8 +477,7 @@ static void build_inputs(dfp21b_t *c)
     for (uint8_t i = 0; i < n; i++) {
         hal_put_be16(&c->in_image[off + 2u * (size_t)i], c->pi[i]);
     }
-    dp_slave_set_inputs(&c->dp, c->in_image, off + 2u * (size_t)n);
-    c->inputs_dirty = false;
+    return off + 2u * (size_t)n;
 }
 
 void dfp21b_inverter_param_response(dfp21b_t *c, uint8_t channel,
@@ -564,7 +565,10 @@ hal_time_us_t dfp21b_poll(dfp21b_t *c, hal_time_us_t now)
     }
     preempt(c);
     if (c->inputs_dirty) {
-        build_inputs(c);
+        size_t len = build_inputs(c);
+        preempt(c); /* framing the longest image is a section of its own */
+        dp_slave_set_inputs(&c->dp, c->in_image, len);
+        c->inputs_dirty = false;
     }
     preempt(c);
     dp_slave_prepare(&c->dp);

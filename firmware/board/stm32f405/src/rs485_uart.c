@@ -179,14 +179,15 @@ static unsigned rx_buf_index(const rs485_uart_t *u, const uint8_t *buf)
     return (unsigned)((size_t)(buf - &u->rx_buf[0][0]) / FDL_FRAME_MAX);
 }
 
-static void rx_queue_put(rs485_uart_t *u, const fdl_rx_telegram_t *tg)
+static inline __attribute__((always_inline)) void rx_queue_put(rs485_uart_t *u,
+                                                                const fdl_rx_telegram_t *tg)
 {
     uint32_t head = atomic_load_explicit(&u->rx_head, memory_order_relaxed);
     u->rx_queue[head % RS485_RX_QUEUE] = *tg;
     atomic_store_explicit(&u->rx_head, head + 1u, memory_order_release);
 }
 
-static bool rx_queue_full(const rs485_uart_t *u)
+static inline __attribute__((always_inline)) bool rx_queue_full(const rs485_uart_t *u)
 {
     return atomic_load_explicit(&u->rx_head, memory_order_relaxed) -
                atomic_load_explicit(&u->rx_tail, memory_order_acquire) >=

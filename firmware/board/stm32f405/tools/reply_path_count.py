@@ -247,8 +247,12 @@ class Trace:
             self.isr_n += 1
             if pc == self.hand_over:
                 self.isr_kind = "hand-over"
+                # a request whose reply was still being worked on got none (the transmitter
+                # refuses a reply once the next request is in): the master, slowed by QEMU,
+                # had sent again, and that work is not this reply's
+                late = self.reply is not None and self.reply["telegrams"] > 0
                 self.reply = {"n": self.isr_n, "funcs": set(), "wait": 0, "wait_last": 0,
-                              "sent": False, "telegrams": 0}
+                              "sent": False, "telegrams": 1 if late else 0}
             elif self.isr_kind == "interior" and inside(pc, self.slow_ranges):
                 self.isr_kind = "slow"
         if self.post is not None and handler and self.isr_n is None:
@@ -262,6 +266,8 @@ class Trace:
         r = self.reply
         if r is None or not handler or pc == self.hand_over:
             return
+        if not r["sent"] and inside(pc, self.tx_isr_work):
+            return  # an earlier frame still going out (QEMU: all at once; a USART: per TXE)
         r["n"] += 1
         r["funcs"].add(func)
         if self.wait[0] <= pc < self.wait[0] + self.wait[1]:
