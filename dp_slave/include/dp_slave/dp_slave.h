@@ -144,7 +144,7 @@ typedef struct dp_slave_cfg {
 /* The largest DU a reply is built from in a slot's own buffer: Get_Cfg, RD_Inp, RD_Outp, a
  * short SAP reply (Data_Exchange, Slave_Diag and DP-V1 responses are framed where they lie). */
 #define DP_MAX2_(a, b) ((a) > (b) ? (a) : (b))
-#define FDL_SLOT_DU_MAX DP_MAX2_(DP_MAX2_(DP_MAX_CFG_LEN, DP_MAX_IO_LEN), DP_SAP_REPLY_SHORT + 2u)
+#define FDL_SLOT_DU_MAX DP_MAX2_(DP_MAX2_(DP_MAX_CFG_LEN, DP_SAP_REPLY_SHORT + 2u), DP_MAX_IO_LEN)
 
 /* One master's FCB state and its last reply (IEC 61158-4-3 frame count bit): a retry is
  * answered by pointing the transmitter at the same octets again, never by building it anew. */
