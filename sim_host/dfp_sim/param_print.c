@@ -41,7 +41,7 @@ typedef struct im0_texts {
     char sw[24];
 } im0_texts_t;
 
-static void im0_texts(const dpm_im0_t *im0, im0_texts_t *t)
+static void im0_texts(const dp_master_im0_t *im0, im0_texts_t *t)
 {
     trimmed(t->order, sizeof t->order, im0->order_id);
     trimmed(t->serial, sizeof t->serial, im0->serial_number);
@@ -93,7 +93,7 @@ static void value_line(const md_param_info_t *info, uint32_t value, char *out, s
     }
 }
 
-static void print_im0_json(const dpm_im0_t *im0)
+static void print_im0_json(const dp_master_im0_t *im0)
 {
     im0_texts_t t;
     im0_texts(im0, &t);
@@ -152,7 +152,7 @@ static void print_json(const run_t *run, unsigned i, const param_name_t *pn, boo
     printf("}\n");
 }
 
-static void print_im0_text(const char *what, const dpm_im0_t *im0)
+static void print_im0_text(const char *what, const dp_master_im0_t *im0)
 {
     im0_texts_t t;
     im0_texts(im0, &t);

@@ -175,7 +175,7 @@ cJSON *http_json_card(const rig_snap_card_t *c)
     return o;
 }
 
-/* Stable identifiers for scripts; dpm_phase_name() is the log's wording. */
+/* Stable identifiers for scripts; dp_master_phase_name() is the log's wording. */
 static const char *phase_id(uint8_t p)
 {
     static const char *const ids[] = {"BACKOFF", "FDL_STATUS", "DIAG_1",    "SET_PRM",

@@ -13,22 +13,22 @@
 
 /* A phase that sends a DDLM service is named by the service table (dp_services.h); the phases
  * around them are the master's own. */
-const char *dpm_phase_name(dpm_phase_t p)
+const char *dp_master_phase_name(dp_master_phase_t p)
 {
     switch (p) {
-    case DPM_PHASE_BACKOFF: return "back-off";
-    case DPM_PHASE_FDL_STATUS: return "FDL status";
-    case DPM_PHASE_DIAG_1: return dp_service_label(DDLM_SLAVE_DIAG);
-    case DPM_PHASE_SET_PRM: return dp_service_label(DDLM_SET_PRM);
-    case DPM_PHASE_CHK_CFG: return dp_service_label(DDLM_CHK_CFG);
-    case DPM_PHASE_DATA_EXCH: return dp_service_label(DDLM_DATA_EXCHANGE);
-    case DPM_PHASE_DIAG_2: return DP_SERVICE_LABEL_SLAVE_DIAG " (check)";
-    case DPM_PHASE_DIAG_DX: return DP_SERVICE_LABEL_SLAVE_DIAG " (DH)";
+    case DP_MASTER_PHASE_BACKOFF: return "back-off";
+    case DP_MASTER_PHASE_FDL_STATUS: return "FDL status";
+    case DP_MASTER_PHASE_DIAG_1: return dp_service_label(DDLM_SLAVE_DIAG);
+    case DP_MASTER_PHASE_SET_PRM: return dp_service_label(DDLM_SET_PRM);
+    case DP_MASTER_PHASE_CHK_CFG: return dp_service_label(DDLM_CHK_CFG);
+    case DP_MASTER_PHASE_DATA_EXCH: return dp_service_label(DDLM_DATA_EXCHANGE);
+    case DP_MASTER_PHASE_DIAG_2: return DP_SERVICE_LABEL_SLAVE_DIAG " (check)";
+    case DP_MASTER_PHASE_DIAG_DX: return DP_SERVICE_LABEL_SLAVE_DIAG " (DH)";
     }
     return "?";
 }
 
-size_t dpm_build_prm(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
+size_t dp_master_build_prm(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
                      size_t user_len)
 {
     uint32_t units = (wd_ms + 9u) / 10u; /* 10 ms base */
@@ -50,17 +50,17 @@ size_t dpm_build_prm(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t
     out[DP_PRM_IDENT_HIGH] = (uint8_t)(ident >> 8);
     out[DP_PRM_IDENT_LOW] = (uint8_t)(ident & 0xFFu);
     out[DP_PRM_GROUP_IDENT] = 0;
-    if (user_len > DPM_MAX_PRM - DP_PRM_LEN_STANDARD) {
-        user_len = DPM_MAX_PRM - DP_PRM_LEN_STANDARD;
+    if (user_len > DP_MASTER_MAX_PRM - DP_PRM_LEN_STANDARD) {
+        user_len = DP_MASTER_MAX_PRM - DP_PRM_LEN_STANDARD;
     }
     memcpy(&out[DP_PRM_LEN_STANDARD], user, user_len);
     return DP_PRM_LEN_STANDARD + user_len;
 }
 
-size_t dpm_build_prm_dpv1(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
+size_t dp_master_build_prm_dpv1(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
                           size_t user_len)
 {
-    uint8_t u[DPM_MAX_PRM - DP_PRM_LEN_STANDARD] = {0};
+    uint8_t u[DP_MASTER_MAX_PRM - DP_PRM_LEN_STANDARD] = {0};
     if (user_len > sizeof u) {
         user_len = sizeof u;
     }
@@ -69,28 +69,28 @@ size_t dpm_build_prm_dpv1(uint8_t *out, uint16_t ident, uint32_t wd_ms, const ui
     }
     size_t n = user_len < 3u ? 3u : user_len; /* DPV1_Status_1..3 at least */
     u[0] |= DP_DPV1_1_ENABLE;
-    return dpm_build_prm(out, ident, wd_ms, u, n);
+    return dp_master_build_prm(out, ident, wd_ms, u, n);
 }
 
-bool dpm_prm_is_dpv1(const uint8_t *prm, size_t len)
+bool dp_master_prm_is_dpv1(const uint8_t *prm, size_t len)
 {
     return len >= DP_PRM_LEN_DPV1 && (prm[DP_PRM_DPV1_STATUS_1] & DP_DPV1_1_ENABLE) != 0u;
 }
 
-static void emit(dp_master_t *m, const dpm_event_t *ev)
+static void emit(dp_master_t *m, const dp_master_event_t *ev)
 {
     if (m->cfg.event != NULL) {
         m->cfg.event(m->cfg.event_ctx, ev);
     }
 }
 
-static void set_phase(dp_master_t *m, unsigned idx, dpm_phase_t next, hal_time_us_t t)
+static void set_phase(dp_master_t *m, unsigned idx, dp_master_phase_t next, hal_time_us_t t)
 {
-    dpm_slave_t *s = &m->slaves[idx];
+    dp_master_slave_t *s = &m->slaves[idx];
     if (s->phase == next) {
         return;
     }
-    dpm_event_t ev = {.type = DPM_EV_PHASE, .t = t, .slave = s->cfg.address,
+    dp_master_event_t ev = {.type = DP_MASTER_EV_PHASE, .t = t, .slave = s->cfg.address,
                       .old_phase = s->phase, .new_phase = next};
     s->phase = next;
     emit(m, &ev);
@@ -98,22 +98,23 @@ static void set_phase(dp_master_t *m, unsigned idx, dpm_phase_t next, hal_time_u
 
 /* MSAC1 closes when the slave leaves Data_Exch: a request the card already took is lost. One
  * not sent yet waits for the next Data_Exch. */
-static void c1_lost(dpm_slave_t *s, hal_time_us_t t, const char *why)
+static void c1_lost(dp_master_slave_t *s, hal_time_us_t t, const char *why)
 {
     s->c1_turn = false;
-    if (dpm_xfer_busy(&s->c1) && s->c1.started) {
-        dpm_xfer_fail(&s->c1, t, "slave %u restarted (%s); the request is lost", s->cfg.address,
-                      why);
+    if (dp_master_xfer_busy(&s->c1) && s->c1.started) {
+        dp_master_xfer_fail(&s->c1, t, "slave %u restarted (%s); the request is lost",
+                            s->cfg.address, why);
     }
 }
 
 static void restart_slave(dp_master_t *m, unsigned idx, hal_time_us_t t, const char *why)
 {
-    dpm_slave_t *s = &m->slaves[idx];
-    bool lost = s->phase == DPM_PHASE_FDL_STATUS;
+    dp_master_slave_t *s = &m->slaves[idx];
+    bool lost = s->phase == DP_MASTER_PHASE_FDL_STATUS;
     (void)snprintf(s->fault, sizeof s->fault, "%s", why);
-    dpm_event_t ev = {.type = DPM_EV_FAULT, .t = t, .slave = s->cfg.address, .text = s->fault,
-                      .old_phase = s->phase, .new_phase = DPM_PHASE_BACKOFF};
+    dp_master_event_t ev = {.type = DP_MASTER_EV_FAULT, .t = t, .slave = s->cfg.address,
+                            .text = s->fault, .old_phase = s->phase,
+                            .new_phase = DP_MASTER_PHASE_BACKOFF};
     emit(m, &ev);
     s->restarts++;
     s->fcb_first = true;
@@ -127,7 +128,7 @@ static void restart_slave(dp_master_t *m, unsigned idx, hal_time_us_t t, const c
         s->backoff_us = s->backoff_us * 2u > m->cfg.backoff_max_us ? m->cfg.backoff_max_us
                                                                    : s->backoff_us * 2u;
     }
-    set_phase(m, idx, DPM_PHASE_BACKOFF, t);
+    set_phase(m, idx, DP_MASTER_PHASE_BACKOFF, t);
     c1_lost(s, t, why);
 }
 
@@ -145,7 +146,7 @@ void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t no
     if (m->cfg.backoff_min_us == 0u) m->cfg.backoff_min_us = 10000u;
     if (m->cfg.backoff_max_us == 0u) m->cfg.backoff_max_us = 1000000u;
     if (m->cfg.lost_poll_us == 0u) m->cfg.lost_poll_us = 5000u;
-    if (m->cfg.c1_timeout_us == 0u) m->cfg.c1_timeout_us = DPM_C1_TIMEOUT_US_DEFAULT;
+    if (m->cfg.c1_timeout_us == 0u) m->cfg.c1_timeout_us = DP_MASTER_C1_TIMEOUT_US_DEFAULT;
     fdl_rx_init(&m->rx, cfg->baud, cfg->strict_timing);
     if (cfg->uart.ops != NULL && cfg->uart.ops->set_baud != NULL) {
         (void)cfg->uart.ops->set_baud(cfg->uart.ctx, cfg->baud);
@@ -154,9 +155,9 @@ void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t no
     m->next_send = now;
 }
 
-int dp_master_add_slave(dp_master_t *m, const dpm_slave_cfg_t *sc)
+int dp_master_add_slave(dp_master_t *m, const dp_master_slave_cfg_t *sc)
 {
-    if (m->num_slaves >= DPM_MAX_SLAVES || sc->prm_len < DP_PRM_LEN_STANDARD) {
+    if (m->num_slaves >= DP_MASTER_MAX_SLAVES || sc->prm_len < DP_PRM_LEN_STANDARD) {
         return -1;
     }
     uint16_t out_len;
@@ -164,13 +165,13 @@ int dp_master_add_slave(dp_master_t *m, const dpm_slave_cfg_t *sc)
     if (!dp_cfg_io_lengths(sc->cfg, sc->cfg_len, &out_len, &in_len)) {
         return -1;
     }
-    dpm_slave_t *s = &m->slaves[m->num_slaves];
+    dp_master_slave_t *s = &m->slaves[m->num_slaves];
     memset(s, 0, sizeof *s);
     s->cfg = *sc;
     s->out_len = out_len;
     s->in_len = in_len;
     s->fcb_first = true;
-    s->phase = DPM_PHASE_FDL_STATUS;
+    s->phase = DP_MASTER_PHASE_FDL_STATUS;
     s->backoff_us = m->cfg.backoff_min_us;
     /* Due at once. Not 0: on a wall clock 0 can be more than 2^31 us in the past, which the
      * wrapping comparison reads as the future. */
@@ -178,7 +179,7 @@ int dp_master_add_slave(dp_master_t *m, const dpm_slave_cfg_t *sc)
     return m->num_slaves++;
 }
 
-int dp_master_reconfigure(dp_master_t *m, unsigned idx, const dpm_slave_cfg_t *sc,
+int dp_master_reconfigure(dp_master_t *m, unsigned idx, const dp_master_slave_cfg_t *sc,
                           hal_time_us_t now)
 {
     uint16_t out_len;
@@ -187,7 +188,7 @@ int dp_master_reconfigure(dp_master_t *m, unsigned idx, const dpm_slave_cfg_t *s
         !dp_cfg_io_lengths(sc->cfg, sc->cfg_len, &out_len, &in_len)) {
         return -1;
     }
-    dpm_slave_t *s = &m->slaves[idx];
+    dp_master_slave_t *s = &m->slaves[idx];
     s->cfg = *sc;
     s->out_len = out_len;
     s->in_len = in_len;
@@ -195,7 +196,7 @@ int dp_master_reconfigure(dp_master_t *m, unsigned idx, const dpm_slave_cfg_t *s
     s->due = now;
     s->backoff_us = m->cfg.backoff_min_us;
     memset(s->outputs, 0, sizeof s->outputs);
-    set_phase(m, idx, DPM_PHASE_FDL_STATUS, now);
+    set_phase(m, idx, DP_MASTER_PHASE_FDL_STATUS, now);
     c1_lost(s, now, "new parameters");
     return 0;
 }
@@ -205,7 +206,7 @@ void dp_master_set_outputs(dp_master_t *m, unsigned idx, const uint8_t *out, siz
     if (idx >= m->num_slaves) {
         return;
     }
-    dpm_slave_t *s = &m->slaves[idx];
+    dp_master_slave_t *s = &m->slaves[idx];
     memcpy(s->outputs, out, len < s->out_len ? len : s->out_len);
 }
 
@@ -232,13 +233,13 @@ void dp_master_start(dp_master_t *m, hal_time_us_t now)
      * c2_abort_stuck). */
     for (unsigned k = 0; k < m->num_c2; k++) {
         if (m->c2[k]->on_wire) {
-            dpm_c2_no_answer(m->c2[k], now);
+            dp_master_c2_no_answer(m->c2[k], now);
         }
     }
     for (unsigned i = 0; i < m->num_slaves; i++) {
         m->slaves[i].fcb_first = true;
         m->slaves[i].due = now;
-        set_phase(m, i, DPM_PHASE_FDL_STATUS, now);
+        set_phase(m, i, DP_MASTER_PHASE_FDL_STATUS, now);
         c1_lost(&m->slaves[i], now, "master restarted");
     }
 }
@@ -246,39 +247,39 @@ void dp_master_start(dp_master_t *m, hal_time_us_t now)
 /* ---- DP-V1 -------------------------------------------------------------------------------- */
 
 int dp_master_c1_submit(dp_master_t *m, unsigned idx, const uint8_t *pdu, size_t len,
-                        dpm_acyc_done_t done, void *ctx)
+                        dp_master_acyc_done_t done, void *ctx)
 {
     if (idx >= m->num_slaves) {
         return -1;
     }
-    dpm_slave_t *s = &m->slaves[idx];
-    if (!dpm_prm_is_dpv1(s->cfg.prm, s->cfg.prm_len)) {
+    dp_master_slave_t *s = &m->slaves[idx];
+    if (!dp_master_prm_is_dpv1(s->cfg.prm, s->cfg.prm_len)) {
         return -1;
     }
-    return dpm_xfer_start(&s->c1, DPV1_SAP_C1, DPV1_SAP_C1, pdu, len, m->cfg.c1_timeout_us, done,
-                          ctx);
+    return dp_master_xfer_start(&s->c1, DPV1_SAP_C1, DPV1_SAP_C1, pdu, len, m->cfg.c1_timeout_us,
+                                done, ctx);
 }
 
 bool dp_master_c1_busy(const dp_master_t *m, unsigned idx)
 {
-    return idx < m->num_slaves && dpm_xfer_busy(&m->slaves[idx].c1);
+    return idx < m->num_slaves && dp_master_xfer_busy(&m->slaves[idx].c1);
 }
 
 static int c1_port_submit(void *ctx, unsigned idx, const uint8_t *pdu, size_t len,
-                          dpm_acyc_done_t done, void *done_ctx, hal_time_us_t now)
+                          dp_master_acyc_done_t done, void *done_ctx, hal_time_us_t now)
 {
     (void)now;
     return dp_master_c1_submit(ctx, idx, pdu, len, done, done_ctx);
 }
 
-dpm_acyc_port_t dp_master_c1_port(dp_master_t *m, unsigned idx)
+dp_master_acyc_port_t dp_master_c1_port(dp_master_t *m, unsigned idx)
 {
-    return (dpm_acyc_port_t){.submit = c1_port_submit, .ctx = m, .idx = idx};
+    return (dp_master_acyc_port_t){.submit = c1_port_submit, .ctx = m, .idx = idx};
 }
 
-int dp_master_add_c2(dp_master_t *m, struct dpm_c2 *c)
+int dp_master_add_c2(dp_master_t *m, struct dp_master_c2 *c)
 {
-    if (m->num_c2 >= DPM_MAX_C2) {
+    if (m->num_c2 >= DP_MASTER_MAX_C2) {
         return -1;
     }
     m->c2[m->num_c2++] = c;
@@ -299,9 +300,9 @@ static void pair_fcb(dp_master_t *m, uint8_t own, uint8_t slave, bool **first, b
             }
         }
     }
-    dpm_fcb_t *free_slot = NULL;
+    dp_master_fcb_t *free_slot = NULL;
     for (unsigned i = 0; i < sizeof m->fcbs / sizeof m->fcbs[0]; i++) {
-        dpm_fcb_t *f = &m->fcbs[i];
+        dp_master_fcb_t *f = &m->fcbs[i];
         if (f->used && f->own == own && f->slave == slave) {
             *first = &f->first;
             *fcb = &f->fcb;
@@ -314,7 +315,7 @@ static void pair_fcb(dp_master_t *m, uint8_t own, uint8_t slave, bool **first, b
     if (free_slot == NULL) {
         free_slot = &m->fcbs[0]; /* more pairs than slots: start that pair afresh */
     }
-    *free_slot = (dpm_fcb_t){.used = true, .own = own, .slave = slave, .first = true};
+    *free_slot = (dp_master_fcb_t){.used = true, .own = own, .slave = slave, .first = true};
     *first = &free_slot->first;
     *fcb = &free_slot->fcb;
 }
@@ -354,7 +355,7 @@ static uint8_t fc_with(bool first, bool fcb, bool high)
     return (uint8_t)(FDL_FC_REQUEST | FDL_FC_FCV | (fcb ? FDL_FC_FCB : 0u) | code);
 }
 
-static uint8_t next_fc(dpm_slave_t *s, bool high)
+static uint8_t next_fc(dp_master_slave_t *s, bool high)
 {
     return fc_with(s->fcb_first, s->fcb, high);
 }
@@ -366,35 +367,35 @@ static void fcb_advance(bool *first, bool *fcb)
     *first = false;
 }
 
-static void build_request(dp_master_t *m, dpm_slave_t *s)
+static void build_request(dp_master_t *m, dp_master_slave_t *s)
 {
     uint8_t da = s->cfg.address;
     uint8_t sa = m->cfg.address;
     size_t n = 0;
     switch (s->phase) {
-    case DPM_PHASE_FDL_STATUS:
+    case DP_MASTER_PHASE_FDL_STATUS:
         n = fdl_encode(m->request, da, sa, FDL_FC_REQUEST | FDL_REQ_FDL_STATUS, false, 0, 0,
                        NULL, 0);
         break;
-    case DPM_PHASE_DIAG_1:
-    case DPM_PHASE_DIAG_2:
-    case DPM_PHASE_DIAG_DX:
+    case DP_MASTER_PHASE_DIAG_1:
+    case DP_MASTER_PHASE_DIAG_2:
+    case DP_MASTER_PHASE_DIAG_DX:
         n = fdl_encode(m->request, da, sa, next_fc(s, true), true, DP_SAP_SLAVE_DIAG,
                        DP_SAP_MASTER, NULL, 0);
         break;
-    case DPM_PHASE_SET_PRM:
+    case DP_MASTER_PHASE_SET_PRM:
         n = fdl_encode(m->request, da, sa, next_fc(s, true), true, DP_SAP_SET_PRM, DP_SAP_MASTER,
                        s->cfg.prm, s->cfg.prm_len);
         break;
-    case DPM_PHASE_CHK_CFG:
+    case DP_MASTER_PHASE_CHK_CFG:
         n = fdl_encode(m->request, da, sa, next_fc(s, true), true, DP_SAP_CHK_CFG, DP_SAP_MASTER,
                        s->cfg.cfg, s->cfg.cfg_len);
         break;
-    case DPM_PHASE_DATA_EXCH:
+    case DP_MASTER_PHASE_DATA_EXCH:
         n = fdl_encode(m->request, da, sa, next_fc(s, true), false, 0, 0, s->outputs,
                        s->out_len);
         break;
-    case DPM_PHASE_BACKOFF:
+    case DP_MASTER_PHASE_BACKOFF:
         break;
     }
     m->request_len = (uint16_t)n;
@@ -406,14 +407,14 @@ static void build_request(dp_master_t *m, dpm_slave_t *s)
  * the later ones whether it is ready for data exchange. */
 static void diag_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, hal_time_us_t t)
 {
-    dpm_slave_t *s = &m->slaves[idx];
+    dp_master_slave_t *s = &m->slaves[idx];
     const uint8_t *d = msg->data;
     s->last_diag_len = msg->data_len;
     memcpy(s->last_diag, d, msg->data_len);
-    dpm_event_t ev = {.type = DPM_EV_DIAG, .t = t, .slave = s->cfg.address, .data = d,
+    dp_master_event_t ev = {.type = DP_MASTER_EV_DIAG, .t = t, .slave = s->cfg.address, .data = d,
                       .len = msg->data_len, .old_phase = s->phase, .new_phase = s->phase};
     emit(m, &ev);
-    if (s->phase == DPM_PHASE_DIAG_1) {
+    if (s->phase == DP_MASTER_PHASE_DIAG_1) {
         uint16_t ident = (uint16_t)((d[DP_DIAG_IDENT_HIGH] << 8) | d[DP_DIAG_IDENT_LOW]);
         uint16_t want = (uint16_t)((s->cfg.prm[DP_PRM_IDENT_HIGH] << 8) |
                                    s->cfg.prm[DP_PRM_IDENT_LOW]);
@@ -428,7 +429,7 @@ static void diag_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, ha
                            (unsigned)d[DP_DIAG_MASTER_ADD]);
             restart_slave(m, idx, t, why);
         } else {
-            set_phase(m, idx, DPM_PHASE_SET_PRM, t);
+            set_phase(m, idx, DP_MASTER_PHASE_SET_PRM, t);
         }
         return;
     }
@@ -449,7 +450,7 @@ static void diag_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, ha
     } else {
         s->stat_diag_repeats = 0;
         s->backoff_us = m->cfg.backoff_min_us;
-        set_phase(m, idx, DPM_PHASE_DATA_EXCH, t);
+        set_phase(m, idx, DP_MASTER_PHASE_DATA_EXCH, t);
     }
 }
 
@@ -457,7 +458,7 @@ static void diag_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, ha
 static void data_exchange_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, bool sc,
                                    uint8_t code, hal_time_us_t t)
 {
-    dpm_slave_t *s = &m->slaves[idx];
+    dp_master_slave_t *s = &m->slaves[idx];
     if (!sc && (code == FDL_RSP_RS || code == FDL_RSP_RR || code == FDL_RSP_UE)) {
         restart_slave(m, idx, t, code == FDL_RSP_RS ? "RS: slave left data exchange"
                                                     : "slave refused Data_Exchange");
@@ -469,60 +470,60 @@ static void data_exchange_received(dp_master_t *m, unsigned idx, const fdl_msg_t
     if (!sc) {
         memcpy(s->inputs, msg->data, msg->data_len);
     }
-    dpm_event_t ev = {.type = DPM_EV_INPUTS, .t = t, .slave = s->cfg.address,
+    dp_master_event_t ev = {.type = DP_MASTER_EV_INPUTS, .t = t, .slave = s->cfg.address,
                       .data = s->inputs, .len = s->inputs_len, .old_phase = s->phase,
                       .new_phase = s->phase};
     emit(m, &ev);
     if (!sc && (code == FDL_RSP_DH || code == FDL_RSP_RDH)) {
-        set_phase(m, idx, DPM_PHASE_DIAG_DX, t);
+        set_phase(m, idx, DP_MASTER_PHASE_DIAG_DX, t);
     }
 }
 
 /* An acknowledgement (sc: short acknowledgement) moves a Set_Prm or Chk_Cfg phase on. */
 static void ack_received(dp_master_t *m, unsigned idx, bool sc, hal_time_us_t t)
 {
-    bool set_prm = m->slaves[idx].phase == DPM_PHASE_SET_PRM;
+    bool set_prm = m->slaves[idx].phase == DP_MASTER_PHASE_SET_PRM;
     if (!sc) {
         restart_slave(m, idx, t, set_prm ? "Set_Prm not acknowledged"
                                          : "Chk_Cfg not acknowledged");
         return;
     }
-    set_phase(m, idx, set_prm ? DPM_PHASE_CHK_CFG : DPM_PHASE_DIAG_2, t);
+    set_phase(m, idx, set_prm ? DP_MASTER_PHASE_CHK_CFG : DP_MASTER_PHASE_DIAG_2, t);
 }
 
 static void reply_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, bool sc,
                            hal_time_us_t t)
 {
-    dpm_slave_t *s = &m->slaves[idx];
-    if (s->phase != DPM_PHASE_FDL_STATUS) {
+    dp_master_slave_t *s = &m->slaves[idx];
+    if (s->phase != DP_MASTER_PHASE_FDL_STATUS) {
         fcb_advance(&s->fcb_first, &s->fcb);
     }
     uint8_t code = sc ? 0xFFu : (uint8_t)(msg->fc & FDL_FC_CODE_MASK);
     switch (s->phase) {
-    case DPM_PHASE_FDL_STATUS:
+    case DP_MASTER_PHASE_FDL_STATUS:
         if (sc || (msg->fc & FDL_FC_REQUEST) != 0u) {
             restart_slave(m, idx, t, "unexpected answer to FDL status");
             return;
         }
-        set_phase(m, idx, DPM_PHASE_DIAG_1, t);
+        set_phase(m, idx, DP_MASTER_PHASE_DIAG_1, t);
         return;
-    case DPM_PHASE_DIAG_1:
-    case DPM_PHASE_DIAG_2:
-    case DPM_PHASE_DIAG_DX:
+    case DP_MASTER_PHASE_DIAG_1:
+    case DP_MASTER_PHASE_DIAG_2:
+    case DP_MASTER_PHASE_DIAG_DX:
         if (sc || code != FDL_RSP_DL || msg->data_len < DP_DIAG_STD_LEN) {
             restart_slave(m, idx, t, "no valid diagnosis");
             return;
         }
         diag_received(m, idx, msg, t);
         return;
-    case DPM_PHASE_SET_PRM:
-    case DPM_PHASE_CHK_CFG:
+    case DP_MASTER_PHASE_SET_PRM:
+    case DP_MASTER_PHASE_CHK_CFG:
         ack_received(m, idx, sc, t);
         return;
-    case DPM_PHASE_DATA_EXCH:
+    case DP_MASTER_PHASE_DATA_EXCH:
         data_exchange_received(m, idx, msg, sc, code, t);
         return;
-    case DPM_PHASE_BACKOFF:
+    case DP_MASTER_PHASE_BACKOFF:
         return;
     }
 }
@@ -551,9 +552,9 @@ void dp_master_rx_char(dp_master_t *m, uint8_t byte, uint8_t flags, hal_time_us_
     }
 }
 
-void dp_master_rx_telegram(dp_master_t *m, const dpm_whole_t *w)
+void dp_master_rx_telegram(dp_master_t *m, const dp_master_whole_t *w)
 {
-    fdl_rx_telegram_t tg = dpm_whole_take(&m->rx, w);
+    fdl_rx_telegram_t tg = dp_master_whole_take(&m->rx, w);
     if (m->waiting && w->len > 1u) {
         /* rx_char would have moved the deadline at each character but the last; the one before
          * the last moves it furthest */
@@ -582,24 +583,24 @@ static void frame_received(dp_master_t *m)
     m->next_send = m->rx.frame_end_t + idle_before_request_us(m);
     hal_time_us_t te = m->rx.frame_end_t;
     switch (m->waiting_kind) {
-    case DPM_WAIT_CYCLIC:
+    case DP_MASTER_WAIT_CYCLIC:
         m->c2_turn = true;
         reply_received(m, idx, &msg, sc, te);
         return;
-    case DPM_WAIT_C1: {
-        dpm_slave_t *s = &m->slaves[idx];
+    case DP_MASTER_WAIT_C1: {
+        dp_master_slave_t *s = &m->slaves[idx];
         m->c2_turn = true;
         fcb_advance(&s->fcb_first, &s->fcb);
-        dpm_xfer_answer(&s->c1, &msg, sc, te);
+        dp_master_xfer_answer(&s->c1, &msg, sc, te);
         return;
     }
-    case DPM_WAIT_C2: {
-        dpm_c2_t *c = m->c2[m->waiting_c2];
+    case DP_MASTER_WAIT_C2: {
+        dp_master_c2_t *c = m->c2[m->waiting_c2];
         bool *first;
         bool *fcb;
         pair_fcb(m, m->expect_da, m->expect_sa, &first, &fcb);
         fcb_advance(first, fcb);
-        dpm_c2_answer(c, &msg, sc, te);
+        dp_master_c2_answer(c, &msg, sc, te);
         return;
     }
     }
@@ -611,8 +612,8 @@ static int pick_slave(dp_master_t *m, hal_time_us_t now, bool *c1)
 {
     for (unsigned k = 0; k < m->num_slaves; k++) {
         unsigned idx = (m->next_slave + k) % m->num_slaves;
-        dpm_slave_t *s = &m->slaves[idx];
-        if (s->phase == DPM_PHASE_DATA_EXCH && s->c1_turn && dpm_xfer_busy(&s->c1)) {
+        dp_master_slave_t *s = &m->slaves[idx];
+        if (s->phase == DP_MASTER_PHASE_DATA_EXCH && s->c1_turn && dp_master_xfer_busy(&s->c1)) {
             *c1 = true;
             m->next_slave = (uint8_t)((idx + 1u) % m->num_slaves);
             return (int)idx;
@@ -621,8 +622,8 @@ static int pick_slave(dp_master_t *m, hal_time_us_t now, bool *c1)
             continue;
         }
         *c1 = false;
-        if (s->phase == DPM_PHASE_BACKOFF) {
-            set_phase(m, idx, DPM_PHASE_FDL_STATUS, now);
+        if (s->phase == DP_MASTER_PHASE_BACKOFF) {
+            set_phase(m, idx, DP_MASTER_PHASE_FDL_STATUS, now);
         }
         m->next_slave = (uint8_t)((idx + 1u) % m->num_slaves);
         return (int)idx;
@@ -635,13 +636,13 @@ static bool send_c2(dp_master_t *m, hal_time_us_t now)
 {
     for (unsigned k = 0; k < m->num_c2; k++) {
         unsigned i = (m->next_c2 + k) % m->num_c2;
-        dpm_c2_t *c = m->c2[i];
-        if (!dpm_c2_ready(c, now)) {
+        dp_master_c2_t *c = m->c2[i];
+        if (!dp_master_c2_ready(c, now)) {
             continue;
         }
         uint8_t dsap = 0;
         const uint8_t *du = NULL;
-        size_t n = dpm_c2_telegram(c, now, &dsap, &du);
+        size_t n = dp_master_c2_telegram(c, now, &dsap, &du);
         bool *first;
         bool *fcb;
         pair_fcb(m, c->cfg.address, c->cfg.slave, &first, &fcb);
@@ -649,7 +650,7 @@ static bool send_c2(dp_master_t *m, hal_time_us_t now)
                                               fc_with(*first, *fcb, true), true, dsap,
                                               c->cfg.ssap, du, n);
         m->next_c2 = (uint8_t)((i + 1u) % m->num_c2);
-        m->waiting_kind = DPM_WAIT_C2;
+        m->waiting_kind = DP_MASTER_WAIT_C2;
         m->waiting_c2 = (uint8_t)i;
         m->expect_da = c->cfg.address;
         m->expect_sa = c->cfg.slave;
@@ -671,8 +672,8 @@ static bool reply_timed_out(dp_master_t *m, hal_time_us_t now)
     if (m->retries < m->cfg.max_retry) {
         m->retries++;
         m->total_retries++;
-        if (m->waiting_kind != DPM_WAIT_C2) {
-            dpm_event_t ev = {.type = DPM_EV_RETRY, .t = now,
+        if (m->waiting_kind != DP_MASTER_WAIT_C2) {
+            dp_master_event_t ev = {.type = DP_MASTER_EV_RETRY, .t = now,
                               .slave = m->slaves[idx].cfg.address,
                               .old_phase = m->slaves[idx].phase,
                               .new_phase = m->slaves[idx].phase};
@@ -685,12 +686,12 @@ static bool reply_timed_out(dp_master_t *m, hal_time_us_t now)
     }
     m->retries = 0;
     m->next_send = now;
-    if (m->waiting_kind == DPM_WAIT_C2) {
+    if (m->waiting_kind == DP_MASTER_WAIT_C2) {
         bool *first;
         bool *fcb;
         pair_fcb(m, m->expect_da, m->expect_sa, &first, &fcb);
         *first = true;
-        dpm_c2_no_answer(m->c2[m->waiting_c2], now);
+        dp_master_c2_no_answer(m->c2[m->waiting_c2], now);
     } else {
         restart_slave(m, idx, now, "no answer");
     }
@@ -706,7 +707,8 @@ static void send_global_control(dp_master_t *m, hal_time_us_t now)
                                           FDL_FC_REQUEST | FDL_REQ_SDN_HIGH, true,
                                           DP_SAP_GLOBAL_CONTROL, DP_SAP_MASTER, du, 2);
     send(m, now, false, 0);
-    dpm_event_t ev = {.type = DPM_EV_GLOBAL_CONTROL_SENT, .t = now, .data = du, .len = 2};
+    dp_master_event_t ev = {.type = DP_MASTER_EV_GLOBAL_CONTROL_SENT, .t = now, .data = du,
+                            .len = 2};
     emit(m, &ev);
 }
 
@@ -716,11 +718,11 @@ static hal_time_us_t idle_until(dp_master_t *m, hal_time_us_t now)
     hal_time_us_t next = now + HAL_TIME_NO_DEADLINE_US;
     for (unsigned i = 0; i < m->num_slaves; i++) {
         next = hal_time_earlier(next, m->slaves[i].due);
-        hal_time_us_t d = dpm_xfer_check_timeout(&m->slaves[i].c1, now);
+        hal_time_us_t d = dp_master_xfer_check_timeout(&m->slaves[i].c1, now);
         next = hal_time_earlier(next, d);
     }
     for (unsigned i = 0; i < m->num_c2; i++) {
-        hal_time_us_t d = dpm_c2_next_deadline(m->c2[i], now);
+        hal_time_us_t d = dp_master_c2_next_deadline(m->c2[i], now);
         next = hal_time_earlier(next, d);
     }
     return next;
@@ -729,26 +731,26 @@ static hal_time_us_t idle_until(dp_master_t *m, hal_time_us_t now)
 /* The slave's next telegram: a class-1 acyclic one (c1) or its phase's cyclic one. */
 static void send_to_slave(dp_master_t *m, unsigned idx, bool c1, hal_time_us_t now)
 {
-    dpm_slave_t *s = &m->slaves[idx];
+    dp_master_slave_t *s = &m->slaves[idx];
     m->expect_da = m->cfg.address;
     m->expect_sa = s->cfg.address;
     if (c1) {
         const uint8_t *du = NULL;
-        size_t n = dpm_xfer_telegram(&s->c1, now, &du);
+        size_t n = dp_master_xfer_telegram(&s->c1, now, &du);
         m->request_len = (uint16_t)fdl_encode(m->request, s->cfg.address, m->cfg.address,
                                               next_fc(s, true), true, DPV1_SAP_C1, DPV1_SAP_C1,
                                               du, n);
         s->c1_turn = false;
-        m->waiting_kind = DPM_WAIT_C1;
+        m->waiting_kind = DP_MASTER_WAIT_C1;
         m->acyclic_telegrams++;
         send(m, now, true, idx);
         return;
     }
     build_request(m, s);
-    if (s->phase == DPM_PHASE_DATA_EXCH) {
+    if (s->phase == DP_MASTER_PHASE_DATA_EXCH) {
         s->due = now + m->cfg.cycle_us;
     }
-    m->waiting_kind = DPM_WAIT_CYCLIC;
+    m->waiting_kind = DP_MASTER_WAIT_CYCLIC;
     send(m, now, true, idx);
 }
 
@@ -774,7 +776,7 @@ hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
     }
     /* Class-1 response timers run while their slave is busy with other things. */
     for (unsigned i = 0; i < m->num_slaves; i++) {
-        (void)dpm_xfer_check_timeout(&m->slaves[i].c1, now);
+        (void)dp_master_xfer_check_timeout(&m->slaves[i].c1, now);
     }
     if (m->c2_turn && send_c2(m, now)) {
         return m->reply_deadline;

@@ -4,32 +4,32 @@
 #include <stdio.h>
 #include <string.h>
 
-const char *dpm_c2_state_name(dpm_c2_state_t s)
+const char *dp_master_c2_state_name(dp_master_c2_state_t s)
 {
     switch (s) {
-    case DPM_C2_CLOSED: return "closed";
-    case DPM_C2_RM: return "Initiate to the resource manager";
-    case DPM_C2_INITIATING: return "waiting for the Initiate.res";
-    case DPM_C2_OPEN: return "open";
-    case DPM_C2_ABORTING: return "aborting";
+    case DP_MASTER_C2_CLOSED: return "closed";
+    case DP_MASTER_C2_RM: return "Initiate to the resource manager";
+    case DP_MASTER_C2_INITIATING: return "waiting for the Initiate.res";
+    case DP_MASTER_C2_OPEN: return "open";
+    case DP_MASTER_C2_ABORTING: return "aborting";
     }
     return "?";
 }
 
-void dpm_c2_init(dpm_c2_t *c, const dpm_c2_cfg_t *cfg)
+void dp_master_c2_init(dp_master_c2_t *c, const dp_master_c2_cfg_t *cfg)
 {
     memset(c, 0, sizeof *c);
     c->cfg = *cfg;
-    if (c->cfg.ssap == 0u) c->cfg.ssap = DPM_C2_SSAP_DEFAULT;
-    if (c->cfg.send_timeout == 0u) c->cfg.send_timeout = DPM_C2_SEND_TIMEOUT_DEFAULT;
+    if (c->cfg.ssap == 0u) c->cfg.ssap = DP_MASTER_C2_SSAP_DEFAULT;
+    if (c->cfg.send_timeout == 0u) c->cfg.send_timeout = DP_MASTER_C2_SEND_TIMEOUT_DEFAULT;
     if (c->cfg.response_timeout_us == 0u) {
-        c->cfg.response_timeout_us = DPM_C2_RESPONSE_TIMEOUT_US_DEFAULT;
+        c->cfg.response_timeout_us = DP_MASTER_C2_RESPONSE_TIMEOUT_US_DEFAULT;
     }
 }
 
-size_t dpm_c2_build_initiate(uint8_t *out, uint16_t send_timeout)
+size_t dp_master_c2_build_initiate(uint8_t *out, uint16_t send_timeout)
 {
-    const uint8_t pdu[DPM_C2_INITIATE_LEN] = {
+    const uint8_t pdu[DP_MASTER_C2_INITIATE_LEN] = {
         DPV1_FN_INITIATE, 0x00, 0x00, 0x00,
         (uint8_t)(send_timeout >> 8), (uint8_t)send_timeout,
         0x01, 0x00, /* Features_Supported_1: DPMV1_RW (Read/Write); _2: none */
@@ -44,8 +44,9 @@ size_t dpm_c2_build_initiate(uint8_t *out, uint16_t send_timeout)
     return sizeof pdu;
 }
 
-static void set_error(dpm_c2_t *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void set_error(dpm_c2_t *c, const char *fmt, ...)
+static void set_error(dp_master_c2_t *c, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+static void set_error(dp_master_c2_t *c, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -54,32 +55,32 @@ static void set_error(dpm_c2_t *c, const char *fmt, ...)
 }
 
 /* Tells the owner of the current operation how it ended. */
-static void report(dpm_c2_t *c, bool ok, const dpm_acyc_result_t *base, const char *error,
-                   hal_time_us_t t)
+static void report(dp_master_c2_t *c, bool ok, const dp_master_acyc_result_t *base,
+                   const char *error, hal_time_us_t t)
 {
-    dpm_acyc_done_t done = c->user_done;
+    dp_master_acyc_done_t done = c->user_done;
     void *ctx = c->user_ctx;
     c->user_done = NULL;
     c->user_ctx = NULL;
     if (done == NULL) {
         return;
     }
-    dpm_acyc_result_t r = *base;
+    dp_master_acyc_result_t r = *base;
     r.ok = ok;
     r.error = ok ? NULL : error;
     done(ctx, &r, t);
 }
 
-static void close_with(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t t)
+static void close_with(dp_master_c2_t *c, const dp_master_acyc_result_t *r, hal_time_us_t t)
 {
-    c->state = DPM_C2_CLOSED;
-    c->op = DPM_C2_OP_NONE;
+    c->state = DP_MASTER_C2_CLOSED;
+    c->op = DP_MASTER_C2_OP_NONE;
     c->sap = 0;
     bool had_queued = c->queued;
     c->queued = false;
     report(c, false, r, c->error, t);
     if (had_queued && c->queued_done != NULL) {
-        dpm_acyc_result_t q = {.ok = false, .error = c->error, .t_start = t, .t_end = t};
+        dp_master_acyc_result_t q = {.ok = false, .error = c->error, .t_start = t, .t_end = t};
         c->queued_done(c->queued_ctx, &q, t);
     }
 }
@@ -100,17 +101,17 @@ static void abort_text(char *out, size_t max, const uint8_t *pdu, size_t len)
              (ir & 0x30u) == 0x10u ? reasons[ir & 0x0Fu] : "");
 }
 
-static bool is_abort(const dpm_acyc_result_t *r)
+static bool is_abort(const dp_master_acyc_result_t *r)
 {
     return r->ok && r->len >= 1u && r->pdu[0] == DPV1_FN_ABORT;
 }
 
-static void start_queued(dpm_c2_t *c, hal_time_us_t now);
+static void start_queued(dp_master_c2_t *c, hal_time_us_t now);
 
-static void xfer_done(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now);
+static void xfer_done(void *ctx, const dp_master_acyc_result_t *r, hal_time_us_t now);
 
 /* The resource manager named the connection's SAP: the Initiate goes there next. */
-static void rm_answered(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void rm_answered(dp_master_c2_t *c, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
     if (r->len < 2u || r->pdu[0] != DPV1_FN_RM || r->pdu[1] > 48u) {
         set_error(c, "resource manager: unexpected answer (%zu octets, first 0x%02X)", r->len,
@@ -119,16 +120,16 @@ static void rm_answered(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t n
         return;
     }
     c->sap = r->pdu[1];
-    c->state = DPM_C2_INITIATING;
-    (void)dpm_xfer_start_polling(&c->x, c->sap, c->cfg.ssap, c->cfg.response_timeout_us,
+    c->state = DP_MASTER_C2_INITIATING;
+    (void)dp_master_xfer_start_polling(&c->x, c->sap, c->cfg.ssap, c->cfg.response_timeout_us,
                                  xfer_done, c);
 }
 
 /* The answer to the resource manager's poll or to the Initiate. */
-static void open_done(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void open_done(dp_master_c2_t *c, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
     if (!r->ok) {
-        set_error(c, "%s: %s", c->state == DPM_C2_RM ? "Initiate (resource manager)"
+        set_error(c, "%s: %s", c->state == DP_MASTER_C2_RM ? "Initiate (resource manager)"
                                                      : "Initiate", r->error);
         close_with(c, r, now);
         return;
@@ -137,18 +138,18 @@ static void open_done(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t now
         char text[160];
         abort_text(text, sizeof text, r->pdu, r->len);
         set_error(c, "connection refused (%s SAP %u): %s",
-                  c->state == DPM_C2_RM ? "resource manager" : "connection",
-                  c->state == DPM_C2_RM ? DPV1_SAP_RM : c->sap, text);
+                  c->state == DP_MASTER_C2_RM ? "resource manager" : "connection",
+                  c->state == DP_MASTER_C2_RM ? DPV1_SAP_RM : c->sap, text);
         close_with(c, r, now);
         return;
     }
-    if (c->state == DPM_C2_RM) {
+    if (c->state == DP_MASTER_C2_RM) {
         rm_answered(c, r, now);
         return;
     }
     if (r->pdu[0] == DPV1_FN_INITIATE && r->len >= 12u) {
-        c->state = DPM_C2_OPEN;
-        c->op = DPM_C2_OP_NONE;
+        c->state = DP_MASTER_C2_OPEN;
+        c->op = DP_MASTER_C2_OP_NONE;
         c->opens++;
         memcpy(c->initiate_res, r->pdu, r->len);
         c->initiate_res_len = (uint8_t)r->len;
@@ -159,7 +160,8 @@ static void open_done(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t now
     }
     if (r->pdu[0] == (DPV1_FN_INITIATE | DPV1_FN_ERROR)) {
         set_error(c, "Initiate refused: %s (Error_Code_1 0x%02X)",
-                  dpm_v1_error_text(r->len > 2u ? r->pdu[2] : 0u), r->len > 2u ? r->pdu[2] : 0u);
+                  dp_master_v1_error_text(r->len > 2u ? r->pdu[2] : 0u),
+                  r->len > 2u ? r->pdu[2] : 0u);
     } else {
         set_error(c, "Initiate: unexpected answer (%zu octets, first 0x%02X)", r->len,
                   r->pdu[0]);
@@ -168,9 +170,9 @@ static void open_done(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t now
 }
 
 /* The answer to a request or to the Idle that keeps an open connection alive. */
-static void request_done(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void request_done(dp_master_c2_t *c, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
-    bool idle = c->op == DPM_C2_OP_IDLE;
+    bool idle = c->op == DP_MASTER_C2_OP_IDLE;
     if (!r->ok || is_abort(r)) {
         if (is_abort(r)) {
             char text[160];
@@ -182,7 +184,7 @@ static void request_done(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t 
         close_with(c, r, now);
         return;
     }
-    c->op = DPM_C2_OP_NONE;
+    c->op = DP_MASTER_C2_OP_NONE;
     if (idle) {
         if (r->len < 1u || r->pdu[0] != DPV1_FN_IDLE) {
             set_error(c, "Idle answered with 0x%02X (expected 0x48)",
@@ -197,42 +199,42 @@ static void request_done(dpm_c2_t *c, const dpm_acyc_result_t *r, hal_time_us_t 
 }
 
 /* Every exchange of x ends here. */
-static void xfer_done(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void xfer_done(void *ctx, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
-    dpm_c2_t *c = ctx;
+    dp_master_c2_t *c = ctx;
     switch (c->op) {
-    case DPM_C2_OP_NONE:
+    case DP_MASTER_C2_OP_NONE:
         return;
-    case DPM_C2_OP_OPEN:
+    case DP_MASTER_C2_OP_OPEN:
         open_done(c, r, now);
         return;
-    case DPM_C2_OP_REQUEST:
-    case DPM_C2_OP_IDLE:
+    case DP_MASTER_C2_OP_REQUEST:
+    case DP_MASTER_C2_OP_IDLE:
         request_done(c, r, now);
         return;
-    case DPM_C2_OP_ABORT:
-        c->state = DPM_C2_CLOSED;
-        c->op = DPM_C2_OP_NONE;
+    case DP_MASTER_C2_OP_ABORT:
+        c->state = DP_MASTER_C2_CLOSED;
+        c->op = DP_MASTER_C2_OP_NONE;
         c->sap = 0;
         report(c, r->ok, r, r->error, now);
         return;
     }
 }
 
-int dpm_c2_open(dpm_c2_t *c, dpm_acyc_done_t done, void *ctx, hal_time_us_t now)
+int dp_master_c2_open(dp_master_c2_t *c, dp_master_acyc_done_t done, void *ctx, hal_time_us_t now)
 {
     (void)now;
-    if (c->state != DPM_C2_CLOSED || c->op != DPM_C2_OP_NONE) {
+    if (c->state != DP_MASTER_C2_CLOSED || c->op != DP_MASTER_C2_OP_NONE) {
         return -1;
     }
-    uint8_t pdu[DPM_C2_INITIATE_LEN];
-    size_t n = dpm_c2_build_initiate(pdu, c->cfg.send_timeout);
-    if (dpm_xfer_start(&c->x, DPV1_SAP_RM, c->cfg.ssap, pdu, n, c->cfg.response_timeout_us,
+    uint8_t pdu[DP_MASTER_C2_INITIATE_LEN];
+    size_t n = dp_master_c2_build_initiate(pdu, c->cfg.send_timeout);
+    if (dp_master_xfer_start(&c->x, DPV1_SAP_RM, c->cfg.ssap, pdu, n, c->cfg.response_timeout_us,
                        xfer_done, c) != 0) {
         return -1;
     }
-    c->state = DPM_C2_RM;
-    c->op = DPM_C2_OP_OPEN;
+    c->state = DP_MASTER_C2_RM;
+    c->op = DP_MASTER_C2_OP_OPEN;
     c->user_done = done;
     c->user_ctx = ctx;
     c->error[0] = '\0';
@@ -240,40 +242,40 @@ int dpm_c2_open(dpm_c2_t *c, dpm_acyc_done_t done, void *ctx, hal_time_us_t now)
     return 0;
 }
 
-static int start_request(dpm_c2_t *c, const uint8_t *pdu, size_t len, dpm_acyc_done_t done,
-                         void *ctx)
+static int start_request(dp_master_c2_t *c, const uint8_t *pdu, size_t len,
+                         dp_master_acyc_done_t done, void *ctx)
 {
-    if (dpm_xfer_start(&c->x, c->sap, c->cfg.ssap, pdu, len, c->cfg.response_timeout_us,
+    if (dp_master_xfer_start(&c->x, c->sap, c->cfg.ssap, pdu, len, c->cfg.response_timeout_us,
                        xfer_done, c) != 0) {
         return -1;
     }
-    c->op = DPM_C2_OP_REQUEST;
+    c->op = DP_MASTER_C2_OP_REQUEST;
     c->user_done = done;
     c->user_ctx = ctx;
     return 0;
 }
 
-static void start_queued(dpm_c2_t *c, hal_time_us_t now)
+static void start_queued(dp_master_c2_t *c, hal_time_us_t now)
 {
     (void)now;
-    if (!c->queued || c->state != DPM_C2_OPEN || c->op != DPM_C2_OP_NONE) {
+    if (!c->queued || c->state != DP_MASTER_C2_OPEN || c->op != DP_MASTER_C2_OP_NONE) {
         return;
     }
     c->queued = false;
     if (start_request(c, c->queued_pdu, c->queued_len, c->queued_done, c->queued_ctx) != 0) {
-        dpm_acyc_result_t q = {.ok = false, .error = "request could not be started"};
+        dp_master_acyc_result_t q = {.ok = false, .error = "request could not be started"};
         c->queued_done(c->queued_ctx, &q, now);
     }
 }
 
-int dpm_c2_submit(dpm_c2_t *c, const uint8_t *pdu, size_t len, dpm_acyc_done_t done, void *ctx,
-                  hal_time_us_t now)
+int dp_master_c2_submit(dp_master_c2_t *c, const uint8_t *pdu, size_t len,
+                        dp_master_acyc_done_t done, void *ctx, hal_time_us_t now)
 {
     (void)now;
-    if (c->state != DPM_C2_OPEN || c->queued || len == 0u || len > DPV1_MAX_PDU) {
+    if (c->state != DP_MASTER_C2_OPEN || c->queued || len == 0u || len > DPV1_MAX_PDU) {
         return -1;
     }
-    if (c->op == DPM_C2_OP_IDLE) {
+    if (c->op == DP_MASTER_C2_OP_IDLE) {
         memcpy(c->queued_pdu, pdu, len);
         c->queued_len = (uint16_t)len;
         c->queued_done = done;
@@ -281,36 +283,36 @@ int dpm_c2_submit(dpm_c2_t *c, const uint8_t *pdu, size_t len, dpm_acyc_done_t d
         c->queued = true;
         return 0;
     }
-    if (c->op != DPM_C2_OP_NONE) {
+    if (c->op != DP_MASTER_C2_OP_NONE) {
         return -1;
     }
     return start_request(c, pdu, len, done, ctx);
 }
 
-static void start_abort(dpm_c2_t *c)
+static void start_abort(dp_master_c2_t *c)
 {
     const uint8_t pdu[4] = {DPV1_FN_ABORT, 0x00, c->abort_code, 0x00};
-    (void)dpm_xfer_start(&c->x, c->sap, c->cfg.ssap, pdu, sizeof pdu, c->cfg.response_timeout_us,
-                         xfer_done, c);
+    (void)dp_master_xfer_start(&c->x, c->sap, c->cfg.ssap, pdu, sizeof pdu,
+                               c->cfg.response_timeout_us, xfer_done, c);
     c->x.no_response = true;
 }
 
-int dpm_c2_abort(dpm_c2_t *c, uint8_t instance_reason, dpm_acyc_done_t done, void *ctx,
-                 hal_time_us_t now)
+int dp_master_c2_abort(dp_master_c2_t *c, uint8_t instance_reason, dp_master_acyc_done_t done,
+                       void *ctx, hal_time_us_t now)
 {
-    if (c->state == DPM_C2_CLOSED || c->state == DPM_C2_ABORTING) {
+    if (c->state == DP_MASTER_C2_CLOSED || c->state == DP_MASTER_C2_ABORTING) {
         return -1;
     }
-    bool have_sap = c->state != DPM_C2_RM;
+    bool have_sap = c->state != DP_MASTER_C2_RM;
     /* Whatever runs is given up. */
-    if (c->op != DPM_C2_OP_NONE || c->queued) {
+    if (c->op != DP_MASTER_C2_OP_NONE || c->queued) {
         set_error(c, "aborted by the master");
-        dpm_acyc_result_t r = {.ok = false, .t_start = now, .t_end = now};
-        dpm_c2_op_t op = c->op;
-        c->op = DPM_C2_OP_NONE;
-        c->x.state = DPM_XFER_IDLE;
+        dp_master_acyc_result_t r = {.ok = false, .t_start = now, .t_end = now};
+        dp_master_c2_op_t op = c->op;
+        c->op = DP_MASTER_C2_OP_NONE;
+        c->x.state = DP_MASTER_XFER_IDLE;
         c->x.started = false;
-        if (op != DPM_C2_OP_IDLE) {
+        if (op != DP_MASTER_C2_OP_IDLE) {
             report(c, false, &r, c->error, now);
         }
         if (c->queued) {
@@ -322,14 +324,14 @@ int dpm_c2_abort(dpm_c2_t *c, uint8_t instance_reason, dpm_acyc_done_t done, voi
     c->user_ctx = ctx;
     if (!have_sap) {
         /* The resource manager has not named a SAP yet: nothing to abort on the wire. */
-        c->state = DPM_C2_CLOSED;
-        dpm_acyc_result_t r = {.ok = true, .t_start = now, .t_end = now};
+        c->state = DP_MASTER_C2_CLOSED;
+        dp_master_acyc_result_t r = {.ok = true, .t_start = now, .t_end = now};
         report(c, true, &r, NULL, now);
         return 0;
     }
-    c->abort_code = instance_reason != 0u ? instance_reason : DPM_C2_ABORT_USER;
-    c->op = DPM_C2_OP_ABORT;
-    c->state = DPM_C2_ABORTING;
+    c->abort_code = instance_reason != 0u ? instance_reason : DP_MASTER_C2_ABORT_USER;
+    c->op = DP_MASTER_C2_OP_ABORT;
+    c->state = DP_MASTER_C2_ABORTING;
     if (c->on_wire) {
         c->abort_pending = true; /* after the answer to the telegram on the wire */
     } else {
@@ -339,50 +341,51 @@ int dpm_c2_abort(dpm_c2_t *c, uint8_t instance_reason, dpm_acyc_done_t done, voi
 }
 
 static int c2_port_submit(void *ctx, unsigned idx, const uint8_t *pdu, size_t len,
-                          dpm_acyc_done_t done, void *done_ctx, hal_time_us_t now)
+                          dp_master_acyc_done_t done, void *done_ctx, hal_time_us_t now)
 {
     (void)idx;
-    return dpm_c2_submit(ctx, pdu, len, done, done_ctx, now);
+    return dp_master_c2_submit(ctx, pdu, len, done, done_ctx, now);
 }
 
-dpm_acyc_port_t dpm_c2_port(dpm_c2_t *c)
+dp_master_acyc_port_t dp_master_c2_port(dp_master_c2_t *c)
 {
-    return (dpm_acyc_port_t){.submit = c2_port_submit, .ctx = c, .idx = 0};
+    return (dp_master_acyc_port_t){.submit = c2_port_submit, .ctx = c, .idx = 0};
 }
 
 /* ---- driven by the master station ---------------------------------------------------------- */
 
-static hal_time_us_t idle_due(const dpm_c2_t *c)
+static hal_time_us_t idle_due(const dp_master_c2_t *c)
 {
     /* Half the Send_Timeout (10 ms units) after the last telegram. */
     return c->last_tx + (uint32_t)c->cfg.send_timeout * 5000u;
 }
 
-bool dpm_c2_ready(dpm_c2_t *c, hal_time_us_t now)
+bool dp_master_c2_ready(dp_master_c2_t *c, hal_time_us_t now)
 {
-    (void)dpm_xfer_check_timeout(&c->x, now); /* may close the connection */
-    if (c->state == DPM_C2_OPEN && c->op == DPM_C2_OP_NONE && !c->queued && !c->cfg.no_idle &&
-        c->last_tx_valid && hal_time_reached(now, idle_due(c))) {
+    (void)dp_master_xfer_check_timeout(&c->x, now); /* may close the connection */
+    if (c->state == DP_MASTER_C2_OPEN && c->op == DP_MASTER_C2_OP_NONE && !c->queued &&
+        !c->cfg.no_idle && c->last_tx_valid && hal_time_reached(now, idle_due(c))) {
         const uint8_t pdu[4] = {DPV1_FN_IDLE, 0x00, 0x00, 0x00};
-        if (dpm_xfer_start(&c->x, c->sap, c->cfg.ssap, pdu, sizeof pdu,
+        if (dp_master_xfer_start(&c->x, c->sap, c->cfg.ssap, pdu, sizeof pdu,
                            c->cfg.response_timeout_us, xfer_done, c) == 0) {
-            c->op = DPM_C2_OP_IDLE;
+            c->op = DP_MASTER_C2_OP_IDLE;
         }
     }
-    return dpm_xfer_busy(&c->x);
+    return dp_master_xfer_busy(&c->x);
 }
 
-size_t dpm_c2_telegram(dpm_c2_t *c, hal_time_us_t now, uint8_t *dsap, const uint8_t **du)
+size_t dp_master_c2_telegram(dp_master_c2_t *c, hal_time_us_t now, uint8_t *dsap,
+                             const uint8_t **du)
 {
     *dsap = c->x.dsap;
     c->on_wire = true;
     c->last_tx = now;
     c->last_tx_valid = true;
-    return dpm_xfer_telegram(&c->x, now, du);
+    return dp_master_xfer_telegram(&c->x, now, du);
 }
 
 /* An Abort asked for while a telegram was on the wire goes out now; that answer is dropped. */
-static bool abort_now(dpm_c2_t *c)
+static bool abort_now(dp_master_c2_t *c)
 {
     c->on_wire = false;
     if (!c->abort_pending) {
@@ -393,29 +396,29 @@ static bool abort_now(dpm_c2_t *c)
     return true;
 }
 
-void dpm_c2_answer(dpm_c2_t *c, const fdl_msg_t *msg, bool sc, hal_time_us_t t)
+void dp_master_c2_answer(dp_master_c2_t *c, const fdl_msg_t *msg, bool sc, hal_time_us_t t)
 {
     if (abort_now(c)) {
         return;
     }
-    dpm_xfer_answer(&c->x, msg, sc, t);
+    dp_master_xfer_answer(&c->x, msg, sc, t);
 }
 
-void dpm_c2_no_answer(dpm_c2_t *c, hal_time_us_t t)
+void dp_master_c2_no_answer(dp_master_c2_t *c, hal_time_us_t t)
 {
     if (abort_now(c)) {
         return;
     }
-    dpm_xfer_fail(&c->x, t, "no answer from slave %u", c->cfg.slave);
+    dp_master_xfer_fail(&c->x, t, "no answer from slave %u", c->cfg.slave);
 }
 
-hal_time_us_t dpm_c2_next_deadline(const dpm_c2_t *c, hal_time_us_t now)
+hal_time_us_t dp_master_c2_next_deadline(const dp_master_c2_t *c, hal_time_us_t now)
 {
     hal_time_us_t next = now + HAL_TIME_NO_DEADLINE_US;
-    if (dpm_xfer_busy(&c->x) && c->x.started) {
+    if (dp_master_xfer_busy(&c->x) && c->x.started) {
         next = c->x.deadline;
     }
-    if (c->state == DPM_C2_OPEN && c->op == DPM_C2_OP_NONE && !c->cfg.no_idle &&
+    if (c->state == DP_MASTER_C2_OPEN && c->op == DP_MASTER_C2_OP_NONE && !c->cfg.no_idle &&
         c->last_tx_valid) {
         next = hal_time_earlier(next, idle_due(c));
     }

@@ -8,7 +8,7 @@
 
 /* ---- DS47 request / response ---------------------------------------------------------------- */
 
-bool dpm_ds47_param_writes(const dpm_ds47_req_t *r, unsigned i)
+bool dp_master_ds47_param_writes(const dp_master_ds47_req_t *r, unsigned i)
 {
     if (r->id == DS47_ID_CHANGE) {
         return true;
@@ -20,14 +20,14 @@ bool dpm_ds47_param_writes(const dpm_ds47_req_t *r, unsigned i)
     return false;
 }
 
-size_t dpm_ds47_build(const dpm_ds47_req_t *r, uint8_t *out, size_t max)
+size_t dp_master_ds47_build(const dp_master_ds47_req_t *r, uint8_t *out, size_t max)
 {
     if (r->n == 0u || r->n > DS47_MAX_PARAMS) {
         return 0;
     }
     size_t need = 4u + 6u * r->n;
     for (unsigned i = 0; i < r->n; i++) {
-        need += dpm_ds47_param_writes(r, i) ? 6u : 0u;
+        need += dp_master_ds47_param_writes(r, i) ? 6u : 0u;
     }
     if (need > max) {
         return 0;
@@ -38,7 +38,7 @@ size_t dpm_ds47_build(const dpm_ds47_req_t *r, uint8_t *out, size_t max)
     out[n++] = r->axis;
     out[n++] = r->n;
     for (unsigned i = 0; i < r->n; i++) {
-        const dpm_ds47_param_t *p = &r->p[i];
+        const dp_master_ds47_param_t *p = &r->p[i];
         out[n++] = p->attribute;
         out[n++] = p->elements;
         out[n++] = (uint8_t)(p->number >> 8);
@@ -47,7 +47,7 @@ size_t dpm_ds47_build(const dpm_ds47_req_t *r, uint8_t *out, size_t max)
         out[n++] = (uint8_t)p->subindex;
     }
     for (unsigned i = 0; i < r->n; i++) {
-        if (!dpm_ds47_param_writes(r, i)) {
+        if (!dp_master_ds47_param_writes(r, i)) {
             continue;
         }
         uint32_t v = r->p[i].value;
@@ -85,7 +85,7 @@ static size_t format_size(uint8_t f)
 }
 
 /* One value block at d[*pos]: format, count, values (padded to words). */
-static bool parse_block(const uint8_t *d, size_t len, size_t *pos, dpm_ds47_result_t *res,
+static bool parse_block(const uint8_t *d, size_t len, size_t *pos, dp_master_ds47_result_t *res,
                         unsigned i, char *err, size_t errlen)
 {
     if (*pos + 2u > len) {
@@ -134,8 +134,8 @@ static bool parse_block(const uint8_t *d, size_t len, size_t *pos, dpm_ds47_resu
     return true;
 }
 
-bool dpm_ds47_parse(const dpm_ds47_req_t *req, const uint8_t *d, size_t len, dpm_ds47_rsp_t *rsp,
-                char *err, size_t errlen)
+bool dp_master_ds47_parse(const dp_master_ds47_req_t *req, const uint8_t *d, size_t len,
+                          dp_master_ds47_rsp_t *rsp, char *err, size_t errlen)
 {
     memset(rsp, 0, sizeof *rsp);
     if (len < 4u) {
@@ -162,8 +162,8 @@ bool dpm_ds47_parse(const dpm_ds47_req_t *req, const uint8_t *d, size_t len, dpm
     }
     size_t pos = 4;
     for (unsigned i = 0; i < rsp->n; i++) {
-        dpm_ds47_result_t *res = &rsp->p[i];
-        if (!rsp->negative && dpm_ds47_param_writes(req, i)) {
+        dp_master_ds47_result_t *res = &rsp->p[i];
+        if (!rsp->negative && dp_master_ds47_param_writes(req, i)) {
             res->ok = true; /* a successful write has no block */
             continue;
         }
@@ -182,7 +182,7 @@ bool dpm_ds47_parse(const dpm_ds47_req_t *req, const uint8_t *d, size_t len, dpm
     return true;
 }
 
-size_t dpm_ml_error_value_text(uint16_t value, char *out, size_t max)
+size_t dp_master_ml_error_value_text(uint16_t value, char *out, size_t max)
 {
     uint8_t cls = (uint8_t)(value >> 8);
     uint8_t low = (uint8_t)value;
@@ -226,12 +226,12 @@ static const char *profidrive_text(uint16_t e)
     }
 }
 
-size_t dpm_ds47_error_text(uint8_t id, uint16_t error, char *out, size_t max)
+size_t dp_master_ds47_error_text(uint8_t id, uint16_t error, char *out, size_t max)
 {
     int n;
     const char *pd = profidrive_text(error);
     if ((id & 0x7Fu) == DS47_ID_MOVILINK && error >= 0x0100u) {
-        return dpm_ml_error_value_text(error, out, max);
+        return dp_master_ml_error_value_text(error, out, max);
     }
     if (pd != NULL) {
         n = snprintf(out, max, "PROFIdrive error 0x%02X: %s", error, pd);
@@ -241,11 +241,11 @@ size_t dpm_ds47_error_text(uint8_t id, uint16_t error, char *out, size_t max)
         uint16_t v = (uint16_t)(((error & 0x0Fu) == 0x05u ? 0x0500u : 0x0600u) | (error & 0x0Fu));
         char ml[96];
         ml[0] = '\0';
-        dpm_ml_error_value_text(v, ml, sizeof ml);
+        dp_master_ml_error_value_text(v, ml, sizeof ml);
         n = snprintf(out, max, "manufacturer specific 0x%04X (MOVILINK 0x%04X: %s)", error, v, ml);
     } else if (error >= 0x0080u && error <= 0x00FFu) {
         char ml[96];
-        dpm_ml_error_value_text((uint16_t)(0x0800u | (error - 0x80u)), ml, sizeof ml);
+        dp_master_ml_error_value_text((uint16_t)(0x0800u | (error - 0x80u)), ml, sizeof ml);
         n = snprintf(out, max, "manufacturer specific (MOVILINK %s)", ml);
     } else if (error >= 0x0065u && error <= 0x00FFu) {
         n = snprintf(out, max, "manufacturer specific error 0x%02X", error);
@@ -259,7 +259,8 @@ size_t dpm_ds47_error_text(uint8_t id, uint16_t error, char *out, size_t max)
 
 static uint16_t be16(const uint8_t *p) { return (uint16_t)((p[0] << 8) | p[1]); }
 
-bool dpm_im0_decode(const uint8_t *d, size_t len, dpm_im0_t *o, char *err, size_t errlen)
+bool dp_master_im0_decode(const uint8_t *d, size_t len, dp_master_im0_t *o, char *err,
+                          size_t errlen)
 {
     memset(o, 0, sizeof *o);
     if (len < 4u || d[0] != IM_FN_CALL || be16(&d[2]) != IM_INDEX_0) {
@@ -291,19 +292,19 @@ bool dpm_im0_decode(const uint8_t *d, size_t len, dpm_im0_t *o, char *err, size_
 
 /* ---- the record call ------------------------------------------------------------------------ */
 
-static void call_finish(dpm_call_t *c, bool ok, hal_time_us_t now)
+static void call_finish(dp_master_call_t *c, bool ok, hal_time_us_t now)
 {
     c->ok = ok;
-    c->state = DPM_CALL_DONE;
+    c->state = DP_MASTER_CALL_DONE;
     c->t_end = now;
     if (c->done != NULL) {
         c->done(c->ctx, c, now);
     }
 }
 
-static void call_fail(dpm_call_t *c, hal_time_us_t now, const char *fmt, ...)
+static void call_fail(dp_master_call_t *c, hal_time_us_t now, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
-static void call_fail(dpm_call_t *c, hal_time_us_t now, const char *fmt, ...)
+static void call_fail(dp_master_call_t *c, hal_time_us_t now, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -312,19 +313,19 @@ static void call_fail(dpm_call_t *c, hal_time_us_t now, const char *fmt, ...)
     call_finish(c, false, now);
 }
 
-static void call_answer(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now);
+static void call_answer(void *ctx, const dp_master_acyc_result_t *r, hal_time_us_t now);
 
-static int submit_read(dpm_call_t *c, hal_time_us_t now)
+static int submit_read(dp_master_call_t *c, hal_time_us_t now)
 {
     const uint8_t pdu[4] = {DPV1_FN_READ, c->slot, c->index, c->read_len};
     c->reads++;
-    return dpm_acyc_submit(&c->port, pdu, sizeof pdu, call_answer, c, now);
+    return dp_master_acyc_submit(&c->port, pdu, sizeof pdu, call_answer, c, now);
 }
 
-static void call_answer(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void call_answer(void *ctx, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
-    dpm_call_t *c = ctx;
-    const char *what = c->state == DPM_CALL_WRITE ? "Write" : "Read";
+    dp_master_call_t *c = ctx;
+    const char *what = c->state == DP_MASTER_CALL_WRITE ? "Write" : "Read";
     c->telegrams += r->telegrams;
     c->polls += r->polls;
     if (!r->ok) {
@@ -332,8 +333,8 @@ static void call_answer(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now
         return;
     }
     uint8_t code1 = 0;
-    if (dpm_v1_is_negative(r->pdu, r->len, &code1)) {
-        if (c->state == DPM_CALL_READ && code1 == DPV1_ERR_STATE_CONFLICT) {
+    if (dp_master_v1_is_negative(r->pdu, r->len, &code1)) {
+        if (c->state == DP_MASTER_CALL_READ && code1 == DPV1_ERR_STATE_CONFLICT) {
             c->busy++;
             if (c->reads >= c->max_reads || hal_time_reached(now, c->deadline)) {
                 call_fail(c, now, "no answer to the request: Read.req index %u still answered "
@@ -350,16 +351,16 @@ static void call_answer(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now
         c->neg_fn = r->pdu[0];
         c->neg_code1 = code1;
         call_fail(c, now, "%s.res index %u negative: Error_Code_1 0x%02X (%s)", what, c->index,
-                  code1, dpm_v1_error_text(code1));
+                  code1, dp_master_v1_error_text(code1));
         return;
     }
-    if (c->state == DPM_CALL_WRITE) {
+    if (c->state == DP_MASTER_CALL_WRITE) {
         if (r->len < 4u || r->pdu[0] != DPV1_FN_WRITE || r->pdu[2] != c->index) {
             call_fail(c, now, "Write.req index %u: unexpected answer (%zu octets, first 0x%02X)",
                       c->index, r->len, r->len > 0u ? r->pdu[0] : 0u);
             return;
         }
-        c->state = DPM_CALL_READ;
+        c->state = DP_MASTER_CALL_READ;
         if (submit_read(c, now) != 0) {
             call_fail(c, now, "Read.req index %u could not be queued", c->index);
         }
@@ -377,12 +378,12 @@ static void call_answer(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now
     call_finish(c, true, now);
 }
 
-int dpm_call_start(dpm_call_t *c, dpm_acyc_port_t port, uint8_t index, const uint8_t *data,
-                   size_t len, uint8_t read_len, dpm_call_done_t done, void *ctx,
-                   hal_time_us_t now)
+int dp_master_call_start(dp_master_call_t *c, dp_master_acyc_port_t port, uint8_t index,
+                         const uint8_t *data, size_t len, uint8_t read_len,
+                         dp_master_call_done_t done, void *ctx, hal_time_us_t now)
 {
-    if (c->state == DPM_CALL_WRITE || c->state == DPM_CALL_READ || len > DPV1_MAX_DATA ||
-        len == 0u) {
+    if (c->state == DP_MASTER_CALL_WRITE || c->state == DP_MASTER_CALL_READ ||
+        len > DPV1_MAX_DATA || len == 0u) {
         return -1;
     }
     uint32_t max_reads = c->max_reads != 0u ? c->max_reads : 10000u;
@@ -407,28 +408,30 @@ int dpm_call_start(dpm_call_t *c, dpm_acyc_port_t port, uint8_t index, const uin
     pdu[2] = index;
     pdu[3] = (uint8_t)len;
     memcpy(&pdu[4], data, len);
-    c->state = DPM_CALL_WRITE;
-    if (dpm_acyc_submit(&port, pdu, 4u + len, call_answer, c, now) != 0) {
-        c->state = DPM_CALL_IDLE;
+    c->state = DP_MASTER_CALL_WRITE;
+    if (dp_master_acyc_submit(&port, pdu, 4u + len, call_answer, c, now) != 0) {
+        c->state = DP_MASTER_CALL_IDLE;
         return -1;
     }
     return 0;
 }
 
-int dpm_ds47_start(dpm_call_t *c, dpm_acyc_port_t port, const dpm_ds47_req_t *req,
-                   dpm_call_done_t done, void *ctx, hal_time_us_t now)
+int dp_master_ds47_start(dp_master_call_t *c, dp_master_acyc_port_t port,
+                         const dp_master_ds47_req_t *req, dp_master_call_done_t done, void *ctx,
+                         hal_time_us_t now)
 {
     uint8_t buf[DPV1_MAX_DATA];
-    size_t n = dpm_ds47_build(req, buf, sizeof buf);
+    size_t n = dp_master_ds47_build(req, buf, sizeof buf);
     if (n == 0u) {
         return -1;
     }
-    return dpm_call_start(c, port, DPV1_INDEX_DS47, buf, n, DPV1_MAX_DATA, done, ctx, now);
+    return dp_master_call_start(c, port, DPV1_INDEX_DS47, buf, n, DPV1_MAX_DATA, done, ctx, now);
 }
 
-int dpm_im0_start(dpm_call_t *c, dpm_acyc_port_t port, dpm_call_done_t done, void *ctx,
-                  hal_time_us_t now)
+int dp_master_im0_start(dp_master_call_t *c, dp_master_acyc_port_t port, dp_master_call_done_t done,
+                        void *ctx, hal_time_us_t now)
 {
     const uint8_t sel[4] = {IM_FN_CALL, 0x00, (uint8_t)(IM_INDEX_0 >> 8), (uint8_t)IM_INDEX_0};
-    return dpm_call_start(c, port, DPV1_INDEX_IM, sel, sizeof sel, DPV1_MAX_DATA, done, ctx, now);
+    return dp_master_call_start(c, port, DPV1_INDEX_IM, sel, sizeof sel, DPV1_MAX_DATA, done, ctx,
+                                now);
 }

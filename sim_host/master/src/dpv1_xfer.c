@@ -6,10 +6,10 @@
 
 #include "dp_slave/fdl_wire.h"
 
-static int begin(dpm_xfer_t *x, uint8_t dsap, uint8_t ssap, uint32_t timeout_us,
-                 dpm_acyc_done_t done, void *ctx)
+static int begin(dp_master_xfer_t *x, uint8_t dsap, uint8_t ssap, uint32_t timeout_us,
+                 dp_master_acyc_done_t done, void *ctx)
 {
-    if (x->state != DPM_XFER_IDLE) {
+    if (x->state != DP_MASTER_XFER_IDLE) {
         return -1;
     }
     x->dsap = dsap;
@@ -25,30 +25,30 @@ static int begin(dpm_xfer_t *x, uint8_t dsap, uint8_t ssap, uint32_t timeout_us,
     return 0;
 }
 
-int dpm_xfer_start(dpm_xfer_t *x, uint8_t dsap, uint8_t ssap, const uint8_t *pdu, size_t len,
-                   uint32_t timeout_us, dpm_acyc_done_t done, void *ctx)
+int dp_master_xfer_start(dp_master_xfer_t *x, uint8_t dsap, uint8_t ssap, const uint8_t *pdu,
+                         size_t len, uint32_t timeout_us, dp_master_acyc_done_t done, void *ctx)
 {
     if (len == 0u || len > DPV1_MAX_PDU || begin(x, dsap, ssap, timeout_us, done, ctx) != 0) {
         return -1;
     }
     memcpy(x->pdu, pdu, len);
     x->len = (uint16_t)len;
-    x->state = DPM_XFER_REQUEST;
+    x->state = DP_MASTER_XFER_REQUEST;
     return 0;
 }
 
-int dpm_xfer_start_polling(dpm_xfer_t *x, uint8_t dsap, uint8_t ssap, uint32_t timeout_us,
-                           dpm_acyc_done_t done, void *ctx)
+int dp_master_xfer_start_polling(dp_master_xfer_t *x, uint8_t dsap, uint8_t ssap,
+                                 uint32_t timeout_us, dp_master_acyc_done_t done, void *ctx)
 {
     if (begin(x, dsap, ssap, timeout_us, done, ctx) != 0) {
         return -1;
     }
     x->len = 0;
-    x->state = DPM_XFER_POLL;
+    x->state = DP_MASTER_XFER_POLL;
     return 0;
 }
 
-size_t dpm_xfer_telegram(dpm_xfer_t *x, hal_time_us_t now, const uint8_t **du)
+size_t dp_master_xfer_telegram(dp_master_xfer_t *x, hal_time_us_t now, const uint8_t **du)
 {
     if (!x->started) {
         x->started = true;
@@ -56,7 +56,7 @@ size_t dpm_xfer_telegram(dpm_xfer_t *x, hal_time_us_t now, const uint8_t **du)
         x->deadline = now + x->timeout_us;
     }
     x->telegrams++;
-    if (x->state == DPM_XFER_REQUEST) {
+    if (x->state == DP_MASTER_XFER_REQUEST) {
         *du = x->pdu;
         return x->len;
     }
@@ -65,7 +65,7 @@ size_t dpm_xfer_telegram(dpm_xfer_t *x, hal_time_us_t now, const uint8_t **du)
     return 0;
 }
 
-static void finish(dpm_xfer_t *x, bool ok, const uint8_t *pdu, size_t len, hal_time_us_t t)
+static void finish(dp_master_xfer_t *x, bool ok, const uint8_t *pdu, size_t len, hal_time_us_t t)
 {
     /* Copy what the callback needs: it may start the next exchange in this struct. */
     uint8_t rsp[DPV1_MAX_PDU];
@@ -77,12 +77,12 @@ static void finish(dpm_xfer_t *x, bool ok, const uint8_t *pdu, size_t len, hal_t
         memcpy(rsp, pdu, n);
     }
     memcpy(err, x->error, sizeof err);
-    dpm_acyc_result_t r = {.ok = ok, .pdu = rsp, .len = n, .error = ok ? NULL : err,
+    dp_master_acyc_result_t r = {.ok = ok, .pdu = rsp, .len = n, .error = ok ? NULL : err,
                            .polls = x->polls, .telegrams = x->telegrams,
                            .t_start = x->t_start, .t_end = t};
-    dpm_acyc_done_t done = x->done;
+    dp_master_acyc_done_t done = x->done;
     void *ctx = x->ctx;
-    x->state = DPM_XFER_IDLE;
+    x->state = DP_MASTER_XFER_IDLE;
     x->started = false;
     if (ok) {
         x->completed++;
@@ -94,9 +94,9 @@ static void finish(dpm_xfer_t *x, bool ok, const uint8_t *pdu, size_t len, hal_t
     }
 }
 
-void dpm_xfer_fail(dpm_xfer_t *x, hal_time_us_t now, const char *fmt, ...)
+void dp_master_xfer_fail(dp_master_xfer_t *x, hal_time_us_t now, const char *fmt, ...)
 {
-    if (x->state == DPM_XFER_IDLE) {
+    if (x->state == DP_MASTER_XFER_IDLE) {
         return;
     }
     va_list ap;
@@ -106,22 +106,22 @@ void dpm_xfer_fail(dpm_xfer_t *x, hal_time_us_t now, const char *fmt, ...)
     finish(x, false, NULL, 0, now);
 }
 
-static bool timed_out(const dpm_xfer_t *x, hal_time_us_t now)
+static bool timed_out(const dp_master_xfer_t *x, hal_time_us_t now)
 {
     return x->started && hal_time_reached(now, x->deadline);
 }
 
-static void fail_timeout(dpm_xfer_t *x, hal_time_us_t now)
+static void fail_timeout(dp_master_xfer_t *x, hal_time_us_t now)
 {
-    dpm_xfer_fail(x, now, "no %s within the response timeout (%u ms; %u polls answered SC)",
-                  x->state == DPM_XFER_REQUEST ? "acknowledgement of the request"
+    dp_master_xfer_fail(x, now, "no %s within the response timeout (%u ms; %u polls answered SC)",
+                  x->state == DP_MASTER_XFER_REQUEST ? "acknowledgement of the request"
                                                : "response",
                   (unsigned)(x->timeout_us / 1000u), (unsigned)x->polls);
 }
 
-void dpm_xfer_answer(dpm_xfer_t *x, const fdl_msg_t *msg, bool sc, hal_time_us_t t)
+void dp_master_xfer_answer(dp_master_xfer_t *x, const fdl_msg_t *msg, bool sc, hal_time_us_t t)
 {
-    if (x->state == DPM_XFER_IDLE) {
+    if (x->state == DP_MASTER_XFER_IDLE) {
         return;
     }
     uint8_t code = sc ? 0xFFu : (uint8_t)(msg->fc & FDL_FC_CODE_MASK);
@@ -133,7 +133,7 @@ void dpm_xfer_answer(dpm_xfer_t *x, const fdl_msg_t *msg, bool sc, hal_time_us_t
                         code == FDL_RSP_RDH) && msg->data_len > 0u;
     if (data) {
         if (!msg->has_dsap || !msg->has_ssap || msg->dsap != x->ssap || msg->ssap != x->dsap) {
-            dpm_xfer_fail(x, t, "answer with the wrong SAPs (%u/%u, expected %u/%u)",
+            dp_master_xfer_fail(x, t, "answer with the wrong SAPs (%u/%u, expected %u/%u)",
                           msg->has_dsap ? msg->dsap : 0u, msg->has_ssap ? msg->ssap : 0u,
                           x->ssap, x->dsap);
             return;
@@ -144,7 +144,7 @@ void dpm_xfer_answer(dpm_xfer_t *x, const fdl_msg_t *msg, bool sc, hal_time_us_t
     if (sc || code == FDL_RSP_NR || code == FDL_RSP_OK || code == FDL_RSP_DL ||
         code == FDL_RSP_DH) {
         /* Taken, or not ready yet: poll next time (unless the time is up). */
-        x->state = DPM_XFER_POLL;
+        x->state = DP_MASTER_XFER_POLL;
         if (timed_out(x, t)) {
             fail_timeout(x, t);
         }
@@ -152,24 +152,24 @@ void dpm_xfer_answer(dpm_xfer_t *x, const fdl_msg_t *msg, bool sc, hal_time_us_t
     }
     switch (code) {
     case FDL_RSP_RS:
-        dpm_xfer_fail(x, t, "RS: SAP %u not activated for us (MSAC1 closed, connection not "
+        dp_master_xfer_fail(x, t, "RS: SAP %u not activated for us (MSAC1 closed, connection not "
                             "bound, or another master)", x->dsap);
         return;
     case FDL_RSP_RR:
-        dpm_xfer_fail(x, t, "RR: the slave has no resource for SAP %u", x->dsap);
+        dp_master_xfer_fail(x, t, "RR: the slave has no resource for SAP %u", x->dsap);
         return;
     case FDL_RSP_UE:
-        dpm_xfer_fail(x, t, "UE: user error at SAP %u", x->dsap);
+        dp_master_xfer_fail(x, t, "UE: user error at SAP %u", x->dsap);
         return;
     default:
-        dpm_xfer_fail(x, t, "unexpected answer FC 0x%02X", msg->fc);
+        dp_master_xfer_fail(x, t, "unexpected answer FC 0x%02X", msg->fc);
         return;
     }
 }
 
-hal_time_us_t dpm_xfer_check_timeout(dpm_xfer_t *x, hal_time_us_t now)
+hal_time_us_t dp_master_xfer_check_timeout(dp_master_xfer_t *x, hal_time_us_t now)
 {
-    if (x->state == DPM_XFER_IDLE || !x->started) {
+    if (x->state == DP_MASTER_XFER_IDLE || !x->started) {
         return now + HAL_TIME_NO_DEADLINE_US;
     }
     if (timed_out(x, now)) {
@@ -179,7 +179,7 @@ hal_time_us_t dpm_xfer_check_timeout(dpm_xfer_t *x, hal_time_us_t now)
     return x->deadline;
 }
 
-const char *dpm_v1_error_text(uint8_t code1)
+const char *dp_master_v1_error_text(uint8_t code1)
 {
     switch (code1) {
     case 0xA0: return "application: read error";
@@ -212,7 +212,7 @@ const char *dpm_v1_error_text(uint8_t code1)
     }
 }
 
-bool dpm_v1_is_negative(const uint8_t *pdu, size_t len, uint8_t *code1)
+bool dp_master_v1_is_negative(const uint8_t *pdu, size_t len, uint8_t *code1)
 {
     if (len < 1u || (pdu[0] & DPV1_FN_ERROR) == 0u) {
         return false;

@@ -3,13 +3,13 @@
 #include <stdio.h>
 #include <string.h>
 
-void dpm_param_sync(dpm_param_t *p, const uint8_t in[ML_TELEGRAM_LEN])
+void dp_master_param_sync(dp_master_param_t *p, const uint8_t in[ML_TELEGRAM_LEN])
 {
     p->handshake = (uint8_t)(in[ML_OFF_MANAGEMENT] & ML_MGMT_HANDSHAKE);
     p->busy = false;
 }
 
-void dpm_param_start(dpm_param_t *p, uint8_t service, uint16_t index, uint32_t value,
+void dp_master_param_start(dp_master_param_t *p, uint8_t service, uint16_t index, uint32_t value,
                      uint8_t out[ML_TELEGRAM_LEN])
 {
     p->handshake = (uint8_t)(p->handshake ^ ML_MGMT_HANDSHAKE);
@@ -23,7 +23,7 @@ void dpm_param_start(dpm_param_t *p, uint8_t service, uint16_t index, uint32_t v
     memcpy(out, p->req, ML_TELEGRAM_LEN);
 }
 
-bool dpm_param_done(dpm_param_t *p, const uint8_t in[ML_TELEGRAM_LEN])
+bool dp_master_param_done(dp_master_param_t *p, const uint8_t in[ML_TELEGRAM_LEN])
 {
     if (!p->busy || (in[ML_OFF_MANAGEMENT] & ML_MGMT_HANDSHAKE) != p->handshake ||
         ml_index(in) != ml_index(p->req)) {

@@ -11,7 +11,7 @@ static fdl_gap_t gap_before(const fdl_rx_t *rx, hal_time_us_t first_t)
                          rx->relaxed_resync_us);
 }
 
-bool dpm_whole_clean(const fdl_rx_t *rx, const dpm_whole_t *w)
+bool dp_master_whole_clean(const fdl_rx_t *rx, const dp_master_whole_t *w)
 {
     if (rx->collecting || w->len == 0u) {
         return false;
@@ -27,13 +27,13 @@ bool dpm_whole_clean(const fdl_rx_t *rx, const dpm_whole_t *w)
     return fdl_check(w->data, w->len, NULL, NULL) == FDL_CHECK_OK;
 }
 
-fdl_rx_telegram_t dpm_whole_take(fdl_rx_t *rx, const dpm_whole_t *w)
+fdl_rx_telegram_t dp_master_whole_take(fdl_rx_t *rx, const dp_master_whole_t *w)
 {
     fdl_gap_t gap = gap_before(rx, w->first_t);
     rx->have_last = true;
     rx->last_char_t = w->end_t;
-    /* dpm_whole_clean found the FCS right, so the octet sum is the FCS octet (second to last in
-     * the telegrams that have one): the core need not add the octets up again. */
+    /* dp_master_whole_clean found the FCS right, so the octet sum is the FCS octet (second to last
+     * in the telegrams that have one): the core need not add the octets up again. */
     return (fdl_rx_telegram_t){.buf = w->data, .len = w->len, .error = FDL_RX_OK,
                                .end_t = w->end_t, .idle_before_ns = gap.idle_ns,
                                .sum_known = true,

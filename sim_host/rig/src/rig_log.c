@@ -384,7 +384,7 @@ static void log_action(void *ctx, unsigned card, rig_action_type_t type, uint32_
 
 /* ---- master -------------------------------------------------------------------------------- */
 
-static void log_inputs(rig_log_t *l, const dpm_event_t *ev)
+static void log_inputs(rig_log_t *l, const dp_master_event_t *ev)
 {
     const dp_master_t *m = &l->rig->master;
     unsigned i = 0;
@@ -395,8 +395,8 @@ static void log_inputs(rig_log_t *l, const dpm_event_t *ev)
         return;
     }
     size_t len = ev->len;
-    if (len > DPM_MAX_IO) {
-        len = DPM_MAX_IO;
+    if (len > DP_MASTER_MAX_IO) {
+        len = DP_MASTER_MAX_IO;
     }
     bool same = len == l->last_inputs_len[i] && memcmp(l->last_inputs[i], ev->data, len) == 0;
     if (same) {
@@ -404,7 +404,7 @@ static void log_inputs(rig_log_t *l, const dpm_event_t *ev)
     }
     memcpy(l->last_inputs[i], ev->data, len);
     l->last_inputs_len[i] = (uint16_t)len;
-    const dpm_slave_t *s = &m->slaves[i];
+    const dp_master_slave_t *s = &m->slaves[i];
     dfp21b_pd_cfg_t pd;
     char text[400];
     size_t n = 0;
@@ -431,32 +431,32 @@ static void log_inputs(rig_log_t *l, const dpm_event_t *ev)
     rig_log(l, RIG_LOG_INFO, "master", "master", "slave %u inputs: %s", s->cfg.address, text);
 }
 
-bool rig_master_event_text(const dpm_event_t *ev, bool *slave_silent, char *out, size_t n,
+bool rig_master_event_text(const dp_master_event_t *ev, bool *slave_silent, char *out, size_t n,
                            rig_log_level_t *level, const char **kind)
 {
     char text[256];
     switch (ev->type) {
-    case DPM_EV_PHASE:
-        if (*slave_silent && (ev->new_phase == DPM_PHASE_FDL_STATUS ||
-                              ev->new_phase == DPM_PHASE_BACKOFF)) {
+    case DP_MASTER_EV_PHASE:
+        if (*slave_silent && (ev->new_phase == DP_MASTER_PHASE_FDL_STATUS ||
+                              ev->new_phase == DP_MASTER_PHASE_BACKOFF)) {
             break;
         }
-        if (ev->new_phase > DPM_PHASE_FDL_STATUS) {
+        if (ev->new_phase > DP_MASTER_PHASE_FDL_STATUS) {
             *slave_silent = false;
         }
-        if (ev->new_phase == DPM_PHASE_DATA_EXCH) {
+        if (ev->new_phase == DP_MASTER_PHASE_DATA_EXCH) {
             return SAY(RIG_LOG_INFO, "master", "slave %u is in data exchange", ev->slave);
         }
-        if (ev->new_phase != DPM_PHASE_BACKOFF) {
+        if (ev->new_phase != DP_MASTER_PHASE_BACKOFF) {
             return SAY(RIG_LOG_INFO, "master", "slave %u: %s", ev->slave,
-                       dpm_phase_name(ev->new_phase));
+                       dp_master_phase_name(ev->new_phase));
         }
         break;
-    case DPM_EV_DIAG:
+    case DP_MASTER_EV_DIAG:
         rig_diag_text(ev->data, ev->len, text, sizeof text);
         return SAY(RIG_LOG_INFO, "diag", "slave %u diagnosis: %s", ev->slave, text);
-    case DPM_EV_FAULT:
-        if (ev->old_phase == DPM_PHASE_FDL_STATUS) {
+    case DP_MASTER_EV_FAULT:
+        if (ev->old_phase == DP_MASTER_PHASE_FDL_STATUS) {
             bool first = !*slave_silent;
             *slave_silent = true;
             if (first) {
@@ -467,24 +467,24 @@ bool rig_master_event_text(const dpm_event_t *ev, bool *slave_silent, char *out,
         }
         return SAY(RIG_LOG_WARN, "master", "slave %u: %s; start-up again later", ev->slave,
                    ev->text);
-    case DPM_EV_RETRY:
-        if (!*slave_silent && ev->old_phase != DPM_PHASE_FDL_STATUS) {
+    case DP_MASTER_EV_RETRY:
+        if (!*slave_silent && ev->old_phase != DP_MASTER_PHASE_FDL_STATUS) {
             return SAY(RIG_LOG_INFO, "master", "slave %u: no answer, retry", ev->slave);
         }
         break;
-    case DPM_EV_INPUTS: /* every cycle: each printer decides how to show them */
+    case DP_MASTER_EV_INPUTS: /* every cycle: each printer decides how to show them */
         break;
-    case DPM_EV_GLOBAL_CONTROL_SENT:
+    case DP_MASTER_EV_GLOBAL_CONTROL_SENT:
         return SAY(RIG_LOG_INFO, "master", "Global_Control 0x%02X to group 0x%02X (broadcast)",
                    ev->data[0], ev->data[1]);
     }
     return false;
 }
 
-static void log_master_event(void *ctx, const dpm_event_t *ev)
+static void log_master_event(void *ctx, const dp_master_event_t *ev)
 {
     rig_log_t *l = ctx;
-    if (ev->type == DPM_EV_INPUTS) {
+    if (ev->type == DP_MASTER_EV_INPUTS) {
         log_inputs(l, ev);
         return;
     }

@@ -10,23 +10,23 @@
 
 #include "movilink/movilink_wire.h"
 
-typedef struct dpm_param {
+typedef struct dp_master_param {
     uint8_t handshake; /* of the request in flight */
     uint8_t req[ML_TELEGRAM_LEN];
     bool busy;
-} dpm_param_t;
+} dp_master_param_t;
 
 /* Takes the handshake of the reply the card shows now (in = the first 8 input octets), so the
  * next request toggles relative to it. A master that starts talking to a card which already ran
  * services (another master, an earlier session) must do this after its first Data_Exchange: the
  * card keeps its handshake across masters, and a request carrying the card's current handshake is
  * not an edge. */
-void dpm_param_sync(dpm_param_t *p, const uint8_t in[ML_TELEGRAM_LEN]);
+void dp_master_param_sync(dp_master_param_t *p, const uint8_t in[ML_TELEGRAM_LEN]);
 /* Starts a service: writes the request into out[0..7] (the output image). */
-void dpm_param_start(dpm_param_t *p, uint8_t service, uint16_t index, uint32_t value,
+void dp_master_param_start(dp_master_param_t *p, uint8_t service, uint16_t index, uint32_t value,
                      uint8_t out[ML_TELEGRAM_LEN]);
 /* in = the first 8 input octets. True when they carry the answer to the running request. */
-bool dpm_param_done(dpm_param_t *p, const uint8_t in[ML_TELEGRAM_LEN]);
+bool dp_master_param_done(dp_master_param_t *p, const uint8_t in[ML_TELEGRAM_LEN]);
 /* "class 8, additional code 0x15: value too high" etc. */
 size_t ml_error_text(const uint8_t rsp[ML_TELEGRAM_LEN], char *out, size_t max);
 const char *ml_service_name(uint8_t service);

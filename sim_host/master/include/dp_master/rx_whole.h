@@ -14,22 +14,22 @@
 
 #include "dp_slave/fdl_rx.h"
 
-typedef struct dpm_whole {
+typedef struct dp_master_whole {
     const uint8_t *data;
     uint16_t len;
     uint32_t char_ns;            /* on the line */
     hal_time_us_t first_t;       /* the timestamps fdl_rx_char would have had: the first, */
     hal_time_us_t before_last_t; /* the one before the last (first_t for one character), */
     hal_time_us_t end_t;         /* the last */
-} dpm_whole_t;
+} dp_master_whole_t;
 
 /* True when fdl_rx_char for each character would accept exactly this telegram: the assembler
  * is between telegrams and may start one, no pause inside, and the octets are one telegram. */
-bool dpm_whole_clean(const fdl_rx_t *rx, const dpm_whole_t *w);
+bool dp_master_whole_clean(const fdl_rx_t *rx, const dp_master_whole_t *w);
 
 /* The telegram for fdl_rx_telegram (or dp_slave_rx_telegram) with the idle before it, and the
  * assembler's record of the last character updated as fdl_rx_char updates it. Only after
- * dpm_whole_clean, and only when the telegram does reach the assembler. */
-fdl_rx_telegram_t dpm_whole_take(fdl_rx_t *rx, const dpm_whole_t *w);
+ * dp_master_whole_clean, and only when the telegram does reach the assembler. */
+fdl_rx_telegram_t dp_master_whole_take(fdl_rx_t *rx, const dp_master_whole_t *w);
 
 #endif
