@@ -5,10 +5,10 @@
  *   movilink    DP start-up with DP-V1 parameters, class-1 data set 47, request id 0x40
  *   profidrive  the same with request id 0x01 (read) / 0x02 (change, non-volatile)
  *   c2          a class-2 connection (no start-up), data set 47 with id 0x40, then Abort
- * and I&M0 through class 1 or class 2. A parameter is named by index, P-number, name (md_names.h)
- * or IPOS variable Hn; results carry the name and the value in its unit or enumeration text.
- * Exit 0 when every result is positive, 1 on a negative one or no result in time, 2 on a bad
- * command line. */
+ * and I&M0 through class 1 or class 2. A parameter is named by index, P-number, name
+ * (movidrive_names.h) or IPOS variable Hn; results carry the name and the value in its unit or
+ * enumeration text. Exit 0 when every result is positive, 1 on a negative one or no result in time,
+ * 2 on a bad command line. */
 #include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -20,7 +20,7 @@
 #include "commands.h"
 #include "dfp_lcm_bridge/lcm_segment.h"
 #include "medium.h"
-#include "movidrive/md_names.h"
+#include "movidrive/movidrive_names.h"
 #include "param_run.h"
 #include "report.h"
 #include "rig/rig.h"
@@ -285,7 +285,7 @@ static bool parse_value(uint16_t index, const char *text, uint32_t *out)
 {
     char err[200];
     int32_t raw = 0;
-    if (!md_value_parse(md_param_info(index), text, &raw, err, sizeof err)) {
+    if (!movidrive_value_parse(movidrive_param_info(index), text, &raw, err, sizeof err)) {
         cli_error("param: VALUE %s", err);
         return false;
     }
@@ -319,7 +319,7 @@ static bool parse_index(const char *text, uint16_t *index)
         return true;
     }
     char err[256];
-    const md_param_info_t *p = md_param_find(text, err, sizeof err);
+    const movidrive_param_info_t *p = movidrive_param_find(text, err, sizeof err);
     if (p == NULL) {
         cli_error("param: %s", err);
         return false;

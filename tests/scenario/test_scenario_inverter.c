@@ -259,7 +259,7 @@ static int32_t drive_value(uint16_t index)
     return v;
 }
 
-static int32_t p819(void) { return drive_value(MD_IDX_P819_FIELDBUS_TIMEOUT); }
+static int32_t p819(void) { return drive_value(MOVIDRIVE_IDX_P819_FIELDBUS_TIMEOUT); }
 
 /* protocol.md §B5: P819 shows the master's watchdog time; written through another interface it is
  * shown until the next parameterisation. Global_Control and the other DP events in between also
@@ -268,7 +268,7 @@ static void test_p819_written_elsewhere_stays_until_next_set_prm(void)
 {
     setup(0, 0x01);
     CHECK_EQ(p819(), 50);
-    start(ML_SVC_WRITE_VOLATILE, MD_IDX_P819_FIELDBUS_TIMEOUT, 300);
+    start(ML_SVC_WRITE_VOLATILE, MOVIDRIVE_IDX_P819_FIELDBUS_TIMEOUT, 300);
     CHECK(finish(100000) != UINT32_MAX);
     CHECK_EQ(inputs()[0] & ML_MGMT_ERROR, 0);
     CHECK_EQ(p819(), 300);

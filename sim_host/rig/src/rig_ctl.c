@@ -192,8 +192,8 @@ static void snap_card(const rig_card_t *rc, rig_snap_card_t *s)
         s->setpoint_mrpm = md->speed_setpoint_mrpm;
         s->speed_mrpm = md->speed_actual_mrpm;
         s->current_mpct = md->current_mpct;
-        s->ramp_up_ms = movidrive_read_value(md, MD_IDX_P130_RAMP_UP, &v) ? v : 0;
-        s->ramp_down_ms = movidrive_read_value(md, MD_IDX_P131_RAMP_DOWN, &v) ? v : 0;
+        s->ramp_up_ms = movidrive_read_value(md, MOVIDRIVE_IDX_P130_RAMP_UP, &v) ? v : 0;
+        s->ramp_down_ms = movidrive_read_value(md, MOVIDRIVE_IDX_P131_RAMP_DOWN, &v) ? v : 0;
         s->di00 = md->cfg.terminal_enable;
     }
 }

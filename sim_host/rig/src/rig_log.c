@@ -4,7 +4,7 @@
 #include <time.h>
 
 #include "dp_slave/dp_wire.h"
-#include "movidrive/md_names.h"
+#include "movidrive/movidrive_names.h"
 #include "sim_hal/sim_board.h"
 
 static const char *const level_names[] = {"error", "warn", "info", "debug"};
@@ -133,7 +133,7 @@ void rig_pi_text(const uint16_t *pi, unsigned n, char *out, size_t max)
 {
     char sw[160] = "";
     if (n > 0u) {
-        md_status_word_text(pi[0], sw, sizeof sw);
+        movidrive_status_word_text(pi[0], sw, sizeof sw);
     }
     snprintf(out, max, "PI1 %s%s%.1f rpm%s%.1f %% I_N", sw, n > 1u ? ", PI2 " : "",
              n > 1u ? (int16_t)pi[1] * 0.2 : 0.0, n > 2u ? ", PI3 " : "",
@@ -147,7 +147,7 @@ void rig_po_text(const uint16_t *po, unsigned n, char *out, size_t max)
 {
     char cw[160] = "";
     if (n > 0u) {
-        md_control_word_text(po[0], cw, sizeof cw);
+        movidrive_control_word_text(po[0], cw, sizeof cw);
     }
     if (n > 1u) {
         snprintf(out, max, "PO1 %s, PO2 %.1f rpm", cw, (int16_t)po[1] * 0.2);
@@ -285,12 +285,13 @@ static void log_param(void *ctx, unsigned card, uint8_t channel, const uint8_t *
     rig_log_level_t level = channel == DFP21B_CH_STATUS_POLL ? RIG_LOG_DEBUG : RIG_LOG_INFO;
     char src[16];
     card_source(l, card, src, sizeof src, "drive");
-    const md_param_info_t *p = md_param_info(index);
+    const movidrive_param_info_t *p = movidrive_param_info(index);
     char name[96];
     if (p != NULL) {
         snprintf(name, sizeof name, "%s %s", p->p_number, p->name);
-    } else if (index >= MD_IDX_IPOS_H0 && index < MD_IDX_IPOS_H0 + MD_IPOS_VARS) {
-        snprintf(name, sizeof name, "H%u", index - MD_IDX_IPOS_H0);
+    } else if (index >= MOVIDRIVE_IDX_IPOS_H0 &&
+               index < MOVIDRIVE_IDX_IPOS_H0 + MOVIDRIVE_IPOS_VARS) {
+        snprintf(name, sizeof name, "H%u", index - MOVIDRIVE_IDX_IPOS_H0);
     } else {
         snprintf(name, sizeof name, "index %u", index);
     }
@@ -305,7 +306,7 @@ static void log_param(void *ctx, unsigned card, uint8_t channel, const uint8_t *
     int32_t v = (int32_t)ml_data(rsp);
     if (p != NULL && (service == ML_SVC_READ || service == ML_SVC_WRITE ||
                       service == ML_SVC_WRITE_VOLATILE)) {
-        md_value_text(p, v, value, sizeof value);
+        movidrive_value_text(p, v, value, sizeof value);
     } else {
         snprintf(value, sizeof value, "%d", v);
     }
@@ -318,7 +319,7 @@ static void log_drive(void *ctx, unsigned card, const rig_drive_event_t *ev)
     rig_log_t *l = ctx;
     char src[16];
     card_source(l, card, src, sizeof src, "drive");
-    const char *fname = md_fault_name((uint8_t)ev->value);
+    const char *fname = movidrive_fault_name((uint8_t)ev->value);
     double n = ev->speed_mrpm / 1000.0;
     double target = ev->setpoint_mrpm / 1000.0;
     switch (ev->type) {
@@ -374,7 +375,7 @@ static void log_action(void *ctx, unsigned card, rig_action_type_t type, uint32_
                 "next power-up)", value);
         break;
     case RIG_ACTION_FAULT_INJECTED: {
-        const char *fname = md_fault_name((uint8_t)value);
+        const char *fname = movidrive_fault_name((uint8_t)value);
         rig_log(l, RIG_LOG_INFO, src, "action", "drive fault F%02u %s injected", value,
                 fname != NULL ? fname : "(unknown fault)");
         break;

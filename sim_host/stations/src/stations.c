@@ -25,10 +25,11 @@ static hal_time_us_t card_poll(void *ctx, hal_time_us_t now)
     if (c->inverter != CARD_INVERTER_SIM) {
         return dfp21b_poll(&c->card, now);
     }
-    hal_time_us_t next = md_inproc_link_poll(&c->md_link, now);
+    hal_time_us_t next = movidrive_inproc_link_poll(&c->movidrive_link, now);
     next = earlier(next, movidrive_tick(&c->md, now));
     next = earlier(next, dfp21b_poll(&c->card, now));
-    next = earlier(next, md_inproc_link_poll(&c->md_link, now)); /* PI for the PO just taken */
+    /* PI for the PO just taken */
+    next = earlier(next, movidrive_inproc_link_poll(&c->movidrive_link, now));
     if (c->card.inputs_dirty) {
         next = earlier(next, dfp21b_poll(&c->card, now));
     }
@@ -139,9 +140,10 @@ static bool start_inverter(card_station_t *c, const card_options_t *opt, char *e
         note_add(err, errlen, "drive EEPROM: %s: %s",
                  opt->eeprom_path != NULL ? opt->eeprom_path : "(none)", merr);
     }
-    c->md_link = (md_inproc_link_t){.md = &c->md, .param_response = card_station_param_response,
-                                    .process_inputs = card_station_process_inputs, .card = c,
-                                    .delay_us = opt->inverter_delay_us};
+    c->movidrive_link = (movidrive_inproc_link_t){
+        .md = &c->md, .param_response = card_station_param_response,
+        .process_inputs = card_station_process_inputs, .card = c,
+        .delay_us = opt->inverter_delay_us};
     return nrc != 0 || mrc != 0;
 }
 
@@ -173,7 +175,7 @@ int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t u
     ml_link_t link = {0};
     if (opt->inverter == CARD_INVERTER_SIM) {
         noted = start_inverter(c, opt, note, sizeof c->nvm_note);
-        link = md_inproc_link(&c->md_link);
+        link = movidrive_inproc_link(&c->movidrive_link);
     } else if (opt->inverter == CARD_INVERTER_LINK) {
         link = opt->external_link;
     }

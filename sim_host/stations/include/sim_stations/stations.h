@@ -24,7 +24,7 @@ typedef struct card_station {
     sim_dip_t dip;
     card_inverter_t inverter;
     movidrive_t md;
-    md_inproc_link_t md_link;
+    movidrive_inproc_link_t movidrive_link;
     file_nvm_t nvm;      /* the inverter's EEPROM */
     file_nvm_t card_nvm; /* the card's own storage: I&M1..I&M4 */
     char nvm_note[CARD_NVM_NOTE_MAX]; /* card_station_init's note in full ("" = none) */

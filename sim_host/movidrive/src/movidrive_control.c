@@ -1,25 +1,28 @@
 /* The emulated MOVIDRIVE's control: where the control word and the setpoint come from (P100,
  * P101, P870..P872, P876), the drive mode they and a fault or warning give, and faults (latch,
  * error memory P080..P084, reset). README.md "Drive model". */
-#include "md_internal.h"
+#include "movidrive_internal.h"
 
-bool md_po_data_enabled(const movidrive_t *md)
+bool movidrive_po_data_enabled(const movidrive_t *md)
 {
-    return md_ram_value(md, MD_IDX_P876_PO_ENABLE) == 1 &&
-           (md_ram_value(md, MD_IDX_P100_SETPOINT_SOURCE) == MD_SOURCE_FIELDBUS_SETPOINT ||
-            md_ram_value(md, MD_IDX_P101_CONTROL_SOURCE) == MD_SOURCE_FIELDBUS_CONTROL);
+    return movidrive_ram_value(md, MOVIDRIVE_IDX_P876_PO_ENABLE) == 1 &&
+           (movidrive_ram_value(md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE) ==
+                MOVIDRIVE_SOURCE_FIELDBUS_SETPOINT ||
+            movidrive_ram_value(md, MOVIDRIVE_IDX_P101_CONTROL_SOURCE) ==
+                MOVIDRIVE_SOURCE_FIELDBUS_CONTROL);
 }
 
-bool md_cw_in_effect(const movidrive_t *md)
+bool movidrive_cw_in_effect(const movidrive_t *md)
 {
-    return md_ram_value(md, MD_IDX_P101_CONTROL_SOURCE) == MD_SOURCE_FIELDBUS_CONTROL &&
-           md_po_data_enabled(md) && md->po_received;
+    return movidrive_ram_value(md, MOVIDRIVE_IDX_P101_CONTROL_SOURCE) ==
+               MOVIDRIVE_SOURCE_FIELDBUS_CONTROL &&
+           movidrive_po_data_enabled(md) && md->po_received;
 }
 
-bool md_po_word(const movidrive_t *md, int32_t function, uint16_t *word)
+bool movidrive_po_word(const movidrive_t *md, int32_t function, uint16_t *word)
 {
     for (uint8_t i = 0; i < 3 && i < md->po_count; i++) {
-        if (md_ram_value(md, (uint16_t)(MD_IDX_P870_PO1 + i)) == function) {
+        if (movidrive_ram_value(md, (uint16_t)(MOVIDRIVE_IDX_P870_PO1 + i)) == function) {
             *word = md->po[i];
             return true;
         }
@@ -27,21 +30,21 @@ bool md_po_word(const movidrive_t *md, int32_t function, uint16_t *word)
     return false;
 }
 
-bool md_ramp_set_2(const movidrive_t *md)
+bool movidrive_ramp_set_2(const movidrive_t *md)
 {
-    return md_cw_in_effect(md) && (md->control_word & MD_CW_RAMP_SET_2);
+    return movidrive_cw_in_effect(md) && (md->control_word & MOVIDRIVE_CW_RAMP_SET_2);
 }
 
-uint16_t md_compute_control_word(const movidrive_t *md)
+uint16_t movidrive_compute_control_word(const movidrive_t *md)
 {
-    if (!md_cw_in_effect(md)) {
+    if (!movidrive_cw_in_effect(md)) {
         return 0;
     }
     uint16_t w;
-    if (md_po_word(md, PO_CTRL_WORD_1, &w)) {
+    if (movidrive_po_word(md, PO_CTRL_WORD_1, &w)) {
         return w;
     }
-    if (md_po_word(md, PO_CTRL_WORD_2, &w)) {
+    if (movidrive_po_word(md, PO_CTRL_WORD_2, &w)) {
         return (uint16_t)(w & 0x00FFu); /* basic block; high byte: virtual terminals (ignored) */
     }
     return 0; /* no control word assigned: no enable */
@@ -49,9 +52,10 @@ uint16_t md_compute_control_word(const movidrive_t *md)
 
 static int32_t max_speed_mrpm(const movidrive_t *md)
 {
-    int32_t nmax = md_ram_value(md, MD_IDX_P302_MAX_SPEED);
+    int32_t nmax = movidrive_ram_value(md, MOVIDRIVE_IDX_P302_MAX_SPEED);
     uint16_t w;
-    if (md_po_data_enabled(md) && md->po_received && md_po_word(md, PO_MAX_SPEED, &w)) {
+    if (movidrive_po_data_enabled(md) && md->po_received &&
+        movidrive_po_word(md, PO_MAX_SPEED, &w)) {
         int32_t po_max = (int32_t)(int16_t)w * 200;
         if (po_max >= 0 && po_max < nmax) {
             nmax = po_max;
@@ -62,17 +66,18 @@ static int32_t max_speed_mrpm(const movidrive_t *md)
 
 static int32_t compute_setpoint(const movidrive_t *md)
 {
-    if (md_ram_value(md, MD_IDX_P100_SETPOINT_SOURCE) != MD_SOURCE_FIELDBUS_SETPOINT ||
-        !md_po_data_enabled(md) || !md->po_received) {
+    if (movidrive_ram_value(md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE) !=
+            MOVIDRIVE_SOURCE_FIELDBUS_SETPOINT ||
+        !movidrive_po_data_enabled(md) || !md->po_received) {
         return 0; /* other sources (analog, fixed setpoints via terminals) are not emulated */
     }
     int32_t nmax = max_speed_mrpm(md);
     int64_t n = 0;
     uint16_t w;
-    if (md_po_word(md, PO_SPEED, &w)) {
+    if (movidrive_po_word(md, PO_SPEED, &w)) {
         n = (int64_t)(int16_t)w * 200;
-    } else if (md_po_word(md, PO_SPEED_PERCENT, &w)) {
-        n = (int64_t)(int16_t)w * md_ram_value(md, MD_IDX_P302_MAX_SPEED) / 0x4000;
+    } else if (movidrive_po_word(md, PO_SPEED_PERCENT, &w)) {
+        n = (int64_t)(int16_t)w * movidrive_ram_value(md, MOVIDRIVE_IDX_P302_MAX_SPEED) / 0x4000;
     }
     if (n > nmax) {
         n = nmax;
@@ -103,8 +108,8 @@ static uint8_t reaction_mode(uint8_t reaction)
 static uint8_t compute_mode(const movidrive_t *md)
 {
     uint16_t cw = md->control_word;
-    bool bus = md_cw_in_effect(md);
-    if (!md->cfg.terminal_enable || (bus && (cw & MD_CW_CONTROLLER_INHIBIT))) {
+    bool bus = movidrive_cw_in_effect(md);
+    if (!md->cfg.terminal_enable || (bus && (cw & MOVIDRIVE_CW_CONTROLLER_INHIBIT))) {
         return MODE_INHIBIT;
     }
     uint8_t mode = MODE_RUN;
@@ -120,18 +125,18 @@ static uint8_t compute_mode(const movidrive_t *md)
         /* P101 = TERMINALS (DI01..DI05 not wired in the emulation), or PO not (yet) enabled */
         return MODE_STOP;
     }
-    if (!(cw & MD_CW_ENABLE_RAPID_STOP)) {
+    if (!(cw & MOVIDRIVE_CW_ENABLE_RAPID_STOP)) {
         return MODE_RAPID;
     }
-    if (!(cw & MD_CW_ENABLE_STOP)) {
+    if (!(cw & MOVIDRIVE_CW_ENABLE_STOP)) {
         return MODE_STOP;
     }
     return MODE_RUN;
 }
 
-void md_evaluate(movidrive_t *md)
+void movidrive_evaluate(movidrive_t *md)
 {
-    md->control_word = md_compute_control_word(md);
+    md->control_word = movidrive_compute_control_word(md);
     md->mode = compute_mode(md);
     switch (md->mode) {
     case MODE_INHIBIT:
@@ -152,7 +157,7 @@ void md_evaluate(movidrive_t *md)
         }
         break;
     }
-    md_update_currents(md);
+    movidrive_update_currents(md);
 }
 
 /* ---------------------------------------------------------------------------------------------
@@ -161,8 +166,8 @@ void md_evaluate(movidrive_t *md)
 /* Error memory: P080 = the newest fault, older ones move down to P084; kept in EEPROM. */
 static void record_fault(movidrive_t *md, uint8_t number)
 {
-    int first = md_find_def(md, IDX_P080_ERROR_T0);
-    int last = md_find_def(md, IDX_P084_ERROR_T4);
+    int first = movidrive_find_def(md, IDX_P080_ERROR_T0);
+    int last = movidrive_find_def(md, IDX_P084_ERROR_T4);
     if (first < 0 || last < first) {
         return;
     }
@@ -172,10 +177,10 @@ static void record_fault(movidrive_t *md, uint8_t number)
     }
     md->ram[first] = number;
     md->ee[first] = number;
-    (void)md_ee_save_params(md, (size_t)first, (size_t)last);
+    (void)movidrive_ee_save_params(md, (size_t)first, (size_t)last);
 }
 
-void md_raise_fault(movidrive_t *md, uint8_t number, uint8_t reaction)
+void movidrive_raise_fault(movidrive_t *md, uint8_t number, uint8_t reaction)
 {
     if (md->fault != 0) {
         return;
@@ -190,13 +195,13 @@ void movidrive_inject_fault(movidrive_t *md, uint8_t number)
     if (number == 0u) {
         return;
     }
-    md_raise_fault(md, number, REACT_IMM_ERROR);
-    md_evaluate(md);
+    movidrive_raise_fault(md, number, REACT_IMM_ERROR);
+    movidrive_evaluate(md);
 }
 
-void md_fault_reset(movidrive_t *md)
+void movidrive_fault_reset(movidrive_t *md)
 {
-    if (md->fault == MD_FAULT_FIELDBUS_TIMEOUT && md->fieldbus_timeout) {
+    if (md->fault == MOVIDRIVE_FAULT_FIELDBUS_TIMEOUT && md->fieldbus_timeout) {
         return; /* the cause is still there */
     }
     md->fault = 0;

@@ -1,11 +1,11 @@
 /* The card's inverter link, in process: requests run on the emulated MOVIDRIVE at once, their
- * responses come back delay_us later from md_inproc_link_poll(), so the card sees the same
+ * responses come back delay_us later from movidrive_inproc_link_poll(), so the card sees the same
  * asynchronous behaviour as over SBus. */
 #include <string.h>
 
 #include "movidrive/movidrive.h"
 
-static void push_inputs(md_inproc_link_t *l)
+static void push_inputs(movidrive_inproc_link_t *l)
 {
     if (l->process_inputs == NULL || l->pd_words == 0) {
         return;
@@ -17,7 +17,7 @@ static void push_inputs(md_inproc_link_t *l)
 
 static int link_param_request(void *ctx, uint8_t channel, const uint8_t req[ML_TELEGRAM_LEN])
 {
-    md_inproc_link_t *l = ctx;
+    movidrive_inproc_link_t *l = ctx;
     if (channel >= ML_MAX_CHANNELS || l->ch[channel].pending) {
         return -1;
     }
@@ -29,7 +29,7 @@ static int link_param_request(void *ctx, uint8_t channel, const uint8_t req[ML_T
 
 static void link_process_outputs(void *ctx, const uint16_t *po, uint8_t n)
 {
-    md_inproc_link_t *l = ctx;
+    movidrive_inproc_link_t *l = ctx;
     if (n > ML_MAX_PD) {
         n = ML_MAX_PD;
     }
@@ -40,7 +40,7 @@ static void link_process_outputs(void *ctx, const uint16_t *po, uint8_t n)
 
 static void link_fieldbus_status(void *ctx, const ml_fieldbus_status_t *status)
 {
-    md_inproc_link_t *l = ctx;
+    movidrive_inproc_link_t *l = ctx;
     movidrive_fieldbus_status(l->md, status);
 }
 
@@ -50,12 +50,12 @@ static const ml_link_ops_t inproc_ops = {
     .fieldbus_status = link_fieldbus_status,
 };
 
-ml_link_t md_inproc_link(md_inproc_link_t *l)
+ml_link_t movidrive_inproc_link(movidrive_inproc_link_t *l)
 {
     return (ml_link_t){.ops = &inproc_ops, .ctx = l};
 }
 
-hal_time_us_t md_inproc_link_poll(md_inproc_link_t *l, hal_time_us_t now)
+hal_time_us_t movidrive_inproc_link_poll(movidrive_inproc_link_t *l, hal_time_us_t now)
 {
     l->now = now;
     hal_time_us_t next = movidrive_tick(l->md, now);

@@ -1,15 +1,15 @@
-/* md_inproc_link: the card's inverter link in process. Responses arrive delay_us after the
+/* movidrive_inproc_link: the card's inverter link in process. Responses arrive delay_us after the
  * request, never at once; PO go to the drive and fresh PI come back; the fieldbus status reaches
  * P819/P831. Also driven through the card's service client (movilink_client). */
 #include <stdio.h>
 #include <string.h>
 
 #include "check.h"
-#include "md_test_util.h"
+#include "movidrive_test_util.h"
 #include "movilink/movilink_client.h"
 
 static movidrive_t md;
-static md_inproc_link_t link_;
+static movidrive_inproc_link_t link_;
 static ml_link_t ml;
 
 static struct {
@@ -35,7 +35,7 @@ static void on_response(void *c, uint8_t channel, const uint8_t rsp[ML_TELEGRAM_
     if (card.chain > 0) {
         card.chain--;
         uint8_t req[8];
-        md_req(req, 0x01, MD_IDX_P130_RAMP_UP, 0);
+        movidrive_req(req, 0x01, MOVIDRIVE_IDX_P130_RAMP_UP, 0);
         CHECK_EQ(ml.ops->param_request(ml.ctx, channel, req), 0);
     }
 }
@@ -59,26 +59,26 @@ static void setup(uint32_t delay_us)
     link_.process_inputs = on_inputs;
     link_.card = &card;
     link_.delay_us = delay_us;
-    ml = md_inproc_link(&link_);
+    ml = movidrive_inproc_link(&link_);
     now = 1000;
-    md_inproc_link_poll(&link_, now);
+    movidrive_inproc_link_poll(&link_, now);
 }
 
 static void poll_to(hal_time_us_t t)
 {
     now = t;
-    md_inproc_link_poll(&link_, now);
+    movidrive_inproc_link_poll(&link_, now);
 }
 
 static void test_delay(void)
 {
     setup(5000);
     uint8_t req[8];
-    md_req(req, 0x01, MD_IDX_FIRMWARE, 0);
+    movidrive_req(req, 0x01, MOVIDRIVE_IDX_FIRMWARE, 0);
     CHECK_EQ(ml.ops->param_request(ml.ctx, 0, req), 0);
     CHECK_EQ(card.responses, 0); /* never answered inside the request */
     /* the next deadline the link asks for is the response */
-    CHECK_EQ(md_inproc_link_poll(&link_, now), 1000 + 5000);
+    CHECK_EQ(movidrive_inproc_link_poll(&link_, now), 1000 + 5000);
     poll_to(5999);
     CHECK_EQ(card.responses, 0);
     poll_to(6000);
@@ -90,10 +90,10 @@ static void test_delay(void)
     CHECK_EQ(card.responses, 1); /* once */
 
     /* two channels in parallel, each with its own due time */
-    md_req(req, 0x32, MD_IDX_P130_RAMP_UP, 3000);
+    movidrive_req(req, 0x32, MOVIDRIVE_IDX_P130_RAMP_UP, 3000);
     CHECK_EQ(ml.ops->param_request(ml.ctx, 1, req), 0);
     poll_to(22000);
-    md_req(req, 0x01, MD_IDX_P130_RAMP_UP, 0);
+    movidrive_req(req, 0x01, MOVIDRIVE_IDX_P130_RAMP_UP, 0);
     CHECK_EQ(ml.ops->param_request(ml.ctx, 2, req), 0);
     /* one request per channel at a time */
     CHECK_EQ(ml.ops->param_request(ml.ctx, 2, req), -1);
@@ -109,25 +109,25 @@ static void test_delay(void)
     CHECK_EQ(card.channel, 2);
     CHECK_BYTES(card.rsp, 8, 0x01, 0x00, 0x21, 0x16, 0x00, 0x00, 0x0B, 0xB8);
     /* errors travel the same way */
-    md_req(req, 0x32, MD_IDX_FIRMWARE, 0);
+    movidrive_req(req, 0x32, MOVIDRIVE_IDX_FIRMWARE, 0);
     CHECK_EQ(ml.ops->param_request(ml.ctx, 3, req), 0);
     poll_to(32000);
     CHECK_BYTES(card.rsp, 8, 0xB2, 0x00, 0x20, 0x6C, 0x08, 0x00, 0x00, 0x12);
 
     /* a completion that starts the next request on the same channel */
     card.chain = 1;
-    md_req(req, 0x01, MD_IDX_FIRMWARE, 0);
+    movidrive_req(req, 0x01, MOVIDRIVE_IDX_FIRMWARE, 0);
     CHECK_EQ(ml.ops->param_request(ml.ctx, 0, req), 0);
     poll_to(37000);
     CHECK_EQ(card.responses, 5);
-    CHECK_EQ(md_inproc_link_poll(&link_, now), 42000);
+    CHECK_EQ(movidrive_inproc_link_poll(&link_, now), 42000);
     poll_to(42000);
     CHECK_EQ(card.responses, 6);
     CHECK_BYTES(card.rsp, 8, 0x01, 0x00, 0x21, 0x16, 0x00, 0x00, 0x0B, 0xB8);
 
     /* delay 0: delivered at the next poll, still not inside the request */
     setup(0);
-    md_req(req, 0x01, MD_IDX_FIRMWARE, 0);
+    movidrive_req(req, 0x01, MOVIDRIVE_IDX_FIRMWARE, 0);
     CHECK_EQ(ml.ops->param_request(ml.ctx, 0, req), 0);
     CHECK_EQ(card.responses, 0);
     poll_to(now);
@@ -137,8 +137,8 @@ static void test_delay(void)
 static void test_process_data(void)
 {
     setup(1000);
-    CHECK_EQ(md_write(&md, MD_IDX_P100_SETPOINT_SOURCE, 3, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P101_CONTROL_SOURCE, 2, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE, 3, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P101_CONTROL_SOURCE, 2, 1), 0);
     const uint16_t po[3] = {0x0006, 1500, 0};
     ml.ops->process_outputs(ml.ctx, po, 3);
     CHECK_EQ(card.inputs, 1); /* PI pushed right away */
@@ -157,8 +157,8 @@ static void test_process_data(void)
                                .baud = 12000000, .address = 7, .watchdog_ms = 60, .prm_count = 1,
                                .data_exchange = true};
     ml.ops->fieldbus_status(ml.ctx, &st);
-    CHECK_EQ(md_read(&md, MD_IDX_P819_FIELDBUS_TIMEOUT), 60);
-    CHECK_EQ(md_read(&md, 8454), 7);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P819_FIELDBUS_TIMEOUT), 60);
+    CHECK_EQ(movidrive_read(&md, 8454), 7);
     st.timeout = true;
     ml.ops->fieldbus_status(ml.ctx, &st);
     poll_to(now + 1000);
@@ -194,7 +194,7 @@ static void test_with_client(void)
     ml_client_init(&client, ml, 200000);
     memset(&client_done, 0, sizeof client_done);
     uint8_t req[8];
-    md_req(req, 0x41, MD_IDX_P160_N11, 0); /* handshake set: the client clears it */
+    movidrive_req(req, 0x41, MOVIDRIVE_IDX_P160_N11, 0); /* handshake set: the client clears it */
     CHECK_EQ(ml_client_request(&client, 0, req, done_cb, NULL, now), 0);
     CHECK(ml_client_busy(&client, 0));
     poll_to(now + 2999);
@@ -206,7 +206,7 @@ static void test_with_client(void)
 
     /* slower than the client's patience: 6/2 from the card, the late answer dropped */
     link_.delay_us = 300000;
-    md_req(req, 0x01, MD_IDX_FIRMWARE, 0);
+    movidrive_req(req, 0x01, MOVIDRIVE_IDX_FIRMWARE, 0);
     CHECK_EQ(ml_client_request(&client, 0, req, done_cb, NULL, now), 0);
     hal_time_us_t start = now;
     poll_to(start + 200000);

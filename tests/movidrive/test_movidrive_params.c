@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "md_test_util.h"
+#include "movidrive_test_util.h"
 
 static movidrive_t md;
 
@@ -47,12 +47,12 @@ static void test_read(void)
     XCHG(0x01, 0x00, 0x20, 0x7E, 0x00, 0x00, 0x00, 0x00, 0x01, 0x00, 0x20, 0x7E, 0x00, 0x00,
          0x00, 0x00);
     /* P831 (8610 = 0x21A2) default 4 RAPID STOP/ERROR; P870 default 9 CTRL. WORD 1 */
-    CHECK_EQ(md_read(&md, MD_IDX_P831_FIELDBUS_REACTION), 4);
-    CHECK_EQ(md_read(&md, MD_IDX_P870_PO1), 9);
-    CHECK_EQ(md_read(&md, MD_IDX_P870_PO1 + 1), 1);
-    CHECK_EQ(md_read(&md, 8307), 6);
-    CHECK_EQ(md_read(&md, MD_IDX_P876_PO_ENABLE), 1);
-    CHECK_EQ(md_read(&md, MD_IDX_P819_FIELDBUS_TIMEOUT), 500);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P831_FIELDBUS_REACTION), 4);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P870_PO1), 9);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P870_PO1 + 1), 1);
+    CHECK_EQ(movidrive_read(&md, 8307), 6);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P876_PO_ENABLE), 1);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P819_FIELDBUS_TIMEOUT), 500);
     /* H0..H511 start at 0 */
     XCHG(0x01, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x00, 0x00, 0x01, 0x00, 0x2A, 0xF8, 0x00, 0x00,
          0x00, 0x00);
@@ -72,7 +72,7 @@ static void test_write(void)
     /* handshake 0x72, as the cyclic channel sends it: the handshake is not echoed */
     XCHG(0x72, 0x00, 0x21, 0x16, 0x00, 0x00, 0x0F, 0xA0, 0x32, 0x00, 0x21, 0x16, 0x00, 0x00,
          0x0F, 0xA0);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 4000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 4000);
     /* DFP21B manual §6.3: write volatile H0 (11000 = 0x2AF8) = 0x0BB8 */
     XCHG(0x33, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x0B, 0xB8, 0x33, 0x00, 0x2A, 0xF8, 0x00, 0x00,
          0x0B, 0xB8);
@@ -81,34 +81,34 @@ static void test_write(void)
     /* protocol.md §C7: write volatile n11 = 300000 (300 rpm) */
     XCHG(0x73, 0x00, 0x21, 0x29, 0x00, 0x04, 0x93, 0xE0, 0x33, 0x00, 0x21, 0x29, 0x00, 0x04,
          0x93, 0xE0);
-    CHECK_EQ(md_read(&md, MD_IDX_P160_N11), 300000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P160_N11), 300000);
     /* negative values, H511 = -1 */
-    CHECK_EQ(md_write(&md, MD_IDX_P160_N11, (uint32_t)-250000, 1), 0);
-    CHECK_EQ((int32_t)md_read(&md, MD_IDX_P160_N11), -250000);
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0 + 511, 0xFFFFFFFFu, 1), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0 + 511), 0xFFFFFFFFu);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0 + 510), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P160_N11, (uint32_t)-250000, 1), 0);
+    CHECK_EQ((int32_t)movidrive_read(&md, MOVIDRIVE_IDX_P160_N11), -250000);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0 + 511, 0xFFFFFFFFu, 1), 0);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0 + 511), 0xFFFFFFFFu);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0 + 510), 0);
     /* the aliases P031 = P600 (8335) share one value */
-    CHECK_EQ(md_write(&md, 8335, 0, 1), 0);
-    CHECK_EQ(md_read(&md, 8335), 0);
+    CHECK_EQ(movidrive_write(&md, 8335, 0, 1), 0);
+    CHECK_EQ(movidrive_read(&md, 8335), 0);
     /* unsigned ranges: P092 0..0xFFFFFFFF, P221 1..3999999999 */
-    CHECK_EQ(md_write(&md, 8453, 0xFFFFFFFFu, 0), 0);
-    CHECK_EQ(md_read(&md, 8453), 0xFFFFFFFFu);
-    CHECK_EQ(md_write(&md, 8502, 3999999999u, 1), 0);
-    CHECK_EQ(md_read(&md, 8502), 3999999999u);
-    CHECK_EQ(md_write(&md, 8502, 4000000000u, 1), ML_ADD_TOO_HIGH);
-    CHECK_EQ(md_write(&md, 8502, 0, 1), ML_ADD_TOO_LOW);
+    CHECK_EQ(movidrive_write(&md, 8453, 0xFFFFFFFFu, 0), 0);
+    CHECK_EQ(movidrive_read(&md, 8453), 0xFFFFFFFFu);
+    CHECK_EQ(movidrive_write(&md, 8502, 3999999999u, 1), 0);
+    CHECK_EQ(movidrive_read(&md, 8502), 3999999999u);
+    CHECK_EQ(movidrive_write(&md, 8502, 4000000000u, 1), ML_ADD_TOO_HIGH);
+    CHECK_EQ(movidrive_write(&md, 8502, 0, 1), ML_ADD_TOO_LOW);
     /* limits themselves are accepted */
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 2000000, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 0, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 2000000, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 0, 1), 0);
     /* P831 = 6 EMERG. STOP/WARNG: the A list's typo fixed (protocol.md §C3.6) */
-    CHECK_EQ(md_write(&md, MD_IDX_P831_FIELDBUS_REACTION, 6, 1), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_P831_FIELDBUS_REACTION), 6);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P831_FIELDBUS_REACTION, 6, 1), 0);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P831_FIELDBUS_REACTION), 6);
     /* commands read back 0 */
-    CHECK_EQ(md_write(&md, 8617, 1, 0), 0); /* P840 manual reset */
-    CHECK_EQ(md_read(&md, 8617), 0);
-    CHECK_EQ(md_write(&md, 8596, 1, 0), 0); /* P804 reset error memory */
-    CHECK_EQ(md_read(&md, 8596), 0);
+    CHECK_EQ(movidrive_write(&md, 8617, 1, 0), 0); /* P840 manual reset */
+    CHECK_EQ(movidrive_read(&md, 8617), 0);
+    CHECK_EQ(movidrive_write(&md, 8596, 1, 0), 0); /* P804 reset error memory */
+    CHECK_EQ(movidrive_read(&md, 8596), 0);
 }
 
 static void test_min_max_default(void)
@@ -125,7 +125,7 @@ static void test_min_max_default(void)
     XCHG(0x46, 0x00, 0x21, 0x29, 0x00, 0x00, 0x00, 0x00, 0x06, 0x00, 0x21, 0x29, 0x00, 0x02,
          0x49, 0xF0);
     /* default after a write stays the factory value */
-    CHECK_EQ(md_write(&md, MD_IDX_P160_N11, 1000, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P160_N11, 1000, 1), 0);
     XCHG(0x06, 0x00, 0x21, 0x29, 0x00, 0x00, 0x00, 0x00, 0x06, 0x00, 0x21, 0x29, 0x00, 0x02,
          0x49, 0xF0);
     /* P150 ramp t3 (8486 = 0x2126): 200 .. 50000, default 20000 */
@@ -214,12 +214,12 @@ static void test_attribute(void)
     size_t visited = 0;
     while (idx != 0 && visited < 2000) {
         uint8_t rsp[8];
-        md_svc(&md, 0x08, idx, 0, rsp);
+        movidrive_svc(&md, 0x08, idx, 0, rsp);
         CHECK_EQ(rsp[0] & 0x80, 0);
         idx = hal_get_be16(rsp + 4);
         visited++;
     }
-    CHECK_EQ(visited, md.num_defs + MD_IPOS_VARS);
+    CHECK_EQ(visited, md.num_defs + MOVIDRIVE_IPOS_VARS);
 }
 
 /* Errors whatever the drive does: illegal index, read only, range, enumeration, P803 lock. */
@@ -250,14 +250,14 @@ static void test_errors(void)
          0x00, 0x16);
     XCHG(0x32, 0x00, 0x21, 0x29, 0xFF, 0xB3, 0xB4, 0xBF, 0xB2, 0x00, 0x21, 0x29, 0x08, 0x00,
          0x00, 0x16);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000); /* nothing changed */
-    CHECK_EQ(md_read(&md, MD_IDX_P160_N11), 150000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000); /* nothing changed */
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P160_N11), 150000);
     /* 0x1D value not permitted: RESERVED enumeration values (P873 10, P950 3..5) */
     XCHG(0x32, 0x00, 0x20, 0x73, 0x00, 0x00, 0x00, 0x0A, 0xB2, 0x00, 0x20, 0x73, 0x08, 0x00,
          0x00, 0x1D);
-    CHECK_EQ(md_write(&md, 8777, 4, 1), ML_ADD_VALUE_NOT_PERMITTED);
-    CHECK_EQ(md_write(&md, 8777, 6, 1), 0);
-    CHECK_EQ(md_write(&md, 8307, 11, 1), 0);
+    CHECK_EQ(movidrive_write(&md, 8777, 4, 1), ML_ADD_VALUE_NOT_PERMITTED);
+    CHECK_EQ(movidrive_write(&md, 8777, 6, 1), 0);
+    CHECK_EQ(movidrive_write(&md, 8307, 11, 1), 0);
     /* 0x13 parameter lock P803: ordinary parameters and S parameters */
     XCHG(0x32, 0x00, 0x21, 0x93, 0x00, 0x00, 0x00, 0x01, 0x32, 0x00, 0x21, 0x93, 0x00, 0x00,
          0x00, 0x01);
@@ -265,26 +265,27 @@ static void test_errors(void)
          0x00, 0x13);
     XCHG(0x33, 0x00, 0x21, 0x0D, 0x00, 0x00, 0x00, 0x03, 0xB3, 0x00, 0x21, 0x0D, 0x08, 0x00,
          0x00, 0x13);
-    CHECK_EQ(md_write(&md, MD_IDX_P876_PO_ENABLE, 0, 1), 0);  /* S: allowed */
-    CHECK_EQ(md_write(&md, MD_IDX_P819_FIELDBUS_TIMEOUT, 100, 0), 0); /* S */
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0 + 3, 77, 1), 0);   /* variables are not locked */
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000);
-    CHECK_EQ(md_write(&md, MD_IDX_P803_PARAM_LOCK, 2, 1), ML_ADD_TOO_HIGH);
-    CHECK_EQ(md_write(&md, MD_IDX_P803_PARAM_LOCK, 0, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 3000, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P876_PO_ENABLE, 0, 1), 0);  /* S: allowed */
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P819_FIELDBUS_TIMEOUT, 100, 0), 0); /* S */
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0 + 3, 77, 1),
+             0); /* variables are not locked */
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P803_PARAM_LOCK, 2, 1), ML_ADD_TOO_HIGH);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P803_PARAM_LOCK, 0, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 3000, 1), 0);
     /* read only beats the lock */
-    CHECK_EQ(md_write(&md, MD_IDX_P803_PARAM_LOCK, 1, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_FIRMWARE, 0, 1), ML_ADD_READ_ONLY);
-    CHECK_EQ(md_write(&md, MD_IDX_P803_PARAM_LOCK, 0, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P803_PARAM_LOCK, 1, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_FIRMWARE, 0, 1), ML_ADD_READ_ONLY);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P803_PARAM_LOCK, 0, 1), 0);
 }
 
 /* 0x1C controller inhibit required / 0x20 output stage enabled: a running drive */
 static void test_errors_running(void)
 {
     fresh();
-    CHECK_EQ(md_write(&md, MD_IDX_P100_SETPOINT_SOURCE, 3, 0), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P101_CONTROL_SOURCE, 2, 0), 0);
-    md_po3(&md, 0x0006, 0, 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE, 3, 0), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P101_CONTROL_SOURCE, 2, 0), 0);
+    movidrive_po3(&md, 0x0006, 0, 0);
     CHECK(md.output_stage_enabled);
     XCHG(0x32, 0x00, 0x21, 0x0D, 0x00, 0x00, 0x00, 0x00, 0xB2, 0x00, 0x21, 0x0D, 0x08, 0x00,
          0x00, 0x1C);
@@ -293,23 +294,25 @@ static void test_errors_running(void)
     XCHG(0x33, 0x00, 0x20, 0x75, 0x00, 0x00, 0x00, 0x01, 0xB3, 0x00, 0x20, 0x75, 0x08, 0x00,
          0x00, 0x20);
     /* P802 factory setting is R too */
-    CHECK_EQ(md_write(&md, 8594, 1, 0), ML_ADD_CONTROLLER_INHIBIT_REQUIRED);
+    CHECK_EQ(movidrive_write(&md, 8594, 1, 0), ML_ADD_CONTROLLER_INHIBIT_REQUIRED);
     /* not R, not P87x: fine while running */
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 1000, 0), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 1000, 0), 0);
     /* no enable (0x0002 stop): output stage off after the ramp, but bus control word does not
      * inhibit -> still 0x1C; P870 is now allowed */
-    md_po3(&md, 0x0002, 0, 0);
+    movidrive_po3(&md, 0x0002, 0, 0);
     CHECK(!md.output_stage_enabled);
-    CHECK_EQ(md_write(&md, MD_IDX_P100_SETPOINT_SOURCE, 0, 0), ML_ADD_CONTROLLER_INHIBIT_REQUIRED);
-    CHECK_EQ(md_write(&md, 8309, 1, 0), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE, 0, 0),
+             ML_ADD_CONTROLLER_INHIBIT_REQUIRED);
+    CHECK_EQ(movidrive_write(&md, 8309, 1, 0), 0);
     /* control word bit 0: controller inhibit -> R parameters writable */
-    md_po3(&md, 0x0001, 0, 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P101_CONTROL_SOURCE, 2, 1), 0);
+    movidrive_po3(&md, 0x0001, 0, 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P101_CONTROL_SOURCE, 2, 1), 0);
     /* terminal DI00 open inhibits as well, whatever the control word */
-    md_po3(&md, 0x0006, 0, 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P100_SETPOINT_SOURCE, 3, 0), ML_ADD_CONTROLLER_INHIBIT_REQUIRED);
+    movidrive_po3(&md, 0x0006, 0, 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE, 3, 0),
+             ML_ADD_CONTROLLER_INHIBIT_REQUIRED);
     movidrive_set_terminal_enable(&md, false);
-    CHECK_EQ(md_write(&md, MD_IDX_P100_SETPOINT_SOURCE, 3, 0), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE, 3, 0), 0);
 }
 
 /* Errors of classes other than 8: illegal service, type conflict. */
@@ -326,17 +329,20 @@ static void test_errors_other_classes(void)
          0x00, 0x00);
     XCHG(0x23, 0x00, 0x21, 0x16, 0x00, 0x00, 0x0B, 0xB8, 0xA3, 0x00, 0x21, 0x16, 0x06, 0x08,
          0x00, 0x00);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000);
 }
 
 /* "Write volatile" refused (0x1D) where the table says so: no CSV row does today, so a table
  * with such an entry is swapped in. */
 static void test_no_volatile(void)
 {
-    static const md_param_def_t defs[] = {
-        {8470, 0, 1000, 10, 4, -3, MD_PF_NON_VOLATILE | MD_PF_HAS_MIN | MD_PF_HAS_MAX, 0},
+    static const movidrive_param_def_t defs[] = {
+        {8470, 0, 1000, 10, 4, -3,
+         MOVIDRIVE_PF_NON_VOLATILE | MOVIDRIVE_PF_HAS_MIN | MOVIDRIVE_PF_HAS_MAX, 0},
         {8471, 0, 1000, 10, 4, -3,
-         MD_PF_NON_VOLATILE | MD_PF_NO_VOLATILE | MD_PF_HAS_MIN | MD_PF_HAS_MAX, 0},
+         MOVIDRIVE_PF_NON_VOLATILE | MOVIDRIVE_PF_NO_VOLATILE | MOVIDRIVE_PF_HAS_MIN |
+             MOVIDRIVE_PF_HAS_MAX,
+         0},
     };
     fresh();
     md.defs = defs;
@@ -346,41 +352,43 @@ static void test_no_volatile(void)
          0x00, 0x1D);
     XCHG(0x32, 0x00, 0x21, 0x17, 0x00, 0x00, 0x00, 0x05, 0x32, 0x00, 0x21, 0x17, 0x00, 0x00,
          0x00, 0x05);
-    CHECK_EQ(md_write(&md, 8470, 7, 0), 0);
-    CHECK_EQ(md_read(&md, 8471), 5);
-    CHECK_EQ(md_read(&md, 8470), 7);
+    CHECK_EQ(movidrive_write(&md, 8470, 7, 0), 0);
+    CHECK_EQ(movidrive_read(&md, 8471), 5);
+    CHECK_EQ(movidrive_read(&md, 8470), 7);
     /* walking: 8470 -> 8471 -> H0 */
     uint8_t rsp[8];
-    md_svc(&md, 0x08, 8471, 0, rsp);
-    CHECK_EQ(hal_get_be16(rsp + 4), MD_IDX_IPOS_H0);
+    movidrive_svc(&md, 0x08, 8471, 0, rsp);
+    CHECK_EQ(hal_get_be16(rsp + 4), MOVIDRIVE_IDX_IPOS_H0);
 }
 
 /* The generated table: sorted, unique, the facts the brief names. */
 static void test_table(void)
 {
     fresh();
-    CHECK(md.num_defs > 300 && md.num_defs <= MD_MAX_PARAMS);
+    CHECK(md.num_defs > 300 && md.num_defs <= MOVIDRIVE_MAX_PARAMS);
     int sorted = 1;
     for (size_t k = 1; k < md.num_defs; k++) {
         sorted &= md.defs[k - 1].index < md.defs[k].index;
     }
     CHECK(sorted);
-    const md_param_def_t *d = movidrive_param_def(&md, MD_IDX_P160_N11);
+    const movidrive_param_def_t *d = movidrive_param_def(&md, MOVIDRIVE_IDX_P160_N11);
     CHECK(d != NULL && d->def == 150000 && d->quantity == 11 && d->conversion == 66);
-    d = movidrive_param_def(&md, MD_IDX_P100_SETPOINT_SOURCE);
-    CHECK(d != NULL && (d->flags & MD_PF_INHIBIT_REQUIRED) && (d->flags & MD_PF_NON_VOLATILE));
+    d = movidrive_param_def(&md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE);
+    CHECK(d != NULL && (d->flags & MOVIDRIVE_PF_INHIBIT_REQUIRED) &&
+          (d->flags & MOVIDRIVE_PF_NON_VOLATILE));
     CHECK(d != NULL && d->enum_mask == 0x7FFu);
-    d = movidrive_param_def(&md, MD_IDX_P803_PARAM_LOCK);
-    CHECK(d != NULL && (d->flags & MD_PF_LOCK_EXEMPT));
-    d = movidrive_param_def(&md, MD_IDX_FIRMWARE);
-    CHECK(d != NULL && (d->flags & MD_PF_READ_ONLY) && d->def == 0x311C7289);
-    d = movidrive_param_def(&md, MD_IDX_IPOS_H0 + 200);
-    CHECK(d != NULL && (d->flags & MD_PF_NON_VOLATILE) && !(d->flags & MD_PF_NO_VOLATILE));
-    CHECK(movidrive_param_def(&md, MD_IDX_IPOS_H0 + 512) == NULL);
+    d = movidrive_param_def(&md, MOVIDRIVE_IDX_P803_PARAM_LOCK);
+    CHECK(d != NULL && (d->flags & MOVIDRIVE_PF_LOCK_EXEMPT));
+    d = movidrive_param_def(&md, MOVIDRIVE_IDX_FIRMWARE);
+    CHECK(d != NULL && (d->flags & MOVIDRIVE_PF_READ_ONLY) && d->def == 0x311C7289);
+    d = movidrive_param_def(&md, MOVIDRIVE_IDX_IPOS_H0 + 200);
+    CHECK(d != NULL && (d->flags & MOVIDRIVE_PF_NON_VOLATILE) &&
+          !(d->flags & MOVIDRIVE_PF_NO_VOLATILE));
+    CHECK(movidrive_param_def(&md, MOVIDRIVE_IDX_IPOS_H0 + 512) == NULL);
     CHECK(movidrive_param_def(&md, 8302) == NULL);
     size_t no_volatile = 0;
     for (size_t k = 0; k < md.num_defs; k++) {
-        no_volatile += (md.defs[k].flags & MD_PF_NO_VOLATILE) ? 1u : 0u;
+        no_volatile += (md.defs[k].flags & MOVIDRIVE_PF_NO_VOLATILE) ? 1u : 0u;
     }
     CHECK_EQ(no_volatile, 0); /* the CSV forbids write volatile nowhere */
 }

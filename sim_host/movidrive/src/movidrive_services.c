@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "hal/hal_byte_order.h"
-#include "md_internal.h"
+#include "movidrive_internal.h"
 
 /* ---------------------------------------------------------------------------------------------
  * Write */
@@ -20,28 +20,28 @@ static bool inhibit_for_write(const movidrive_t *md)
     if (md->output_stage_enabled) {
         return false;
     }
-    return !md_cw_in_effect(md) || (md->control_word & MD_CW_CONTROLLER_INHIBIT);
+    return !movidrive_cw_in_effect(md) || (md->control_word & MOVIDRIVE_CW_CONTROLLER_INHIBIT);
 }
 
 /* P870..P875: the process data mapping must not change under a running motor. */
 static bool needs_output_stage_off(uint16_t index)
 {
-    return index >= MD_IDX_P870_PO1 && index <= IDX_P873_PI1 + 2u;
+    return index >= MOVIDRIVE_IDX_P870_PO1 && index <= IDX_P873_PI1 + 2u;
 }
 
 static bool is_setpoint_description(uint16_t index)
 {
-    return index >= MD_IDX_P870_PO1 && index <= MD_IDX_P870_PO1 + 2u;
+    return index >= MOVIDRIVE_IDX_P870_PO1 && index <= MOVIDRIVE_IDX_P870_PO1 + 2u;
 }
 
 /* H0..H511: variables, not parameters, so P803 does not lock them (I). */
 static uint8_t write_ipos(movidrive_t *md, uint16_t index, int32_t v, bool non_volatile)
 {
-    size_t i = index - MD_IDX_IPOS_H0;
+    size_t i = index - MOVIDRIVE_IDX_IPOS_H0;
     md->ipos[i] = v;
     if (non_volatile) {
         md->ee_ipos[i] = v;
-        if (md_ee_save_ipos(md, i) != 0) {
+        if (movidrive_ee_save_ipos(md, i) != 0) {
             return ML_ADD_NOT_SAVED;
         }
     }
@@ -49,19 +49,20 @@ static uint8_t write_ipos(movidrive_t *md, uint16_t index, int32_t v, bool non_v
 }
 
 /* Whether the entry may be written now, whatever the value: the class 8 code or 0. */
-static uint8_t access_code(const movidrive_t *md, uint16_t index, const md_param_def_t *d,
+static uint8_t access_code(const movidrive_t *md, uint16_t index, const movidrive_param_def_t *d,
                            bool non_volatile)
 {
-    if (d->flags & MD_PF_READ_ONLY) {
+    if (d->flags & MOVIDRIVE_PF_READ_ONLY) {
         return ML_ADD_READ_ONLY;
     }
-    if (md_ram_value(md, MD_IDX_P803_PARAM_LOCK) == 1 && !(d->flags & MD_PF_LOCK_EXEMPT)) {
+    if (movidrive_ram_value(md, MOVIDRIVE_IDX_P803_PARAM_LOCK) == 1 &&
+        !(d->flags & MOVIDRIVE_PF_LOCK_EXEMPT)) {
         return ML_ADD_PARAMETER_LOCK;
     }
-    if (!non_volatile && (d->flags & MD_PF_NO_VOLATILE)) {
+    if (!non_volatile && (d->flags & MOVIDRIVE_PF_NO_VOLATILE)) {
         return ML_ADD_VALUE_NOT_PERMITTED;
     }
-    if ((d->flags & MD_PF_INHIBIT_REQUIRED) && !inhibit_for_write(md)) {
+    if ((d->flags & MOVIDRIVE_PF_INHIBIT_REQUIRED) && !inhibit_for_write(md)) {
         return ML_ADD_CONTROLLER_INHIBIT_REQUIRED;
     }
     if (needs_output_stage_off(index) && md->output_stage_enabled) {
@@ -71,35 +72,36 @@ static uint8_t access_code(const movidrive_t *md, uint16_t index, const md_param
 }
 
 /* Whether the value fits the entry: too high, too low, not an enumeration value, or 0. */
-static uint8_t value_code(const md_param_def_t *d, int32_t v)
+static uint8_t value_code(const movidrive_param_def_t *d, int32_t v)
 {
-    if (d->flags & MD_PF_UNSIGNED) {
-        if ((d->flags & MD_PF_HAS_MAX) && (uint32_t)v > (uint32_t)d->max) {
+    if (d->flags & MOVIDRIVE_PF_UNSIGNED) {
+        if ((d->flags & MOVIDRIVE_PF_HAS_MAX) && (uint32_t)v > (uint32_t)d->max) {
             return ML_ADD_TOO_HIGH;
         }
-        if ((d->flags & MD_PF_HAS_MIN) && (uint32_t)v < (uint32_t)d->min) {
+        if ((d->flags & MOVIDRIVE_PF_HAS_MIN) && (uint32_t)v < (uint32_t)d->min) {
             return ML_ADD_TOO_LOW;
         }
     } else {
-        if ((d->flags & MD_PF_HAS_MAX) && v > d->max) {
+        if ((d->flags & MOVIDRIVE_PF_HAS_MAX) && v > d->max) {
             return ML_ADD_TOO_HIGH;
         }
-        if ((d->flags & MD_PF_HAS_MIN) && v < d->min) {
+        if ((d->flags & MOVIDRIVE_PF_HAS_MIN) && v < d->min) {
             return ML_ADD_TOO_LOW;
         }
     }
-    return md_value_in_range(d, v) ? 0u : ML_ADD_VALUE_NOT_PERMITTED;
+    return movidrive_value_in_range(d, v) ? 0u : ML_ADD_VALUE_NOT_PERMITTED;
 }
 
 /* P804 = 1 ERROR MEMORY: P080..P084 to 0, in RAM and EEPROM. */
 static uint8_t clear_error_memory(movidrive_t *md)
 {
-    int first = md_find_def(md, IDX_P080_ERROR_T0);
-    int last = md_find_def(md, IDX_P084_ERROR_T4);
+    int first = movidrive_find_def(md, IDX_P080_ERROR_T0);
+    int last = movidrive_find_def(md, IDX_P084_ERROR_T4);
     for (int j = first; j >= 0 && j <= last; j++) {
         md->ram[j] = md->ee[j] = 0;
     }
-    if (first >= 0 && last >= first && md_ee_save_params(md, (size_t)first, (size_t)last) != 0) {
+    if (first >= 0 && last >= first &&
+        movidrive_ee_save_params(md, (size_t)first, (size_t)last) != 0) {
         return ML_ADD_NOT_SAVED;
     }
     return 0;
@@ -117,8 +119,8 @@ static bool run_command(movidrive_t *md, uint16_t index, int32_t v, uint8_t *cod
         return true;
     case IDX_P840_MANUAL_RESET:
         if (v == 1) {
-            md_fault_reset(md);
-            md_evaluate(md);
+            movidrive_fault_reset(md);
+            movidrive_evaluate(md);
         }
         return true;
     case IDX_P804_RESET_STATS:
@@ -135,24 +137,24 @@ static bool run_command(movidrive_t *md, uint16_t index, int32_t v, uint8_t *cod
 static uint8_t store(movidrive_t *md, int k, int32_t v, bool non_volatile)
 {
     md->ram[k] = v;
-    if (!non_volatile || !(md->defs[k].flags & MD_PF_NON_VOLATILE)) {
+    if (!non_volatile || !(md->defs[k].flags & MOVIDRIVE_PF_NON_VOLATILE)) {
         return 0;
     }
     md->ee[k] = v;
-    return md_ee_save_params(md, (size_t)k, (size_t)k) != 0 ? ML_ADD_NOT_SAVED : 0u;
+    return movidrive_ee_save_params(md, (size_t)k, (size_t)k) != 0 ? ML_ADD_NOT_SAVED : 0u;
 }
 
 /* Returns the class 8 additional code, 0 = done. */
 static uint8_t write_param(movidrive_t *md, uint16_t index, int32_t v, bool non_volatile)
 {
-    if (md_is_ipos(index)) {
+    if (movidrive_is_ipos(index)) {
         return write_ipos(md, index, v, non_volatile);
     }
-    int k = md_find_def(md, index);
+    int k = movidrive_find_def(md, index);
     if (k < 0) {
         return ML_ADD_ILLEGAL_INDEX;
     }
-    const md_param_def_t *d = &md->defs[k];
+    const movidrive_param_def_t *d = &md->defs[k];
     uint8_t code = access_code(md, index, d, non_volatile);
     if (code == 0) {
         code = value_code(d, v);
@@ -164,12 +166,12 @@ static uint8_t write_param(movidrive_t *md, uint16_t index, int32_t v, bool non_
     code = store(md, k, v, non_volatile);
     /* S5: changing P870..P872 sets P876 PO data enable to NO. */
     if (is_setpoint_description(index) && old != v) {
-        int e = md_find_def(md, MD_IDX_P876_PO_ENABLE);
+        int e = movidrive_find_def(md, MOVIDRIVE_IDX_P876_PO_ENABLE);
         if (e >= 0 && store(md, e, 0, non_volatile) != 0) {
             code = ML_ADD_NOT_SAVED;
         }
     }
-    md_evaluate(md);
+    movidrive_evaluate(md);
     return code;
 }
 
@@ -180,10 +182,10 @@ static uint8_t write_param(movidrive_t *md, uint16_t index, int32_t v, bool non_
 static bool live_value(const movidrive_t *md, uint16_t index, int32_t *v)
 {
     switch (index) {
-    case MD_IDX_STATUS:
+    case MOVIDRIVE_IDX_STATUS:
         *v = movidrive_status_word(md);
         return true;
-    case MD_IDX_SPEED:
+    case MOVIDRIVE_IDX_SPEED:
         *v = md->speed_actual_mrpm;
         return true;
     case IDX_P002_FREQUENCY:
@@ -222,7 +224,7 @@ static bool live_value(const movidrive_t *md, uint16_t index, int32_t *v)
         return true;
     }
     if (index >= IDX_P097_PI1 && index <= IDX_P099_PI3) {
-        *v = md_pi_word(md, (uint8_t)(index - IDX_P097_PI1));
+        *v = movidrive_pi_word(md, (uint8_t)(index - IDX_P097_PI1));
         return true;
     }
     return false;
@@ -230,11 +232,11 @@ static bool live_value(const movidrive_t *md, uint16_t index, int32_t *v)
 
 bool movidrive_read_value(const movidrive_t *md, uint16_t index, int32_t *value)
 {
-    if (md_is_ipos(index)) {
-        *value = md->ipos[index - MD_IDX_IPOS_H0];
+    if (movidrive_is_ipos(index)) {
+        *value = md->ipos[index - MOVIDRIVE_IDX_IPOS_H0];
         return true;
     }
-    int k = md_find_def(md, index);
+    int k = movidrive_find_def(md, index);
     if (k < 0) {
         return false;
     }
@@ -246,55 +248,57 @@ bool movidrive_read_value(const movidrive_t *md, uint16_t index, int32_t *value)
 
 /* Bytes 4..5 the next index (after the table: H0; after H511: 0), bytes 6..7 the access
  * attribute (MOVITRAC B coding, protocol.md §C1.3). */
-static void put_attribute(const movidrive_t *md, uint16_t index, const md_param_def_t *d,
+static void put_attribute(const movidrive_t *md, uint16_t index, const movidrive_param_def_t *d,
                           uint8_t *rsp)
 {
     uint16_t next = 0;
-    if (md_is_ipos(index)) {
-        next = index + 1u < MD_IDX_IPOS_H0 + MD_IPOS_VARS ? (uint16_t)(index + 1u) : 0u;
+    if (movidrive_is_ipos(index)) {
+        next =
+            index + 1u < MOVIDRIVE_IDX_IPOS_H0 + MOVIDRIVE_IPOS_VARS ? (uint16_t)(index + 1u) : 0u;
     } else {
-        int k = md_find_def(md, index);
-        next = (size_t)k + 1u < md->num_defs ? md->defs[k + 1].index : (uint16_t)MD_IDX_IPOS_H0;
+        int k = movidrive_find_def(md, index);
+        next =
+            (size_t)k + 1u < md->num_defs ? md->defs[k + 1].index : (uint16_t)MOVIDRIVE_IDX_IPOS_H0;
     }
     uint16_t a = 0;
-    if (!(d->flags & MD_PF_READ_ONLY)) {
-        a |= MD_ATTR_WRITE_ALLOWED | MD_ATTR_FACTORY_RAM;
-        if (d->flags & MD_PF_NON_VOLATILE) {
-            a |= MD_ATTR_FACTORY_EEPROM;
+    if (!(d->flags & MOVIDRIVE_PF_READ_ONLY)) {
+        a |= MOVIDRIVE_ATTR_WRITE_ALLOWED | MOVIDRIVE_ATTR_FACTORY_RAM;
+        if (d->flags & MOVIDRIVE_PF_NON_VOLATILE) {
+            a |= MOVIDRIVE_ATTR_FACTORY_EEPROM;
         }
     }
-    if (d->flags & MD_PF_NON_VOLATILE) {
-        a |= MD_ATTR_EEPROM | MD_ATTR_EEPROM_VALID_AT_INIT;
+    if (d->flags & MOVIDRIVE_PF_NON_VOLATILE) {
+        a |= MOVIDRIVE_ATTR_EEPROM | MOVIDRIVE_ATTR_EEPROM_VALID_AT_INIT;
     }
-    if (!(d->flags & MD_PF_INHIBIT_REQUIRED)) {
-        a |= MD_ATTR_NO_INHIBIT_REQUIRED;
+    if (!(d->flags & MOVIDRIVE_PF_INHIBIT_REQUIRED)) {
+        a |= MOVIDRIVE_ATTR_NO_INHIBIT_REQUIRED;
     }
     hal_put_be16(rsp + 4, next);
     hal_put_be16(rsp + 6, a);
 }
 
 /* Read min / read max of an entry without a bound: the type's range. */
-static uint32_t min_value(const md_param_def_t *d)
+static uint32_t min_value(const movidrive_param_def_t *d)
 {
-    if (d->flags & MD_PF_HAS_MIN) {
+    if (d->flags & MOVIDRIVE_PF_HAS_MIN) {
         return (uint32_t)d->min;
     }
-    return (d->flags & MD_PF_UNSIGNED) ? 0u : (uint32_t)INT32_MIN;
+    return (d->flags & MOVIDRIVE_PF_UNSIGNED) ? 0u : (uint32_t)INT32_MIN;
 }
 
-static uint32_t max_value(const md_param_def_t *d)
+static uint32_t max_value(const movidrive_param_def_t *d)
 {
-    if (d->flags & MD_PF_HAS_MAX) {
+    if (d->flags & MOVIDRIVE_PF_HAS_MAX) {
         return (uint32_t)d->max;
     }
-    return (d->flags & MD_PF_UNSIGNED) ? UINT32_MAX : (uint32_t)INT32_MAX;
+    return (d->flags & MOVIDRIVE_PF_UNSIGNED) ? UINT32_MAX : (uint32_t)INT32_MAX;
 }
 
 /* ---------------------------------------------------------------------------------------------
  * The service */
 
 /* A request that passed the checks: its answer into rsp (management and index already set). */
-static void answer(movidrive_t *md, uint8_t service, uint16_t index, const md_param_def_t *d,
+static void answer(movidrive_t *md, uint8_t service, uint16_t index, const movidrive_param_def_t *d,
                    const uint8_t *req, uint8_t *rsp)
 {
     switch (service) {
@@ -358,7 +362,7 @@ void movidrive_param(movidrive_t *md, const uint8_t req[ML_TELEGRAM_LEN],
         ml_put_error(rsp, ML_CLASS_ACCESS, ML_CODE_TYPE_CONFLICT, 0);
         return;
     }
-    const md_param_def_t *d = movidrive_param_def(md, index);
+    const movidrive_param_def_t *d = movidrive_param_def(md, index);
     if (d == NULL || req[ML_OFF_RESERVED] != 0) {
         ml_put_error(rsp, ML_CLASS_OTHER, 0, ML_ADD_ILLEGAL_INDEX);
         return;

@@ -2,10 +2,10 @@
  * range and enumeration checks, factory defaults. */
 #include <string.h>
 
-#include "md_internal.h"
-#include "md_params.h"
+#include "movidrive_internal.h"
+#include "movidrive_params.h"
 
-int md_find_def(const movidrive_t *md, uint16_t index)
+int movidrive_find_def(const movidrive_t *md, uint16_t index)
 {
     /* The drive model looks up a dozen parameters on every tick (a quarter of a replay's time
      * went here): a binary search without a branch on the comparison, which the CPU cannot
@@ -14,7 +14,7 @@ int md_find_def(const movidrive_t *md, uint16_t index)
     if (n == 0u) {
         return -1;
     }
-    const md_param_def_t *base = md->defs;
+    const movidrive_param_def_t *base = md->defs;
     while (n > 1u) {
         size_t half = n / 2u;
         base = base[half].index <= index ? base + half : base;
@@ -23,44 +23,44 @@ int md_find_def(const movidrive_t *md, uint16_t index)
     return base->index == index ? (int)(base - md->defs) : -1;
 }
 
-int32_t md_ram_value(const movidrive_t *md, uint16_t index)
+int32_t movidrive_ram_value(const movidrive_t *md, uint16_t index)
 {
-    int k = md_find_def(md, index);
+    int k = movidrive_find_def(md, index);
     return k < 0 ? 0 : md->ram[k];
 }
 
-void md_set_ram_value(movidrive_t *md, uint16_t index, int32_t value)
+void movidrive_set_ram_value(movidrive_t *md, uint16_t index, int32_t value)
 {
-    int k = md_find_def(md, index);
+    int k = movidrive_find_def(md, index);
     if (k >= 0) {
         md->ram[k] = value;
     }
 }
 
-bool md_value_in_range(const md_param_def_t *d, int32_t value)
+bool movidrive_value_in_range(const movidrive_param_def_t *d, int32_t value)
 {
-    if (d->flags & MD_PF_UNSIGNED) {
-        if ((d->flags & MD_PF_HAS_MIN) && (uint32_t)value < (uint32_t)d->min) {
+    if (d->flags & MOVIDRIVE_PF_UNSIGNED) {
+        if ((d->flags & MOVIDRIVE_PF_HAS_MIN) && (uint32_t)value < (uint32_t)d->min) {
             return false;
         }
-        if ((d->flags & MD_PF_HAS_MAX) && (uint32_t)value > (uint32_t)d->max) {
+        if ((d->flags & MOVIDRIVE_PF_HAS_MAX) && (uint32_t)value > (uint32_t)d->max) {
             return false;
         }
     } else {
-        if ((d->flags & MD_PF_HAS_MIN) && value < d->min) {
+        if ((d->flags & MOVIDRIVE_PF_HAS_MIN) && value < d->min) {
             return false;
         }
-        if ((d->flags & MD_PF_HAS_MAX) && value > d->max) {
+        if ((d->flags & MOVIDRIVE_PF_HAS_MAX) && value > d->max) {
             return false;
         }
     }
     return d->enum_mask == 0u || (value >= 0 && value < 32 && (d->enum_mask >> value) & 1u);
 }
 
-void md_load_defaults(movidrive_t *md, bool keep_read_only)
+void movidrive_load_defaults(movidrive_t *md, bool keep_read_only)
 {
     for (size_t k = 0; k < md->num_defs; k++) {
-        if (keep_read_only && (md->defs[k].flags & MD_PF_READ_ONLY)) {
+        if (keep_read_only && (md->defs[k].flags & MOVIDRIVE_PF_READ_ONLY)) {
             continue;
         }
         md->ram[k] = md->defs[k].def;
@@ -70,11 +70,11 @@ void md_load_defaults(movidrive_t *md, bool keep_read_only)
     memset(md->ee_ipos, 0, sizeof md->ee_ipos);
 }
 
-const md_param_def_t *movidrive_param_def(const movidrive_t *md, uint16_t index)
+const movidrive_param_def_t *movidrive_param_def(const movidrive_t *md, uint16_t index)
 {
-    if (md_is_ipos(index)) {
-        return &md_ipos_def;
+    if (movidrive_is_ipos(index)) {
+        return &movidrive_ipos_def;
     }
-    int k = md_find_def(md, index);
+    int k = movidrive_find_def(md, index);
     return k < 0 ? NULL : &md->defs[k];
 }

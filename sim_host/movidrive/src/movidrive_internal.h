@@ -1,8 +1,8 @@
 /* What the parts of the emulated MOVIDRIVE share (private to sim_host/movidrive/src/):
  * parameter indices and codes, the RAM value table, the EEPROM image, the drive model's entry
  * points. Sources and assumptions: sim_host/movidrive/README.md. */
-#ifndef MOVIDRIVE_MD_INTERNAL_H
-#define MOVIDRIVE_MD_INTERNAL_H
+#ifndef MOVIDRIVE_MOVIDRIVE_INTERNAL_H
+#define MOVIDRIVE_MOVIDRIVE_INTERNAL_H
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -97,65 +97,65 @@ enum {
 #define INC_PER_REV 4096
 #define POLE_PAIRS 2
 
-/* ---- parameter values in RAM (md_values.c) ---- */
+/* ---- parameter values in RAM (movidrive_values.c) ---- */
 
-static inline bool md_is_ipos(uint16_t index)
+static inline bool movidrive_is_ipos(uint16_t index)
 {
-    return index >= MD_IDX_IPOS_H0 && index < MD_IDX_IPOS_H0 + MD_IPOS_VARS;
+    return index >= MOVIDRIVE_IDX_IPOS_H0 && index < MOVIDRIVE_IDX_IPOS_H0 + MOVIDRIVE_IPOS_VARS;
 }
 
 /* Position of a table parameter in defs[]/ram[]/ee[], -1 if the table lacks it. */
-int md_find_def(const movidrive_t *md, uint16_t index);
+int movidrive_find_def(const movidrive_t *md, uint16_t index);
 /* RAM value of a table parameter (0 if the table lacks it). */
-int32_t md_ram_value(const movidrive_t *md, uint16_t index);
+int32_t movidrive_ram_value(const movidrive_t *md, uint16_t index);
 /* Sets the RAM value of a table parameter (nothing if the table lacks it). */
-void md_set_ram_value(movidrive_t *md, uint16_t index, int32_t value);
+void movidrive_set_ram_value(movidrive_t *md, uint16_t index, int32_t value);
 /* Within min..max (unsigned compare for unsigned entries) and a known enumeration value. */
-bool md_value_in_range(const md_param_def_t *d, int32_t value);
+bool movidrive_value_in_range(const movidrive_param_def_t *d, int32_t value);
 /* Defaults into RAM and the EEPROM copy; keep_read_only leaves RO entries (P802). */
-void md_load_defaults(movidrive_t *md, bool keep_read_only);
+void movidrive_load_defaults(movidrive_t *md, bool keep_read_only);
 
-/* ---- EEPROM image (md_eeprom.c) ---- */
+/* ---- EEPROM image (movidrive_eeprom.c) ---- */
 
 /* Loads ee[]/ram[] from the NVM. 0: loaded or blank; -1 with a message in err. */
-int md_ee_load(movidrive_t *md, char *err, size_t errlen);
+int movidrive_ee_load(movidrive_t *md, char *err, size_t errlen);
 /* The whole image, one NVM write. 0 or -1. */
-int md_ee_save_all(movidrive_t *md);
+int movidrive_ee_save_all(movidrive_t *md);
 /* The records of the N parameters among defs[first..last], one contiguous write. 0 or -1. */
-int md_ee_save_params(movidrive_t *md, size_t first, size_t last);
+int movidrive_ee_save_params(movidrive_t *md, size_t first, size_t last);
 /* IPOS variable H<i>. 0 or -1. */
-int md_ee_save_ipos(movidrive_t *md, size_t i);
+int movidrive_ee_save_ipos(movidrive_t *md, size_t i);
 
-/* ---- control source and drive mode (md_control.c) ---- */
+/* ---- control source and drive mode (movidrive_control.c) ---- */
 
 /* Status bit 2: P876 = YES and P100 or P101 = FIELDBUS. */
-bool md_po_data_enabled(const movidrive_t *md);
+bool movidrive_po_data_enabled(const movidrive_t *md);
 /* The control word comes from the bus (P101 = FIELDBUS, PO enabled, PO received). */
-bool md_cw_in_effect(const movidrive_t *md);
+bool movidrive_cw_in_effect(const movidrive_t *md);
 /* First received PO word (PO1..PO3) whose P870..P872 description is `function`. */
-bool md_po_word(const movidrive_t *md, int32_t function, uint16_t *word);
+bool movidrive_po_word(const movidrive_t *md, int32_t function, uint16_t *word);
 /* Control word 1 from the PO words (0 when the bus does not control the unit). */
-uint16_t md_compute_control_word(const movidrive_t *md);
+uint16_t movidrive_compute_control_word(const movidrive_t *md);
 /* Control word bit 4 from the bus. */
-bool md_ramp_set_2(const movidrive_t *md);
+bool movidrive_ramp_set_2(const movidrive_t *md);
 /* Re-evaluates control word, mode, setpoint and the output stage after any input change. */
-void md_evaluate(movidrive_t *md);
+void movidrive_evaluate(movidrive_t *md);
 
-/* ---- faults (md_control.c) ---- */
+/* ---- faults (movidrive_control.c) ---- */
 
 /* Latches a fault (if none is latched) and records it in P080..P084. */
-void md_raise_fault(movidrive_t *md, uint8_t number, uint8_t reaction);
+void movidrive_raise_fault(movidrive_t *md, uint8_t number, uint8_t reaction);
 /* Clears the fault unless its cause (the fieldbus timeout) persists. */
-void md_fault_reset(movidrive_t *md);
+void movidrive_fault_reset(movidrive_t *md);
 
-/* ---- motion (md_motion.c) ---- */
+/* ---- motion (movidrive_motion.c) ---- */
 
 /* Output and active current from the speed and its change in the last tick. */
-void md_update_currents(movidrive_t *md);
+void movidrive_update_currents(movidrive_t *md);
 
-/* ---- process input data (md_process_data.c) ---- */
+/* ---- process input data (movidrive_process_data.c) ---- */
 
 /* PI word i (0..ML_MAX_PD-1) as P873..P875 describe it. */
-uint16_t md_pi_word(const movidrive_t *md, uint8_t i);
+uint16_t movidrive_pi_word(const movidrive_t *md, uint8_t i);
 
 #endif

@@ -1,7 +1,7 @@
 /* The emulated MOVIDRIVE's motion in simulated time: ramps towards the setpoint, position,
  * currents (README.md "Ramps", "Current model"). Integer arithmetic with carried remainders,
  * so any tick size gives the same trajectory. */
-#include "md_internal.h"
+#include "movidrive_internal.h"
 
 #define US_PER_MS 1000
 #define TICK_WHILE_RAMPING_US 1000u /* deadline asked for while the speed still changes */
@@ -10,29 +10,29 @@
 /* Ramp time in ms for a 3000 rpm change: `up` = |n| growing, `positive` = CW rotation. */
 static int32_t ramp_ms(const movidrive_t *md, bool up, bool positive)
 {
-    bool set2 = md_ramp_set_2(md);
+    bool set2 = movidrive_ramp_set_2(md);
     switch (md->mode) {
     case MODE_RAPID:
-        return md_ram_value(md, set2 ? IDX_P146_STOP_RAMP2 : IDX_P136_STOP_RAMP);
+        return movidrive_ram_value(md, set2 ? IDX_P146_STOP_RAMP2 : IDX_P136_STOP_RAMP);
     case MODE_EMERGENCY:
-        return md_ram_value(md, set2 ? IDX_P147_EMERGENCY_RAMP2 : IDX_P137_EMERGENCY_RAMP);
+        return movidrive_ram_value(md, set2 ? IDX_P147_EMERGENCY_RAMP2 : IDX_P137_EMERGENCY_RAMP);
     default:
         break;
     }
     uint16_t w;
-    if (md_po_data_enabled(md) && md->po_received && md_po_word(md, PO_RAMP, &w)) {
+    if (movidrive_po_data_enabled(md) && md->po_received && movidrive_po_word(md, PO_RAMP, &w)) {
         return w; /* PO "RAMP": ms, up and down alike (I: 1 digit = 1 ms as on MOVIMOT) */
     }
     if (positive) {
         if (up) {
-            return md_ram_value(md, set2 ? IDX_P140_RAMP2_UP : MD_IDX_P130_RAMP_UP);
+            return movidrive_ram_value(md, set2 ? IDX_P140_RAMP2_UP : MOVIDRIVE_IDX_P130_RAMP_UP);
         }
-        return md_ram_value(md, set2 ? IDX_P141_RAMP2_DOWN : MD_IDX_P131_RAMP_DOWN);
+        return movidrive_ram_value(md, set2 ? IDX_P141_RAMP2_DOWN : MOVIDRIVE_IDX_P131_RAMP_DOWN);
     }
     if (up) {
-        return md_ram_value(md, set2 ? IDX_P142_RAMP2_UP_CCW : IDX_P132_RAMP_UP_CCW);
+        return movidrive_ram_value(md, set2 ? IDX_P142_RAMP2_UP_CCW : IDX_P132_RAMP_UP_CCW);
     }
-    return md_ram_value(md, set2 ? IDX_P143_RAMP2_DOWN_CCW : IDX_P133_RAMP_DOWN_CCW);
+    return movidrive_ram_value(md, set2 ? IDX_P143_RAMP2_DOWN_CCW : IDX_P133_RAMP_DOWN_CCW);
 }
 
 /* Moves the actual speed towards the setpoint for dt_us of simulated time. A reversal is two
@@ -90,7 +90,7 @@ static int32_t abs32(int32_t v)
     return v < 0 ? -v : v;
 }
 
-void md_update_currents(movidrive_t *md)
+void movidrive_update_currents(movidrive_t *md)
 {
     if (!md->output_stage_enabled) {
         md->current_mpct = 0;
@@ -102,7 +102,7 @@ void md_update_currents(movidrive_t *md)
     int32_t accel = md->accel != 0 ? ACCEL_MPCT : 0;
     int32_t active = load + (md->accel > 0 ? accel : -accel);
     int32_t out = MAGNETISING_MPCT + load + accel;
-    int32_t limit = md_ram_value(md, IDX_P303_CURRENT_LIMIT);
+    int32_t limit = movidrive_ram_value(md, IDX_P303_CURRENT_LIMIT);
     if (limit > 0 && out > limit) {
         out = limit;
     }
@@ -123,7 +123,7 @@ hal_time_us_t movidrive_tick(movidrive_t *md, hal_time_us_t now)
     if (!md->ticked) {
         md->ticked = true;
         md->last_tick = now;
-        md_evaluate(md);
+        movidrive_evaluate(md);
         return now + TICK_WHILE_RAMPING_US;
     }
     int32_t dt = hal_time_diff(now, md->last_tick);
@@ -131,7 +131,7 @@ hal_time_us_t movidrive_tick(movidrive_t *md, hal_time_us_t now)
         return next_deadline(md, now);
     }
     md->last_tick = now;
-    md_evaluate(md);
+    movidrive_evaluate(md);
     int32_t before = md->speed_actual_mrpm;
     uint32_t left = (uint32_t)dt;
     while (left > 0) {
@@ -143,6 +143,6 @@ hal_time_us_t movidrive_tick(movidrive_t *md, hal_time_us_t now)
     }
     int32_t after = md->speed_actual_mrpm;
     md->accel = (int8_t)(abs32(after) > abs32(before) ? 1 : abs32(after) < abs32(before) ? -1 : 0);
-    md_evaluate(md); /* a stop ramp that reached 0 switches the output stage off */
+    movidrive_evaluate(md); /* a stop ramp that reached 0 switches the output stage off */
     return next_deadline(md, now);
 }

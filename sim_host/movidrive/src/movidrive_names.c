@@ -1,5 +1,5 @@
-/* Names for people (md_names.h) over the generated tables in md_names_table.c. */
-#include "movidrive/md_names.h"
+/* Names for people (movidrive_names.h) over the generated tables in movidrive_names_table.c. */
+#include "movidrive/movidrive_names.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -8,8 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "md_names_table.h"
-#include "md_params.h"
+#include "movidrive_names_table.h"
+#include "movidrive_params.h"
 
 #define MAX_LISTED 5u /* an ambiguous name lists this many candidates */
 
@@ -110,16 +110,16 @@ static const char *trim(const char *s, size_t *len)
     return s;
 }
 
-static const md_param_def_t *param_def(uint16_t index)
+static const movidrive_param_def_t *param_def(uint16_t index)
 {
     size_t lo = 0;
-    size_t hi = md_params_count;
+    size_t hi = movidrive_params_count;
     while (lo < hi) {
         size_t mid = lo + (hi - lo) / 2u;
-        if (md_params[mid].index == index) {
-            return &md_params[mid];
+        if (movidrive_params[mid].index == index) {
+            return &movidrive_params[mid];
         }
-        if (md_params[mid].index < index) {
+        if (movidrive_params[mid].index < index) {
             lo = mid + 1u;
         } else {
             hi = mid;
@@ -128,10 +128,10 @@ static const md_param_def_t *param_def(uint16_t index)
     return NULL;
 }
 
-static bool is_unsigned(const md_param_info_t *p)
+static bool is_unsigned(const movidrive_param_info_t *p)
 {
-    const md_param_def_t *d = param_def(p->index);
-    return d != NULL && (d->flags & MD_PF_UNSIGNED) != 0u;
+    const movidrive_param_def_t *d = param_def(p->index);
+    return d != NULL && (d->flags & MOVIDRIVE_PF_UNSIGNED) != 0u;
 }
 
 static int64_t pow10_i64(int32_t e)
@@ -145,13 +145,14 @@ static int64_t pow10_i64(int32_t e)
 
 /* ---- parameters ------------------------------------------------------------------------ */
 
-const md_param_info_t *md_param_info(uint16_t index)
+const movidrive_param_info_t *movidrive_param_info(uint16_t index)
 {
     size_t lo = 0;
-    size_t hi = md_param_infos_count;
+    size_t hi = movidrive_param_infos_count;
     while (lo < hi) {
         size_t mid = lo + (hi - lo) / 2u;
-        const md_param_info_t *p = &md_param_infos[md_param_infos_by_index[mid]];
+        const movidrive_param_info_t *p =
+            &movidrive_param_infos[movidrive_param_infos_by_index[mid]];
         if (p->index == index) {
             return p;
         }
@@ -164,22 +165,22 @@ const md_param_info_t *md_param_info(uint16_t index)
     return NULL;
 }
 
-size_t md_param_count(void)
+size_t movidrive_param_count(void)
 {
-    return md_param_infos_count;
+    return movidrive_param_infos_count;
 }
 
-const md_param_info_t *md_param_at(size_t i)
+const movidrive_param_info_t *movidrive_param_at(size_t i)
 {
-    return i < md_param_infos_count ? &md_param_infos[i] : NULL;
+    return i < movidrive_param_infos_count ? &movidrive_param_infos[i] : NULL;
 }
 
 /* "'speed' matches 12 parameters: P000 speed, P001 ..., ..." */
 static void ambiguous(const char *s, size_t len, bool exact, char *err, size_t errlen)
 {
     size_t count = 0;
-    for (size_t i = 0; i < md_param_infos_count; i++) {
-        const char *name = md_param_infos[i].name;
+    for (size_t i = 0; i < movidrive_param_infos_count; i++) {
+        const char *name = movidrive_param_infos[i].name;
         if (exact ? ci_equal(s, len, name) : ci_contains(name, s, len)) {
             count++;
         }
@@ -187,8 +188,8 @@ static void ambiguous(const char *s, size_t len, bool exact, char *err, size_t e
     appender_t a = app_init(err, errlen);
     app(&a, "'%.*s' matches %zu parameters:", (int)len, s, count);
     size_t listed = 0;
-    for (size_t i = 0; i < md_param_infos_count && listed < MAX_LISTED; i++) {
-        const md_param_info_t *p = &md_param_infos[i];
+    for (size_t i = 0; i < movidrive_param_infos_count && listed < MAX_LISTED; i++) {
+        const movidrive_param_info_t *p = &movidrive_param_infos[i];
         if (exact ? ci_equal(s, len, p->name) : ci_contains(p->name, s, len)) {
             app(&a, "%s %s %s", listed == 0u ? "" : ",", p->p_number, p->name);
             listed++;
@@ -211,17 +212,17 @@ static bool all_digits(const char *s, size_t len)
 }
 
 /* "P100", or an error memory sub-entry "P080.Speed"; aliases (P031 = P600) included. */
-static const md_param_info_t *find_by_p_number(const char *s, size_t len, char *err,
+static const movidrive_param_info_t *find_by_p_number(const char *s, size_t len, char *err,
                                                size_t errlen)
 {
-    for (size_t i = 0; i < md_param_infos_count; i++) {
-        if (ci_equal(s, len, md_param_infos[i].p_number)) {
-            return &md_param_infos[i];
+    for (size_t i = 0; i < movidrive_param_infos_count; i++) {
+        if (ci_equal(s, len, movidrive_param_infos[i].p_number)) {
+            return &movidrive_param_infos[i];
         }
     }
-    for (size_t i = 0; i < md_param_aliases_count; i++) {
-        if (ci_equal(s, len, md_param_aliases[i].p_number)) {
-            return md_param_info(md_param_aliases[i].index);
+    for (size_t i = 0; i < movidrive_param_aliases_count; i++) {
+        if (ci_equal(s, len, movidrive_param_aliases[i].p_number)) {
+            return movidrive_param_info(movidrive_param_aliases[i].index);
         }
     }
     set_err(err, errlen, "no parameter '%.*s'", (int)len, s);
@@ -253,8 +254,8 @@ static bool copy_token(char *out, size_t cap, const char *s, size_t len)
 
 /* An index, decimal or 0xHEX. False when the text is no number after all ("4-quadrant
  * operation 1" is a name); true with *found (NULL and a reason when no parameter has it). */
-static bool find_by_index(const char *s, size_t len, const md_param_info_t **found, char *err,
-                          size_t errlen)
+static bool find_by_index(const char *s, size_t len, const movidrive_param_info_t **found,
+                          char *err, size_t errlen)
 {
     char num[24];
     if (!copy_token(num, sizeof num, s, len)) {
@@ -271,7 +272,7 @@ static bool find_by_index(const char *s, size_t len, const md_param_info_t **fou
         set_err(err, errlen, "index %s is out of 0..65535", num);
         return true;
     }
-    *found = md_param_info((uint16_t)v);
+    *found = movidrive_param_info((uint16_t)v);
     if (*found == NULL) {
         set_err(err, errlen, "no parameter with index %lu", v);
     }
@@ -279,15 +280,16 @@ static bool find_by_index(const char *s, size_t len, const md_param_info_t **fou
 }
 
 /* The one parameter whose name equals the text, or else the one whose name contains it. */
-static const md_param_info_t *find_by_name(const char *s, size_t len, char *err, size_t errlen)
+static const movidrive_param_info_t *find_by_name(const char *s, size_t len, char *err,
+                                                  size_t errlen)
 {
     for (int exact = 1; exact >= 0; exact--) {
-        const md_param_info_t *hit = NULL;
+        const movidrive_param_info_t *hit = NULL;
         size_t hits = 0;
-        for (size_t i = 0; i < md_param_infos_count; i++) {
-            const char *name = md_param_infos[i].name;
+        for (size_t i = 0; i < movidrive_param_infos_count; i++) {
+            const char *name = movidrive_param_infos[i].name;
             if (exact ? ci_equal(s, len, name) : ci_contains(name, s, len)) {
-                hit = &md_param_infos[i];
+                hit = &movidrive_param_infos[i];
                 hits++;
             }
         }
@@ -303,7 +305,7 @@ static const md_param_info_t *find_by_name(const char *s, size_t len, char *err,
     return NULL;
 }
 
-const md_param_info_t *md_param_find(const char *text, char *err, size_t errlen)
+const movidrive_param_info_t *movidrive_param_find(const char *text, char *err, size_t errlen)
 {
     size_t len = 0;
     const char *s = text != NULL ? trim(text, &len) : "";
@@ -322,7 +324,7 @@ const md_param_info_t *md_param_find(const char *text, char *err, size_t errlen)
         explain_ipos_variable(s, len, err, errlen);
         return NULL;
     }
-    const md_param_info_t *found = NULL;
+    const movidrive_param_info_t *found = NULL;
     if (isdigit((unsigned char)s[0]) && find_by_index(s, len, &found, err, errlen)) {
         return found;
     }
@@ -331,7 +333,7 @@ const md_param_info_t *md_param_find(const char *text, char *err, size_t errlen)
 
 /* ---- values ---------------------------------------------------------------------------- */
 
-const char *md_enum_text(const md_param_info_t *p, int32_t raw)
+const char *movidrive_enum_text(const movidrive_param_info_t *p, int32_t raw)
 {
     if (p == NULL) {
         return NULL;
@@ -344,7 +346,7 @@ const char *md_enum_text(const md_param_info_t *p, int32_t raw)
     return NULL;
 }
 
-int md_value_text(const md_param_info_t *p, int32_t raw, char *out, size_t n)
+int movidrive_value_text(const movidrive_param_info_t *p, int32_t raw, char *out, size_t n)
 {
     appender_t a = app_init(out, n);
     if (p == NULL) {
@@ -352,7 +354,7 @@ int md_value_text(const md_param_info_t *p, int32_t raw, char *out, size_t n)
         return app_result(&a);
     }
     if (p->num_enums > 0u) {
-        const char *t = md_enum_text(p, raw);
+        const char *t = movidrive_enum_text(p, raw);
         app(&a, "%ld (%s)", (long)raw, t != NULL ? t : "unknown value");
         return app_result(&a);
     }
@@ -403,7 +405,7 @@ static bool read_whole(const char *s, size_t len, size_t *i, decimal_t *d, char 
 }
 
 /* ".25" from s[*i]; false with a reason when it has more non-zero decimals than allowed. */
-static bool read_fraction(const md_param_info_t *p, const char *s, size_t len, size_t *i,
+static bool read_fraction(const movidrive_param_info_t *p, const char *s, size_t len, size_t *i,
                           int32_t decimals, decimal_t *d, char *err, size_t errlen)
 {
     if (*i >= len || s[*i] != '.') {
@@ -428,7 +430,7 @@ static bool read_fraction(const md_param_info_t *p, const char *s, size_t len, s
 
 /* A value in the unit to the raw magnitude: × 10^decimals, or ÷ 10^scale_exp for a positive
  * scale (false with a reason when it is no multiple of that). */
-static bool unit_to_raw(const md_param_info_t *p, const char *s, size_t len, decimal_t *d,
+static bool unit_to_raw(const movidrive_param_info_t *p, const char *s, size_t len, decimal_t *d,
                         int32_t decimals, uint64_t *mag, char *err, size_t errlen)
 {
     while ((int32_t)d->fdigits < decimals) {
@@ -452,7 +454,7 @@ static bool unit_to_raw(const md_param_info_t *p, const char *s, size_t len, dec
 /* "300.5", "-1.25 rpm", "2000 ms": sign, digits, optional fraction, optional unit. Raw value
  * in *raw; false with a reason. *scaled tells whether it was a value in the unit (a fraction or
  * a unit given) rather than a raw integer. */
-static bool parse_number(const md_param_info_t *p, const char *s, size_t len, int64_t *raw,
+static bool parse_number(const movidrive_param_info_t *p, const char *s, size_t len, int64_t *raw,
                          bool *scaled, char *err, size_t errlen)
 {
     decimal_t d = {0};
@@ -509,8 +511,8 @@ static bool parse_raw_integer(const char *s, size_t len, int32_t *raw, bool *ok,
 }
 
 /* The reason a text is no value of p: the enumeration texts, or the number forms it takes. */
-static void explain_not_a_value(const md_param_info_t *p, const char *s, size_t len, char *err,
-                                size_t errlen)
+static void explain_not_a_value(const movidrive_param_info_t *p, const char *s, size_t len,
+                                char *err, size_t errlen)
 {
     if (p == NULL) {
         set_err(err, errlen, "'%.*s' is not a number (decimal, -N or 0xHEX)", (int)len, s);
@@ -535,8 +537,8 @@ static void explain_not_a_value(const md_param_info_t *p, const char *s, size_t 
     (void)app_result(&a);
 }
 
-bool md_value_parse(const md_param_info_t *p, const char *text, int32_t *raw, char *err,
-                    size_t errlen)
+bool movidrive_value_parse(const movidrive_param_info_t *p, const char *text, int32_t *raw,
+                           char *err, size_t errlen)
 {
     size_t len = 0;
     const char *s = text != NULL ? trim(text, &len) : "";
@@ -577,7 +579,7 @@ bool md_value_parse(const md_param_info_t *p, const char *text, int32_t *raw, ch
 
 /* ---- faults, unit status, control and status words ------------------------------------- */
 
-static const char *code_name(const md_code_name_t *t, size_t n, uint8_t code)
+static const char *code_name(const movidrive_code_name_t *t, size_t n, uint8_t code)
 {
     for (size_t i = 0; i < n; i++) {
         if (t[i].code == code) {
@@ -587,18 +589,18 @@ static const char *code_name(const md_code_name_t *t, size_t n, uint8_t code)
     return NULL;
 }
 
-const char *md_fault_name(uint8_t fault)
+const char *movidrive_fault_name(uint8_t fault)
 {
-    return code_name(md_fault_names, md_fault_names_count, fault);
+    return code_name(movidrive_fault_names, movidrive_fault_names_count, fault);
 }
 
-const char *md_unit_status_name(uint8_t code)
+const char *movidrive_unit_status_name(uint8_t code)
 {
-    return code_name(md_unit_status_names, md_unit_status_names_count, code);
+    return code_name(movidrive_unit_status_names, movidrive_unit_status_names_count, code);
 }
 
 /* Bits 0..2 say what they mean set or clear; the others only when set. */
-static void word_bits(appender_t *a, const md_bit_text_t *bits, uint16_t w, uint16_t skip)
+static void word_bits(appender_t *a, const movidrive_bit_text_t *bits, uint16_t w, uint16_t skip)
 {
     bool first = true;
     for (unsigned b = 0; b < 8u; b++) {
@@ -615,28 +617,28 @@ static void word_bits(appender_t *a, const md_bit_text_t *bits, uint16_t w, uint
     }
 }
 
-int md_control_word_text(uint16_t cw, char *out, size_t n)
+int movidrive_control_word_text(uint16_t cw, char *out, size_t n)
 {
     appender_t a = app_init(out, n);
     app(&a, "%04X = ", cw);
-    word_bits(&a, md_control_bits, cw, 0u);
+    word_bits(&a, movidrive_control_bits, cw, 0u);
     if ((cw >> 8) != 0u) {
         app(&a, ", high byte 0x%02X", (unsigned)(cw >> 8));
     }
     return app_result(&a);
 }
 
-int md_status_word_text(uint16_t sw, char *out, size_t n)
+int movidrive_status_word_text(uint16_t sw, char *out, size_t n)
 {
     appender_t a = app_init(out, n);
     app(&a, "%04X = ", sw);
-    word_bits(&a, md_status_bits, sw, 1u << 5); /* bit 5 shows as the fault below */
+    word_bits(&a, movidrive_status_bits, sw, 1u << 5); /* bit 5 shows as the fault below */
     uint8_t high = (uint8_t)(sw >> 8);
     if ((sw & 0x0020u) != 0u) {
-        const char *f = md_fault_name(high);
+        const char *f = movidrive_fault_name(high);
         app(&a, ", fault %u (%s)", (unsigned)high, f != NULL ? f : "unknown");
     } else {
-        const char *u = md_unit_status_name(high);
+        const char *u = movidrive_unit_status_name(high);
         app(&a, ", unit status %u (%s)", (unsigned)high, u != NULL ? u : "unknown");
     }
     return app_result(&a);

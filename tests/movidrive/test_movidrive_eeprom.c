@@ -17,7 +17,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "md_test_util.h"
+#include "movidrive_test_util.h"
 #include "sim_hal/file_nvm.h"
 
 #define EE_SIZE 8192u
@@ -87,7 +87,7 @@ static void test_blank_start(void)
     CHECK_EQ(open_md(&nrc), 0);
     CHECK_EQ(nrc, 0);
     CHECK_STR(err, "");
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000);
     CHECK_EQ(movidrive_eeprom_size() <= EE_SIZE, 1);
     /* nothing is written until something is stored */
     struct stat st;
@@ -98,38 +98,38 @@ static void test_volatile_vs_non_volatile(void)
 {
     use_file("persist.ee");
     CHECK_EQ(open_md(NULL), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 7000, 1), 0);        /* write */
-    CHECK_EQ(md_write(&md, MD_IDX_P131_RAMP_DOWN, 5000, 0), 0);      /* write volatile */
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0 + 5, 1234, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0 + 6, 99, 0), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P160_N11, (uint32_t)-300000, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P160_N11, 600000, 0), 0);          /* volatile on top */
-    CHECK_EQ(md_write(&md, 8502, 3999999999u, 1), 0);                /* unsigned */
-    CHECK_EQ(md_write(&md, 8617, 1, 1), 0);                          /* P840: not stored */
-    CHECK_EQ(md_read(&md, MD_IDX_P131_RAMP_DOWN), 5000);
-    CHECK_EQ(md_read(&md, MD_IDX_P160_N11), 600000);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0 + 6), 99);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 7000, 1), 0); /* write */
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P131_RAMP_DOWN, 5000, 0), 0); /* write volatile */
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0 + 5, 1234, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0 + 6, 99, 0), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P160_N11, (uint32_t)-300000, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P160_N11, 600000, 0), 0); /* volatile on top */
+    CHECK_EQ(movidrive_write(&md, 8502, 3999999999u, 1), 0); /* unsigned */
+    CHECK_EQ(movidrive_write(&md, 8617, 1, 1), 0); /* P840: not stored */
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P131_RAMP_DOWN), 5000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P160_N11), 600000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0 + 6), 99);
     uint32_t writes = md.eeprom_writes;
-    CHECK_EQ(md_write(&md, MD_IDX_P131_RAMP_DOWN, 4000, 0), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P131_RAMP_DOWN, 4000, 0), 0);
     CHECK_EQ(md.eeprom_writes, writes); /* write volatile never touches the EEPROM */
 
     /* power cycle: same file */
     CHECK_EQ(open_md(NULL), 0);
     CHECK_STR(err, "");
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 7000);
-    CHECK_EQ(md_read(&md, MD_IDX_P131_RAMP_DOWN), 2000);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0 + 5), 1234);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0 + 6), 0);
-    CHECK_EQ((int32_t)md_read(&md, MD_IDX_P160_N11), -300000);
-    CHECK_EQ(md_read(&md, 8502), 3999999999u);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 7000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P131_RAMP_DOWN), 2000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0 + 5), 1234);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0 + 6), 0);
+    CHECK_EQ((int32_t)movidrive_read(&md, MOVIDRIVE_IDX_P160_N11), -300000);
+    CHECK_EQ(movidrive_read(&md, 8502), 3999999999u);
     CHECK(md.ee_layout_ok);
     /* and once more after further writes */
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 8000, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0 + 511, 0x80000000u, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 8000, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0 + 511, 0x80000000u, 1), 0);
     CHECK_EQ(open_md(NULL), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 8000);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0 + 511), 0x80000000u);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0 + 5), 1234);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 8000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0 + 511), 0x80000000u);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0 + 5), 1234);
 }
 
 /* Two generations: the file holds `new_value`, PATH.bak `old_value` of H0. */
@@ -137,8 +137,8 @@ static void two_generations(const char *name, int32_t old_value, int32_t new_val
 {
     use_file(name);
     CHECK_EQ(open_md(NULL), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0, (uint32_t)old_value, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0, (uint32_t)new_value, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0, (uint32_t)old_value, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0, (uint32_t)new_value, 1), 0);
 }
 
 static void test_truncated_main(void)
@@ -154,20 +154,20 @@ static void test_truncated_main(void)
         CHECK_EQ(open_md(&nrc), 0);
         CHECK_EQ(nrc, 1); /* previous generation */
         CHECK(strstr(err, ".bak") != NULL);
-        CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 111); /* exactly the old value */
+        CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 111); /* exactly the old value */
     }
     printf("truncated image: \"%s\"\n", err);
     /* the next write replaces the damaged file and keeps the good backup */
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0, 333, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0, 333, 1), 0);
     int nrc;
     CHECK_EQ(open_md(&nrc), 0);
     CHECK_EQ(nrc, 0);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 333);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 333);
     /* file intact again: the new value */
     write_file(path, good, (size_t)n);
     CHECK_EQ(open_md(&nrc), 0);
     CHECK_EQ(nrc, 0);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 222);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 222);
 }
 
 /* A crash while the temporary file is being written leaves PATH.tmp cut anywhere: ignored. */
@@ -186,11 +186,11 @@ static void test_torn_temporary(void)
         int nrc;
         CHECK_EQ(open_md(&nrc), 0);
         CHECK_EQ(nrc, 0);
-        CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 6);
+        CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 6);
     }
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0, 7, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0, 7, 1), 0);
     CHECK_EQ(open_md(NULL), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 7);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 7);
     struct stat st;
     CHECK_EQ(stat(tmp, &st), -1); /* consumed by the rename */
 }
@@ -209,7 +209,7 @@ static void test_damaged_bytes(void)
         int nrc;
         CHECK_EQ(open_md(&nrc), 0);
         CHECK_EQ(nrc, 1);
-        CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 41);
+        CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 41);
     }
     img[300] ^= 1u;
     write_file(path, img, (size_t)n);
@@ -225,7 +225,7 @@ static void test_damaged_bytes(void)
     open_md(&nrc);
     CHECK_EQ(nrc, 1);
     CHECK(strstr(err, "length field") != NULL);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 41);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 41);
 }
 
 /* No usable image at all: a clear message, factory defaults, no crash; the next write heals. */
@@ -245,9 +245,9 @@ static void test_corrupt_without_backup(void)
         CHECK_EQ(nrc, -1);
         CHECK(strstr(err, path) != NULL);
         CHECK(strstr(err, "factory defaults used") != NULL);
-        CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000);
-        CHECK_EQ(md_read(&md, MD_IDX_P870_PO1), 9);
-        CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 0);
+        CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000);
+        CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P870_PO1), 9);
+        CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 0);
         if (i == 2 || i == 6) {
             printf("garbage (%zu bytes): \"%s\"\n", sizes[i], err);
         }
@@ -258,13 +258,13 @@ static void test_corrupt_without_backup(void)
     open_md(NULL);
     CHECK(strstr(err, "file too short") != NULL);
     /* a write replaces the garbage with a whole image */
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 3000, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 3000, 1), 0);
     int nrc;
     CHECK_EQ(open_md(&nrc), 0);
     CHECK_EQ(nrc, 0);
     CHECK_STR(err, "");
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 3000);
-    CHECK_EQ(md_read(&md, MD_IDX_P131_RAMP_DOWN), 2000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 3000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P131_RAMP_DOWN), 2000);
     /* a directory where the file should be */
     use_file("adir.ee");
     mkdir(path, 0755);
@@ -286,26 +286,26 @@ static void test_bad_movidrive_image(void)
     CHECK_EQ(open_md(NULL), -1);
     CHECK(strstr(err, "no MOVIDRIVE image") != NULL);
     printf("foreign image: \"%s\"\n", err);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000);
 
     /* a valid image, then one value out of range and one index the table does not know */
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 3000, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P131_RAMP_DOWN, 4000, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0 + 9, 9, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 3000, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P131_RAMP_DOWN, 4000, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0 + 9, 9, 1), 0);
     CHECK(md.ee_layout_ok);
     uint8_t hdr[12];
     CHECK_EQ(h.ops->read(h.ctx, 0, hdr, 12), 0);
-    CHECK_EQ(hal_get_be32(hdr), MD_EE_MAGIC);
+    CHECK_EQ(hal_get_be32(hdr), MOVIDRIVE_EE_MAGIC);
     /* find P130's record */
     size_t nrec = hal_get_be16(hdr + 6);
     int found = 0;
     for (size_t r = 0; r < nrec; r++) {
         uint8_t rec[6];
-        h.ops->read(h.ctx, MD_EE_HEADER + r * 6, rec, 6);
+        h.ops->read(h.ctx, MOVIDRIVE_EE_HEADER + r * 6, rec, 6);
         uint16_t idx = hal_get_be16(rec);
-        if (idx == MD_IDX_P130_RAMP_UP) {
+        if (idx == MOVIDRIVE_IDX_P130_RAMP_UP) {
             const uint8_t bad[6] = {rec[0], rec[1], 0x7F, 0x00, 0x00, 0x00};
-            h.ops->write(h.ctx, MD_EE_HEADER + r * 6, bad, 6);
+            h.ops->write(h.ctx, MOVIDRIVE_EE_HEADER + r * 6, bad, 6);
             found++;
         } else if (idx == 8302 - 1) {
             /* unreachable: 8301 is RO and not stored */
@@ -315,9 +315,9 @@ static void test_bad_movidrive_image(void)
     CHECK_EQ(open_md(NULL), -1);
     CHECK(strstr(err, "1 stored values out of range") != NULL);
     printf("bad value: \"%s\"\n", err);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000); /* that one: default */
-    CHECK_EQ(md_read(&md, MD_IDX_P131_RAMP_DOWN), 4000); /* the rest: kept */
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0 + 9), 9);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000); /* that one: default */
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P131_RAMP_DOWN), 4000); /* the rest: kept */
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0 + 9), 9);
 
     /* an image written by a table with a different layout: values found by index, and the next
      * write stores the whole image in this table's layout */
@@ -334,54 +334,54 @@ static void test_bad_movidrive_image(void)
     CHECK_EQ(h.ops->write(h.ctx, 0, img, 12 + 12 + 2048), 0);
     CHECK_EQ(open_md(NULL), 0);
     CHECK(!md.ee_layout_ok);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 6000);
-    CHECK_EQ(md_read(&md, MD_IDX_P131_RAMP_DOWN), 8000);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 42);
-    CHECK_EQ(md_write(&md, MD_IDX_P160_N11, 1000, 1), 0);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 6000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P131_RAMP_DOWN), 8000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 42);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P160_N11, 1000, 1), 0);
     CHECK(md.ee_layout_ok);
     CHECK_EQ(open_md(NULL), 0);
     CHECK(md.ee_layout_ok);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 6000);
-    CHECK_EQ(md_read(&md, MD_IDX_P160_N11), 1000);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 42);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 6000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P160_N11), 1000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 42);
 }
 
 static void test_factory_reset(void)
 {
     use_file("factory.ee");
     CHECK_EQ(open_md(NULL), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 7000, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P100_SETPOINT_SOURCE, 3, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0 + 1, 5, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P803_PARAM_LOCK, 1, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 7000, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE, 3, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0 + 1, 5, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P803_PARAM_LOCK, 1, 1), 0);
     CHECK_EQ(movidrive_factory_reset(&md), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000);
-    CHECK_EQ(md_read(&md, MD_IDX_P100_SETPOINT_SOURCE), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0 + 1), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_P803_PARAM_LOCK), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_FIRMWARE), 0x311C7289u);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE), 0);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0 + 1), 0);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P803_PARAM_LOCK), 0);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_FIRMWARE), 0x311C7289u);
     CHECK_EQ(open_md(NULL), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0 + 1), 0);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0 + 1), 0);
 
     /* P802 = YES through the parameter channel (R: needs controller inhibit) */
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 9000, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P100_SETPOINT_SOURCE, 3, 1), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P101_CONTROL_SOURCE, 2, 1), 0);
-    md_po3(&md, 0x0006, 0, 0); /* enabled: P802 refused */
-    CHECK_EQ(md_write(&md, 8594, 1, 1), ML_ADD_CONTROLLER_INHIBIT_REQUIRED);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 9000);
-    md_po3(&md, 0x0001, 0, 0); /* controller inhibit */
-    CHECK_EQ(md_write(&md, 8594, 0, 1), 0); /* NO: nothing happens */
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 9000);
-    CHECK_EQ(md_write(&md, 8594, 1, 1), 0);
-    CHECK_EQ(md_read(&md, 8594), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000);
-    CHECK_EQ(md_read(&md, MD_IDX_P101_CONTROL_SOURCE), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 9000, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE, 3, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P101_CONTROL_SOURCE, 2, 1), 0);
+    movidrive_po3(&md, 0x0006, 0, 0); /* enabled: P802 refused */
+    CHECK_EQ(movidrive_write(&md, 8594, 1, 1), ML_ADD_CONTROLLER_INHIBIT_REQUIRED);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 9000);
+    movidrive_po3(&md, 0x0001, 0, 0); /* controller inhibit */
+    CHECK_EQ(movidrive_write(&md, 8594, 0, 1), 0); /* NO: nothing happens */
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 9000);
+    CHECK_EQ(movidrive_write(&md, 8594, 1, 1), 0);
+    CHECK_EQ(movidrive_read(&md, 8594), 0);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P101_CONTROL_SOURCE), 0);
     CHECK_EQ(open_md(NULL), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000);
-    CHECK_EQ(md_read(&md, MD_IDX_P100_SETPOINT_SOURCE), 0);
-    CHECK_EQ(md_write(&md, 8594, 2, 1), ML_ADD_TOO_HIGH);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE), 0);
+    CHECK_EQ(movidrive_write(&md, 8594, 2, 1), ML_ADD_TOO_HIGH);
 }
 
 /* Fault memory P080..P084 (N/RO) survives a restart. */
@@ -397,20 +397,20 @@ static void test_fault_memory(void)
     movidrive_fieldbus_status(&md, &off); /* P831 default 4: RAPID STOP/ERROR -> F28 */
     CHECK_EQ(md.fault, 28);
     movidrive_fieldbus_status(&md, &on);
-    CHECK_EQ(md_write(&md, 8617, 1, 0), 0); /* P840 manual reset */
+    CHECK_EQ(movidrive_write(&md, 8617, 1, 0), 0); /* P840 manual reset */
     CHECK_EQ(md.fault, 0);
     movidrive_fieldbus_status(&md, &off);
-    CHECK_EQ(md_read(&md, 8366), 28); /* P080 error t-0 */
-    CHECK_EQ(md_read(&md, 8367), 28); /* P081 error t-1 */
-    CHECK_EQ(md_read(&md, 8368), 0);
+    CHECK_EQ(movidrive_read(&md, 8366), 28); /* P080 error t-0 */
+    CHECK_EQ(movidrive_read(&md, 8367), 28); /* P081 error t-1 */
+    CHECK_EQ(movidrive_read(&md, 8368), 0);
     CHECK_EQ(open_md(NULL), 0);
-    CHECK_EQ(md_read(&md, 8366), 28);
-    CHECK_EQ(md_read(&md, 8367), 28);
+    CHECK_EQ(movidrive_read(&md, 8366), 28);
+    CHECK_EQ(movidrive_read(&md, 8367), 28);
     CHECK_EQ(md.fault, 0); /* a restart clears the fault itself */
-    CHECK_EQ(md_write(&md, 8596, 1, 0), 0); /* P804 = ERROR MEMORY */
-    CHECK_EQ(md_read(&md, 8366), 0);
+    CHECK_EQ(movidrive_write(&md, 8596, 1, 0), 0); /* P804 = ERROR MEMORY */
+    CHECK_EQ(movidrive_read(&md, 8366), 0);
     CHECK_EQ(open_md(NULL), 0);
-    CHECK_EQ(md_read(&md, 8367), 0);
+    CHECK_EQ(movidrive_read(&md, 8367), 0);
 }
 
 /* NVM failures: too small, write error -> class 8 code 0x1F, RAM value kept. */
@@ -453,23 +453,25 @@ static void test_nvm_failures(void)
     char e[256];
     CHECK_EQ(movidrive_init(&md, &cfg, e, sizeof e), 0);
     uint8_t rsp[8];
-    md_svc(&md, 0x32, MD_IDX_P130_RAMP_UP, 3000, rsp);
+    movidrive_svc(&md, 0x32, MOVIDRIVE_IDX_P130_RAMP_UP, 3000, rsp);
     CHECK_BYTES(rsp, 8, 0xB2, 0x00, 0x21, 0x16, 0x08, 0x00, 0x00, 0x1F);
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 3000);
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 2500, 0), 0); /* volatile: no EEPROM */
-    CHECK_EQ(md_write(&md, MD_IDX_IPOS_H0, 1, 1), ML_ADD_NOT_SAVED);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 3000);
+    /* volatile: no EEPROM */
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 2500, 0), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_IPOS_H0, 1, 1), ML_ADD_NOT_SAVED);
     CHECK_EQ(movidrive_factory_reset(&md), -1);
 
     cfg.eeprom.ops = &small_ops;
     CHECK_EQ(movidrive_init(&md, &cfg, e, sizeof e), -1);
     printf("small EEPROM: \"%s\"\n", e);
     CHECK(strstr(e, "too small") != NULL);
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 3000, 1), 0); /* not stored, not an error */
+    /* not stored, not an error */
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 3000, 1), 0);
 
     /* no EEPROM at all */
     cfg.eeprom.ops = NULL;
     CHECK_EQ(movidrive_init(&md, &cfg, NULL, 0), 0);
-    CHECK_EQ(md_write(&md, MD_IDX_P130_RAMP_UP, 3000, 1), 0);
+    CHECK_EQ(movidrive_write(&md, MOVIDRIVE_IDX_P130_RAMP_UP, 3000, 1), 0);
     CHECK_EQ(movidrive_factory_reset(&md), 0);
 }
 
@@ -538,7 +540,8 @@ static void test_open_reports(void)
     CHECK_STR(e, want);
     CHECK_EQ(nvm.loaded, FILE_NVM_IMAGE_BACKUP);
     CHECK_EQ(open_md(NULL), 0);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 10); /* the backup's value, not the lost 20 */
+    /* the backup's value, not the lost 20 */
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 10);
     /* both unusable */
     char bak[700];
     snprintf(bak, sizeof bak, "%s.bak", path);
@@ -552,8 +555,8 @@ static void test_open_reports(void)
     CHECK_STR(e, want);
     CHECK_EQ(nvm.loaded, FILE_NVM_IMAGE_NONE);
     CHECK_EQ(open_md(NULL), -1);
-    CHECK_EQ(md_read(&md, MD_IDX_IPOS_H0), 0); /* factory settings */
-    CHECK_EQ(md_read(&md, MD_IDX_P130_RAMP_UP), 2000);
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0), 0); /* factory settings */
+    CHECK_EQ(movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP), 2000);
     /* the file gone, the backup good */
     write_file(bak, good, sizeof good);
     unlink(path);
@@ -648,7 +651,7 @@ static void writer_child(progress_t *pg, uint32_t value)
     for (uint32_t v = value + 1;; v++) {
         pg->started = v;
         uint8_t req[8], rsp[8];
-        md_req(req, 0x32, MD_IDX_IPOS_H0, v);
+        movidrive_req(req, 0x32, MOVIDRIVE_IDX_IPOS_H0, v);
         movidrive_param(&cm, req, rsp);
         if (rsp[0] & 0x80) {
             _exit(5);
@@ -656,7 +659,7 @@ static void writer_child(progress_t *pg, uint32_t value)
         pg->done = v;
         if ((v & 7u) == 0) { /* now and then a second parameter */
             pg->p130_started = (v * 10u) % 2000000u;
-            md_req(req, 0x32, MD_IDX_P130_RAMP_UP, pg->p130_started);
+            movidrive_req(req, 0x32, MOVIDRIVE_IDX_P130_RAMP_UP, pg->p130_started);
             movidrive_param(&cm, req, rsp);
             pg->p130_done = pg->p130_started;
         }
@@ -684,13 +687,13 @@ static uint32_t check_after_kill(int round, const progress_t *pg, uint32_t *p130
     int mrc = open_md(&nrc);
     CHECK_EQ(nrc, 0);
     CHECK_EQ(mrc, 0);
-    uint32_t got = md_read(&md, MD_IDX_IPOS_H0);
+    uint32_t got = movidrive_read(&md, MOVIDRIVE_IDX_IPOS_H0);
     if (got != done && got != started) {
         t->bad++;
         fprintf(stderr, "round %d: H0 = %u, child had done %u, started %u\n", round,
                 (unsigned)got, (unsigned)done, (unsigned)started);
     }
-    *p130 = md_read(&md, MD_IDX_P130_RAMP_UP);
+    *p130 = movidrive_read(&md, MOVIDRIVE_IDX_P130_RAMP_UP);
     if (*p130 != pg->p130_done && *p130 != pg->p130_started) {
         t->bad++;
         fprintf(stderr, "round %d: P130 = %u, child had done %u, started %u\n", round,
@@ -761,7 +764,7 @@ static void remove_tree(const char *d)
 
 int main(int argc, char **argv)
 {
-    snprintf(dir, sizeof dir, "%s/md_eeprom_XXXXXX", argc > 1 ? argv[1] : "/tmp");
+    snprintf(dir, sizeof dir, "%s/movidrive_eeprom_XXXXXX", argc > 1 ? argv[1] : "/tmp");
     if (mkdtemp(dir) == NULL) {
         perror(dir);
         return 1;
