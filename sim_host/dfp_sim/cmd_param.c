@@ -18,7 +18,7 @@
 
 #include "cli.h"
 #include "commands.h"
-#include "dfp_lcm_bridge/lcm_segment.h"
+#include "lcm_bridge/lcm_segment.h"
 #include "medium.h"
 #include "movidrive/movidrive_names.h"
 #include "param_run.h"

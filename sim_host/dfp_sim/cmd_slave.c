@@ -9,7 +9,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "session.h"
-#include "sim_can/inverter_can.h"
+#include "can/inverter_can.h"
 #include "sim_hal/file_nvm.h"
 #include "sim_hal/host_clock.h"
 #include "sim_hal/tty_port.h"

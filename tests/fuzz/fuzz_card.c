@@ -293,7 +293,7 @@ static void card_process_inputs(void *card, const uint16_t *pi, uint8_t n)
 
 static hal_time_us_t earlier(hal_time_us_t a, hal_time_us_t b) { return hal_time_diff(a, b) < 0 ? a : b; }
 
-/* The card's main loop as the simulator runs it (sim_host/stations/src/stations.c). */
+/* The card's main loop as the simulator runs it (sim_host/sim_stations/src/stations.c). */
 static hal_time_us_t card_poll(void)
 {
     hal_time_us_t now = now_us();

@@ -10,8 +10,8 @@
 #include "dfp_lcm/dfp_lcm_card_state_t.h"
 #include "dfp_lcm/dfp_lcm_param_service_t.h"
 #include "dfp_lcm/dfp_lcm_telegram_t.h"
-#include "dfp_lcm_bridge/lcm_bridge.h"
-#include "dfp_lcm_types/telegram_decode.h"
+#include "lcm_bridge/lcm_bridge.h"
+#include "lcm_bridge/telegram_decode.h"
 #include "dp_master/param_channel.h"
 #include "rig/rig.h"
 

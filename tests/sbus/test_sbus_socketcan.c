@@ -16,7 +16,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "sim_can/inverter_can.h"
+#include "can/inverter_can.h"
 #include "movilink/movilink_client.h"
 
 #define MOVIDRIVE_P100_FIELDBUS 3u /* setpoint source (index 8461) */

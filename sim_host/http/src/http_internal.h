@@ -11,7 +11,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "dfp_http/http_server.h"
+#include "http/http_server.h"
 #include "movidrive/movidrive_names.h"
 #include "rig/rig_ctl.h"
 

@@ -2,7 +2,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "dfp_http/www_files.h"
+#include "http/www_files.h"
 #include "http_internal.h"
 
 #define LOG_LIMIT_DEFAULT 500u

@@ -19,7 +19,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "dfp_lcm_bridge/lcm_segment.h"
+#include "lcm_bridge/lcm_segment.h"
 #include "sim_hal/membus.h"
 #include "sim_hal/tty_port.h"
 #include "sim_stations/stations.h"

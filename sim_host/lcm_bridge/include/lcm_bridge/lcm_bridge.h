@@ -1,5 +1,5 @@
-/* Publishing what a simulated card does to LCM (sim_host/lcm/README.md lists the channels and
- * the messages): every telegram the card sent or heard, the card's state when it changed, and
+/* Publishing what a simulated card does to LCM (sim_host/lcm_bridge/README.md lists the channels
+ * and the messages): every telegram the card sent or heard, the card's state when it changed, and
  * every parameter service the card ran with its inverter.
  *
  * Everything goes through an explicit context, so a program may publish for several cards or

@@ -1,4 +1,4 @@
-#include "dfp_lcm_bridge/lcm_segment.h"
+#include "lcm_bridge/lcm_segment.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -9,8 +9,8 @@
 #include <lcm/lcm.h>
 
 #include "dfp_lcm/dfp_lcm_telegram_t.h"
-#include "dfp_lcm_bridge/lcm_bridge.h"
-#include "dfp_lcm_types/telegram_decode.h"
+#include "lcm_bridge/lcm_bridge.h"
+#include "lcm_bridge/telegram_decode.h"
 #include "sim_hal/host_clock.h"
 
 /* One readable() call handles at most this many messages, so a flood cannot starve the

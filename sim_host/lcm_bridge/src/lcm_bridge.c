@@ -1,4 +1,4 @@
-#include "dfp_lcm_bridge/lcm_bridge.h"
+#include "lcm_bridge/lcm_bridge.h"
 
 #include <stdio.h>
 #include <stdlib.h>

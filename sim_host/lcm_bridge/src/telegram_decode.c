@@ -1,4 +1,4 @@
-#include "dfp_lcm_types/telegram_decode.h"
+#include "lcm_bridge/telegram_decode.h"
 
 #include <stdio.h>
 #include <string.h>
