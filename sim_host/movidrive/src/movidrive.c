@@ -37,6 +37,7 @@ int movidrive_init(movidrive_t *md, const movidrive_cfg_t *cfg, char *err, size_
     md->cfg = *cfg;
     md->defs = movidrive_params;
     md->num_defs = movidrive_params_count;
+    movidrive_build_slots(md);
     movidrive_load_defaults(md, false);
     int rc = movidrive_ee_load(md, err, errlen);
     if (cfg->sbus_address != 0) {

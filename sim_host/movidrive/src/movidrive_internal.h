@@ -104,10 +104,29 @@ static inline bool movidrive_is_ipos(uint16_t index)
     return index >= MOVIDRIVE_IDX_IPOS_H0 && index < MOVIDRIVE_IDX_IPOS_H0 + MOVIDRIVE_IPOS_VARS;
 }
 
-/* Position of a table parameter in defs[]/ram[]/ee[], -1 if the table lacks it. */
-int movidrive_find_def(const movidrive_t *md, uint16_t index);
+/* The index table behind movidrive_find_def for the current defs (none if they span more than
+ * MOVIDRIVE_SLOT_SPAN indices). */
+void movidrive_build_slots(movidrive_t *md);
+/* movidrive_find_def without the index table (a table swapped in after init). */
+int movidrive_find_def_search(const movidrive_t *md, uint16_t index);
+
+/* Position of a table parameter in defs[]/ram[]/ee[], -1 if the table lacks it. Inline, with
+ * movidrive_ram_value: the other parts call them dozens of times per card poll. */
+static inline int movidrive_find_def(const movidrive_t *md, uint16_t index)
+{
+    if (md->slot_defs != NULL && md->slot_defs == md->defs && md->slot_num == md->num_defs) {
+        unsigned off = (unsigned)index - md->slot_base;
+        return off < MOVIDRIVE_SLOT_SPAN ? md->slot[off] : -1;
+    }
+    return movidrive_find_def_search(md, index);
+}
+
 /* RAM value of a table parameter (0 if the table lacks it). */
-int32_t movidrive_ram_value(const movidrive_t *md, uint16_t index);
+static inline int32_t movidrive_ram_value(const movidrive_t *md, uint16_t index)
+{
+    int k = movidrive_find_def(md, index);
+    return k < 0 ? 0 : md->ram[k];
+}
 /* Sets the RAM value of a table parameter (nothing if the table lacks it). */
 void movidrive_set_ram_value(movidrive_t *md, uint16_t index, int32_t value);
 /* Within min..max (unsigned compare for unsigned entries) and a known enumeration value. */

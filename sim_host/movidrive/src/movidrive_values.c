@@ -5,11 +5,30 @@
 #include "movidrive_internal.h"
 #include "movidrive_params.h"
 
-int movidrive_find_def(const movidrive_t *md, uint16_t index)
+void movidrive_build_slots(movidrive_t *md)
 {
-    /* The drive model looks up a dozen parameters on every tick (a quarter of a replay's time
-     * went here): a binary search without a branch on the comparison, which the CPU cannot
-     * predict, ending on the last entry at or below index. */
+    md->slot_defs = NULL; /* until the table is complete: the binary search */
+    size_t n = md->num_defs;
+    if (n == 0u || n > MOVIDRIVE_MAX_PARAMS) {
+        return;
+    }
+    md->slot_base = md->defs[0].index;
+    memset(md->slot, 0xFF, sizeof md->slot); /* every slot -1 */
+    for (size_t k = 0; k < n; k++) {
+        unsigned off = (unsigned)md->defs[k].index - md->slot_base;
+        if (off >= MOVIDRIVE_SLOT_SPAN) {
+            return; /* wider than the table (or not sorted) */
+        }
+        md->slot[off] = (int16_t)k;
+    }
+    md->slot_defs = md->defs;
+    md->slot_num = n;
+}
+
+int movidrive_find_def_search(const movidrive_t *md, uint16_t index)
+{
+    /* A binary search without a branch on the comparison, which the CPU cannot predict, ending
+     * on the last entry at or below index. */
     size_t n = md->num_defs;
     if (n == 0u) {
         return -1;
@@ -21,12 +40,6 @@ int movidrive_find_def(const movidrive_t *md, uint16_t index)
         n -= half;
     }
     return base->index == index ? (int)(base - md->defs) : -1;
-}
-
-int32_t movidrive_ram_value(const movidrive_t *md, uint16_t index)
-{
-    int k = movidrive_find_def(md, index);
-    return k < 0 ? 0 : md->ram[k];
 }
 
 void movidrive_set_ram_value(movidrive_t *md, uint16_t index, int32_t value)

@@ -66,6 +66,9 @@
 #define MOVIDRIVE_FAULT_FIELDBUS_TIMEOUT 28u
 
 #define MOVIDRIVE_MAX_PARAMS 512u
+/* Widest index range (first to last table entry) the per-drive index-to-position table covers;
+ * the generated table spans 8300..8891. */
+#define MOVIDRIVE_SLOT_SPAN 1024u
 
 typedef struct movidrive_param_def {
     uint16_t index;
@@ -159,6 +162,13 @@ typedef struct movidrive {
     int32_t current_mpct;           /* output current, 0.001 % I_N */
     int32_t active_current_mpct;
     bool have_fieldbus;             /* movidrive_fieldbus_status() was called */
+    /* Index -> position in defs (-1: none) for the table movidrive_init set: the drive model
+     * reads dozens of parameters per card poll, and a binary search for each was half of a
+     * replay's time. Used only while defs and num_defs are still that table. */
+    const movidrive_param_def_t *slot_defs;
+    size_t slot_num;
+    uint16_t slot_base;
+    int16_t slot[MOVIDRIVE_SLOT_SPAN];
 } movidrive_t;
 
 /* Loads defaults, then the EEPROM image if there is a valid one. Returns 0, or -1 with a reason
