@@ -1,7 +1,7 @@
 # LCM 1.5 for the host build and the fuzz build: lcm-gen, the static liblcm and its headers from
 # the `lcm` wheel (PyPI) that `make` installs into the project's venv. Debian ships 1.3.1, whose
 # UDP fragment reassembly trusts a fragment's offset: two datagrams from anyone who can reach the
-# multicast group crash every subscriber (sim_host/lcm/README.md, "Who can reach a segment").
+# multicast group crash every subscriber (sim_host/lcm_bridge/README.md, "Who can reach a segment").
 # Linked statically, so dfp-sim runs without the venv (only glib, which liblcm needs, is shared).
 #
 # Sets LCM_GEN, LCM_INCLUDE_DIR, LCM_VERSION and the imported target dfp::lcm.

@@ -1,7 +1,7 @@
-"""dfp-lcm-view: a live console view of what dfp-sim publishes over LCM (sim_host/lcm/README.md):
-one line per telegram, per parameter service and per card state, a status line per station, a
-summary at the end. Decodes through the classes lcm-gen makes of the project's .lcm files
-(lcm_types.py); names the telegrams' services with fdl_text.py.
+"""dfp-lcm-view: a live console view of what dfp-sim publishes over LCM
+(sim_host/lcm_bridge/README.md): one line per telegram, per parameter service and per card state,
+a status line per station, a summary at the end. Decodes through the classes lcm-gen makes of the
+project's .lcm files (lcm_types.py); names the telegrams' services with fdl_text.py.
 """
 
 import argparse
@@ -86,7 +86,7 @@ def parse_args(argv):
                    help="end after S seconds")
     p.add_argument("--lcm-types", metavar="DIR",
                    help="the project's .lcm files (default: $DFP_LCM_TYPES, else "
-                        "sim_host/lcm/dfp_lcm of this checkout)")
+                        "sim_host/lcm_bridge/dfp_lcm of this checkout)")
     return p.parse_args(argv)
 
 

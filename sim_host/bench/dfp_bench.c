@@ -246,8 +246,9 @@ static void bench_rig(uint32_t baud, card_inverter_t inverter, uint32_t inverter
     (void)rig_add_card(&brig, &co, 0);
     dp_master_cfg_t mc = {.address = 2, .baud = baud, .strict_timing = true};
     bmaster = rig_add_master(&brig, &mc, 0);
-    dpm_slave_cfg_t sc = {.address = 4};
-    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, wd_ms, dfp21b_user_prm_default, 9);
+    dp_master_slave_cfg_t sc = {.address = 4};
+    sc.prm_len =
+        (uint8_t)dp_master_build_prm(sc.prm, DFP21B_IDENT, wd_ms, dfp21b_user_prm_default, 9);
     memcpy(sc.cfg, cfg_3pd, 2);
     sc.cfg_len = 2;
     dp_master_add_slave(bmaster, &sc);
@@ -272,7 +273,7 @@ static void bench_membus(unsigned cycles, uint32_t baud)
     uint64_t startup_ns = 0;
     while (bmaster->slaves[0].cycles < cycles && brig.bus.now_ns < 600000000000ull) {
         membus_run_for_us(&brig.bus, startup_ns == 0u ? 50u : 1000u);
-        if (startup_ns == 0u && bmaster->slaves[0].phase == DPM_PHASE_DATA_EXCH) {
+        if (startup_ns == 0u && bmaster->slaves[0].phase == DP_MASTER_PHASE_DATA_EXCH) {
             startup_ns = brig.bus.now_ns;
         }
     }
@@ -298,7 +299,7 @@ static void bench_param_latency(uint32_t baud, uint32_t inverter_us, unsigned n)
     char name[24];
     bench_rig(baud, CARD_INVERTER_SIM, inverter_us, 1000);
     membus_run_for_us(&brig.bus, 200000);
-    dpm_param_t p = {0};
+    dp_master_param_t p = {0};
     uint8_t out[14] = {0};
     uint64_t sum_ns = 0;
     uint64_t max_ns = 0;
@@ -306,11 +307,11 @@ static void bench_param_latency(uint32_t baud, uint32_t inverter_us, unsigned n)
     uint32_t max_cycles = 0;
     unsigned done = 0;
     for (unsigned i = 0; i < n; i++) {
-        dpm_param_start(&p, ML_SVC_READ, 8300, 0, out);
+        dp_master_param_start(&p, ML_SVC_READ, 8300, 0, out);
         dp_master_set_outputs(bmaster, 0, out, sizeof out);
         uint64_t t0 = brig.bus.now_ns;
         uint32_t c0 = bmaster->slaves[0].cycles;
-        while (!dpm_param_done(&p, bmaster->slaves[0].inputs) &&
+        while (!dp_master_param_done(&p, bmaster->slaves[0].inputs) &&
                brig.bus.now_ns - t0 < 1000000000ull) {
             membus_run_for_us(&brig.bus, 10);
         }
@@ -334,26 +335,27 @@ static void bench_param_latency(uint32_t baud, uint32_t inverter_us, unsigned n)
 
 /* One data set 47 access (Write.req, polls, Read.req repeated while B5, polls) on port, in bus
  * time; returns false when it did not end positively. */
-static bool dpv1_access(dpm_acyc_port_t port, const dpm_ds47_req_t *req, uint32_t step_us,
-                        uint32_t *us, uint32_t *cycles, uint32_t *telegrams, uint32_t *busy)
+static bool dpv1_access(dp_master_acyc_port_t port, const dp_master_ds47_req_t *req,
+                        uint32_t step_us, uint32_t *us, uint32_t *cycles, uint32_t *telegrams,
+                        uint32_t *busy)
 {
-    dpm_call_t call;
+    dp_master_call_t call;
     memset(&call, 0, sizeof call);
     uint32_t c0 = bmaster->slaves[0].cycles;
-    if (dpm_ds47_start(&call, port, req, NULL, NULL, membus_now_us(&brig.bus)) != 0) {
+    if (dp_master_ds47_start(&call, port, req, NULL, NULL, membus_now_us(&brig.bus)) != 0) {
         return false;
     }
     uint64_t t0 = brig.bus.now_ns;
-    while (!dpm_call_done(&call) && brig.bus.now_ns - t0 < 5000000000ull) {
+    while (!dp_master_call_done(&call) && brig.bus.now_ns - t0 < 5000000000ull) {
         membus_run_for_us(&brig.bus, step_us);
     }
     *us = call.t_end - call.t_start;
     *cycles = bmaster->slaves[0].cycles - c0;
     *telegrams = call.telegrams;
     *busy = call.busy;
-    dpm_ds47_rsp_t rsp;
-    return dpm_call_done(&call) && call.ok &&
-           dpm_ds47_parse(req, call.data, call.len, &rsp, NULL, 0) && !rsp.negative &&
+    dp_master_ds47_rsp_t rsp;
+    return dp_master_call_done(&call) && call.ok &&
+           dp_master_ds47_parse(req, call.data, call.len, &rsp, NULL, 0) && !rsp.negative &&
            rsp.p[0].value == 0x311C7289u;
 }
 
@@ -362,35 +364,36 @@ static bool dpv1_access(dpm_acyc_port_t port, const dpm_ds47_req_t *req, uint32_
  * 19 parameters per request, time and Data_Exchange cycles per access. */
 static void bench_dpv1(uint32_t baud, uint32_t inverter_us, unsigned n)
 {
-    static dpm_c2_t c2;
+    static dp_master_c2_t c2;
     uint32_t step_us = baud >= 1500000u ? 5u : 200u;
     char name[24];
     const char *rate = rate_name(baud, name);
     for (int cls = 1; cls <= 2; cls++) {
         bench_rig(baud, CARD_INVERTER_SIM, inverter_us, 1000);
-        dpm_slave_cfg_t sc = bmaster->slaves[0].cfg;
-        sc.prm_len = (uint8_t)dpm_build_prm_dpv1(sc.prm, DFP21B_IDENT, 1000,
+        dp_master_slave_cfg_t sc = bmaster->slaves[0].cfg;
+        sc.prm_len = (uint8_t)dp_master_build_prm_dpv1(sc.prm, DFP21B_IDENT, 1000,
                                                  dfp21b_user_prm_default, 9);
         dp_master_reconfigure(bmaster, 0, &sc, 0);
         membus_run_for_us(&brig.bus, 200000);
-        dpm_acyc_port_t port = dp_master_c1_port(bmaster, 0);
+        dp_master_acyc_port_t port = dp_master_c1_port(bmaster, 0);
         uint32_t open_us = 0;
         if (cls == 2) {
-            dpm_c2_cfg_t cc = {.slave = 4, .address = 1};
-            dpm_c2_init(&c2, &cc);
+            dp_master_c2_cfg_t cc = {.slave = 4, .address = 1};
+            dp_master_c2_init(&c2, &cc);
             dp_master_add_c2(bmaster, &c2);
             hal_time_us_t t0 = membus_now_us(&brig.bus);
-            dpm_c2_open(&c2, NULL, NULL, t0);
-            while (dpm_c2_state(&c2) != DPM_C2_OPEN && dpm_c2_state(&c2) != DPM_C2_CLOSED) {
+            dp_master_c2_open(&c2, NULL, NULL, t0);
+            while (dp_master_c2_state(&c2) != DP_MASTER_C2_OPEN &&
+                   dp_master_c2_state(&c2) != DP_MASTER_C2_CLOSED) {
                 membus_run_for_us(&brig.bus, step_us);
             }
             open_us = membus_now_us(&brig.bus) - t0;
-            port = dpm_c2_port(&c2);
+            port = dp_master_c2_port(&c2);
         }
         for (unsigned params = 1; params <= DS47_MAX_PARAMS; params += 18u) {
-            dpm_ds47_req_t req = {.ref = 1, .id = DS47_ID_MOVILINK, .n = (uint8_t)params};
+            dp_master_ds47_req_t req = {.ref = 1, .id = DS47_ID_MOVILINK, .n = (uint8_t)params};
             for (unsigned i = 0; i < params; i++) {
-                req.p[i] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
+                req.p[i] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
             }
             uint64_t sum_us = 0;
             uint32_t max_us = 0;
@@ -467,8 +470,9 @@ static int bench_pty(unsigned cycles)
     dp_master_cfg_t mc = {.address = 2, .baud = BAUD, .strict_timing = false,
                           .slot_time_us = 100000};
     dp_master_t *pm = rig_add_master(&prig[1], &mc, tty_now_us());
-    dpm_slave_cfg_t sc = {.address = 4};
-    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 1000, dfp21b_user_prm_default, 9);
+    dp_master_slave_cfg_t sc = {.address = 4};
+    sc.prm_len =
+        (uint8_t)dp_master_build_prm(sc.prm, DFP21B_IDENT, 1000, dfp21b_user_prm_default, 9);
     memcpy(sc.cfg, cfg_3pd, 2);
     sc.cfg_len = 2;
     dp_master_add_slave(pm, &sc);
@@ -480,7 +484,7 @@ static int bench_pty(unsigned cycles)
             printf("  PTY: %s\n", rig_error(&prig[1]));
             break;
         }
-        if (startup == 0u && pm->slaves[0].phase == DPM_PHASE_DATA_EXCH) {
+        if (startup == 0u && pm->slaves[0].phase == DP_MASTER_PHASE_DATA_EXCH) {
             startup = host_clock_mono_ns() - t0;
             dx0 = host_clock_mono_ns();
         }

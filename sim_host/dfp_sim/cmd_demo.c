@@ -27,7 +27,7 @@ typedef struct demo {
     instrument_t in;
     report_t rep; /* --capture */
     uint8_t out[14]; /* parameter channel + PO1..PO3 */
-    dpm_param_t param;
+    dp_master_param_t param;
     bool ok;
     lcm_cli_t lcm; /* --lcm URL */
     bool paced;    /* --http: simulated time follows the wall clock, so a person can watch */
@@ -96,7 +96,7 @@ static void expect(bool cond, const char *what)
 static bool card_in_data_exchange(void)
 {
     return dp_slave_state(&demo.card->card.dp) == DP_STATE_DATA_EXCH &&
-           demo.master->slaves[0].phase == DPM_PHASE_DATA_EXCH;
+           demo.master->slaves[0].phase == DP_MASTER_PHASE_DATA_EXCH;
 }
 
 static bool card_in_wait_prm(void)
@@ -104,13 +104,13 @@ static bool card_in_wait_prm(void)
     return dp_slave_state(&demo.card->card.dp) == DP_STATE_WAIT_PRM;
 }
 
-static void slave_cfg(dpm_slave_cfg_t *sc, const uint8_t *cfg, size_t len)
+static void slave_cfg(dp_master_slave_cfg_t *sc, const uint8_t *cfg, size_t len)
 {
     /* User prm octet 8 = 00: inverter faults reach the master as external diagnosis. */
     static const uint8_t user[9] = {0x00, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x00};
     memset(sc, 0, sizeof *sc);
     sc->address = DEMO_ADDRESS;
-    sc->prm_len = (uint8_t)dpm_build_prm(sc->prm, DFP21B_IDENT, DEMO_WATCHDOG_MS, user,
+    sc->prm_len = (uint8_t)dp_master_build_prm(sc->prm, DFP21B_IDENT, DEMO_WATCHDOG_MS, user,
                                          sizeof user);
     memcpy(sc->cfg, cfg, len);
     sc->cfg_len = (uint8_t)len;
@@ -127,7 +127,7 @@ static void set_po(uint16_t cw, uint16_t speed)
 
 static bool param_done(void)
 {
-    return dpm_param_done(&demo.param, demo.master->slaves[0].inputs);
+    return dp_master_param_done(&demo.param, demo.master->slaves[0].inputs);
 }
 
 /* One MOVILINK service through the cyclic channel, the way a PLC program does it: toggle the
@@ -135,7 +135,7 @@ static bool param_done(void)
 static bool param(uint8_t service, uint16_t index, uint32_t value, const char *what,
                   uint32_t *result)
 {
-    dpm_param_start(&demo.param, service, index, value, demo.out);
+    dp_master_param_start(&demo.param, service, index, value, demo.out);
     dp_master_set_outputs(demo.master, 0, demo.out, sizeof demo.out);
     uint32_t cycles0 = demo.master->slaves[0].cycles;
     if (!run_until(param_done, 1000000u)) {
@@ -242,7 +242,7 @@ static void setup(const instrument_opts_t *io)
 
 static void reconfigure(const uint8_t *cfg, size_t len)
 {
-    dpm_slave_cfg_t sc;
+    dp_master_slave_cfg_t sc;
     slave_cfg(&sc, cfg, len);
     dp_master_reconfigure(demo.master, 0, &sc, membus_now_us(&demo.rig.bus));
     rig_wake(&demo.rig);
@@ -322,7 +322,7 @@ static int scene_startup(const demo_opts_t *o)
         demo.paced = true;
         demo.wall_start_ns = wall_ns();
     }
-    dpm_slave_cfg_t sc;
+    dp_master_slave_cfg_t sc;
     slave_cfg(&sc, param_3pd, sizeof param_3pd);
     dp_master_add_slave(demo.master, &sc);
     expect(run_until(card_in_data_exchange, 2000000u), "start-up reaches Data_Exch");

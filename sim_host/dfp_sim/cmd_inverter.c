@@ -135,9 +135,10 @@ static void report_state(hal_time_us_t now)
             (void)snprintf(fault, sizeof fault, ", fault F%02u", inv.md.fault);
         }
         line("state  status word 0x%04X: %s%s%s%s, unit status %u%s", sw,
-             (sw & MD_SW_OUTPUT_STAGE_ENABLED) ? "output stage enabled" : "output stage off",
-             (sw & MD_SW_READY) ? ", ready" : "", (sw & MD_SW_PO_DATA_ENABLED) ? ", PO data enabled" : "",
-             (sw & MD_SW_FAULT) ? ", fault/warning" : "", (unsigned)(sw >> 8), fault);
+             (sw & MOVIDRIVE_SW_OUTPUT_STAGE_ENABLED) ? "output stage enabled" : "output stage off",
+             (sw & MOVIDRIVE_SW_READY) ? ", ready" : "",
+             (sw & MOVIDRIVE_SW_PO_DATA_ENABLED) ? ", PO data enabled" : "",
+             (sw & MOVIDRIVE_SW_FAULT) ? ", fault/warning" : "", (unsigned)(sw >> 8), fault);
         inv.status = sw;
         inv.fault = inv.md.fault;
     }

@@ -25,18 +25,18 @@ typedef struct master_opts {
     uint32_t wd_ms;
     uint32_t slot_ms;
     uint32_t ident;
-    uint8_t cfg[DPM_MAX_CFG];
+    uint8_t cfg[DP_MASTER_MAX_CFG];
     size_t cfg_len;
-    uint8_t user[DPM_MAX_PRM];
+    uint8_t user[DP_MASTER_MAX_PRM];
     size_t user_len;
-    uint8_t outputs[DPM_MAX_IO];
+    uint8_t outputs[DP_MASTER_MAX_IO];
     size_t out_given;
     bool verbose;
     bool timeout_given;
     bool reset_fault;
     /* from the above */
     size_t control_word; /* offset of PO1, the control word, in the outputs */
-    uint8_t slave_addr[DPM_MAX_SLAVES];
+    uint8_t slave_addr[DP_MASTER_MAX_SLAVES];
     size_t num_slaves;
 } master_opts_t;
 
@@ -141,7 +141,7 @@ static int master_parse(master_opts_t *o, int argc, char **argv)
         return EXIT_USAGE;
     }
     if (!medium_check(&o->med, "master") ||
-        !cli_address_list(o->addresses, o->slave_addr, DPM_MAX_SLAVES, &o->num_slaves)) {
+        !cli_address_list(o->addresses, o->slave_addr, DP_MASTER_MAX_SLAVES, &o->num_slaves)) {
         return EXIT_USAGE;
     }
     dfp21b_pd_cfg_t pd = {0};
@@ -162,8 +162,8 @@ static int master_parse(master_opts_t *o, int argc, char **argv)
 /* The master on the medium with every slave. Returns 0, or EXIT_USAGE after reporting. */
 static int master_build(session_t *s, const master_opts_t *o)
 {
-    dpm_slave_cfg_t sc = {0};
-    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, (uint16_t)o->ident, o->wd_ms, o->user,
+    dp_master_slave_cfg_t sc = {0};
+    sc.prm_len = (uint8_t)dp_master_build_prm(sc.prm, (uint16_t)o->ident, o->wd_ms, o->user,
                                         o->user_len);
     memcpy(sc.cfg, o->cfg, o->cfg_len);
     sc.cfg_len = (uint8_t)o->cfg_len;
@@ -186,7 +186,7 @@ static int master_build(session_t *s, const master_opts_t *o)
 static void print_start_line(const session_t *s, const master_opts_t *o)
 {
     char name[300];
-    const dpm_slave_t *first = &s->rig.master.slaves[0];
+    const dp_master_slave_t *first = &s->rig.master.slaves[0];
     printf("dfp-sim master: address %u on %s at %s; %s %s, ident 0x%04X, %zu cfg octets, "
            "%u out / %u in octets%s\n",
            o->own, session_medium_name(s, &o->med, name, sizeof name),
@@ -201,7 +201,7 @@ static void print_start_line(const session_t *s, const master_opts_t *o)
 static bool all_in_data_exchange(const dp_master_t *m)
 {
     for (uint8_t i = 0; i < m->num_slaves; i++) {
-        if (m->slaves[i].phase != DPM_PHASE_DATA_EXCH) {
+        if (m->slaves[i].phase != DP_MASTER_PHASE_DATA_EXCH) {
             return false;
         }
     }
@@ -238,8 +238,8 @@ static void report_done(session_t *s, const run_times_t *t)
 {
     const dp_master_t *m = &s->rig.master;
     if (m->num_slaves == 1u) {
-        const dpm_slave_t *sl = &m->slaves[0];
-        char hex[3 * DPM_MAX_IO + 1];
+        const dp_master_slave_t *sl = &m->slaves[0];
+        char hex[3 * DP_MASTER_MAX_IO + 1];
         size_t n = 0;
         for (size_t i = 0; i < sl->inputs_len; i++) {
             n += (size_t)snprintf(hex + n, sizeof hex - n, "%02X", sl->inputs[i]);
@@ -266,11 +266,11 @@ static void report_done(session_t *s, const run_times_t *t)
 static void report_missing(const dp_master_t *m, uint32_t cycles, const char *why)
 {
     if (m->num_slaves == 1u) {
-        const dpm_slave_t *sl = &m->slaves[0];
-        bool fault = sl->phase == DPM_PHASE_BACKOFF && sl->fault[0] != '\0';
+        const dp_master_slave_t *sl = &m->slaves[0];
+        bool fault = sl->phase == DP_MASTER_PHASE_BACKOFF && sl->fault[0] != '\0';
         cli_error("master: slave %u did not complete %u Data_Exchange cycles (%s; reached %u, "
                   "phase %s%s%s)",
-                  sl->cfg.address, cycles, why, sl->cycles, dpm_phase_name(sl->phase),
+                  sl->cfg.address, cycles, why, sl->cycles, dp_master_phase_name(sl->phase),
                   fault ? ": " : "", fault ? sl->fault : "");
         return;
     }
@@ -278,14 +278,14 @@ static void report_missing(const dp_master_t *m, uint32_t cycles, const char *wh
     size_t n = 0;
     unsigned missing = 0;
     for (uint8_t i = 0; i < m->num_slaves; i++) {
-        const dpm_slave_t *sl = &m->slaves[i];
+        const dp_master_slave_t *sl = &m->slaves[i];
         if (sl->cycles >= cycles) {
             continue;
         }
         missing++;
         if (n + 48u < sizeof list) {
             n += (size_t)snprintf(list + n, sizeof list - n, "%s%u (%u, %s)", n > 0 ? ", " : "",
-                                  sl->cfg.address, sl->cycles, dpm_phase_name(sl->phase));
+                                  sl->cfg.address, sl->cycles, dp_master_phase_name(sl->phase));
         }
     }
     cli_error("master: %u of %u slaves did not complete %u Data_Exchange cycles (%s): %s",
@@ -303,16 +303,16 @@ static void report_missing(const dp_master_t *m, uint32_t cycles, const char *wh
 typedef enum reset_phase { RESET_WAIT = 0, RESET_HOLD, RESET_DONE } reset_phase_t;
 
 typedef struct fault_reset {
-    reset_phase_t phase[DPM_MAX_SLAVES];
-    uint32_t until_cycles[DPM_MAX_SLAVES];
-    uint64_t until_ns[DPM_MAX_SLAVES];
+    reset_phase_t phase[DP_MASTER_MAX_SLAVES];
+    uint32_t until_cycles[DP_MASTER_MAX_SLAVES];
+    uint64_t until_ns[DP_MASTER_MAX_SLAVES];
 } fault_reset_t;
 
 /* The outputs as given, with bit 6 of the control word set or cleared; returns the control
  * word sent. */
 static uint16_t outputs_with_reset(const master_opts_t *o, dp_master_t *m, unsigned i, bool bit6)
 {
-    uint8_t out[DPM_MAX_IO];
+    uint8_t out[DP_MASTER_MAX_IO];
     memcpy(out, o->outputs, sizeof out);
     size_t cw_at = o->control_word;
     uint16_t cw = hal_get_be16(&out[cw_at]);
@@ -327,8 +327,8 @@ static void fault_reset_step(session_t *s, const master_opts_t *o, fault_reset_t
 {
     dp_master_t *m = &s->rig.master;
     for (unsigned i = 0; i < m->num_slaves; i++) {
-        const dpm_slave_t *sl = &m->slaves[i];
-        if (fr->phase[i] == RESET_WAIT && sl->phase == DPM_PHASE_DATA_EXCH) {
+        const dp_master_slave_t *sl = &m->slaves[i];
+        if (fr->phase[i] == RESET_WAIT && sl->phase == DP_MASTER_PHASE_DATA_EXCH) {
             uint16_t cw = outputs_with_reset(o, m, i, true);
             fr->phase[i] = RESET_HOLD;
             fr->until_cycles[i] = sl->cycles + RESET_CYCLES;
@@ -365,11 +365,11 @@ static bool fault_reset_holding(const fault_reset_t *fr, unsigned num_slaves)
 static void master_leave(session_t *s)
 {
     dp_master_t *m = &s->rig.master;
-    static const uint8_t zeros[DPM_MAX_IO];
-    uint32_t until[DPM_MAX_SLAVES] = {0};
+    static const uint8_t zeros[DP_MASTER_MAX_IO];
+    uint32_t until[DP_MASTER_MAX_SLAVES] = {0};
     unsigned exchanging = 0;
     for (unsigned i = 0; i < m->num_slaves; i++) {
-        if (m->slaves[i].phase == DPM_PHASE_DATA_EXCH) {
+        if (m->slaves[i].phase == DP_MASTER_PHASE_DATA_EXCH) {
             exchanging++;
             until[i] = m->slaves[i].cycles + LEAVE_CYCLES;
         }
@@ -392,7 +392,7 @@ static void master_leave(session_t *s)
         done = true;
         for (unsigned i = 0; i < m->num_slaves; i++) {
             done = done && (until[i] == 0u || m->slaves[i].cycles >= until[i] ||
-                            m->slaves[i].phase != DPM_PHASE_DATA_EXCH);
+                            m->slaves[i].phase != DP_MASTER_PHASE_DATA_EXCH);
         }
     }
     rig_log(&s->in.log, RIG_LOG_INFO, "master", "master", "%s",

@@ -5,10 +5,10 @@
  *   movilink    DP start-up with DP-V1 parameters, class-1 data set 47, request id 0x40
  *   profidrive  the same with request id 0x01 (read) / 0x02 (change, non-volatile)
  *   c2          a class-2 connection (no start-up), data set 47 with id 0x40, then Abort
- * and I&M0 through class 1 or class 2. A parameter is named by index, P-number, name (md_names.h)
- * or IPOS variable Hn; results carry the name and the value in its unit or enumeration text.
- * Exit 0 when every result is positive, 1 on a negative one or no result in time, 2 on a bad
- * command line. */
+ * and I&M0 through class 1 or class 2. A parameter is named by index, P-number, name
+ * (movidrive_names.h) or IPOS variable Hn; results carry the name and the value in its unit or
+ * enumeration text. Exit 0 when every result is positive, 1 on a negative one or no result in time,
+ * 2 on a bad command line. */
 #include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -18,9 +18,9 @@
 
 #include "cli.h"
 #include "commands.h"
-#include "dfp_lcm_bridge/lcm_segment.h"
+#include "lcm_bridge/lcm_segment.h"
 #include "medium.h"
-#include "movidrive/md_names.h"
+#include "movidrive/movidrive_names.h"
 #include "param_run.h"
 #include "report.h"
 #include "rig/rig.h"
@@ -58,7 +58,7 @@ static void set_result_error(const char *code, const char *fmt, ...)
 
 static void finish_call(void)
 {
-    dpm_call_t *c = &run.call;
+    dp_master_call_t *c = &run.call;
     if (!c->ok) {
         if (c->dpv1_negative) {
             char code[32];
@@ -71,15 +71,15 @@ static void finish_call(void)
     }
     char err[160];
     if (run.op == OP_IM0) {
-        if (!dpm_im0_decode(c->data, c->len, &run.im0, err, sizeof err)) {
+        if (!dp_master_im0_decode(c->data, c->len, &run.im0, err, sizeof err)) {
             set_result_error("failed", "%s", err);
             return;
         }
         run.ok = run.r[0].ok = true;
         return;
     }
-    dpm_ds47_rsp_t rsp;
-    if (!dpm_ds47_parse(&run.req, c->data, c->len, &rsp, err, sizeof err)) {
+    dp_master_ds47_rsp_t rsp;
+    if (!dp_master_ds47_parse(&run.req, c->data, c->len, &rsp, err, sizeof err)) {
         set_result_error("failed", "malformed data set 47 response: %s", err);
         return;
     }
@@ -90,7 +90,7 @@ static void finish_call(void)
         if (!r->ok) {
             run.ok = false;
             snprintf(r->error, sizeof r->error, "0x%04X", rsp.p[i].error);
-            dpm_ds47_error_text(rsp.id, rsp.p[i].error, r->text, sizeof r->text);
+            dp_master_ds47_error_text(rsp.id, rsp.p[i].error, r->text, sizeof r->text);
             continue;
         }
         r->have_value = rsp.p[i].has_value;
@@ -120,7 +120,7 @@ static void finish_channel(const uint8_t *in)
     run.r[0].value = ml_data(in);
 }
 
-static void c2_opened(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void c2_opened(void *ctx, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
     (void)ctx;
     (void)now;
@@ -128,7 +128,7 @@ static void c2_opened(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
     run.c2_open_ok = r->ok;
 }
 
-static void c2_aborted(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void c2_aborted(void *ctx, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
     (void)ctx;
     (void)r;
@@ -136,9 +136,9 @@ static void c2_aborted(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
     run.c2_abort_done = true;
 }
 
-static dpm_ds47_req_t build_request(void)
+static dp_master_ds47_req_t build_request(void)
 {
-    dpm_ds47_req_t q = {.ref = 1, .axis = 0, .n = run.n};
+    dp_master_ds47_req_t q = {.ref = 1, .axis = 0, .n = run.n};
     for (unsigned i = 0; i < run.n; i++) {
         q.p[i].number = run.index[i];
         q.p[i].value = run.value;
@@ -158,15 +158,15 @@ static dpm_ds47_req_t build_request(void)
     return q;
 }
 
-static bool start_call(dpm_acyc_port_t p, hal_time_us_t now)
+static bool start_call(dp_master_acyc_port_t p, hal_time_us_t now)
 {
     memset(&run.call, 0, sizeof run.call);
     int rc;
     if (run.op == OP_IM0) {
-        rc = dpm_im0_start(&run.call, p, NULL, NULL, now);
+        rc = dp_master_im0_start(&run.call, p, NULL, NULL, now);
     } else {
         run.req = build_request();
-        rc = dpm_ds47_start(&run.call, p, &run.req, NULL, NULL, now);
+        rc = dp_master_ds47_start(&run.call, p, &run.req, NULL, NULL, now);
     }
     if (rc != 0) {
         set_result_error("failed", "the request could not be queued");
@@ -180,7 +180,7 @@ static bool start_call(dpm_acyc_port_t p, hal_time_us_t now)
 static void step(void)
 {
     hal_time_us_t now = tty_now_us();
-    dpm_slave_t *s = master->num_slaves > 0u ? &master->slaves[0] : NULL;
+    dp_master_slave_t *s = master->num_slaves > 0u ? &master->slaves[0] : NULL;
     switch (run.stage) {
     case ST_START:
         if (run.via == VIA_C2) {
@@ -188,19 +188,19 @@ static void step(void)
                 return;
             }
             if (!run.c2_open_ok) {
-                set_result_error("failed", "%s", dpm_c2_error(&run.c2));
+                set_result_error("failed", "%s", dp_master_c2_error(&run.c2));
                 run.stage = ST_DONE;
                 return;
             }
-            run.stage = start_call(dpm_c2_port(&run.c2), now) ? ST_RUNNING : ST_ABORTING;
+            run.stage = start_call(dp_master_c2_port(&run.c2), now) ? ST_RUNNING : ST_ABORTING;
             if (run.stage == ST_ABORTING) {
-                (void)dpm_c2_abort(&run.c2, 0, c2_aborted, NULL, now);
+                (void)dp_master_c2_abort(&run.c2, 0, c2_aborted, NULL, now);
                 rig_wake(&rig);
             }
             return;
         }
         /* Without class 2 the slave was added before the run started; s is never NULL here. */
-        if (s == NULL || s->phase != DPM_PHASE_DATA_EXCH) {
+        if (s == NULL || s->phase != DP_MASTER_PHASE_DATA_EXCH) {
             return;
         }
         if (run.via == VIA_CHANNEL) {
@@ -213,8 +213,8 @@ static void step(void)
             }
             uint8_t svc = run.op == OP_READ ? ML_SVC_READ
                           : run.volatile_write ? ML_SVC_WRITE_VOLATILE : ML_SVC_WRITE;
-            dpm_param_sync(&run.pc, s->inputs);
-            dpm_param_start(&run.pc, svc, run.index[0], run.value, run.out);
+            dp_master_param_sync(&run.pc, s->inputs);
+            dp_master_param_start(&run.pc, svc, run.index[0], run.value, run.out);
             dp_master_set_outputs(master, 0, run.out, sizeof run.out);
             run.stage = ST_RUNNING;
             return;
@@ -223,18 +223,18 @@ static void step(void)
         return;
     case ST_RUNNING:
         if (run.via == VIA_CHANNEL) {
-            if (s != NULL && dpm_param_done(&run.pc, s->inputs)) {
+            if (s != NULL && dp_master_param_done(&run.pc, s->inputs)) {
                 finish_channel(s->inputs);
                 run.stage = ST_DONE;
             }
             return;
         }
-        if (!dpm_call_done(&run.call)) {
+        if (!dp_master_call_done(&run.call)) {
             return;
         }
         finish_call();
-        if (run.via == VIA_C2 && dpm_c2_state(&run.c2) != DPM_C2_CLOSED &&
-            dpm_c2_abort(&run.c2, 0, c2_aborted, NULL, now) == 0) {
+        if (run.via == VIA_C2 && dp_master_c2_state(&run.c2) != DP_MASTER_C2_CLOSED &&
+            dp_master_c2_abort(&run.c2, 0, c2_aborted, NULL, now) == 0) {
             rig_wake(&rig);
             run.stage = ST_ABORTING;
             return;
@@ -242,7 +242,7 @@ static void step(void)
         run.stage = ST_DONE;
         return;
     case ST_ABORTING:
-        if (run.c2_abort_done || dpm_c2_state(&run.c2) == DPM_C2_CLOSED) {
+        if (run.c2_abort_done || dp_master_c2_state(&run.c2) == DP_MASTER_C2_CLOSED) {
             run.stage = ST_DONE;
         }
         return;
@@ -253,15 +253,16 @@ static void step(void)
 
 static void timeout_text(uint32_t timeout_s)
 {
-    dpm_slave_t *s = master->num_slaves > 0u ? &master->slaves[0] : NULL;
+    dp_master_slave_t *s = master->num_slaves > 0u ? &master->slaves[0] : NULL;
     if (run.stage == ST_START && s != NULL) {
-        bool why = s->phase == DPM_PHASE_BACKOFF && s->fault[0] != '\0';
+        bool why = s->phase == DP_MASTER_PHASE_BACKOFF && s->fault[0] != '\0';
         set_result_error("timeout", "no result within %u s: slave %u did not reach data "
                          "exchange (phase %s%s%s)", timeout_s, s->cfg.address,
-                         dpm_phase_name(s->phase), why ? ": " : "", why ? s->fault : "");
+                         dp_master_phase_name(s->phase), why ? ": " : "", why ? s->fault : "");
     } else if (run.stage == ST_START) {
         set_result_error("timeout", "no result within %u s: the class-2 connection did not "
-                         "open (%s)", timeout_s, dpm_c2_state_name(dpm_c2_state(&run.c2)));
+                         "open (%s)", timeout_s,
+                         dp_master_c2_state_name(dp_master_c2_state(&run.c2)));
     } else if (run.via == VIA_CHANNEL) {
         set_result_error("timeout", "no result within %u s: no reply with the request's "
                          "handshake in the cyclic channel", timeout_s);
@@ -284,7 +285,7 @@ static bool parse_value(uint16_t index, const char *text, uint32_t *out)
 {
     char err[200];
     int32_t raw = 0;
-    if (!md_value_parse(md_param_info(index), text, &raw, err, sizeof err)) {
+    if (!movidrive_value_parse(movidrive_param_info(index), text, &raw, err, sizeof err)) {
         cli_error("param: VALUE %s", err);
         return false;
     }
@@ -318,7 +319,7 @@ static bool parse_index(const char *text, uint16_t *index)
         return true;
     }
     char err[256];
-    const md_param_info_t *p = md_param_find(text, err, sizeof err);
+    const movidrive_param_info_t *p = movidrive_param_find(text, err, sizeof err);
     if (p == NULL) {
         cli_error("param: %s", err);
         return false;
@@ -559,13 +560,13 @@ static bool param_master(const param_opts_t *o)
         return false;
     }
     if (run.via != VIA_C2) {
-        dpm_slave_cfg_t sc = {.address = (uint8_t)o->address};
+        dp_master_slave_cfg_t sc = {.address = (uint8_t)o->address};
         if (run.via == VIA_CHANNEL) {
-            sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 1000,
+            sc.prm_len = (uint8_t)dp_master_build_prm(sc.prm, DFP21B_IDENT, 1000,
                                                 dfp21b_user_prm_default,
                                                 sizeof dfp21b_user_prm_default);
         } else {
-            sc.prm_len = (uint8_t)dpm_build_prm_dpv1(sc.prm, DFP21B_IDENT, 1000,
+            sc.prm_len = (uint8_t)dp_master_build_prm_dpv1(sc.prm, DFP21B_IDENT, 1000,
                                                      dfp21b_user_prm_default,
                                                      sizeof dfp21b_user_prm_default);
         }
@@ -573,10 +574,10 @@ static bool param_master(const param_opts_t *o)
         sc.cfg_len = sizeof cfg_param_3pd;
         (void)dp_master_add_slave(master, &sc);
     } else {
-        dpm_c2_cfg_t cc = {.slave = (uint8_t)o->address, .address = (uint8_t)o->own};
-        dpm_c2_init(&run.c2, &cc);
+        dp_master_c2_cfg_t cc = {.slave = (uint8_t)o->address, .address = (uint8_t)o->own};
+        dp_master_c2_init(&run.c2, &cc);
         (void)dp_master_add_c2(master, &run.c2);
-        (void)dpm_c2_open(&run.c2, c2_opened, NULL, tty_now_us());
+        (void)dp_master_c2_open(&run.c2, c2_opened, NULL, tty_now_us());
     }
     /* so a new request goes at once */
     (void)rig_add_timer(&rig, master_timer, master);

@@ -8,7 +8,7 @@
 #include "capture/capture.h"
 #include "cli.h"
 #include "commands.h"
-#include "dfp_lcm_bridge/lcm_bridge.h"
+#include "lcm_bridge/lcm_bridge.h"
 #include "instrument.h"
 #include "progress.h"
 #include "replay/infer.h"

@@ -9,7 +9,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "session.h"
-#include "sim_can/inverter_can.h"
+#include "can/inverter_can.h"
 #include "sim_hal/file_nvm.h"
 #include "sim_hal/host_clock.h"
 #include "sim_hal/tty_port.h"
@@ -28,7 +28,7 @@ typedef struct slave_opts {
     const char *eeprom;
     const char *card_nvm;
     /* from the above */
-    uint8_t addresses[DPM_MAX_SLAVES];
+    uint8_t addresses[DP_MASTER_MAX_SLAVES];
     size_t num_cards;
     card_inverter_t kind;
 } slave_opts_t;
@@ -84,7 +84,7 @@ static bool slave_addresses(slave_opts_t *o)
 {
     o->num_cards = 1;
     if (strpbrk(o->address_text, "-,") != NULL) {
-        return cli_address_list(o->address_text, o->addresses, DPM_MAX_SLAVES, &o->num_cards);
+        return cli_address_list(o->address_text, o->addresses, DP_MASTER_MAX_SLAVES, &o->num_cards);
     }
     uint32_t single = 0;
     if (!cli_u32("--address", o->address_text, 0, 127, &single)) {

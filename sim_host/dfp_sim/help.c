@@ -174,7 +174,7 @@ static const help_note_t notes[] = {
      "adds every baud-search step), --timestamps bus|wall (ms since start, or clock time)."},
     {NOTE_LCM, "--lcm URL", " ",
      "publishes the card's telegrams, state and parameter services to LCM (channels\n"
-     "DFP_TELEGRAM, DFP_CARD_STATE, DFP_PARAM; sim_host/lcm/README.md)."},
+     "DFP_TELEGRAM, DFP_CARD_STATE, DFP_PARAM; sim_host/lcm_bridge/README.md)."},
 };
 
 static const char exit_lead[] = "the same for every command";
@@ -198,7 +198,8 @@ static const help_item_t environment[] = {
 
 static const char see_also[] =
     "README.md, docs/commissioning.md, docs/api.md, docs/captures.md, docs/replay.md and\n"
-    "sim_host/lcm/README.md in the source tree; wireshark(1) with tools/wireshark/profibus.lua";
+    "sim_host/lcm_bridge/README.md in the source tree; wireshark(1) with "
+    "tools/wireshark/profibus.lua";
 
 #define COUNT(a) (sizeof(a) / sizeof((a)[0]))
 

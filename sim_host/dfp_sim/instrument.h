@@ -5,7 +5,7 @@
 
 #include <stdbool.h>
 
-#include "dfp_http/http_server.h"
+#include "http/http_server.h"
 #include "rig/rig_ctl.h"
 #include "rig/rig_log.h"
 

@@ -1,12 +1,12 @@
 /* dfp-sim --lcm URL: the card's telegrams, state and parameter services published to LCM
- * (sim_host/lcm/README.md), on top of the report's timeline and --capture. */
+ * (sim_host/lcm_bridge/README.md), on top of the report's timeline and --capture. */
 #ifndef DFP_SIM_LCM_CLI_H
 #define DFP_SIM_LCM_CLI_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "dfp_lcm_bridge/lcm_bridge.h"
+#include "lcm_bridge/lcm_bridge.h"
 #include "report.h"
 #include "sim_stations/stations.h"
 

@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "cli.h"
-#include "dfp_lcm_bridge/lcm_segment.h"
+#include "lcm_bridge/lcm_segment.h"
 
 int medium_option(medium_opts_t *m, int argc, char **argv, int *i)
 {

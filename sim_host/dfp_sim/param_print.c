@@ -2,7 +2,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "movidrive/md_names.h"
+#include "movidrive/movidrive_names.h"
 #include "param_run.h"
 
 const char *const param_via_names[4] = {"channel", "movilink", "profidrive", "c2"};
@@ -41,7 +41,7 @@ typedef struct im0_texts {
     char sw[24];
 } im0_texts_t;
 
-static void im0_texts(const dpm_im0_t *im0, im0_texts_t *t)
+static void im0_texts(const dp_master_im0_t *im0, im0_texts_t *t)
 {
     trimmed(t->order, sizeof t->order, im0->order_id);
     trimmed(t->serial, sizeof t->serial, im0->serial_number);
@@ -53,14 +53,14 @@ static void im0_texts(const dpm_im0_t *im0, im0_texts_t *t)
 /* "P100" and "setpoint source" for a table row, "H12" and "IPOS plus variable H12" for an IPOS
  * variable; false for an index the name table lacks. */
 typedef struct param_name {
-    const md_param_info_t *info;
+    const movidrive_param_info_t *info;
     char pnum[24];
     char name[64];
 } param_name_t;
 
 static bool param_names(uint16_t index, param_name_t *pn)
 {
-    pn->info = md_param_info(index);
+    pn->info = movidrive_param_info(index);
     if (pn->info != NULL) {
         (void)snprintf(pn->pnum, sizeof pn->pnum, "%s", pn->info->p_number);
         (void)snprintf(pn->name, sizeof pn->name, "%s", pn->info->name);
@@ -77,11 +77,11 @@ static bool param_names(uint16_t index, param_name_t *pn)
 /* "P100 setpoint source = 3 (FIELDBUS)", "P076 firmware basic unit = 823947913 (0x311C7289)",
  * "P160 internal setpoint n11 = 1.500 rpm (raw 1500, 0x000005DC)": the raw value stays in
  * sight wherever the text does not show it. */
-static void value_line(const md_param_info_t *info, uint32_t value, char *out, size_t n)
+static void value_line(const movidrive_param_info_t *info, uint32_t value, char *out, size_t n)
 {
     char text[96];
     char raw[16];
-    md_value_text(info, (int32_t)value, text, sizeof text);
+    movidrive_value_text(info, (int32_t)value, text, sizeof text);
     (void)snprintf(raw, sizeof raw, "%d", (int32_t)value);
     if (info->num_enums > 0u) {
         (void)snprintf(out, n, "%s %s = %s", info->p_number, info->name, text);
@@ -93,7 +93,7 @@ static void value_line(const md_param_info_t *info, uint32_t value, char *out, s
     }
 }
 
-static void print_im0_json(const dpm_im0_t *im0)
+static void print_im0_json(const dp_master_im0_t *im0)
 {
     im0_texts_t t;
     im0_texts(im0, &t);
@@ -130,7 +130,7 @@ static void print_json(const run_t *run, unsigned i, const param_name_t *pn, boo
         printf(",\"volatile\":%s,\"value\":%d", run->volatile_write ? "true" : "false",
                (int32_t)run->value);
         if (r->ok && named) {
-            md_value_text(pn->info, (int32_t)run->value, vtext, sizeof vtext);
+            movidrive_value_text(pn->info, (int32_t)run->value, vtext, sizeof vtext);
             json_str("text", vtext);
         }
     }
@@ -138,7 +138,7 @@ static void print_json(const run_t *run, unsigned i, const param_name_t *pn, boo
     if (r->ok && r->have_value) {
         printf(",\"value\":%d,\"hex\":\"0x%08X\"", (int32_t)r->value, r->value);
         if (named && run->op == OP_READ) {
-            md_value_text(pn->info, (int32_t)r->value, vtext, sizeof vtext);
+            movidrive_value_text(pn->info, (int32_t)r->value, vtext, sizeof vtext);
             json_str("text", vtext);
         }
     }
@@ -152,7 +152,7 @@ static void print_json(const run_t *run, unsigned i, const param_name_t *pn, boo
     printf("}\n");
 }
 
-static void print_im0_text(const char *what, const dpm_im0_t *im0)
+static void print_im0_text(const char *what, const dp_master_im0_t *im0)
 {
     im0_texts_t t;
     im0_texts(im0, &t);
@@ -170,7 +170,7 @@ static void print_im0_text(const char *what, const dpm_im0_t *im0)
            im0->im_version_minor, im0->im_supported);
 }
 
-static void print_text(const run_t *run, unsigned i, const md_param_info_t *info,
+static void print_text(const run_t *run, unsigned i, const movidrive_param_info_t *info,
                        const char *what)
 {
     const param_result_t *r = &run->r[i];

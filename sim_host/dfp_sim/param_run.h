@@ -43,13 +43,13 @@ typedef struct run {
     /* result: the whole run's (ok only if every parameter's is), then each parameter's */
     bool ok;
     param_result_t r[DS47_MAX_PARAMS];
-    dpm_im0_t im0;
+    dp_master_im0_t im0;
     /* paths */
-    dpm_param_t pc;
+    dp_master_param_t pc;
     uint8_t out[14];
-    dpm_call_t call;
-    dpm_ds47_req_t req;
-    dpm_c2_t c2;
+    dp_master_call_t call;
+    dp_master_ds47_req_t req;
+    dp_master_c2_t c2;
     bool c2_open_done;
     bool c2_open_ok;
     bool c2_abort_done;

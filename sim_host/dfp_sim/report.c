@@ -43,11 +43,11 @@ void report_card_event(void *ctx, const dp_event_t *ev)
     }
 }
 
-void report_master_event(void *ctx, const dpm_event_t *ev)
+void report_master_event(void *ctx, const dp_master_event_t *ev)
 {
     report_t *r = ctx;
     char text[RIG_CTL_TEXT];
-    if (ev->type == DPM_EV_INPUTS) {
+    if (ev->type == DP_MASTER_EV_INPUTS) {
         if (r->show_inputs) {
             size_t n = 0;
             for (size_t i = 0; i < ev->len && n + 4 < sizeof text; i++) {

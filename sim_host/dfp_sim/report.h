@@ -30,7 +30,7 @@ typedef struct report {
 void report_line(report_t *r, const char *who, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 void report_card_event(void *ctx, const dp_event_t *ev);
-void report_master_event(void *ctx, const dpm_event_t *ev);
+void report_master_event(void *ctx, const dp_master_event_t *ev);
 /* Formats the standard diagnosis bits, e.g. "Station_Not_Ready Prm_Req | Master_Add 2". */
 void report_diag_text(const uint8_t *d, size_t len, char *out, size_t max);
 const char *report_baud_text(uint32_t baud);

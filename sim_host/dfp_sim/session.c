@@ -4,7 +4,7 @@
 #include <time.h>
 
 #include "cli.h"
-#include "dfp_lcm_bridge/lcm_segment.h"
+#include "lcm_bridge/lcm_segment.h"
 
 static bool open_capture(report_t *rep, const capture_opts_t *capture)
 {

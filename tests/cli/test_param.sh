@@ -47,7 +47,7 @@ expect_exit 0 "write 8489 via channel" -- param write 8489 3000 --via channel
 expect_exit 0 "read back via movilink" -- param read 8489 --via movilink
 expect_in "read back 3000" "read 8489 via movilink: P160 internal setpoint n11 = 3.000 rpm (raw 3000," "$out"
 # Back-to-back masters on the cyclic channel: the card keeps its handshake across masters, each
-# new one must toggle relative to the reply it sees (dpm_param_sync), or nothing runs.
+# new one must toggle relative to the reply it sees (dp_master_param_sync), or nothing runs.
 expect_exit 0 "second write via channel" -- param write 8489 4000
 expect_exit 0 "read back via channel again" -- param read 8489
 expect_in "read back 4000" "read 8489 via channel: P160 internal setpoint n11 = 4.000 rpm (raw 4000," "$out"

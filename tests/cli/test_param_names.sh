@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# dfp-sim param with parameter names (md_names.h) against dfp-sim slave over a socat PTY pair:
-# read by P-number, by name and by index all name the parameter and show its value as text;
+# dfp-sim param with parameter names (movidrive_names.h) against dfp-sim slave over a socat PTY
+# pair: read by P-number, by name and by index all name the parameter and show its value as text;
 # write takes an enumeration text and a value in the unit; --json carries p_number, name and
 # text beside the raw value; IPOS variables as Hn; an unknown or ambiguous name is a bad command
 # line (exit 2, the one-line reason on stderr, nothing on stdout).

@@ -85,29 +85,30 @@ static void setup(bool cyclic, bool dpv1, uint32_t inverter_delay_us)
     if (!cyclic) {
         return;
     }
-    dpm_slave_cfg_t sc = {.address = SLAVE};
+    dp_master_slave_cfg_t sc = {.address = SLAVE};
     if (dpv1) {
-        sc.prm_len = (uint8_t)dpm_build_prm_dpv1(sc.prm, DFP21B_IDENT, 100,
+        sc.prm_len = (uint8_t)dp_master_build_prm_dpv1(sc.prm, DFP21B_IDENT, 100,
                                                  dfp21b_user_prm_default,
                                                  sizeof dfp21b_user_prm_default);
     } else {
-        sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 100, dfp21b_user_prm_default,
-                                            sizeof dfp21b_user_prm_default);
+        sc.prm_len =
+            (uint8_t)dp_master_build_prm(sc.prm, DFP21B_IDENT, 100, dfp21b_user_prm_default,
+                                         sizeof dfp21b_user_prm_default);
     }
     memcpy(sc.cfg, cfg_param_3pd, sizeof cfg_param_3pd);
     sc.cfg_len = sizeof cfg_param_3pd;
     CHECK_EQ(dp_master_add_slave(&rig.master, &sc), 0);
     membus_run_for_us(&rig.bus, 20000);
-    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH);
     CHECK_EQ(dp_slave_dpv1_mode(&rig.cards[0].cs.card.dp), dpv1);
 }
 
-static bool run_until_call(const dpm_call_t *c, uint32_t limit_us)
+static bool run_until_call(const dp_master_call_t *c, uint32_t limit_us)
 {
-    for (uint32_t t = 0; t < limit_us && !dpm_call_done(c); t += 50u) {
+    for (uint32_t t = 0; t < limit_us && !dp_master_call_done(c); t += 50u) {
         membus_run_for_us(&rig.bus, 50);
     }
-    return dpm_call_done(c);
+    return dp_master_call_done(c);
 }
 
 typedef struct acyc_result {
@@ -119,7 +120,7 @@ typedef struct acyc_result {
     uint32_t polls;
 } acyc_result_t;
 
-static void acyc_done(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void acyc_done(void *ctx, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
     (void)now;
     acyc_result_t *a = ctx;
@@ -141,19 +142,19 @@ static bool run_until_result(const acyc_result_t *a, uint32_t limit_us)
     return a->done;
 }
 
-static dpm_ds47_req_t ml_request(uint8_t attr, uint16_t index, uint32_t value)
+static dp_master_ds47_req_t ml_request(uint8_t attr, uint16_t index, uint32_t value)
 {
-    dpm_ds47_req_t r = {.ref = 1, .id = DS47_ID_MOVILINK, .axis = 0, .n = 1};
-    r.p[0] = (dpm_ds47_param_t){.attribute = attr, .number = index, .value = value};
+    dp_master_ds47_req_t r = {.ref = 1, .id = DS47_ID_MOVILINK, .axis = 0, .n = 1};
+    r.p[0] = (dp_master_ds47_param_t){.attribute = attr, .number = index, .value = value};
     return r;
 }
 
 /* Runs a DS47 call on port and parses the answer. */
-static bool ds47(dpm_acyc_port_t port, const dpm_ds47_req_t *req, dpm_call_t *call,
-                 dpm_ds47_rsp_t *rsp)
+static bool ds47(dp_master_acyc_port_t port, const dp_master_ds47_req_t *req,
+                 dp_master_call_t *call, dp_master_ds47_rsp_t *rsp)
 {
     memset(call, 0, sizeof *call);
-    if (dpm_ds47_start(call, port, req, NULL, NULL, membus_now_us(&rig.bus)) != 0) {
+    if (dp_master_ds47_start(call, port, req, NULL, NULL, membus_now_us(&rig.bus)) != 0) {
         return false;
     }
     membus_wake(rig.master_port);
@@ -161,7 +162,7 @@ static bool ds47(dpm_acyc_port_t port, const dpm_ds47_req_t *req, dpm_call_t *ca
         return false;
     }
     char err[128];
-    bool ok = dpm_ds47_parse(req, call->data, call->len, rsp, err, sizeof err);
+    bool ok = dp_master_ds47_parse(req, call->data, call->len, rsp, err, sizeof err);
     if (!ok) {
         fprintf(stderr, "    parse: %s\n", err);
     }
@@ -274,14 +275,14 @@ static unsigned check_c1_discipline(void)
 
 static void test_prm_dpv1_octets(void)
 {
-    uint8_t prm[DPM_MAX_PRM];
-    size_t n = dpm_build_prm_dpv1(prm, DFP21B_IDENT, 1000, dfp21b_user_prm_default, 9);
+    uint8_t prm[DP_MASTER_MAX_PRM];
+    size_t n = dp_master_build_prm_dpv1(prm, DFP21B_IDENT, 1000, dfp21b_user_prm_default, 9);
     CHECK_BYTES(prm, n, 0x88, 0x01, 0x64, 0x0B, 0x60, 0x03, 0x00, 0x80, 0x00, 0x00, 0x06, 0x81,
                 0x00, 0x00, 0x01, 0x01);
-    CHECK(dpm_prm_is_dpv1(prm, n));
-    n = dpm_build_prm(prm, DFP21B_IDENT, 1000, dfp21b_user_prm_default, 9);
-    CHECK(!dpm_prm_is_dpv1(prm, n));
-    n = dpm_build_prm_dpv1(prm, 0x1234, 0, NULL, 0); /* no user octets: 80 00 00 */
+    CHECK(dp_master_prm_is_dpv1(prm, n));
+    n = dp_master_build_prm(prm, DFP21B_IDENT, 1000, dfp21b_user_prm_default, 9);
+    CHECK(!dp_master_prm_is_dpv1(prm, n));
+    n = dp_master_build_prm_dpv1(prm, 0x1234, 0, NULL, 0); /* no user octets: 80 00 00 */
     CHECK_BYTES(prm, n, 0x80, 0x01, 0x01, 0x0B, 0x12, 0x34, 0x00, 0x80, 0x00, 0x00);
 }
 
@@ -289,9 +290,9 @@ static void test_c1_ds47_read_8300_on_the_wire(void)
 {
     setup(true, true, 0);
     bench.recording = true;
-    dpm_call_t call;
-    dpm_ds47_rsp_t rsp;
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    dp_master_call_t call;
+    dp_master_ds47_rsp_t rsp;
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     CHECK(ds47(dp_master_c1_port(&rig.master, 0), &req, &call, &rsp));
     CHECK(!rsp.negative);
     CHECK(rsp.p[0].ok && rsp.p[0].has_value);
@@ -360,29 +361,30 @@ static void test_c1_ds47_read_8300_on_the_wire(void)
 static void test_c1_manual_examples_and_writes(void)
 {
     setup(true, true, 0);
-    dpm_acyc_port_t port = dp_master_c1_port(&rig.master, 0);
-    dpm_call_t call;
-    dpm_ds47_rsp_t rsp;
+    dp_master_acyc_port_t port = dp_master_c1_port(&rig.master, 0);
+    dp_master_call_t call;
+    dp_master_ds47_rsp_t rsp;
     /* MOVILINK write volatile H0 = 3000: the manual's request, answered 01 40 00 01. */
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_WRITE_VOLATILE, 11000, 3000);
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_WRITE_VOLATILE, 11000, 3000);
     uint8_t built[64];
-    CHECK_BYTES(built, dpm_ds47_build(&req, built, sizeof built), 0x01, 0x40, 0x00, 0x01, 0x30, 0x00,
-                0x2A, 0xF8, 0x00, 0x00, 0x43, 0x01, 0x00, 0x00, 0x0B, 0xB8);
+    CHECK_BYTES(built, dp_master_ds47_build(&req, built, sizeof built), 0x01, 0x40, 0x00, 0x01,
+                0x30, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x43, 0x01, 0x00, 0x00, 0x0B, 0xB8);
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x01, 0x40, 0x00, 0x01);
     int32_t v = 0;
     CHECK(movidrive_read_value(&rig.cards[0].cs.md, 11000, &v));
     CHECK_EQ(v, 3000);
     /* PROFIdrive request parameter 8300. */
-    req = (dpm_ds47_req_t){.ref = 1, .id = DS47_ID_REQUEST, .n = 1};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8300};
+    req = (dp_master_ds47_req_t){.ref = 1, .id = DS47_ID_REQUEST, .n = 1};
+    req.p[0] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8300};
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x01, 0x01, 0x00, 0x01, 0x43, 0x01, 0x31, 0x1C, 0x72, 0x89);
     /* PROFIdrive change parameter P160 n11 (8489 = 0x2129, axis 0), then read back. */
-    req = (dpm_ds47_req_t){.ref = 0x22, .id = DS47_ID_CHANGE, .n = 1};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489, .value = 250000};
-    CHECK_BYTES(built, dpm_ds47_build(&req, built, sizeof built), 0x22, 0x02, 0x00, 0x01, 0x10, 0x00,
-                0x21, 0x29, 0x00, 0x00, 0x43, 0x01, 0x00, 0x03, 0xD0, 0x90);
+    req = (dp_master_ds47_req_t){.ref = 0x22, .id = DS47_ID_CHANGE, .n = 1};
+    req.p[0] =
+        (dp_master_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489, .value = 250000};
+    CHECK_BYTES(built, dp_master_ds47_build(&req, built, sizeof built), 0x22, 0x02, 0x00, 0x01,
+                0x10, 0x00, 0x21, 0x29, 0x00, 0x00, 0x43, 0x01, 0x00, 0x03, 0xD0, 0x90);
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x22, 0x02, 0x00, 0x01);
     req = ml_request(DS47_ATTR_ML_READ, 8489, 0);
@@ -399,41 +401,42 @@ static void test_c1_manual_examples_and_writes(void)
 static void test_c1_negative_parameter_results(void)
 {
     setup(true, true, 0);
-    dpm_acyc_port_t port = dp_master_c1_port(&rig.master, 0);
-    dpm_call_t call;
-    dpm_ds47_rsp_t rsp;
+    dp_master_acyc_port_t port = dp_master_c1_port(&rig.master, 0);
+    dp_master_call_t call;
+    dp_master_ds47_rsp_t rsp;
     char text[160];
     /* P302 above its maximum: MOVILINK 0x0815 ... */
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_WRITE_VOLATILE, 8517, 99000000u);
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_WRITE_VOLATILE, 8517, 99000000u);
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK(rsp.negative);
     CHECK_BYTES(call.data, call.len, 0x01, 0xC0, 0x00, 0x01, 0x44, 0x01, 0x08, 0x15);
     CHECK(!rsp.p[0].ok);
     CHECK_EQ(rsp.p[0].error, 0x0815);
-    dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
+    dp_master_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
     CHECK_STR(text, "class 8, additional code 0x15: value too high");
     /* ... and PROFIdrive 0x02 through request id 0x02. */
-    req = (dpm_ds47_req_t){.ref = 7, .id = DS47_ID_CHANGE, .n = 1};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8517, .value = 99000000u};
+    req = (dp_master_ds47_req_t){.ref = 7, .id = DS47_ID_CHANGE, .n = 1};
+    req.p[0] =
+        (dp_master_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8517, .value = 99000000u};
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x07, 0x82, 0x00, 0x01, 0x44, 0x01, 0x00, 0x02);
-    dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
+    dp_master_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
     CHECK_STR(text, "PROFIdrive error 0x02: low or high limit exceeded");
     /* Index that does not exist: 0x0810 / PROFIdrive 0x00; mixed with a good read. */
-    req = (dpm_ds47_req_t){.ref = 9, .id = DS47_ID_MOVILINK, .n = 2};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 1};
-    req.p[1] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
+    req = (dp_master_ds47_req_t){.ref = 9, .id = DS47_ID_MOVILINK, .n = 2};
+    req.p[0] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 1};
+    req.p[1] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x09, 0xC0, 0x00, 0x02, 0x44, 0x01, 0x08, 0x10, 0x43, 0x01,
                 0x31, 0x1C, 0x72, 0x89);
     CHECK(!rsp.p[0].ok && rsp.p[1].ok);
-    dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
+    dp_master_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
     CHECK_STR(text, "class 8, additional code 0x10: illegal parameter index");
     /* A failed and a good write: the good one answers 40 00. */
-    req = (dpm_ds47_req_t){.ref = 10, .id = DS47_ID_MOVILINK, .n = 2};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE, .number = 8517,
+    req = (dp_master_ds47_req_t){.ref = 10, .id = DS47_ID_MOVILINK, .n = 2};
+    req.p[0] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE, .number = 8517,
                               .value = 99000000u};
-    req.p[1] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE, .number = 11000,
+    req.p[1] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE, .number = 11000,
                               .value = 5};
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x0A, 0xC0, 0x00, 0x02, 0x44, 0x01, 0x08, 0x15, 0x40, 0x00);
@@ -443,12 +446,12 @@ static void test_c1_negative_parameter_results(void)
     req.axis = 1;
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].error, 0x0019);
-    dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
+    dp_master_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
     CHECK_STR(text, "PROFIdrive error 0x19: axis nonexistent");
     /* DP-V1 level: index 48 -> B0, a header error -> B7. */
     memset(&call, 0, sizeof call);
     const uint8_t junk[4] = {0x01, 0x40, 0x00, 0x01};
-    CHECK_EQ(dpm_call_start(&call, port, 48, junk, sizeof junk, 240, NULL, NULL,
+    CHECK_EQ(dp_master_call_start(&call, port, 48, junk, sizeof junk, 240, NULL, NULL,
                             membus_now_us(&rig.bus)), 0);
     CHECK(run_until_call(&call, 1000000));
     CHECK(!call.ok && call.dpv1_negative);
@@ -456,7 +459,7 @@ static void test_c1_negative_parameter_results(void)
     CHECK_EQ(call.neg_code1, 0xB0);
     CHECK_STR(call.error, "Write.res index 48 negative: Error_Code_1 0xB0 (access: invalid index)");
     memset(&call, 0, sizeof call);
-    CHECK_EQ(dpm_call_start(&call, port, 47, junk, sizeof junk, 240, NULL, NULL,
+    CHECK_EQ(dp_master_call_start(&call, port, 47, junk, sizeof junk, 240, NULL, NULL,
                             membus_now_us(&rig.bus)), 0);
     CHECK(run_until_call(&call, 1000000));
     CHECK_EQ(call.neg_code1, 0xB7);
@@ -466,15 +469,15 @@ static void test_c1_negative_parameter_results(void)
 static void test_c1_nineteen_parameters(void)
 {
     setup(true, true, 0);
-    dpm_ds47_req_t req = {.ref = 0x55, .id = DS47_ID_MOVILINK, .n = DS47_MAX_PARAMS};
+    dp_master_ds47_req_t req = {.ref = 0x55, .id = DS47_ID_MOVILINK, .n = DS47_MAX_PARAMS};
     for (unsigned i = 0; i < DS47_MAX_PARAMS; i++) {
-        req.p[i] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
+        req.p[i] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
     }
     req.p[5].number = 8489;
     uint8_t built[DPV1_MAX_DATA];
-    CHECK_EQ(dpm_ds47_build(&req, built, sizeof built), 4 + 6 * 19);
-    dpm_call_t call;
-    dpm_ds47_rsp_t rsp;
+    CHECK_EQ(dp_master_ds47_build(&req, built, sizeof built), 4 + 6 * 19);
+    dp_master_call_t call;
+    dp_master_ds47_rsp_t rsp;
     CHECK(ds47(dp_master_c1_port(&rig.master, 0), &req, &call, &rsp));
     CHECK_EQ(call.len, 4 + 6 * 19);
     unsigned good = 0;
@@ -484,14 +487,14 @@ static void test_c1_nineteen_parameters(void)
     CHECK_EQ(good, 19);
     /* 20 parameters do not build. */
     req.n = 20;
-    CHECK_EQ(dpm_ds47_build(&req, built, sizeof built), 0);
+    CHECK_EQ(dp_master_ds47_build(&req, built, sizeof built), 0);
     /* 19 writes: 4 + 19 * 12 = 232 octets. */
-    req = (dpm_ds47_req_t){.ref = 0x56, .id = DS47_ID_MOVILINK, .n = DS47_MAX_PARAMS};
+    req = (dp_master_ds47_req_t){.ref = 0x56, .id = DS47_ID_MOVILINK, .n = DS47_MAX_PARAMS};
     for (unsigned i = 0; i < DS47_MAX_PARAMS; i++) {
-        req.p[i] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE,
+        req.p[i] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE,
                                   .number = (uint16_t)(11000 + i), .value = 100u + i};
     }
-    CHECK_EQ(dpm_ds47_build(&req, built, sizeof built), 232);
+    CHECK_EQ(dp_master_ds47_build(&req, built, sizeof built), 232);
     CHECK(ds47(dp_master_c1_port(&rig.master, 0), &req, &call, &rsp));
     CHECK_BYTES(call.data, call.len, 0x56, 0x40, 0x00, 0x13);
     int32_t v = 0;
@@ -504,9 +507,9 @@ static void test_c1_slow_inverter_b5_and_exchange_goes_on(void)
     setup(true, true, 20000); /* 20 ms per MOVILINK service */
     bench.recording = true;
     uint32_t cycles0 = rig.master.slaves[0].cycles;
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
-    dpm_call_t call;
-    dpm_ds47_rsp_t rsp;
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    dp_master_call_t call;
+    dp_master_ds47_rsp_t rsp;
     CHECK(ds47(dp_master_c1_port(&rig.master, 0), &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].value, 0x311C7289u);
     CHECK(call.busy >= 1u);             /* Read 47 answered B5 while the inverter worked */
@@ -528,7 +531,7 @@ static void test_c1_slow_inverter_b5_and_exchange_goes_on(void)
     /* A bound on the reads: with max_reads 2 the call gives up with a clear text. */
     memset(&call, 0, sizeof call);
     call.max_reads = 2;
-    CHECK_EQ(dpm_ds47_start(&call, dp_master_c1_port(&rig.master, 0), &req, NULL, NULL,
+    CHECK_EQ(dp_master_ds47_start(&call, dp_master_c1_port(&rig.master, 0), &req, NULL, NULL,
                             membus_now_us(&rig.bus)), 0);
     CHECK(run_until_call(&call, 1000000));
     CHECK(!call.ok);
@@ -539,15 +542,15 @@ static void test_c1_slow_inverter_b5_and_exchange_goes_on(void)
 static void test_c1_im0(void)
 {
     setup(true, true, 0);
-    dpm_call_t call = {0};
-    CHECK_EQ(dpm_im0_start(&call, dp_master_c1_port(&rig.master, 0), NULL, NULL,
+    dp_master_call_t call = {0};
+    CHECK_EQ(dp_master_im0_start(&call, dp_master_c1_port(&rig.master, 0), NULL, NULL,
                            membus_now_us(&rig.bus)), 0);
     CHECK(run_until_call(&call, 1000000));
     CHECK(call.ok);
     CHECK_EQ(call.len, 68);
-    dpm_im0_t im;
+    dp_master_im0_t im;
     char err[128] = "";
-    CHECK(dpm_im0_decode(call.data, call.len, &im, err, sizeof err));
+    CHECK(dp_master_im0_decode(call.data, call.len, &im, err, sizeof err));
     CHECK_EQ(im.manufacturer_id, 0x010A);
     CHECK_STR(im.order_id, "824 240 2           ");
     CHECK_STR(im.serial_number, "DFP-SIM-004     ");
@@ -556,7 +559,7 @@ static void test_c1_im0(void)
     CHECK_EQ(im.im_version_major, 1);
     CHECK_EQ(im.im_version_minor, 1);
     CHECK_EQ(im.im_supported, 0x001E);
-    CHECK(!dpm_im0_decode(call.data, 20, &im, err, sizeof err));
+    CHECK(!dp_master_im0_decode(call.data, 20, &im, err, sizeof err));
 }
 
 static void test_c1_refusals_and_timeouts(void)
@@ -574,7 +577,7 @@ static void test_c1_refusals_and_timeouts(void)
     CHECK(run_until_result(&a, 100000));
     CHECK(!a.ok);
     CHECK(strstr(a.error, "RS: SAP 51 not activated") != NULL);
-    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH); /* cyclic exchange unharmed */
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH); /* cyclic exchange unharmed */
 
     /* C1 response timeout: a 50 us budget runs out while the card still says SC. */
     setup(true, true, 20000);
@@ -592,12 +595,12 @@ static void test_c1_refusals_and_timeouts(void)
 
     /* The card falls silent during a call: retries, restart, the call fails. */
     setup(true, true, 0);
-    rig.master.cfg.c1_timeout_us = DPM_C1_TIMEOUT_US_DEFAULT;
-    dpm_call_t call = {0};
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
-    CHECK_EQ(dpm_ds47_start(&call, dp_master_c1_port(&rig.master, 0), &req, NULL, NULL,
+    rig.master.cfg.c1_timeout_us = DP_MASTER_C1_TIMEOUT_US_DEFAULT;
+    dp_master_call_t call = {0};
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    CHECK_EQ(dp_master_ds47_start(&call, dp_master_c1_port(&rig.master, 0), &req, NULL, NULL,
                             membus_now_us(&rig.bus)), 0);
-    while (rig.master.slaves[0].c1.state == DPM_XFER_REQUEST ||
+    while (rig.master.slaves[0].c1.state == DP_MASTER_XFER_REQUEST ||
            !rig.master.slaves[0].c1.started) {
         membus_run_for_us(&rig.bus, 10);
     }
@@ -617,11 +620,11 @@ static void test_c1_lost_response_is_repeated_by_the_card(void)
     rig.master.cfg.slot_time_us = 1000; /* the retry comes after the whole answer */
     bench.recording = true;
     bench.drop_read_res = true;
-    dpm_call_t call = {0};
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
-    CHECK_EQ(dpm_ds47_start(&call, dp_master_c1_port(&rig.master, 0), &req, NULL, NULL,
+    dp_master_call_t call = {0};
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    CHECK_EQ(dp_master_ds47_start(&call, dp_master_c1_port(&rig.master, 0), &req, NULL, NULL,
                             membus_now_us(&rig.bus)), 0);
-    for (int i = 0; i < 100000 && !dpm_call_done(&call); i++) {
+    for (int i = 0; i < 100000 && !dp_master_call_done(&call); i++) {
         membus_run_for_us(&rig.bus, 10);
         if (rig.master_port->silenced && rig.bus.now_ns - bench.dropped_at_ns > 400000u) {
             rig.master_port->silenced = false;
@@ -629,8 +632,8 @@ static void test_c1_lost_response_is_repeated_by_the_card(void)
     }
     CHECK(call.ok);
     CHECK_EQ(rig.master.total_retries, 1);
-    dpm_ds47_rsp_t rsp;
-    CHECK(dpm_ds47_parse(&req, call.data, call.len, &rsp, NULL, 0));
+    dp_master_ds47_rsp_t rsp;
+    CHECK(dp_master_ds47_parse(&req, call.data, call.len, &rsp, NULL, 0));
     CHECK_EQ(rsp.p[0].value, 0x311C7289u);
     /* On the wire: poll, Read.res (missed), the same poll again, the same Read.res again. */
     long first = -1;
@@ -659,39 +662,39 @@ static void test_c1_inverter_timeout_texts(void)
     /* The inverter does not answer within the card's 200 ms: MOVILINK 0x0602, and through
      * PROFIdrive the card's manufacturer-range number for it. */
     setup(true, true, 500000);
-    dpm_acyc_port_t port = dp_master_c1_port(&rig.master, 0);
-    dpm_call_t call;
-    dpm_ds47_rsp_t rsp;
+    dp_master_acyc_port_t port = dp_master_c1_port(&rig.master, 0);
+    dp_master_call_t call;
+    dp_master_ds47_rsp_t rsp;
     char text[200];
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].error, 0x0602);
-    dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
+    dp_master_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
     CHECK_STR(text, "class 6 code 2: card <-> inverter communication fault");
     CHECK(call.busy > 10u);
     membus_run_for_us(&rig.bus, 600000); /* let the late answer pass */
-    req = (dpm_ds47_req_t){.ref = 3, .id = DS47_ID_REQUEST, .n = 1};
-    req.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8300};
+    req = (dp_master_ds47_req_t){.ref = 3, .id = DS47_ID_REQUEST, .n = 1};
+    req.p[0] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8300};
     CHECK(ds47(port, &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].error, 0x0082);
-    dpm_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
+    dp_master_ds47_error_text(rsp.id, rsp.p[0].error, text, sizeof text);
     CHECK_STR(text, "manufacturer specific 0x0082 (MOVILINK 0x0602: class 6 code 2: card <-> "
                     "inverter communication fault)");
 }
 
 /* ---- class 2 ------------------------------------------------------------------------------ */
 
-static void c2_setup(dpm_c2_t *c, uint8_t address, uint8_t ssap)
+static void c2_setup(dp_master_c2_t *c, uint8_t address, uint8_t ssap)
 {
-    dpm_c2_cfg_t cfg = {.slave = SLAVE, .address = address, .ssap = ssap};
-    dpm_c2_init(c, &cfg);
+    dp_master_c2_cfg_t cfg = {.slave = SLAVE, .address = address, .ssap = ssap};
+    dp_master_c2_init(c, &cfg);
     CHECK_EQ(dp_master_add_c2(&rig.master, c), 0);
 }
 
-static bool c2_open(dpm_c2_t *c, acyc_result_t *a)
+static bool c2_open(dp_master_c2_t *c, acyc_result_t *a)
 {
     memset(a, 0, sizeof *a);
-    if (dpm_c2_open(c, acyc_done, a, membus_now_us(&rig.bus)) != 0) {
+    if (dp_master_c2_open(c, acyc_done, a, membus_now_us(&rig.bus)) != 0) {
         return false;
     }
     membus_wake(rig.master_port);
@@ -702,11 +705,11 @@ static void test_c2_open_read_abort_on_the_wire(void)
 {
     setup(false, false, 0); /* no class-1 master: the card stays in Wait_Prm */
     bench.recording = true;
-    static dpm_c2_t c;
+    static dp_master_c2_t c;
     c2_setup(&c, 1, 0);
     acyc_result_t a;
     CHECK(c2_open(&c, &a));
-    CHECK_EQ(dpm_c2_state(&c), DPM_C2_OPEN);
+    CHECK_EQ(dp_master_c2_state(&c), DP_MASTER_C2_OPEN);
     CHECK_EQ(c.sap, 0);
     CHECK_BYTES(a.pdu, a.len, 0x57, 0xF0, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
                 0x00);
@@ -725,10 +728,10 @@ static void test_c2_open_read_abort_on_the_wire(void)
                 0x00, 0x00, fdl_fcs(&bench.frames[last].b[4], 17), 0x16);
     /* A DS47 read on the connection. */
     size_t before = bench.nframes;
-    dpm_call_t call;
-    dpm_ds47_rsp_t rsp;
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
-    CHECK(ds47(dpm_c2_port(&c), &req, &call, &rsp));
+    dp_master_call_t call;
+    dp_master_ds47_rsp_t rsp;
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    CHECK(ds47(dp_master_c2_port(&c), &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].value, 0x311C7289u);
     long w = find_request(before, SLAVE, 1, 0, DPV1_FN_WRITE);
     CHECK(w >= 0);
@@ -741,11 +744,11 @@ static void test_c2_open_read_abort_on_the_wire(void)
     }
     /* Abort: 58 00 20 00 to SAP 0, answered SC; the card frees the connection. */
     acyc_result_t ab = {0};
-    CHECK_EQ(dpm_c2_abort(&c, 0, acyc_done, &ab, membus_now_us(&rig.bus)), 0);
+    CHECK_EQ(dp_master_c2_abort(&c, 0, acyc_done, &ab, membus_now_us(&rig.bus)), 0);
     membus_wake(rig.master_port);
     CHECK(run_until_result(&ab, 100000));
     CHECK(ab.ok);
-    CHECK_EQ(dpm_c2_state(&c), DPM_C2_CLOSED);
+    CHECK_EQ(dp_master_c2_state(&c), DP_MASTER_C2_CLOSED);
     long abort_at = find_request(before, SLAVE, 1, 0, DPV1_FN_ABORT);
     CHECK(abort_at >= 0);
     if (abort_at >= 0) {
@@ -757,7 +760,7 @@ static void test_c2_open_read_abort_on_the_wire(void)
     CHECK_EQ(rig.cards[0].cs.card.dpv1.c2_aborts, 1);
     CHECK(!rig.cards[0].cs.card.dpv1.c2[0].open);
     CHECK_EQ(dp_slave_state(&rig.cards[0].cs.card.dp), DP_STATE_WAIT_PRM);
-    CHECK_EQ(dpm_c2_submit(&c, (const uint8_t *)"\x5E\x00\x2F\xF0", 4, acyc_done, &ab,
+    CHECK_EQ(dp_master_c2_submit(&c, (const uint8_t *)"\x5E\x00\x2F\xF0", 4, acyc_done, &ab,
                            membus_now_us(&rig.bus)), -1); /* closed */
     /* The connection can be opened again. */
     CHECK(c2_open(&c, &a));
@@ -767,40 +770,43 @@ static void test_c2_open_read_abort_on_the_wire(void)
 static void test_c2_im0_and_negative(void)
 {
     setup(false, false, 0);
-    static dpm_c2_t c;
+    static dp_master_c2_t c;
     c2_setup(&c, 1, 0);
     acyc_result_t a;
     CHECK(c2_open(&c, &a));
-    dpm_call_t call = {0};
-    CHECK_EQ(dpm_im0_start(&call, dpm_c2_port(&c), NULL, NULL, membus_now_us(&rig.bus)), 0);
+    dp_master_call_t call = {0};
+    CHECK_EQ(dp_master_im0_start(&call, dp_master_c2_port(&c), NULL, NULL, membus_now_us(&rig.bus)),
+             0);
     membus_wake(rig.master_port);
     CHECK(run_until_call(&call, 1000000));
-    dpm_im0_t im;
-    CHECK(call.ok && dpm_im0_decode(call.data, call.len, &im, NULL, 0));
+    dp_master_im0_t im;
+    CHECK(call.ok && dp_master_im0_decode(call.data, call.len, &im, NULL, 0));
     CHECK_EQ(im.manufacturer_id, 0x010A);
     /* Write I&M0 is refused: B6. */
     uint8_t rec[68] = {0x08, 0x00, 0xFD, 0xE8};
     memset(&call, 0, sizeof call);
-    CHECK_EQ(dpm_call_start(&call, dpm_c2_port(&c), 255, rec, sizeof rec, 240, NULL, NULL,
-                            membus_now_us(&rig.bus)), 0);
+    CHECK_EQ(dp_master_call_start(&call, dp_master_c2_port(&c), 255, rec, sizeof rec, 240, NULL,
+                                  NULL, membus_now_us(&rig.bus)),
+             0);
     membus_wake(rig.master_port);
     CHECK(run_until_call(&call, 1000000));
     CHECK(call.dpv1_negative);
     CHECK_EQ(call.neg_code1, 0xB6);
-    CHECK_EQ(dpm_c2_state(&c), DPM_C2_OPEN); /* a negative response keeps the connection */
+    CHECK_EQ(dp_master_c2_state(&c),
+             DP_MASTER_C2_OPEN); /* a negative response keeps the connection */
     /* A MOVILINK error through class 2. */
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_WRITE_VOLATILE, 8517, 99000000u);
-    dpm_ds47_rsp_t rsp;
-    CHECK(ds47(dpm_c2_port(&c), &req, &call, &rsp));
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_WRITE_VOLATILE, 8517, 99000000u);
+    dp_master_ds47_rsp_t rsp;
+    CHECK(ds47(dp_master_c2_port(&c), &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].error, 0x0815);
 }
 
 static void test_c2_third_connection_refused(void)
 {
     setup(false, false, 0);
-    static dpm_c2_t c1;
-    static dpm_c2_t c2;
-    static dpm_c2_t c3;
+    static dp_master_c2_t c1;
+    static dp_master_c2_t c2;
+    static dp_master_c2_t c3;
     c2_setup(&c1, 1, 0);
     c2_setup(&c2, 3, 0);
     c2_setup(&c3, 1, 40); /* same master as c1, another SSAP: a third connection */
@@ -811,44 +817,44 @@ static void test_c2_third_connection_refused(void)
     bench.recording = true;
     CHECK(!c2_open(&c3, &a));
     CHECK(a.done && !a.ok);
-    CHECK_EQ(dpm_c2_state(&c3), DPM_C2_CLOSED);
+    CHECK_EQ(dp_master_c2_state(&c3), DP_MASTER_C2_CLOSED);
     CHECK_STR(a.error, "connection refused (resource manager SAP 49): Abort from the slave: "
                        "subnet 0, instance MSAC_C2, reason 15 RES resource");
-    CHECK_STR(dpm_c2_error(&c3), a.error);
+    CHECK_STR(dp_master_c2_error(&c3), a.error);
     CHECK_EQ(rig.cards[0].cs.card.dpv1.c2_refused, 1);
     /* The refusal on the wire: an Abort PDU from SAP 49 to SSAP 40. */
     CHECK_BYTES(bench.frames[1].b, bench.frames[1].len, 0x68, 0x09, 0x09, 0x68, 0x81, 0x84, 0x08,
                 0x28, 0x31, 0x58, 0x00, 0x1F, 0x00, 0xDD, 0x16);
     /* Both others still work; the FCB sequence of address 1 is shared by c1 and c3. */
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
-    dpm_call_t call;
-    dpm_ds47_rsp_t rsp;
-    CHECK(ds47(dpm_c2_port(&c1), &req, &call, &rsp));
-    CHECK(ds47(dpm_c2_port(&c2), &req, &call, &rsp));
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    dp_master_call_t call;
+    dp_master_ds47_rsp_t rsp;
+    CHECK(ds47(dp_master_c2_port(&c1), &req, &call, &rsp));
+    CHECK(ds47(dp_master_c2_port(&c2), &req, &call, &rsp));
     CHECK_EQ(rsp.p[0].value, 0x311C7289u);
     /* After c1 aborts, c3 gets SAP 0. */
     acyc_result_t ab = {0};
-    CHECK_EQ(dpm_c2_abort(&c1, 0, acyc_done, &ab, membus_now_us(&rig.bus)), 0);
+    CHECK_EQ(dp_master_c2_abort(&c1, 0, acyc_done, &ab, membus_now_us(&rig.bus)), 0);
     membus_wake(rig.master_port);
     CHECK(run_until_result(&ab, 100000));
     CHECK(c2_open(&c3, &a));
     CHECK_EQ(c3.sap, 0);
-    CHECK(ds47(dpm_c2_port(&c3), &req, &call, &rsp));
+    CHECK(ds47(dp_master_c2_port(&c3), &req, &call, &rsp));
     CHECK_EQ(rig.master.timeouts, 0);
 }
 
 static void test_c2_idle_keeps_the_connection(void)
 {
     setup(false, false, 0);
-    static dpm_c2_t c;
-    dpm_c2_cfg_t cfg = {.slave = SLAVE, .address = 1, .send_timeout = 10}; /* 100 ms */
-    dpm_c2_init(&c, &cfg);
+    static dp_master_c2_t c;
+    dp_master_c2_cfg_t cfg = {.slave = SLAVE, .address = 1, .send_timeout = 10}; /* 100 ms */
+    dp_master_c2_init(&c, &cfg);
     CHECK_EQ(dp_master_add_c2(&rig.master, &c), 0);
     acyc_result_t a;
     CHECK(c2_open(&c, &a));
     bench.recording = true;
     membus_run_for_us(&rig.bus, 500000); /* 5 send timeouts without a request */
-    CHECK_EQ(dpm_c2_state(&c), DPM_C2_OPEN);
+    CHECK_EQ(dp_master_c2_state(&c), DP_MASTER_C2_OPEN);
     CHECK(c.idles >= 8u && c.idles <= 11u); /* one per 50 ms */
     CHECK_EQ(rig.cards[0].cs.card.dpv1.c2_timeouts, 0);
     long i = find_request(0, SLAVE, 1, 0, DPV1_FN_IDLE);
@@ -861,74 +867,76 @@ static void test_c2_idle_keeps_the_connection(void)
                     0x84, 0x08, 0x32, 0x00, 0x48, 0x00, 0x00, 0x00, 0x87, 0x16);
     }
     /* A request right after an Idle still goes through. */
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
-    dpm_call_t call;
-    dpm_ds47_rsp_t rsp;
-    CHECK(ds47(dpm_c2_port(&c), &req, &call, &rsp));
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    dp_master_call_t call;
+    dp_master_ds47_rsp_t rsp;
+    CHECK(ds47(dp_master_c2_port(&c), &req, &call, &rsp));
 
     /* Without Idle the card's supervision frees the connection; the next request sees RS. */
     c.cfg.no_idle = true;
     membus_run_for_us(&rig.bus, 300000);
     CHECK_EQ(rig.cards[0].cs.card.dpv1.c2_timeouts, 1);
-    CHECK_EQ(dpm_c2_state(&c), DPM_C2_OPEN); /* the master cannot know yet */
+    CHECK_EQ(dp_master_c2_state(&c), DP_MASTER_C2_OPEN); /* the master cannot know yet */
     memset(&call, 0, sizeof call);
-    CHECK_EQ(dpm_ds47_start(&call, dpm_c2_port(&c), &req, NULL, NULL, membus_now_us(&rig.bus)),
+    CHECK_EQ(dp_master_ds47_start(&call, dp_master_c2_port(&c), &req, NULL, NULL,
+                                  membus_now_us(&rig.bus)),
              0);
     membus_wake(rig.master_port);
     CHECK(run_until_call(&call, 1000000));
     CHECK(!call.ok);
     CHECK(strstr(call.error, "RS: SAP 0 not activated") != NULL);
-    CHECK_EQ(dpm_c2_state(&c), DPM_C2_CLOSED);
-    CHECK(strstr(dpm_c2_error(&c), "connection closed") != NULL);
+    CHECK_EQ(dp_master_c2_state(&c), DP_MASTER_C2_CLOSED);
+    CHECK(strstr(dp_master_c2_error(&c), "connection closed") != NULL);
 }
 
 static void test_c2_and_c1_together_with_cyclic_exchange(void)
 {
     setup(true, true, 2000);
     bench.recording = true;
-    static dpm_c2_t c;
+    static dp_master_c2_t c;
     c2_setup(&c, MASTER, 0); /* same address as the class-1 master: one FCB sequence */
     acyc_result_t a;
     CHECK(c2_open(&c, &a));
-    dpm_ds47_req_t r1 = ml_request(DS47_ATTR_ML_READ, 8300, 0);
-    dpm_ds47_req_t r2 = ml_request(DS47_ATTR_ML_READ, 8489, 0);
+    dp_master_ds47_req_t r1 = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    dp_master_ds47_req_t r2 = ml_request(DS47_ATTR_ML_READ, 8489, 0);
     r2.ref = 2;
-    dpm_call_t k1 = {0};
-    dpm_call_t k2 = {0};
+    dp_master_call_t k1 = {0};
+    dp_master_call_t k2 = {0};
     uint32_t cycles0 = rig.master.slaves[0].cycles;
     hal_time_us_t t = membus_now_us(&rig.bus);
-    CHECK_EQ(dpm_ds47_start(&k1, dp_master_c1_port(&rig.master, 0), &r1, NULL, NULL, t), 0);
-    CHECK_EQ(dpm_ds47_start(&k2, dpm_c2_port(&c), &r2, NULL, NULL, t), 0);
+    CHECK_EQ(dp_master_ds47_start(&k1, dp_master_c1_port(&rig.master, 0), &r1, NULL, NULL, t), 0);
+    CHECK_EQ(dp_master_ds47_start(&k2, dp_master_c2_port(&c), &r2, NULL, NULL, t), 0);
     CHECK(run_until_call(&k1, 2000000));
     CHECK(run_until_call(&k2, 2000000));
-    dpm_ds47_rsp_t rsp;
-    CHECK(k1.ok && dpm_ds47_parse(&r1, k1.data, k1.len, &rsp, NULL, 0));
+    dp_master_ds47_rsp_t rsp;
+    CHECK(k1.ok && dp_master_ds47_parse(&r1, k1.data, k1.len, &rsp, NULL, 0));
     CHECK_EQ(rsp.p[0].value, 0x311C7289u);
-    CHECK(k2.ok && dpm_ds47_parse(&r2, k2.data, k2.len, &rsp, NULL, 0));
+    CHECK(k2.ok && dp_master_ds47_parse(&r2, k2.data, k2.len, &rsp, NULL, 0));
     CHECK_EQ(rsp.p[0].value, 150000);
     CHECK(rig.master.slaves[0].cycles - cycles0 + 1u >= k1.telegrams);
     CHECK_EQ(rig.master.timeouts, 0);
     check_c1_discipline(); /* FCB toggles across DX, C1 and C2 telegrams from address 2 */
-    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH);
 }
 
 static void test_c2_slave_falls_silent(void)
 {
     setup(false, false, 0);
-    static dpm_c2_t c;
+    static dp_master_c2_t c;
     c2_setup(&c, 1, 0);
     acyc_result_t a;
     CHECK(c2_open(&c, &a));
     bench.card_port->silenced = true;
-    dpm_call_t call = {0};
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
-    CHECK_EQ(dpm_ds47_start(&call, dpm_c2_port(&c), &req, NULL, NULL, membus_now_us(&rig.bus)),
+    dp_master_call_t call = {0};
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    CHECK_EQ(dp_master_ds47_start(&call, dp_master_c2_port(&c), &req, NULL, NULL,
+                                  membus_now_us(&rig.bus)),
              0);
     membus_wake(rig.master_port);
     CHECK(run_until_call(&call, 1000000));
     CHECK(!call.ok);
     CHECK_STR(call.error, "Write.req index 47: request: no answer from slave 4; connection closed");
-    CHECK_EQ(dpm_c2_state(&c), DPM_C2_CLOSED);
+    CHECK_EQ(dp_master_c2_state(&c), DP_MASTER_C2_CLOSED);
     CHECK_EQ(rig.master.total_retries, 1);
     /* Opening against a silent slave fails too. */
     CHECK(!c2_open(&c, &a));
@@ -939,33 +947,33 @@ static void test_c2_slave_falls_silent(void)
 
 static void test_ds47_parse_and_texts(void)
 {
-    dpm_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
-    dpm_ds47_rsp_t rsp;
+    dp_master_ds47_req_t req = ml_request(DS47_ATTR_ML_READ, 8300, 0);
+    dp_master_ds47_rsp_t rsp;
     char err[128];
     const uint8_t good[] = {0x01, 0x40, 0x00, 0x01, 0x43, 0x01, 0x31, 0x1C, 0x72, 0x89};
-    CHECK(dpm_ds47_parse(&req, good, sizeof good, &rsp, err, sizeof err));
+    CHECK(dp_master_ds47_parse(&req, good, sizeof good, &rsp, err, sizeof err));
     const uint8_t manual_neg[] = {0x01, 0xC0, 0x00, 0x01, 0x44, 0x01, 0x08, 0x11};
-    CHECK(dpm_ds47_parse(&req, manual_neg, sizeof manual_neg, &rsp, err, sizeof err));
+    CHECK(dp_master_ds47_parse(&req, manual_neg, sizeof manual_neg, &rsp, err, sizeof err));
     CHECK_EQ(rsp.p[0].error, 0x0811);
-    CHECK(!dpm_ds47_parse(&req, good, 8, &rsp, err, sizeof err)); /* truncated */
+    CHECK(!dp_master_ds47_parse(&req, good, 8, &rsp, err, sizeof err)); /* truncated */
     CHECK(strstr(err, "truncated") != NULL);
     const uint8_t wrong_ref[] = {0x02, 0x40, 0x00, 0x01, 0x43, 0x01, 0, 0, 0, 0};
-    CHECK(!dpm_ds47_parse(&req, wrong_ref, sizeof wrong_ref, &rsp, err, sizeof err));
+    CHECK(!dp_master_ds47_parse(&req, wrong_ref, sizeof wrong_ref, &rsp, err, sizeof err));
     CHECK_STR(err, "response reference 0x02, request 0x01");
     char text[160];
-    dpm_ds47_error_text(0x40, 0x0505, text, sizeof text);
+    dp_master_ds47_error_text(0x40, 0x0505, text, sizeof text);
     CHECK_STR(text, "class 5 code 5: wrong coding of the management or reserved octet");
-    dpm_ds47_error_text(0xC0, 0x0602, text, sizeof text);
+    dp_master_ds47_error_text(0xC0, 0x0602, text, sizeof text);
     CHECK_STR(text, "class 6 code 2: card <-> inverter communication fault");
-    dpm_ds47_error_text(0x81, 0x0011, text, sizeof text);
+    dp_master_ds47_error_text(0x81, 0x0011, text, sizeof text);
     CHECK_STR(text, "PROFIdrive error 0x11: request cannot be executed because of the operating "
                     "state");
-    dpm_ds47_error_text(0x81, 0x0091, text, sizeof text);
+    dp_master_ds47_error_text(0x81, 0x0091, text, sizeof text);
     CHECK_STR(text, "manufacturer specific (MOVILINK class 8, additional code 0x11: "
                     "function/parameter not implemented)");
-    CHECK_STR(dpm_v1_error_text(0xB5), "access: state conflict");
+    CHECK_STR(dp_master_v1_error_text(0xB5), "access: state conflict");
     uint8_t ini[32];
-    CHECK_EQ(dpm_c2_build_initiate(ini, 0x0190), 20);
+    CHECK_EQ(dp_master_c2_build_initiate(ini, 0x0190), 20);
     CHECK_BYTES(ini, 6, 0x57, 0x00, 0x00, 0x00, 0x01, 0x90);
 }
 

@@ -47,7 +47,7 @@
 typedef struct rig {
     dfp21b_t card;
     movidrive_t md;
-    md_inproc_link_t md_link;
+    movidrive_inproc_link_t movidrive_link;
     bool use_md;
     fake_link_t link;
     fdl_rx_t shadow;
@@ -247,7 +247,7 @@ static int shim_param_request(void *ctx, uint8_t channel, const uint8_t req[ML_T
         }
     }
     if (r.use_md) {
-        ml_link_t l = md_inproc_link(&r.md_link);
+        ml_link_t l = movidrive_inproc_link(&r.movidrive_link);
         return l.ops->param_request(l.ctx, channel, req);
     }
     return fl_param_request(&r.link, channel, req);
@@ -257,7 +257,7 @@ static void shim_process_outputs(void *ctx, const uint16_t *po, uint8_t n)
 {
     (void)ctx;
     if (r.use_md) {
-        ml_link_t l = md_inproc_link(&r.md_link);
+        ml_link_t l = movidrive_inproc_link(&r.movidrive_link);
         l.ops->process_outputs(l.ctx, po, n);
     } else {
         fl_process_outputs(&r.link, po, n);
@@ -268,7 +268,7 @@ static void shim_fieldbus_status(void *ctx, const ml_fieldbus_status_t *st)
 {
     (void)ctx;
     if (r.use_md) {
-        ml_link_t l = md_inproc_link(&r.md_link);
+        ml_link_t l = movidrive_inproc_link(&r.movidrive_link);
         l.ops->fieldbus_status(l.ctx, st);
     } else {
         fl_fieldbus_status(&r.link, st);
@@ -293,7 +293,7 @@ static void card_process_inputs(void *card, const uint16_t *pi, uint8_t n)
 
 static hal_time_us_t earlier(hal_time_us_t a, hal_time_us_t b) { return hal_time_diff(a, b) < 0 ? a : b; }
 
-/* The card's main loop as the simulator runs it (sim_host/stations/src/stations.c). */
+/* The card's main loop as the simulator runs it (sim_host/sim_stations/src/stations.c). */
 static hal_time_us_t card_poll(void)
 {
     hal_time_us_t now = now_us();
@@ -301,10 +301,10 @@ static hal_time_us_t card_poll(void)
     (void)fdl_rx_poll(&r.shadow, now); /* the card's receiver forgets the line as this one does */
     hal_time_us_t next;
     if (r.use_md) {
-        next = md_inproc_link_poll(&r.md_link, now);
+        next = movidrive_inproc_link_poll(&r.movidrive_link, now);
         next = earlier(next, movidrive_tick(&r.md, now));
         next = earlier(next, dfp21b_poll(&r.card, now));
-        next = earlier(next, md_inproc_link_poll(&r.md_link, now));
+        next = earlier(next, movidrive_inproc_link_poll(&r.movidrive_link, now));
         if (r.card.inputs_dirty) {
             next = earlier(next, dfp21b_poll(&r.card, now));
         }
@@ -656,9 +656,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         char err[128];
         PROPERTY(movidrive_init(&r.md, &mcfg, err, sizeof err) == 0, "movidrive_init: %s", err);
         static const uint32_t delays[4] = {0, 3000, 50000, 300000};
-        r.md_link = (md_inproc_link_t){.md = &r.md, .param_response = card_param_response,
-                                       .process_inputs = card_process_inputs, .card = &r.card,
-                                       .delay_us = delays[(cfgb >> 5) & 3u]};
+        r.movidrive_link = (movidrive_inproc_link_t){
+            .md = &r.md, .param_response = card_param_response,
+            .process_inputs = card_process_inputs, .card = &r.card,
+            .delay_us = delays[(cfgb >> 5) & 3u]};
     }
     dfp21b_cfg_t cfg = {
         .uart = {.ops = &uart_ops, .ctx = NULL},

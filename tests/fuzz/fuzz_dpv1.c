@@ -241,13 +241,19 @@ static size_t build_pdu(fz_t *f, uint8_t kind, uint8_t *pdu)
 {
     switch (kind % 7u) {
     case 0: { /* Write 47 */
-        dpm_ds47_req_t q = {.ref = fz_u8(f), .id = (uint8_t[]){1, 2, 0x40, 0x40}[fz_u8(f) & 3u],
-                            .axis = 0, .n = (uint8_t)(1u + fz_u8(f) % 3u)};
+        dp_master_ds47_req_t q = {.ref = fz_u8(f),
+                                  .id = (uint8_t[]){1, 2, 0x40, 0x40}[fz_u8(f) & 3u],
+                                  .axis = 0,
+                                  .n = (uint8_t)(1u + fz_u8(f) % 3u)};
         for (unsigned i = 0; i < q.n; i++) {
-            q.p[i] = (dpm_ds47_param_t){.attribute = q.id == 0x40 ? (uint8_t)(0x10u * (1u + fz_u8(f) % 3u)) : 0x10u,
-                                        .number = (uint16_t)(8300u + fz_u8(f)), .value = fz_u32(f)};
+            q.p[i] =
+                (dp_master_ds47_param_t){.attribute = q.id == 0x40
+                                                          ? (uint8_t)(0x10u * (1u + fz_u8(f) % 3u))
+                                                          : 0x10u,
+                                         .number = (uint16_t)(8300u + fz_u8(f)),
+                                         .value = fz_u32(f)};
         }
-        size_t n = dpm_ds47_build(&q, &pdu[4], DPV1_MAX_DATA);
+        size_t n = dp_master_ds47_build(&q, &pdu[4], DPV1_MAX_DATA);
         pdu[0] = DPV1_FN_WRITE; pdu[1] = fz_u8(f); pdu[2] = 47; pdu[3] = (uint8_t)n;
         return 4u + n;
     }

@@ -4,7 +4,7 @@
  *
  * Input: a 32-bit start time, then operations (op octet, low 3 bits):
  *   0  raw request: u8 length, octets (what a master wrote after the DP-V1 header)
- *   1  structured request built with the master's codec (dpm_ds47_build): ref, id (0x01,
+ *   1  structured request built with the master's codec (dp_master_ds47_build): ref, id (0x01,
  *      0x02, 0x40 or raw), axis (mostly 0), n, and per parameter attribute, elements, number,
  *      subindex, value (mostly valid)
  *   2  the link answers the oldest request it holds (bits 3..4 mode, bit 5 keep it)
@@ -19,8 +19,8 @@
  *    the services are exactly the expected ones: one per parameter that is not refused before,
  *    in order, with its index, service and value, none twice, none missing at completion;
  *  - ds47_read answers B5 exactly while nothing is ready, B7 when the room is too small, and a
- *    response that fits; for a structured request the master's parser (dpm_ds47_parse) accepts
- *    the response and a read answered by the inverter carries the inverter's value. */
+ *    response that fits; for a structured request the master's parser (dp_master_ds47_parse)
+ *    accepts the response and a read answered by the inverter carries the inverter's value. */
 #include "dp_master/dpv1_ds47.h"
 #include "dpv1/ds47.h"
 #include "fuzz_link.h"
@@ -30,7 +30,7 @@
 
 typedef struct expect {
     bool known; /* built from fields: the services are predictable */
-    dpm_ds47_req_t req;
+    dp_master_ds47_req_t req;
     uint8_t n_svc;
     uint8_t svc_param[DS47_MAX_PARAMS]; /* parameter index of each expected service */
     uint8_t issued;
@@ -65,7 +65,7 @@ static void on_request(void *ctx, uint8_t channel, const uint8_t req[ML_TELEGRAM
     }
     PROPERTY(r.e.issued < r.e.n_svc, "service %u for a request that needs %u (duplicate)",
              r.e.issued + 1u, r.e.n_svc);
-    const dpm_ds47_param_t *p = &r.e.req.p[r.e.svc_param[r.e.issued]];
+    const dp_master_ds47_param_t *p = &r.e.req.p[r.e.svc_param[r.e.issued]];
     uint8_t want_svc = r.e.req.id == DS47_ID_MOVILINK ? (uint8_t)(p->attribute >> 4)
                        : r.e.req.id == DS47_ID_CHANGE ? ML_SVC_WRITE
                                                       : ML_SVC_READ;
@@ -122,7 +122,7 @@ static uint8_t pick_attr(fz_t *f, uint8_t id)
 
 static size_t structured(fz_t *f, uint8_t *out, size_t max)
 {
-    dpm_ds47_req_t *q = &r.e.req;
+    dp_master_ds47_req_t *q = &r.e.req;
     memset(q, 0, sizeof *q);
     q->ref = fz_u8(f);
     uint8_t idsel = fz_u8(f);
@@ -131,7 +131,7 @@ static size_t structured(fz_t *f, uint8_t *out, size_t max)
     q->axis = (idsel & 0x80u) != 0u ? fz_u8(f) : 0u;
     q->n = (uint8_t)(1u + fz_u8(f) % DS47_MAX_PARAMS);
     for (unsigned i = 0; i < q->n; i++) {
-        dpm_ds47_param_t *p = &q->p[i];
+        dp_master_ds47_param_t *p = &q->p[i];
         p->attribute = pick_attr(f, q->id);
         uint8_t shape = fz_u8(f);
         p->elements = (shape & 0x80u) != 0u ? fz_u8(f) : (uint8_t)(shape & 1u);
@@ -139,19 +139,19 @@ static size_t structured(fz_t *f, uint8_t *out, size_t max)
         p->subindex = (shape & 0x40u) != 0u ? fz_u16(f) : 0u;
         p->value = fz_u32(f);
     }
-    return dpm_ds47_build(q, out, max);
+    return dp_master_ds47_build(q, out, max);
 }
 
 /* Which parameters need a MOVILINK service (docs/dpv1.md), computed from the fields. */
 static void expect_services(void)
 {
-    const dpm_ds47_req_t *q = &r.e.req;
+    const dp_master_ds47_req_t *q = &r.e.req;
     r.e.n_svc = 0;
     if (q->axis != 0u) {
         return;
     }
     for (uint8_t i = 0; i < q->n; i++) {
-        const dpm_ds47_param_t *p = &q->p[i];
+        const dp_master_ds47_param_t *p = &q->p[i];
         bool ok;
         if (q->id == DS47_ID_MOVILINK) {
             uint8_t svc = (uint8_t)(p->attribute >> 4);
@@ -200,7 +200,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             }
             bool busy = r.d.state == DS47_BUSY;
             /* Expect the new request's services (ds47_write starts the first one at once). */
-            dpm_ds47_req_t q = r.e.req;
+            dp_master_ds47_req_t q = r.e.req;
             memset(&r.e, 0, sizeof r.e);
             r.e.known = known;
             r.e.req = q;
@@ -260,14 +260,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             if (r.e.known) {
                 PROPERTY(r.e.issued == r.e.n_svc, "completed after %u of %u services (lost)",
                          r.e.issued, r.e.n_svc);
-                dpm_ds47_rsp_t rsp;
+                dp_master_ds47_rsp_t rsp;
                 char err[160] = "";
-                bool ok = dpm_ds47_parse(&r.e.req, out, len, &rsp, err, sizeof err);
+                bool ok = dp_master_ds47_parse(&r.e.req, out, len, &rsp, err, sizeof err);
                 if (!ok) fz_hex("response", out, len);
                 PROPERTY(ok, "the master cannot parse the response: %s", err);
                 for (uint8_t k = 0; k < r.e.n_svc; k++) {
                     uint8_t i = r.e.svc_param[k];
-                    bool reads = !dpm_ds47_param_writes(&r.e.req, i);
+                    bool reads = !dp_master_ds47_param_writes(&r.e.req, i);
                     if (r.e.answered[k] && reads) {
                         PROPERTY(rsp.p[i].ok && rsp.p[i].has_value && rsp.p[i].value == r.e.value[k],
                                  "parameter %u: the inverter read %08X, the response says %d/%08X",

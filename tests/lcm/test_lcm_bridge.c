@@ -10,8 +10,8 @@
 #include "dfp_lcm/dfp_lcm_card_state_t.h"
 #include "dfp_lcm/dfp_lcm_param_service_t.h"
 #include "dfp_lcm/dfp_lcm_telegram_t.h"
-#include "dfp_lcm_bridge/lcm_bridge.h"
-#include "dfp_lcm_types/telegram_decode.h"
+#include "lcm_bridge/lcm_bridge.h"
+#include "lcm_bridge/telegram_decode.h"
 #include "dp_master/param_channel.h"
 #include "rig/rig.h"
 
@@ -206,7 +206,7 @@ static void test_telegram_layout_and_checked_decode(void)
 /* What the test drives the master with; the bus, the card and the master are in the rig. */
 static struct {
     uint8_t out[14];
-    dpm_param_t param;
+    dp_master_param_t param;
 } drv;
 
 static rig_t rig; /* large: keep it off the stack */
@@ -245,15 +245,15 @@ static void setup(card_inverter_t inverter)
     dp_master_cfg_t mc = {.address = 2, .baud = 1500000, .strict_timing = true,
                           .cycle_us = 2000};
     (void)rig_add_master(&rig, &mc, membus_now_us(&rig.bus));
-    dpm_slave_cfg_t sc = {.address = 4};
-    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 50, dfp21b_user_prm_default,
+    dp_master_slave_cfg_t sc = {.address = 4};
+    sc.prm_len = (uint8_t)dp_master_build_prm(sc.prm, DFP21B_IDENT, 50, dfp21b_user_prm_default,
                                         sizeof dfp21b_user_prm_default);
     sc.cfg[0] = 0xF3; /* Param + 3 PD */
     sc.cfg[1] = 0xF2;
     sc.cfg_len = 2;
     CHECK_EQ(dp_master_add_slave(&rig.master, &sc), 0);
     membus_run_for_us(&rig.bus, 20000);
-    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH);
 }
 
 static void set_po(uint16_t a, uint16_t b, uint16_t c)
@@ -323,10 +323,10 @@ static void test_card_state_fields_and_throttle(void)
 
 static uint32_t run_service(uint8_t service, uint16_t index, uint32_t value)
 {
-    dpm_param_start(&drv.param, service, index, value, drv.out);
+    dp_master_param_start(&drv.param, service, index, value, drv.out);
     dp_master_set_outputs(&rig.master, 0, drv.out, sizeof drv.out);
     for (uint32_t t = 0; t < 200000u; t += 500u) {
-        if (dpm_param_done(&drv.param, rig.master.slaves[0].inputs)) {
+        if (dp_master_param_done(&drv.param, rig.master.slaves[0].inputs)) {
             return t;
         }
         membus_run_for_us(&rig.bus, 500u);
@@ -383,11 +383,11 @@ static void test_param_observer_one_message_per_service(void)
     CHECK_EQ(p->ok, 1);
 
     /* A request the card answers itself (reserved octet not 0) never reaches the inverter. */
-    dpm_param_start(&drv.param, ML_SVC_READ, 8300, 0, drv.out);
+    dp_master_param_start(&drv.param, ML_SVC_READ, 8300, 0, drv.out);
     drv.out[1] = 0x01;
     dp_master_set_outputs(&rig.master, 0, drv.out, sizeof drv.out);
     membus_run_for_us(&rig.bus, 50000);
-    CHECK(dpm_param_done(&drv.param, rig.master.slaves[0].inputs));
+    CHECK(dp_master_param_done(&drv.param, rig.master.slaves[0].inputs));
     deliver();
     CHECK_EQ(got.params, 3);
     CHECK_EQ(bridge.failures, 0);

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Hostile datagrams on an LCM segment (sim_host/lcm/README.md, "Who can reach a segment"): the
-# two datagrams that crash an LCM 1.3.1 subscriber (lcm_hostile_datagrams.py) reach a slave and
-# a master running on the segment; both stay up and the master still brings the slave to
+# Hostile datagrams on an LCM segment (sim_host/lcm_bridge/README.md, "Who can reach a segment"):
+# the two datagrams that crash an LCM 1.3.1 subscriber (lcm_hostile_datagrams.py) reach a slave
+# and a master running on the segment; both stay up and the master still brings the slave to
 # Data_Exchange afterwards. udpm on loopback needs a multicast route: a private namespace.
 # Usage: test_lcm_datagrams.sh DFP_SIM PYTHON
 sim=$1

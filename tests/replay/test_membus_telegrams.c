@@ -73,7 +73,7 @@ static void on_card_event(void *ctx, unsigned card, const dp_event_t *ev)
     mix(&r->tr, v, sizeof v);
 }
 
-static void on_master_event(void *ctx, const dpm_event_t *ev)
+static void on_master_event(void *ctx, const dp_master_event_t *ev)
 {
     run_t *r = ctx;
     uint64_t v[] = {ev->type, ev->t, ev->slave, ev->old_phase, ev->new_phase, ev->len};
@@ -130,8 +130,8 @@ static void add_master(run_t *r, const uint8_t *addr, unsigned n, bool absent_sl
     CHECK(m != NULL);
     static const uint8_t user[9] = {0x00, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x01};
     for (unsigned i = 0; i < n + (absent_slave ? 1u : 0u); i++) {
-        dpm_slave_cfg_t sc = {.address = i < n ? addr[i] : 20u};
-        sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 20u + rnd(r, 40u), user,
+        dp_master_slave_cfg_t sc = {.address = i < n ? addr[i] : 20u};
+        sc.prm_len = (uint8_t)dp_master_build_prm(sc.prm, DFP21B_IDENT, 20u + rnd(r, 40u), user,
                                             sizeof user);
         memcpy(sc.cfg, cfg_param_3pd, sizeof cfg_param_3pd);
         sc.cfg_len = sizeof cfg_param_3pd;
@@ -220,7 +220,7 @@ static void finish_trace(run_t *r)
         mix(&r->tr, dp->outputs, sizeof dp->outputs);
     }
     for (unsigned i = 0; i < g->master.num_slaves; i++) {
-        const dpm_slave_t *s = &g->master.slaves[i];
+        const dp_master_slave_t *s = &g->master.slaves[i];
         uint64_t v[] = {s->phase, s->cycles, s->inputs_len};
         mix(&r->tr, v, sizeof v);
     }

@@ -128,7 +128,7 @@ expect_in "shows the card's octets" "$original" "$out"
 expect_rows "altered reply" "$out" "Data_Exchange 100 99 1 0 0" "total 127 126 1 22 22"
 expect_in "result" "result: DIFFERENT: 1 of 127 replies differ" "$out"
 
-# ---- parameter services named (md_names.h) ---------------------------------------------------
+# ---- parameter services named (movidrive_names.h) --------------------------------------------
 # --verbose names every MOVILINK service of the cyclic channel and of data set 47 below its
 # telegram, requests and answers alike; so does the first mismatch of a check report.
 expect_exit 0 "param_channel.pcap --verbose" -- "$sim" replay "$golden/param_channel.pcap" --verbose

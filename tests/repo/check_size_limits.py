@@ -24,8 +24,8 @@ FUNCTION_DIRS = ["dp_slave", "dpv1", "movilink", "firmware", "hal", "sim_host"]
 SOURCE_EXT = (".c", ".h", ".lua", ".js", ".py")
 FUNCTION_EXT = (".c", ".h")
 GENERATED = {
-    "sim_host/movidrive/src/md_params.c",
-    "sim_host/movidrive/src/md_names_table.c",
+    "sim_host/movidrive/src/movidrive_params.c",
+    "sim_host/movidrive/src/movidrive_names_table.c",
     "tools/wireshark/movidrive_params.lua",
 }
 

@@ -16,11 +16,11 @@
 #include <string.h>
 
 #include "check.h"
-#include "sim_can/inverter_can.h"
+#include "can/inverter_can.h"
 #include "movilink/movilink_client.h"
 
-#define MD_P100_FIELDBUS 3u /* setpoint source (index 8461) */
-#define MD_P101_FIELDBUS 2u /* control signal source (index 8462) */
+#define MOVIDRIVE_P100_FIELDBUS 3u /* setpoint source (index 8461) */
+#define MOVIDRIVE_P101_FIELDBUS 2u /* control signal source (index 8462) */
 
 static const char *ifname;
 static int external_address = -1;
@@ -265,10 +265,10 @@ static void test_drive_external(void)
 {
     /* P100 first: both need controller inhibit, which P101 = FIELDBUS with an enabling
      * control word would end. */
-    uint8_t w2[8] = {0x33, 0x00, 0x21, 0x0D, 0, 0, 0, MD_P100_FIELDBUS};
+    uint8_t w2[8] = {0x33, 0x00, 0x21, 0x0D, 0, 0, 0, MOVIDRIVE_P100_FIELDBUS};
     CHECK(service(w2, 0));
     CHECK_EQ(card.rsp[0], 0x33);
-    uint8_t w[8] = {0x33, 0x00, 0x21, 0x0E, 0, 0, 0, MD_P101_FIELDBUS};
+    uint8_t w[8] = {0x33, 0x00, 0x21, 0x0E, 0, 0, 0, MOVIDRIVE_P101_FIELDBUS};
     CHECK(service(w, 0));
     CHECK_EQ(card.rsp[0], 0x33);
     const uint16_t run[3] = {0x0006, 1500, 0}; /* enable, 1500 x 0.2 rpm = 300 rpm */

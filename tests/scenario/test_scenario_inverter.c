@@ -11,7 +11,7 @@
 /* The master's side of the parameter channel, and what the card's events counted. */
 typedef struct scn {
     uint8_t out[14];
-    dpm_param_t param;
+    dp_master_param_t param;
     unsigned gc_events;
 } scn_t;
 
@@ -55,13 +55,13 @@ static void setup(uint32_t inverter_delay_us, uint8_t diag_alarm_octet)
     dp_master_cfg_t mc = {.address = 2, .baud = 1500000, .strict_timing = true, .cycle_us = 2000};
     (void)rig_add_master(&rig, &mc, membus_now_us(&rig.bus));
     const uint8_t user[9] = {0x00, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, diag_alarm_octet};
-    dpm_slave_cfg_t sc = {.address = 4};
-    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 50, user, sizeof user);
+    dp_master_slave_cfg_t sc = {.address = 4};
+    sc.prm_len = (uint8_t)dp_master_build_prm(sc.prm, DFP21B_IDENT, 50, user, sizeof user);
     memcpy(sc.cfg, cfg_param_3pd, sizeof cfg_param_3pd);
     sc.cfg_len = sizeof cfg_param_3pd;
     CHECK_EQ(dp_master_add_slave(&rig.master, &sc), 0);
     membus_run_for_us(&rig.bus, 20000);
-    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH);
 }
 
 static const uint8_t *inputs(void)
@@ -71,7 +71,7 @@ static const uint8_t *inputs(void)
 
 static void start(uint8_t service, uint16_t index, uint32_t value)
 {
-    dpm_param_start(&scn.param, service, index, value, scn.out);
+    dp_master_param_start(&scn.param, service, index, value, scn.out);
     dp_master_set_outputs(&rig.master, 0, scn.out, sizeof scn.out);
 }
 
@@ -80,7 +80,7 @@ static uint32_t finish(uint32_t limit_us)
 {
     uint32_t c0 = rig.master.slaves[0].cycles;
     for (uint32_t t = 0; t < limit_us; t += 500u) {
-        if (dpm_param_done(&scn.param, inputs())) {
+        if (dp_master_param_done(&scn.param, inputs())) {
             return rig.master.slaves[0].cycles - c0;
         }
         membus_run_for_us(&rig.bus, 500u);
@@ -123,7 +123,7 @@ static void test_slow_inverter_keeps_old_reply_and_exchange_running(void)
     start(ML_SVC_READ, 8489, 0);
     bool same_until_done = true;
     uint32_t c0 = rig.master.slaves[0].cycles;
-    for (int i = 0; i < 200 && !dpm_param_done(&scn.param, inputs()); i++) {
+    for (int i = 0; i < 200 && !dp_master_param_done(&scn.param, inputs()); i++) {
         same_until_done = same_until_done && memcmp(inputs(), first, 8) == 0;
         membus_run_for_us(&rig.bus, 500);
     }
@@ -159,7 +159,7 @@ static void test_inverter_error_and_card_error(void)
     CHECK(finish(100000) != UINT32_MAX);
     CHECK_BYTES(inputs(), 8, 0xF3, 0x00, 0x21, 0x45, 0x08, 0x00, 0x00, 0x15);
     /* Reserved octet not 0: the card answers class 5 code 5 without asking the inverter. */
-    dpm_param_start(&scn.param, ML_SVC_READ, 8300, 0, scn.out);
+    dp_master_param_start(&scn.param, ML_SVC_READ, 8300, 0, scn.out);
     scn.out[1] = 0x01;
     dp_master_set_outputs(&rig.master, 0, scn.out, sizeof scn.out);
     CHECK(finish(100000) != UINT32_MAX);
@@ -220,7 +220,7 @@ static void test_fieldbus_timeout_fault_ext_diag_and_reset(void)
     dp_master_start(&rig.master, membus_now_us(&rig.bus));
     membus_wake(rig.master_port);
     membus_run_for_us(&rig.bus, 300000);
-    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH);
     CHECK_EQ(pi_word(0), 0x1C24); /* fault 28 in the high byte, fault bit, PO enabled */
     CHECK_BYTES(rig.master.slaves[0].last_diag, rig.master.slaves[0].last_diag_len, 0x08, 0x0C,
                 0x00, 0x02, 0x60, 0x03, 0x02, 0x1C);
@@ -259,7 +259,7 @@ static int32_t drive_value(uint16_t index)
     return v;
 }
 
-static int32_t p819(void) { return drive_value(MD_IDX_P819_FIELDBUS_TIMEOUT); }
+static int32_t p819(void) { return drive_value(MOVIDRIVE_IDX_P819_FIELDBUS_TIMEOUT); }
 
 /* protocol.md §B5: P819 shows the master's watchdog time; written through another interface it is
  * shown until the next parameterisation. Global_Control and the other DP events in between also
@@ -268,7 +268,7 @@ static void test_p819_written_elsewhere_stays_until_next_set_prm(void)
 {
     setup(0, 0x01);
     CHECK_EQ(p819(), 50);
-    start(ML_SVC_WRITE_VOLATILE, MD_IDX_P819_FIELDBUS_TIMEOUT, 300);
+    start(ML_SVC_WRITE_VOLATILE, MOVIDRIVE_IDX_P819_FIELDBUS_TIMEOUT, 300);
     CHECK(finish(100000) != UINT32_MAX);
     CHECK_EQ(inputs()[0] & ML_MGMT_ERROR, 0);
     CHECK_EQ(p819(), 300);
@@ -278,10 +278,10 @@ static void test_p819_written_elsewhere_stays_until_next_set_prm(void)
     CHECK_EQ(scn.gc_events, gc_before + 1u);
     CHECK_EQ(p819(), 300);
     /* The master parameterises again with the same 50 ms: that overwrites it. */
-    dpm_slave_cfg_t sc = rig.master.slaves[0].cfg;
+    dp_master_slave_cfg_t sc = rig.master.slaves[0].cfg;
     CHECK_EQ(dp_master_reconfigure(&rig.master, 0, &sc, membus_now_us(&rig.bus)), 0);
     membus_run_for_us(&rig.bus, 20000);
-    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH);
     CHECK_EQ(p819(), 50);
 }
 

@@ -22,13 +22,13 @@ static void card_event(void *ctx, unsigned card, const dp_event_t *ev)
     }
 }
 
-static void master_event(void *ctx, const dpm_event_t *ev)
+static void master_event(void *ctx, const dp_master_event_t *ev)
 {
     scn_t *s = ctx;
-    if (ev->type == DPM_EV_FAULT) {
+    if (ev->type == DP_MASTER_EV_FAULT) {
         s->restarts_seen++;
     }
-    if (ev->type == DPM_EV_PHASE && ev->new_phase == DPM_PHASE_DATA_EXCH) {
+    if (ev->type == DP_MASTER_EV_PHASE && ev->new_phase == DP_MASTER_PHASE_DATA_EXCH) {
         s->restarts_at_data_exch = s->restarts_seen;
     }
 }
@@ -53,8 +53,8 @@ static void scn_setup(uint32_t master_baud, uint32_t card_fixed_baud, const uint
     dp_master_cfg_t mc = {.address = 2, .baud = master_baud, .strict_timing = true,
                           .cycle_us = 2000};
     (void)rig_add_master(&rig, &mc, 0);
-    dpm_slave_cfg_t sc = {.address = 4};
-    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, wd_ms, dfp21b_user_prm_default,
+    dp_master_slave_cfg_t sc = {.address = 4};
+    sc.prm_len = (uint8_t)dp_master_build_prm(sc.prm, DFP21B_IDENT, wd_ms, dfp21b_user_prm_default,
                                         sizeof dfp21b_user_prm_default);
     memcpy(sc.cfg, cfg, cfg_len);
     sc.cfg_len = (uint8_t)cfg_len;
@@ -71,7 +71,7 @@ static void test_startup_auto_baud_to_data_exchange(void)
     CHECK_EQ(dp_slave_baud_state(&rig.cards[0].cs.card.dp), DP_BAUD_CONTROL);
     CHECK_EQ(dfp21b_p092_baud(&rig.cards[0].cs.card), 1500000);
     CHECK_EQ(dp_slave_state(&rig.cards[0].cs.card.dp), DP_STATE_DATA_EXCH);
-    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH);
     CHECK_EQ(rig.cards[0].cs.leds.mode[HAL_LED_BUS_FAULT], HAL_LED_OFF);
     CHECK_EQ(dp_slave_master(&rig.cards[0].cs.card.dp), 2);
     CHECK_EQ(dfp21b_p819_timeout_ms(&rig.cards[0].cs.card), 100);
@@ -147,17 +147,17 @@ static void test_inverter_fault_dh_and_diagnosis(void)
     const uint8_t cfg[] = {0xF3, 0xF2};
     scn_setup(1500000, 1500000, cfg, sizeof cfg, 100);
     const uint8_t user[9] = {0x00, 0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x00};
-    dpm_slave_cfg_t sc = rig.master.slaves[0].cfg;
-    sc.prm_len = (uint8_t)dpm_build_prm(sc.prm, DFP21B_IDENT, 100, user, sizeof user);
+    dp_master_slave_cfg_t sc = rig.master.slaves[0].cfg;
+    sc.prm_len = (uint8_t)dp_master_build_prm(sc.prm, DFP21B_IDENT, 100, user, sizeof user);
     dp_master_reconfigure(&rig.master, 0, &sc, 0);
     membus_run_for_us(&rig.bus, 20000);
-    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH);
     uint32_t cycles = rig.master.slaves[0].cycles;
 
     dfp21b_set_inverter_fault(&rig.cards[0].cs.card, 0x11);
     membus_run_for_us(&rig.bus, 10000);
     /* DH made the master read the diagnosis, then it went back to cyclic exchange. */
-    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH);
     CHECK_BYTES(rig.master.slaves[0].last_diag, rig.master.slaves[0].last_diag_len,
                 0x08, 0x0C, 0x00, 0x02, 0x60, 0x03, 0x02, 0x11);
     CHECK(rig.master.slaves[0].cycles > cycles + 2);

@@ -63,10 +63,10 @@ typedef struct path {
 typedef struct soak {
     sim_station_t card_inner; /* the rig's station of the card, behind the faulty receiver */
     hal_uart_t bus_uart;      /* the bus side of the faulty transmitter */
-    dpm_c2_t c2;
-    dpm_call_t call1, call2;
-    dpm_ds47_req_t req1, req2;
-    dpm_param_t param;
+    dp_master_c2_t c2;
+    dp_master_call_t call1, call2;
+    dp_master_ds47_req_t req1, req2;
+    dp_master_param_t param;
     uint8_t out[14];
     ml_link_t md;  /* the emulated inverter's own link */
     path_t p[3];
@@ -294,16 +294,16 @@ static void issue(path_t *p)
     p->started = now();
 }
 
-static void call_done(void *ctx, dpm_call_t *call, hal_time_us_t t)
+static void call_done(void *ctx, dp_master_call_t *call, hal_time_us_t t)
 {
     (void)t;
     path_t *p = ctx;
     bool ok = false;
     if (call->ok) {
-        dpm_ds47_rsp_t rsp;
+        dp_master_ds47_rsp_t rsp;
         char err[160];
-        const dpm_ds47_req_t *req = p == &soak.p[1] ? &soak.req1 : &soak.req2;
-        ok = dpm_ds47_parse(req, call->data, call->len, &rsp, err, sizeof err) && rsp.p[0].ok;
+        const dp_master_ds47_req_t *req = p == &soak.p[1] ? &soak.req1 : &soak.req2;
+        ok = dp_master_ds47_parse(req, call->data, call->len, &rsp, err, sizeof err) && rsp.p[0].ok;
     }
     finish(p, ok);
 }
@@ -312,7 +312,7 @@ static void drive_cyclic(void)
 {
     path_t *p = &soak.p[0];
     const uint8_t *in = rig.master.slaves[0].inputs;
-    if (p->running && dpm_param_done(&soak.param, in)) {
+    if (p->running && dp_master_param_done(&soak.param, in)) {
         finish(p, (in[0] & ML_MGMT_ERROR) == 0u);
     }
     if (p->running && hal_time_diff(now(), p->started) > (int32_t)SERVICE_US) {
@@ -322,12 +322,14 @@ static void drive_cyclic(void)
     }
     if (!p->running) {
         issue(p);
-        dpm_param_start(&soak.param, ML_SVC_WRITE_VOLATILE, p->index, p->next_value, soak.out);
+        dp_master_param_start(&soak.param, ML_SVC_WRITE_VOLATILE, p->index, p->next_value,
+                              soak.out);
         dp_master_set_outputs(&rig.master, 0, soak.out, sizeof soak.out);
     }
 }
 
-static void drive_ds47(path_t *p, dpm_call_t *call, dpm_ds47_req_t *req, dpm_acyc_port_t port)
+static void drive_ds47(path_t *p, dp_master_call_t *call, dp_master_ds47_req_t *req,
+                       dp_master_acyc_port_t port)
 {
     if (p->running && hal_time_diff(now(), p->started) > (int32_t)(2u * SERVICE_US)) {
         /* the call's own time limit (5 s) ends it first; this only guards against a hang */
@@ -338,11 +340,11 @@ static void drive_ds47(path_t *p, dpm_call_t *call, dpm_ds47_req_t *req, dpm_acy
         return;
     }
     /* Request Reference 1..255: 0 is refused as a header error (B7). */
-    *req = (dpm_ds47_req_t){.ref = (uint8_t)(1u + p->next_value % 255u),
+    *req = (dp_master_ds47_req_t){.ref = (uint8_t)(1u + p->next_value % 255u),
                             .id = DS47_ID_MOVILINK, .n = 1};
-    req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE,
+    req->p[0] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE,
                                    .number = p->index, .value = p->next_value + 1u};
-    if (dpm_ds47_start(call, port, req, call_done, p, now()) == 0) {
+    if (dp_master_ds47_start(call, port, req, call_done, p, now()) == 0) {
         issue(p);
     }
 }
@@ -351,12 +353,13 @@ static void drive_ds47(path_t *p, dpm_call_t *call, dpm_ds47_req_t *req, dpm_acy
  * least trying) within C2_STUCK_US, unless the test keeps it silent. Known finding
  * "c2_abort_stuck" (docs/quality.md): dp_master_stop()/dp_master_start() drop a class-2
  * telegram on the wire without telling the connection, whose on_wire stays set; a later
- * dpm_c2_abort() then waits for that answer for ever in DPM_C2_ABORTING. Counted, printed and
- * repaired here (the connection is initialised again); fatal with SOAK_C2_STRICT=1. */
+ * dp_master_c2_abort() then waits for that answer for ever in DP_MASTER_C2_ABORTING. Counted,
+ * printed and repaired here (the connection is initialised again); fatal with SOAK_C2_STRICT=1. */
 static void check_c2(hal_time_us_t t)
 {
-    dpm_c2_state_t st = dpm_c2_state(&soak.c2);
-    if (st == DPM_C2_OPEN || soak.master_stopped || hal_time_diff(t, soak.c2_pause_until) < 0) {
+    dp_master_c2_state_t st = dp_master_c2_state(&soak.c2);
+    if (st == DP_MASTER_C2_OPEN || soak.master_stopped ||
+        hal_time_diff(t, soak.c2_pause_until) < 0) {
         soak.c2_ok_at = t;
         return;
     }
@@ -368,14 +371,14 @@ static void check_c2(hal_time_us_t t)
         CHECK(!"the master's class-2 connection is stuck");
     }
     fprintf(stderr, "    t=%u: class-2 connection %s for %d ms (%s; on_wire %d, abort_pending %d, "
-            "master waiting %d)%s\n", t, dpm_c2_state_name(st),
-            hal_time_diff(t, soak.c2_ok_at) / 1000, dpm_c2_error(&soak.c2), soak.c2.on_wire,
+            "master waiting %d)%s\n", t, dp_master_c2_state_name(st),
+            hal_time_diff(t, soak.c2_ok_at) / 1000, dp_master_c2_error(&soak.c2), soak.c2.on_wire,
             soak.c2.abort_pending,
-            rig.master.waiting && rig.master.waiting_kind == DPM_WAIT_C2,
+            rig.master.waiting && rig.master.waiting_kind == DP_MASTER_WAIT_C2,
             soak.c2_strict ? "" : ": known finding c2_abort_stuck, connection re-initialised");
-    if (!soak.c2.on_wire || rig.master.waiting_kind != DPM_WAIT_C2 || !rig.master.waiting) {
-        dpm_c2_cfg_t cfg = soak.c2.cfg;
-        dpm_c2_init(&soak.c2, &cfg);
+    if (!soak.c2.on_wire || rig.master.waiting_kind != DP_MASTER_WAIT_C2 || !rig.master.waiting) {
+        dp_master_c2_cfg_t cfg = soak.c2.cfg;
+        dp_master_c2_init(&soak.c2, &cfg);
     }
     soak.c2_ok_at = t;
 }
@@ -387,16 +390,16 @@ static void drive_c2(void)
     if (hal_time_diff(t, soak.c2_pause_until) < 0) {
         return; /* silent */
     }
-    dpm_c2_state_t st = dpm_c2_state(&soak.c2);
-    if (st == DPM_C2_CLOSED) {
-        (void)dpm_c2_open(&soak.c2, NULL, NULL, t);
+    dp_master_c2_state_t st = dp_master_c2_state(&soak.c2);
+    if (st == DP_MASTER_C2_CLOSED) {
+        (void)dp_master_c2_open(&soak.c2, NULL, NULL, t);
         return;
     }
-    if (st != DPM_C2_OPEN) {
+    if (st != DP_MASTER_C2_OPEN) {
         return;
     }
     if (chance(700)) { /* about every 1.4 s; a running call fails */
-        if (dpm_c2_abort(&soak.c2, 0, NULL, NULL, t) == 0) soak.c2_aborts++;
+        if (dp_master_c2_abort(&soak.c2, 0, NULL, NULL, t) == 0) soak.c2_aborts++;
         return;
     }
     if (chance(150)) { /* about every 7 s: silence past Send_Timeout once the call ended */
@@ -408,7 +411,7 @@ static void drive_c2(void)
         soak.c2_pause_until = t + 300000u;
         return;
     }
-    drive_ds47(&soak.p[2], &soak.call2, &soak.req2, dpm_c2_port(&soak.c2));
+    drive_ds47(&soak.p[2], &soak.call2, &soak.req2, dp_master_c2_port(&soak.c2));
 }
 
 static void faults(void)
@@ -486,18 +489,19 @@ static void setup(uint64_t seed)
     dp_master_cfg_t mc = {.address = MASTER, .baud = 1500000, .strict_timing = true,
                           .cycle_us = 1000};
     (void)rig_add_master(&rig, &mc, now());
-    dpm_slave_cfg_t sc = {.address = CARD};
-    sc.prm_len = (uint8_t)dpm_build_prm_dpv1(sc.prm, DFP21B_IDENT, WD_MS, dfp21b_user_prm_default,
-                                            sizeof dfp21b_user_prm_default);
+    dp_master_slave_cfg_t sc = {.address = CARD};
+    sc.prm_len =
+        (uint8_t)dp_master_build_prm_dpv1(sc.prm, DFP21B_IDENT, WD_MS, dfp21b_user_prm_default,
+                                          sizeof dfp21b_user_prm_default);
     sc.cfg[0] = 0xF3;
     sc.cfg[1] = 0xF2;
     sc.cfg_len = 2;
     CHECK_EQ(dp_master_add_slave(&rig.master, &sc), 0);
-    dpm_c2_cfg_t c2c = {.slave = CARD, .address = C2_MASTER, .send_timeout = 10 /* 100 ms */};
-    dpm_c2_init(&soak.c2, &c2c);
+    dp_master_c2_cfg_t c2c = {.slave = CARD, .address = C2_MASTER, .send_timeout = 10 /* 100 ms */};
+    dp_master_c2_init(&soak.c2, &c2c);
     CHECK_EQ(dp_master_add_c2(&rig.master, &soak.c2), 0);
     membus_run_for_us(&rig.bus, 30000);
-    CHECK_EQ(rig.master.slaves[0].phase, DPM_PHASE_DATA_EXCH);
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH);
 }
 
 static void verify(path_t *p, bool strict)

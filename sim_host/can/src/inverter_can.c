@@ -1,5 +1,5 @@
 /* SBus card link on SocketCAN inside the tty runner. See inverter_can.h. */
-#include "sim_can/inverter_can.h"
+#include "can/inverter_can.h"
 
 #include <stdio.h>
 #include <stdlib.h>

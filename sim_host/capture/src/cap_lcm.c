@@ -19,7 +19,7 @@
 
 #include <lcm/eventlog.h>
 
-#include "dfp_lcm_types/telegram_decode.h"
+#include "lcm_bridge/telegram_decode.h"
 
 #define LCM_LOG_SYNC 0xEDA1DA01u
 #define LCM_LOG_HEADER 28u

@@ -1,6 +1,6 @@
 /* The LCM event-log backend of capture.c (internal to the dfp_capture library). A log written by
  * lcm-logger holds events of every channel; the reader hands over the dfp_lcm telegram messages
- * (sim_host/lcm/) of the chosen channel (cap_reader_open_channel) and skips other events. */
+ * (sim_host/lcm_bridge/) of the chosen channel (cap_reader_open_channel) and skips other events. */
 #ifndef CAPTURE_CAP_LCM_H
 #define CAPTURE_CAP_LCM_H
 

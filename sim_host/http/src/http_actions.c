@@ -16,8 +16,8 @@ enum MHD_Result http_submit(http_server_t *srv, struct MHD_Connection *conn, rig
     return http_send_json(conn, 200, o);
 }
 
-static enum MHD_Result param_answer(http_server_t *srv, struct MHD_Connection *conn,
-                                    rig_cmd_t *cmd, const md_param_info_t *p, unsigned timeout)
+static enum MHD_Result param_answer(http_server_t *srv, struct MHD_Connection *conn, rig_cmd_t *cmd,
+                                    const movidrive_param_info_t *p, unsigned timeout)
 {
     rig_ctl_submit(srv->ctl, cmd, timeout);
     if (cmd->status != 200) {
@@ -34,7 +34,7 @@ static enum MHD_Result param_answer(http_server_t *srv, struct MHD_Connection *c
         cJSON_AddStringToObject(o, "error", msg);
     } else {
         char text[128];
-        md_value_text(p, cmd->result, text, sizeof text);
+        movidrive_value_text(p, cmd->result, text, sizeof text);
         cJSON_AddNumberToObject(o, "value", cmd->result);
         cJSON_AddStringToObject(o, "text", text);
     }
@@ -92,7 +92,7 @@ enum MHD_Result http_card_param(http_server_t *srv, struct MHD_Connection *conn,
                                 const request_t *req)
 {
     char err[300];
-    const md_param_info_t *p = md_param_find(name, err, sizeof err);
+    const movidrive_param_info_t *p = movidrive_param_find(name, err, sizeof err);
     if (p == NULL) {
         return http_send_error(conn, 404, "%s", err);
     }
@@ -133,15 +133,15 @@ enum MHD_Result http_master_run(http_server_t *srv, struct MHD_Connection *conn,
 }
 
 /* "param": "P100", 8461 or a name. */
-static const md_param_info_t *param_named(const cJSON *param, char *err, size_t n)
+static const movidrive_param_info_t *param_named(const cJSON *param, char *err, size_t n)
 {
     if (param != NULL && cJSON_IsNumber(param)) {
         char num[24];
         (void)snprintf(num, sizeof num, "%d", param->valueint);
-        return md_param_find(num, err, n);
+        return movidrive_param_find(num, err, n);
     }
     if (param != NULL && cJSON_IsString(param)) {
-        return md_param_find(param->valuestring, err, n);
+        return movidrive_param_find(param->valuestring, err, n);
     }
     (void)snprintf(err, n, "'param' is required: \"P100\", 8461 or a name");
     return NULL;
@@ -169,7 +169,7 @@ static bool via_named(const cJSON *via, rig_param_via_t *out, char *err, size_t 
 }
 
 /* The body of POST /api/v1/master/param into cmd; NULL with a message in err. */
-static const md_param_info_t *master_param_cmd(const cJSON *o, rig_cmd_t *cmd, char *err,
+static const movidrive_param_info_t *master_param_cmd(const cJSON *o, rig_cmd_t *cmd, char *err,
                                                size_t n)
 {
     long slave = 0;
@@ -184,7 +184,8 @@ static const md_param_info_t *master_param_cmd(const cJSON *o, rig_cmd_t *cmd, c
         return NULL;
     }
     cmd->write = strcmp(op->valuestring, "write") == 0;
-    const md_param_info_t *p = param_named(cJSON_GetObjectItemCaseSensitive(o, "param"), err, n);
+    const movidrive_param_info_t *p =
+        param_named(cJSON_GetObjectItemCaseSensitive(o, "param"), err, n);
     if (p == NULL) {
         return NULL;
     }
@@ -217,7 +218,7 @@ enum MHD_Result http_master_param(http_server_t *srv, struct MHD_Connection *con
     }
     char err[300] = "";
     rig_cmd_t cmd = {.type = RIG_CMD_MASTER_PARAM};
-    const md_param_info_t *p = master_param_cmd(o, &cmd, err, sizeof err);
+    const movidrive_param_info_t *p = master_param_cmd(o, &cmd, err, sizeof err);
     cJSON_Delete(o);
     if (p == NULL) {
         return http_send_error(conn, 400, "%s", err);

@@ -73,7 +73,7 @@ bool http_get_int(const cJSON *o, const char *key, bool required, long lo, long 
 }
 
 /* A parameter value: a number or a text the parameter knows ("FIELDBUS", "300.5"). */
-bool http_get_value(const cJSON *o, const md_param_info_t *p, int32_t *raw, char *err,
+bool http_get_value(const cJSON *o, const movidrive_param_info_t *p, int32_t *raw, char *err,
                     size_t n)
 {
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, "value");
@@ -91,7 +91,7 @@ bool http_get_value(const cJSON *o, const md_param_info_t *p, int32_t *raw, char
         return true;
     }
     if (cJSON_IsString(v) && p != NULL) {
-        return md_value_parse(p, v->valuestring, raw, err, n);
+        return movidrive_value_parse(p, v->valuestring, raw, err, n);
     }
     snprintf(err, n, "'value' must be a number or a text");
     return false;

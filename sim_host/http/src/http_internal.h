@@ -11,8 +11,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "dfp_http/http_server.h"
-#include "movidrive/md_names.h"
+#include "http/http_server.h"
+#include "movidrive/movidrive_names.h"
 #include "rig/rig_ctl.h"
 
 #define BODY_MAX 16384u
@@ -51,7 +51,7 @@ rig_snapshot_t *http_snapshot(rig_ctl_t *ctl);
 cJSON *http_json_state(rig_ctl_t *ctl, const rig_snapshot_t *s);
 cJSON *http_json_card(const rig_snap_card_t *c);
 cJSON *http_json_event(const rig_ctl_event_t *e);
-cJSON *http_json_param_info(const md_param_info_t *p);
+cJSON *http_json_param_info(const movidrive_param_info_t *p);
 
 /* ---- the event stream (http_stream.c) ------------------------------------------------------ */
 
@@ -69,7 +69,7 @@ bool http_get_bool(const cJSON *o, const char *key, bool required, bool *out, ch
 bool http_get_int(const cJSON *o, const char *key, bool required, long lo, long hi, long *out,
                   char *err, size_t n);
 /* "value": a number, or a text the parameter knows ("FIELDBUS", "300.5"). */
-bool http_get_value(const cJSON *o, const md_param_info_t *p, int32_t *raw, char *err,
+bool http_get_value(const cJSON *o, const movidrive_param_info_t *p, int32_t *raw, char *err,
                     size_t n);
 
 /* ---- actions (http_actions.c) -------------------------------------------------------------- */

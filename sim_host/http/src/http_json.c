@@ -58,14 +58,14 @@ static cJSON *json_drive(const rig_snap_card_t *c)
     cJSON *d = cJSON_CreateObject();
     char text[200];
     cJSON_AddNumberToObject(d, "control_word", c->control_word);
-    md_control_word_text(c->control_word, text, sizeof text);
+    movidrive_control_word_text(c->control_word, text, sizeof text);
     cJSON_AddStringToObject(d, "control_text", text);
     cJSON_AddNumberToObject(d, "status_word", c->status_word);
-    md_status_word_text(c->status_word, text, sizeof text);
+    movidrive_status_word_text(c->status_word, text, sizeof text);
     cJSON_AddStringToObject(d, "status_text", text);
     cJSON_AddBoolToObject(d, "enabled", c->enabled);
     cJSON_AddNumberToObject(d, "fault", c->fault);
-    const char *fname = md_fault_name(c->fault);
+    const char *fname = movidrive_fault_name(c->fault);
     cJSON_AddStringToObject(d, "fault_name", fname != NULL ? fname : "unknown fault");
     cJSON_AddNumberToObject(d, "speed_setpoint_rpm", c->setpoint_mrpm / 1000.0);
     cJSON_AddNumberToObject(d, "speed_actual_rpm", c->speed_mrpm / 1000.0);
@@ -102,7 +102,7 @@ static void add_diag(cJSON *dp, const rig_snap_card_t *c)
     const uint8_t *ext = c->diag + DP_DIAG_STD_LEN;
     add_hex(diag, "ext", ext, c->diag_len - DP_DIAG_STD_LEN);
     if (c->diag_len - DP_DIAG_STD_LEN >= 2u && ext[0] == 0x02u) {
-        const char *fname = md_fault_name(ext[1]);
+        const char *fname = movidrive_fault_name(ext[1]);
         (void)snprintf(text, sizeof text, "fault %u (%s)", ext[1],
                        fname != NULL ? fname : "unknown fault");
         cJSON_AddStringToObject(diag, "ext_text", text);
@@ -175,7 +175,7 @@ cJSON *http_json_card(const rig_snap_card_t *c)
     return o;
 }
 
-/* Stable identifiers for scripts; dpm_phase_name() is the log's wording. */
+/* Stable identifiers for scripts; dp_master_phase_name() is the log's wording. */
 static const char *phase_id(uint8_t p)
 {
     static const char *const ids[] = {"BACKOFF", "FDL_STATUS", "DIAG_1",    "SET_PRM",
@@ -269,7 +269,7 @@ cJSON *http_json_event(const rig_ctl_event_t *e)
     return o;
 }
 
-cJSON *http_json_param_info(const md_param_info_t *p)
+cJSON *http_json_param_info(const movidrive_param_info_t *p)
 {
     cJSON *o = cJSON_CreateObject();
     cJSON_AddStringToObject(o, "p_number", p->p_number);

@@ -2,7 +2,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "dfp_http/www_files.h"
+#include "http/www_files.h"
 #include "http_internal.h"
 
 #define LOG_LIMIT_DEFAULT 500u
@@ -172,8 +172,8 @@ static enum MHD_Result serve_params(struct MHD_Connection *conn)
 {
     const char *q = MHD_lookup_connection_value(conn, MHD_GET_ARGUMENT_KIND, "q");
     cJSON *a = cJSON_CreateArray();
-    for (size_t i = 0; i < md_param_count(); i++) {
-        const md_param_info_t *p = md_param_at(i);
+    for (size_t i = 0; i < movidrive_param_count(); i++) {
+        const movidrive_param_info_t *p = movidrive_param_at(i);
         char idx[8];
         (void)snprintf(idx, sizeof idx, "%u", p->index);
         if (q == NULL || q[0] == '\0' || strcasestr(p->p_number, q) != NULL ||

@@ -1,4 +1,4 @@
-#include "dfp_http/http_server.h"
+#include "http/http_server.h"
 
 #include <arpa/inet.h>
 #include <errno.h>

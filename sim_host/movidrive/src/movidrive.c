@@ -3,8 +3,8 @@
  * status and the timeout reaction P831. The parts: README.md "Files". */
 #include <string.h>
 
-#include "md_internal.h"
-#include "md_params.h"
+#include "movidrive_internal.h"
+#include "movidrive_params.h"
 
 #define FIELDBUS_TYPE_PROFIBUS_DP 5 /* P091 */
 
@@ -16,12 +16,12 @@ static void apply_fieldbus_values(movidrive_t *md, bool take_p819)
         return;
     }
     const ml_fieldbus_status_t *st = &md->fieldbus;
-    md_set_ram_value(md, MD_IDX_P090, st->pd_config);
-    md_set_ram_value(md, IDX_P091_FIELDBUS_TYPE, FIELDBUS_TYPE_PROFIBUS_DP);
-    md_set_ram_value(md, IDX_P092_BAUD, (int32_t)st->baud);
-    md_set_ram_value(md, IDX_P093_ADDRESS, st->address);
+    movidrive_set_ram_value(md, MOVIDRIVE_IDX_P090, st->pd_config);
+    movidrive_set_ram_value(md, IDX_P091_FIELDBUS_TYPE, FIELDBUS_TYPE_PROFIBUS_DP);
+    movidrive_set_ram_value(md, IDX_P092_BAUD, (int32_t)st->baud);
+    movidrive_set_ram_value(md, IDX_P093_ADDRESS, st->address);
     if (take_p819) {
-        md_set_ram_value(md, MD_IDX_P819_FIELDBUS_TIMEOUT, (int32_t)st->watchdog_ms);
+        movidrive_set_ram_value(md, MOVIDRIVE_IDX_P819_FIELDBUS_TIMEOUT, (int32_t)st->watchdog_ms);
     }
 }
 
@@ -35,30 +35,31 @@ int movidrive_init(movidrive_t *md, const movidrive_cfg_t *cfg, char *err, size_
     err[0] = '\0';
     memset(md, 0, sizeof *md);
     md->cfg = *cfg;
-    md->defs = md_params;
-    md->num_defs = md_params_count;
-    md_load_defaults(md, false);
-    int rc = md_ee_load(md, err, errlen);
+    md->defs = movidrive_params;
+    md->num_defs = movidrive_params_count;
+    movidrive_build_slots(md);
+    movidrive_load_defaults(md, false);
+    int rc = movidrive_ee_load(md, err, errlen);
     if (cfg->sbus_address != 0) {
-        md_set_ram_value(md, IDX_P813_SBUS_ADDRESS, cfg->sbus_address);
+        movidrive_set_ram_value(md, IDX_P813_SBUS_ADDRESS, cfg->sbus_address);
     }
-    md_evaluate(md);
+    movidrive_evaluate(md);
     return rc;
 }
 
 int movidrive_factory_reset(movidrive_t *md)
 {
-    md_load_defaults(md, true);
+    movidrive_load_defaults(md, true);
     apply_fieldbus_values(md, true); /* the defaults replaced the master's watchdog time */
-    int rc = md->cfg.eeprom.ops != NULL ? md_ee_save_all(md) : 0;
-    md_evaluate(md);
+    int rc = md->cfg.eeprom.ops != NULL ? movidrive_ee_save_all(md) : 0;
+    movidrive_evaluate(md);
     return rc;
 }
 
 void movidrive_set_terminal_enable(movidrive_t *md, bool enabled)
 {
     md->cfg.terminal_enable = enabled;
-    md_evaluate(md);
+    movidrive_evaluate(md);
 }
 
 /* P831 once when the timeout begins (protocol.md §C3.6): a fault, or a warning that goes with
@@ -66,18 +67,18 @@ void movidrive_set_terminal_enable(movidrive_t *md, bool enabled)
 static void timeout_began(movidrive_t *md)
 {
     md->fieldbus_timeout = true;
-    uint8_t r = (uint8_t)md_ram_value(md, MD_IDX_P831_FIELDBUS_REACTION);
+    uint8_t r = (uint8_t)movidrive_ram_value(md, MOVIDRIVE_IDX_P831_FIELDBUS_REACTION);
     switch (r) {
     case REACT_NONE:
         break;
     case REACT_IMM_ERROR:
     case REACT_EMERG_ERROR:
     case REACT_RAPID_ERROR:
-        md_raise_fault(md, MD_FAULT_FIELDBUS_TIMEOUT, r);
+        movidrive_raise_fault(md, MOVIDRIVE_FAULT_FIELDBUS_TIMEOUT, r);
         break;
     default: /* DISPLAY ERROR and the .../WARNG reactions */
         md->warning = true;
-        md->warning_code = MD_FAULT_FIELDBUS_TIMEOUT;
+        md->warning_code = MOVIDRIVE_FAULT_FIELDBUS_TIMEOUT;
         md->warning_reaction = r == REACT_DISPLAY ? REACT_NONE : r;
         break;
     }
@@ -87,7 +88,7 @@ static void timeout_began(movidrive_t *md)
 static void timeout_ended(movidrive_t *md)
 {
     md->fieldbus_timeout = false;
-    if (md->warning && md->warning_code == MD_FAULT_FIELDBUS_TIMEOUT) {
+    if (md->warning && md->warning_code == MOVIDRIVE_FAULT_FIELDBUS_TIMEOUT) {
         md->warning = false;
         md->warning_code = 0;
         md->warning_reaction = 0;
@@ -106,5 +107,5 @@ void movidrive_fieldbus_status(movidrive_t *md, const ml_fieldbus_status_t *st)
     } else if (!st->timeout && md->fieldbus_timeout) {
         timeout_ended(md);
     }
-    md_evaluate(md);
+    movidrive_evaluate(md);
 }

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Generate the emulated MOVIDRIVE's tables from the data in sim_host/movidrive/data/.
 
-    gen_params.py            write src/md_params.c, src/md_names_table.c and
+    gen_params.py            write src/movidrive_params.c, src/movidrive_names_table.c and
                              tools/wireshark/movidrive_params.lua
     gen_params.py --check    compare them with what the data gives; exit 1 and print a diff
                              for each file that differs
@@ -15,7 +15,7 @@ Inputs (data/README.md describes the columns):
   control_bits.csv   control word 1 basic block, bit -> meaning when set / when clear
   status_bits.csv    status word 1 basic block, the same
 
-Rules for md_params.c (the emulation's behaviour; see sim_host/movidrive/README.md):
+Rules for movidrive_params.c (the emulation's behaviour; see sim_host/movidrive/README.md):
 - One entry per MOVILINK index, sorted. Where several rows share an index (P010..P013, P031 =
   P600, P160 = P162.n11, ...), the first row wins; the others are aliases, named in a comment.
 - Flags from the SEW access attribute: RO -> read only, N -> non-volatile (EEPROM), R ->
@@ -25,10 +25,11 @@ Rules for md_params.c (the emulation's behaviour; see sim_host/movidrive/README.
   32-bit pattern, compared unsigned). No bound: no check.
 - The first row's enumeration becomes a value mask when it covers exactly min..max (max < 32);
   values named RESERVED are not permitted.
-- H0..H511 (11000 + n) are not table entries: one shared definition md_ipos_def, from the H0 row.
+- H0..H511 (11000 + n) are not table entries: one shared definition movidrive_ipos_def, from the
+  H0 row.
 
-md_names_table.c (names for people) takes, per index, the first row's name and unit and the first
-enumeration any row of that index carries (P031 has only a range, its alias P600 the list).
+movidrive_names_table.c (names for people) takes, per index, the first row's name and unit and the
+first enumeration any row of that index carries (P031 has only a range, its alias P600 the list).
 """
 import argparse
 import csv
@@ -44,8 +45,8 @@ UINT32_MAX = (1 << 32) - 1
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_DATA = os.path.normpath(os.path.join(HERE, "..", "data"))
 DEFAULT_ROOT = os.path.normpath(os.path.join(HERE, "..", "..", ".."))
-OUT_PARAMS = "sim_host/movidrive/src/md_params.c"
-OUT_NAMES = "sim_host/movidrive/src/md_names_table.c"
+OUT_PARAMS = "sim_host/movidrive/src/movidrive_params.c"
+OUT_NAMES = "sim_host/movidrive/src/movidrive_names_table.c"
 OUT_LUA = "tools/wireshark/movidrive_params.lua"
 P_NUMBER = re.compile(r"P(\d{3})(\.[A-Za-z0-9_.()\[\]]+)?$")
 H_NUMBER = re.compile(r"H(\d+)$")
@@ -128,25 +129,25 @@ def flags_of(r):
         raise DataError(f"{r['where']}: access attribute {r['access']!r} not understood")
     flags = []
     if "RO" in attrs:
-        flags.append("MD_PF_READ_ONLY")
+        flags.append("MOVIDRIVE_PF_READ_ONLY")
     if "N" in attrs:
-        flags.append("MD_PF_NON_VOLATILE")
+        flags.append("MOVIDRIVE_PF_NON_VOLATILE")
     if "R" in attrs:
-        flags.append("MD_PF_INHIBIT_REQUIRED")
+        flags.append("MOVIDRIVE_PF_INHIBIT_REQUIRED")
     if "S" in attrs:
-        flags.append("MD_PF_LOCK_EXEMPT")
+        flags.append("MOVIDRIVE_PF_LOCK_EXEMPT")
     if r["volatile"].strip().lower().startswith("no") and "RO" not in attrs:
-        flags.append("MD_PF_NO_VOLATILE")
+        flags.append("MOVIDRIVE_PF_NO_VOLATILE")
     lo, hi = r["lo"], r["hi"]
     unsigned = hi is not None and hi > INT32_MAX
     if unsigned and (lo is None or lo < 0 or hi > UINT32_MAX):
         raise DataError(f"{r['where']}: range {lo}..{hi} fits neither int32 nor uint32")
     if lo is not None:
-        flags.append("MD_PF_HAS_MIN")
+        flags.append("MOVIDRIVE_PF_HAS_MIN")
     if hi is not None:
-        flags.append("MD_PF_HAS_MAX")
+        flags.append("MOVIDRIVE_PF_HAS_MAX")
     if unsigned:
-        flags.append("MD_PF_UNSIGNED")
+        flags.append("MOVIDRIVE_PF_UNSIGNED")
     return flags
 
 
@@ -171,7 +172,7 @@ def build(data):
     if ipos is None or ipos["index"] != 11000 or "RW" not in ipos["access"].split("/"):
         raise DataError("the H0 row (index 11000, RW) is missing")
     if len(first) > 512:
-        raise DataError(f"{len(first)} parameters, MD_MAX_PARAMS is 512")
+        raise DataError(f"{len(first)} parameters, MOVIDRIVE_MAX_PARAMS is 512")
     seen_p = {}
     for r in rows:
         key = r["p_number"].upper()
@@ -186,7 +187,8 @@ def build(data):
             flags_of(a)
         lo, hi = r["lo"], r["hi"]
         mask = 0
-        if "MD_PF_READ_ONLY" not in flags and lo is not None and hi is not None and r["enums"]:
+        if ("MOVIDRIVE_PF_READ_ONLY" not in flags and lo is not None and hi is not None
+                and r["enums"]):
             values = {v for v, _ in r["enums"]}
             if min(values) == lo and max(values) == hi and hi < 32:
                 for v, label in r["enums"]:
@@ -239,11 +241,11 @@ def render_params(data):
     w(" *")
     w(" * Per entry: index, min, max, default (raw bus values), quantity index, conversion index,")
     w(" * flags, enumeration mask (bit n set = value n defined; 0 = no enumeration known). */")
-    w('#include "md_params.h"')
+    w('#include "movidrive_params.h"')
     w("")
     w("#include <stdint.h>")
     w("")
-    w("const md_param_def_t md_params[] = {")
+    w("const movidrive_param_def_t movidrive_params[] = {")
     for e in table:
         r = e["row"]
         flags = " | ".join(e["flags"]) if e["flags"] else "0"
@@ -253,19 +255,21 @@ def render_params(data):
         w(f"    /* {comment(text)} */")
         if r["note"]:
             w(f"    /* {comment(r['note'])} */")
-        u = "MD_PF_UNSIGNED" in e["flags"]
+        u = "MOVIDRIVE_PF_UNSIGNED" in e["flags"]
         w(f"    {{{r['index']}, {c_int(e['lo'], u)}, {c_int(e['hi'], u)}, "
           f"{c_int(e['default'], u)}, {r['quantity']}, {r['conversion']}, {flags}, "
           f"0x{e['mask']:08X}u}},")
     w("};")
     w("")
-    w("const size_t md_params_count = sizeof md_params / sizeof md_params[0];")
+    w("const size_t movidrive_params_count = "
+      "sizeof movidrive_params / sizeof movidrive_params[0];")
     w("")
     w(f"/* {comment(ipos['p_number'])}: {comment(ipos['name'])}.")
     w(" * H0..H511 at 11000 + n: int32, read/write, write volatile allowed, kept in EEPROM by a")
     w(" * (non-volatile) write. */")
-    w("const md_param_def_t md_ipos_def = {11000, INT32_MIN, INT32_MAX, 0, 0, 0,")
-    w("                                    MD_PF_NON_VOLATILE | MD_PF_HAS_MIN | MD_PF_HAS_MAX, 0u};")
+    w("const movidrive_param_def_t movidrive_ipos_def = {11000, INT32_MIN, INT32_MAX, 0, 0, 0,")
+    w("                                    "
+      "MOVIDRIVE_PF_NON_VOLATILE | MOVIDRIVE_PF_HAS_MIN | MOVIDRIVE_PF_HAS_MAX, 0u};")
     return "\n".join(out) + "\n"
 
 
@@ -318,7 +322,7 @@ def render_names(data):
     out = []
     w = out.append
     w(HEADER + " */")
-    w('#include "md_names_table.h"')
+    w('#include "movidrive_names_table.h"')
     w("")
     w("#include <stddef.h>")
     w("#include <stdint.h>")
@@ -329,30 +333,31 @@ def render_names(data):
         key = tuple(e["enums"])
         if not key or key in enum_names:
             continue
-        name = f"md_enum_{len(enum_names)}"
+        name = f"movidrive_enum_{len(enum_names)}"
         enum_names[key] = name
-        w(f"static const md_enum_text_t {name}[] = {{")
+        w(f"static const movidrive_enum_text_t {name}[] = {{")
         for v, label in key:
             w(f"    {{{v}, {c_str(label)}}},")
         w("};")
     w("")
     w("/* Sorted by P-number; one row per MOVILINK index (the first of the list). */")
-    w("const md_param_info_t md_param_infos[] = {")
+    w("const movidrive_param_info_t movidrive_param_infos[] = {")
     for e in order:
         r = e["row"]
         key = tuple(e["enums"])
         en = f"{enum_names[key]}, {len(key)}" if key else "NULL, 0"
-        ro = "MD_PF_READ_ONLY" in e["flags"]
-        nv = "MD_PF_NON_VOLATILE" in e["flags"]
-        inh = "MD_PF_INHIBIT_REQUIRED" in e["flags"]
+        ro = "MOVIDRIVE_PF_READ_ONLY" in e["flags"]
+        nv = "MOVIDRIVE_PF_NON_VOLATILE" in e["flags"]
+        inh = "MOVIDRIVE_PF_INHIBIT_REQUIRED" in e["flags"]
         w(f"    {{{c_str(r['p_number'])}, {r['index']}, {c_str(r['name'])}, {c_str(r['unit'])}, "
           f"{r['scale_exp']}, {en}, {str(ro).lower()}, {str(nv).lower()}, {str(inh).lower()}}},")
     w("};")
     w("")
-    w("const size_t md_param_infos_count = sizeof md_param_infos / sizeof md_param_infos[0];")
+    w("const size_t movidrive_param_infos_count = "
+      "sizeof movidrive_param_infos / sizeof movidrive_param_infos[0];")
     w("")
-    w("/* Positions in md_param_infos, sorted by index (for the binary search by index). */")
-    w("const uint16_t md_param_infos_by_index[] = {")
+    w("/* Positions in movidrive_param_infos, sorted by index (for the binary search by index). */")
+    w("const uint16_t movidrive_param_infos_by_index[] = {")
     where = {id(e["row"]): n for n, e in enumerate(order)}
     line = "   "
     for i in sorted(by_index):
@@ -365,24 +370,25 @@ def render_names(data):
     w("};")
     w("")
     w("/* The other P-numbers of an index (P011 = P010's index, P600 = P031's ...). */")
-    w("const md_param_alias_t md_param_aliases[] = {")
+    w("const movidrive_param_alias_t movidrive_param_aliases[] = {")
     for e in order:
         for a in e["aliases"]:
             w(f"    {{{c_str(a['p_number'])}, {a['index']}}},")
     w("};")
     w("")
-    w("const size_t md_param_aliases_count = sizeof md_param_aliases / sizeof md_param_aliases[0];")
+    w("const size_t movidrive_param_aliases_count = "
+      "sizeof movidrive_param_aliases / sizeof movidrive_param_aliases[0];")
     w("")
-    for name, codes in (("md_fault_names", faults), ("md_unit_status_names", status)):
-        w(f"const md_code_name_t {name}[] = {{")
+    for name, codes in (("movidrive_fault_names", faults), ("movidrive_unit_status_names", status)):
+        w(f"const movidrive_code_name_t {name}[] = {{")
         for c, text in codes:
             w(f"    {{{c}, {c_str(text)}}},")
         w("};")
         w("")
         w(f"const size_t {name}_count = sizeof {name} / sizeof {name}[0];")
         w("")
-    for name, bits in (("md_control_bits", cw), ("md_status_bits", sw)):
-        w(f"const md_bit_text_t {name}[8] = {{")
+    for name, bits in (("movidrive_control_bits", cw), ("movidrive_status_bits", sw)):
+        w(f"const movidrive_bit_text_t {name}[8] = {{")
         for s, c in bits:
             w(f"    {{{c_str(s)}, {c_str(c)}}},")
         w("};")

@@ -379,7 +379,7 @@ static void dpv1_text(sbuf_t *b, const uint8_t *d, size_t len, bool reply)
         put(b, "%s negative", name);
         if (len >= 4u) {
             put(b, ": decode 0x%02X, code 0x%02X (%s), 0x%02X", d[1], d[2],
-                dpm_v1_error_text(d[2]), d[3]);
+                dp_master_v1_error_text(d[2]), d[3]);
         }
         return;
     }

@@ -166,21 +166,21 @@ typedef struct gen {
     cap_writer_t w;
     bool write_failed;
     /* cyclic channel */
-    dpm_param_t pc;
+    dp_master_param_t pc;
     bool pc_synced;
     uint32_t pc_next_cycle;
     uint32_t pc_started_cycle;
     unsigned pc_step;
     uint8_t out[14];
     /* DP-V1 */
-    dpm_call_t call;
+    dp_master_call_t call;
     bool call_running;
-    dpm_ds47_req_t req;
+    dp_master_ds47_req_t req;
     unsigned ds47_step;
     uint32_t ds47_next_cycle;
-    dpm_c2_t c2;
+    dp_master_c2_t c2;
     int c2_stage; /* 0 not yet, 1 opening, 2 call running, 3 aborting, 4 done */
-    dpm_call_t c2_call;
+    dp_master_call_t c2_call;
     bool c2_open_done;
     bool c2_open_ok;
     bool c2_abort_done;
@@ -228,22 +228,22 @@ static void wake_master(gen_t *g)
     membus_wake(g->rig.master_port);
 }
 
-static dpm_slave_t *card_slave(gen_t *g)
+static dp_master_slave_t *card_slave(gen_t *g)
 {
     return &g->master->slaves[0];
 }
 
-static void slave_cfg(const gen_t *g, dpm_slave_cfg_t *sc, uint8_t address, const uint8_t *cfg,
-                      size_t len)
+static void slave_cfg(const gen_t *g, dp_master_slave_cfg_t *sc, uint8_t address,
+                      const uint8_t *cfg, size_t len)
 {
     memset(sc, 0, sizeof *sc);
     sc->address = address;
     if (g->opt.dpv1) {
-        sc->prm_len = (uint8_t)dpm_build_prm_dpv1(sc->prm, DFP21B_IDENT, GEN_WATCHDOG_MS,
+        sc->prm_len = (uint8_t)dp_master_build_prm_dpv1(sc->prm, DFP21B_IDENT, GEN_WATCHDOG_MS,
                                                   dfp21b_user_prm_default,
                                                   sizeof dfp21b_user_prm_default);
     } else {
-        sc->prm_len = (uint8_t)dpm_build_prm(sc->prm, DFP21B_IDENT, GEN_WATCHDOG_MS,
+        sc->prm_len = (uint8_t)dp_master_build_prm(sc->prm, DFP21B_IDENT, GEN_WATCHDOG_MS,
                                              dfp21b_user_prm_default,
                                              sizeof dfp21b_user_prm_default);
     }
@@ -281,9 +281,9 @@ static pc_service_t pc_round(unsigned step)
 }
 
 /* The service in progress: counted when answered, given up when lost. */
-static void pc_watch(gen_t *g, const dpm_slave_t *s)
+static void pc_watch(gen_t *g, const dp_master_slave_t *s)
 {
-    if (dpm_param_done(&g->pc, s->inputs)) {
+    if (dp_master_param_done(&g->pc, s->inputs)) {
         g->res->param_services++;
         if ((s->inputs[0] & ML_MGMT_ERROR) != 0u) {
             g->res->param_errors++;
@@ -297,8 +297,8 @@ static void pc_watch(gen_t *g, const dpm_slave_t *s)
 
 static void param_channel(gen_t *g)
 {
-    dpm_slave_t *s = card_slave(g);
-    if (g->opt.param_every == 0u || s->phase != DPM_PHASE_DATA_EXCH || s->inputs_len < 8u) {
+    dp_master_slave_t *s = card_slave(g);
+    if (g->opt.param_every == 0u || s->phase != DP_MASTER_PHASE_DATA_EXCH || s->inputs_len < 8u) {
         g->pc_synced = false;
         return;
     }
@@ -307,7 +307,7 @@ static void param_channel(gen_t *g)
         if (((s->inputs[0] ^ g->out[0]) & ML_MGMT_HANDSHAKE) != 0u && g->pc.busy) {
             return;
         }
-        dpm_param_sync(&g->pc, s->inputs);
+        dp_master_param_sync(&g->pc, s->inputs);
         g->pc_synced = true;
         g->pc_next_cycle = s->cycles + g->opt.param_every;
     }
@@ -320,12 +320,12 @@ static void param_channel(gen_t *g)
     }
     pc_service_t p = pc_round(g->pc_step);
     g->pc_step++;
-    dpm_param_start(&g->pc, p.svc, p.index, p.value, g->out);
+    dp_master_param_start(&g->pc, p.svc, p.index, p.value, g->out);
     dp_master_set_outputs(g->master, 0, g->out, sizeof g->out);
     g->pc_started_cycle = s->cycles;
 }
 
-static void ds47_done(void *ctx, dpm_call_t *call, hal_time_us_t now)
+static void ds47_done(void *ctx, dp_master_call_t *call, hal_time_us_t now)
 {
     gen_t *g = ctx;
     (void)call;
@@ -336,7 +336,7 @@ static void ds47_done(void *ctx, dpm_call_t *call, hal_time_us_t now)
 
 /* Step k of the class-1 round of six: data set 47 requests (one the inverter refuses), then
  * I&M0 (step 5: the request stays empty). */
-static void ds47_round(dpm_ds47_req_t *req, unsigned step)
+static void ds47_round(dp_master_ds47_req_t *req, unsigned step)
 {
     uint32_t k = step / 6u;
     memset(req, 0, sizeof *req);
@@ -345,25 +345,25 @@ static void ds47_round(dpm_ds47_req_t *req, unsigned step)
     switch (step % 6u) {
     case 0:
         req->id = DS47_ID_MOVILINK;
-        req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
+        req->p[0] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
         break;
     case 1:
         req->id = DS47_ID_REQUEST;
-        req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489};
+        req->p[0] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489};
         break;
     case 2:
         req->id = DS47_ID_MOVILINK;
-        req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE,
+        req->p[0] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_WRITE_VOLATILE,
                                        .number = 11000, .value = 500u + k};
         break;
     case 3:
         req->id = DS47_ID_CHANGE;
-        req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489,
+        req->p[0] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_VALUE, .number = 8489,
                                        .value = 2000u + k};
         break;
     case 4: /* a parameter that does not exist: a negative data set 47 response */
         req->id = DS47_ID_MOVILINK;
-        req->p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 1};
+        req->p[0] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 1};
         break;
     default:
         break;
@@ -372,8 +372,8 @@ static void ds47_round(dpm_ds47_req_t *req, unsigned step)
 
 static void dpv1_class1(gen_t *g)
 {
-    dpm_slave_t *s = card_slave(g);
-    if (!g->opt.dpv1 || g->call_running || s->phase != DPM_PHASE_DATA_EXCH ||
+    dp_master_slave_t *s = card_slave(g);
+    if (!g->opt.dpv1 || g->call_running || s->phase != DP_MASTER_PHASE_DATA_EXCH ||
         s->cycles < g->ds47_next_cycle || dp_master_c1_busy(g->master, 0)) {
         return;
     }
@@ -382,9 +382,10 @@ static void dpv1_class1(gen_t *g)
     ds47_round(&g->req, g->ds47_step);
     int rc;
     if (g->ds47_step % 6u == 5u) {
-        rc = dpm_im0_start(&g->call, dp_master_c1_port(g->master, 0), ds47_done, g, now_us(g));
+        rc =
+            dp_master_im0_start(&g->call, dp_master_c1_port(g->master, 0), ds47_done, g, now_us(g));
     } else {
-        rc = dpm_ds47_start(&g->call, dp_master_c1_port(g->master, 0), &g->req, ds47_done, g,
+        rc = dp_master_ds47_start(&g->call, dp_master_c1_port(g->master, 0), &g->req, ds47_done, g,
                             now_us(g));
     }
     g->ds47_step++;
@@ -394,7 +395,7 @@ static void dpv1_class1(gen_t *g)
     }
 }
 
-static void c2_opened(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void c2_opened(void *ctx, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
     gen_t *g = ctx;
     (void)now;
@@ -402,7 +403,7 @@ static void c2_opened(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
     g->c2_open_ok = r->ok;
 }
 
-static void c2_aborted(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void c2_aborted(void *ctx, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
     gen_t *g = ctx;
     (void)r;
@@ -418,9 +419,10 @@ static int c2_read(gen_t *g)
     }
     g->res->c2_connections++;
     memset(&g->c2_call, 0, sizeof g->c2_call);
-    dpm_ds47_req_t q = {.ref = 0x42, .id = DS47_ID_MOVILINK, .n = 1};
-    q.p[0] = (dpm_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
-    if (dpm_ds47_start(&g->c2_call, dpm_c2_port(&g->c2), &q, NULL, NULL, now_us(g)) != 0) {
+    dp_master_ds47_req_t q = {.ref = 0x42, .id = DS47_ID_MOVILINK, .n = 1};
+    q.p[0] = (dp_master_ds47_param_t){.attribute = DS47_ATTR_ML_READ, .number = 8300};
+    if (dp_master_ds47_start(&g->c2_call, dp_master_c2_port(&g->c2), &q, NULL, NULL,
+                             now_us(g)) != 0) {
         return 4;
     }
     wake_master(g);
@@ -430,11 +432,12 @@ static int c2_read(gen_t *g)
 /* One class-2 connection in the middle of the run: Initiate, a data set 47 read, Abort. */
 static void dpv1_class2(gen_t *g)
 {
-    dpm_slave_t *s = card_slave(g);
+    dp_master_slave_t *s = card_slave(g);
     switch (g->c2_stage) {
     case 0:
-        if (g->opt.dpv1 && s->cycles >= g->opt.cycles / 3u && s->phase == DPM_PHASE_DATA_EXCH &&
-            dpm_c2_open(&g->c2, c2_opened, g, now_us(g)) == 0) {
+        if (g->opt.dpv1 && s->cycles >= g->opt.cycles / 3u &&
+            s->phase == DP_MASTER_PHASE_DATA_EXCH &&
+            dp_master_c2_open(&g->c2, c2_opened, g, now_us(g)) == 0) {
             g->c2_stage = 1;
             wake_master(g);
         }
@@ -445,9 +448,9 @@ static void dpv1_class2(gen_t *g)
         }
         return;
     case 2:
-        if (!dpm_call_done(&g->c2_call)) return;
+        if (!dp_master_call_done(&g->c2_call)) return;
         g->res->ds47_calls++;
-        if (dpm_c2_abort(&g->c2, 0, c2_aborted, g, now_us(g)) != 0) {
+        if (dp_master_c2_abort(&g->c2, 0, c2_aborted, g, now_us(g)) != 0) {
             g->c2_stage = 4;
             return;
         }
@@ -455,7 +458,7 @@ static void dpv1_class2(gen_t *g)
         wake_master(g);
         return;
     case 3:
-        if (g->c2_abort_done || dpm_c2_state(&g->c2) == DPM_C2_CLOSED) g->c2_stage = 4;
+        if (g->c2_abort_done || dp_master_c2_state(&g->c2) == DP_MASTER_C2_CLOSED) g->c2_stage = 4;
         return;
     default:
         return;
@@ -469,14 +472,14 @@ static bool c2_busy(const gen_t *g)
 
 static void reconfigure(gen_t *g, const uint8_t *cfg, size_t len)
 {
-    dpm_slave_cfg_t sc;
+    dp_master_slave_cfg_t sc;
     slave_cfg(g, &sc, g->opt.address, cfg, len);
     dp_master_reconfigure(g->master, 0, &sc, now_us(g));
     wake_master(g);
 }
 
 /* The master falls silent until the card's watchdog expired, then starts again. */
-static void fault_silence(gen_t *g, const dpm_slave_t *s)
+static void fault_silence(gen_t *g, const dp_master_slave_t *s)
 {
     if (g->fault_stage == 0) {
         if (s->cycles >= g->opt.cycles / 3u && !g->master->waiting && !g->call_running &&
@@ -494,10 +497,10 @@ static void fault_silence(gen_t *g, const dpm_slave_t *s)
 }
 
 /* Global_Control Clear_Data, then Operate. */
-static void fault_clear_data(gen_t *g, const dpm_slave_t *s)
+static void fault_clear_data(gen_t *g, const dp_master_slave_t *s)
 {
     if (g->fault_stage == 2) {
-        if (s->cycles >= g->opt.cycles / 2u && s->phase == DPM_PHASE_DATA_EXCH) {
+        if (s->cycles >= g->opt.cycles / 2u && s->phase == DP_MASTER_PHASE_DATA_EXCH) {
             dp_master_global_control(g->master, DP_GC_CLEAR_DATA, 0);
             wake_master(g);
             g->fault_stage = 3;
@@ -511,7 +514,7 @@ static void fault_clear_data(gen_t *g, const dpm_slave_t *s)
 }
 
 /* A configuration the card refuses, then the right one again. */
-static void fault_wrong_cfg(gen_t *g, const dpm_slave_t *s)
+static void fault_wrong_cfg(gen_t *g, const dp_master_slave_t *s)
 {
     if (g->fault_stage == 4) {
         if (s->cycles >= 2u * g->opt.cycles / 3u && !g->master->waiting && !g->call_running) {
@@ -532,7 +535,7 @@ static void fault_wrong_cfg(gen_t *g, const dpm_slave_t *s)
 static void faults(gen_t *g)
 {
     if (!g->opt.faults) return;
-    const dpm_slave_t *s = card_slave(g);
+    const dp_master_slave_t *s = card_slave(g);
     switch (g->fault_stage) {
     case 0:
     case 1:
@@ -609,7 +612,7 @@ static int assemble(gen_t *g, char *err, size_t errlen)
  * (the drive follows once P100/P101 say FIELDBUS). */
 static void configure_master(gen_t *g)
 {
-    dpm_slave_cfg_t sc;
+    dp_master_slave_cfg_t sc;
     slave_cfg(g, &sc, g->opt.address, cfg_param_3pd, sizeof cfg_param_3pd);
     dp_master_add_slave(g->master, &sc);
     if (g->opt.foreign) {
@@ -617,8 +620,8 @@ static void configure_master(gen_t *g)
         dp_master_add_slave(g->master, &sc);
     }
     if (g->opt.dpv1) {
-        dpm_c2_cfg_t cc = {.slave = g->opt.address, .address = 1};
-        dpm_c2_init(&g->c2, &cc);
+        dp_master_c2_cfg_t cc = {.slave = g->opt.address, .address = 1};
+        dp_master_c2_init(&g->c2, &cc);
         dp_master_add_c2(g->master, &g->c2);
     }
     g->out[8] = 0x00;
@@ -630,7 +633,7 @@ static void configure_master(gen_t *g)
 
 static bool finished(gen_t *g)
 {
-    const dpm_slave_t *s = card_slave(g);
+    const dp_master_slave_t *s = card_slave(g);
     bool dpv1_busy = g->opt.dpv1 && (g->call_running || g->c2_stage == 2 || g->c2_stage == 3);
     return s->cycles >= g->opt.cycles && g->fault_stage != 1 && quiet(g) && !dpv1_busy;
 }
@@ -638,12 +641,12 @@ static bool finished(gen_t *g)
 /* One step of the script after a slice of bus time. */
 static void script_step(gen_t *g, uint32_t *last_progress)
 {
-    const dpm_slave_t *s = card_slave(g);
+    const dp_master_slave_t *s = card_slave(g);
     param_channel(g);
     dpv1_class1(g);
     dpv1_class2(g);
     faults(g);
-    if (g->opt.foreign && s->phase == DPM_PHASE_DATA_EXCH &&
+    if (g->opt.foreign && s->phase == DP_MASTER_PHASE_DATA_EXCH &&
         s->cycles >= g->foreign_cycle + GEN_FOREIGN_EVERY && s->cycles < g->opt.cycles) {
         g->foreign_cycle = s->cycles;
         g->foreign.wanted = true;
@@ -660,12 +663,12 @@ static int run_cycles(gen_t *g, char *err, size_t errlen)
 {
     uint64_t limit_ns = 10000000000ull + (uint64_t)g->opt.cycles * 50000000ull;
     uint32_t last_progress = 0;
-    const dpm_slave_t *s = card_slave(g);
+    const dp_master_slave_t *s = card_slave(g);
     while (!finished(g)) {
         if (bus_ns(g) > limit_ns) {
             (void)snprintf(err, errlen, "the card did not complete %u Data_Exchange cycles (%u "
                            "done, master phase %s)", g->opt.cycles, s->cycles,
-                           dpm_phase_name(s->phase));
+                           dp_master_phase_name(s->phase));
             return -1;
         }
         /* Short steps while finishing, so the capture ends right after the last answer. */

@@ -5,7 +5,7 @@
 
 #include "dp_master/param_channel.h"
 #include "dpv1/dpv1_wire.h"
-#include "movidrive/md_names.h"
+#include "movidrive/movidrive_names.h"
 #include "movidrive/movidrive.h"
 #include "movilink/movilink_wire.h"
 
@@ -19,11 +19,12 @@
 /* "P100 setpoint source (8461)", "H0 (11000)", "index 1". */
 static void param_name(uint16_t index, char *out, size_t max)
 {
-    const md_param_info_t *p = md_param_info(index);
+    const movidrive_param_info_t *p = movidrive_param_info(index);
     if (p != NULL) {
         (void)snprintf(out, max, "%s %s (%u)", p->p_number, p->name, index);
-    } else if (index >= MD_IDX_IPOS_H0 && index < MD_IDX_IPOS_H0 + MD_IPOS_VARS) {
-        (void)snprintf(out, max, "H%u (%u)", index - MD_IDX_IPOS_H0, index);
+    } else if (index >= MOVIDRIVE_IDX_IPOS_H0 &&
+               index < MOVIDRIVE_IDX_IPOS_H0 + MOVIDRIVE_IPOS_VARS) {
+        (void)snprintf(out, max, "H%u (%u)", index - MOVIDRIVE_IDX_IPOS_H0, index);
     } else {
         (void)snprintf(out, max, "index %u", index);
     }
@@ -33,10 +34,10 @@ static void param_name(uint16_t index, char *out, size_t max)
  * plain number for the other services (limits, scaling, attributes). */
 static void param_value(uint16_t index, uint8_t service, uint32_t raw, char *out, size_t max)
 {
-    const md_param_info_t *p = md_param_info(index);
+    const movidrive_param_info_t *p = movidrive_param_info(index);
     if (p != NULL && (service == ML_SVC_READ || service == ML_SVC_WRITE ||
                       service == ML_SVC_WRITE_VOLATILE)) {
-        (void)md_value_text(p, (int32_t)raw, out, max);
+        (void)movidrive_value_text(p, (int32_t)raw, out, max);
     } else {
         (void)snprintf(out, max, "%d", (int32_t)raw);
     }

@@ -41,7 +41,7 @@ static void on_param(void *ctx, uint8_t channel, const uint8_t req[ML_TELEGRAM_L
     FOR_TAPS(c->rig, param, c->index, channel, req, rsp);
 }
 
-static void on_master_event(void *ctx, const dpm_event_t *ev)
+static void on_master_event(void *ctx, const dp_master_event_t *ev)
 {
     rig_t *r = ctx;
     FOR_TAPS(r, master_event, ev);
@@ -123,9 +123,9 @@ static void card_rx(void *ctx, uint8_t byte, uint8_t flags, hal_time_us_t t)
 }
 
 /* The in-memory bus's telegram path (membus.h): the timestamps rx_char would have had. */
-static dpm_whole_t whole_of(const membus_telegram_t *tg)
+static dp_master_whole_t whole_of(const membus_telegram_t *tg)
 {
-    return (dpm_whole_t){.data = tg->data, .len = (uint16_t)tg->len, .char_ns = tg->char_ns,
+    return (dp_master_whole_t){.data = tg->data, .len = (uint16_t)tg->len, .char_ns = tg->char_ns,
                          .first_t = membus_char_us(tg, 1u),
                          .before_last_t = membus_char_us(tg, tg->len > 1u ? tg->len - 1u : 1u),
                          .end_t = membus_char_us(tg, tg->len)};
@@ -140,16 +140,16 @@ static bool card_hears(const rig_card_t *c)
 static bool card_takes_whole(void *ctx, const membus_telegram_t *tg)
 {
     rig_card_t *c = ctx;
-    dpm_whole_t w = whole_of(tg);
-    return !card_hears(c) || dpm_whole_clean(&c->cs.card.dp.rx, &w);
+    dp_master_whole_t w = whole_of(tg);
+    return !card_hears(c) || dp_master_whole_clean(&c->cs.card.dp.rx, &w);
 }
 
 static void card_rx_whole(void *ctx, const membus_telegram_t *tg)
 {
     rig_card_t *c = ctx;
     if (card_hears(c)) {
-        dpm_whole_t w = whole_of(tg);
-        fdl_rx_telegram_t t = dpm_whole_take(&c->cs.card.dp.rx, &w);
+        dp_master_whole_t w = whole_of(tg);
+        fdl_rx_telegram_t t = dp_master_whole_take(&c->cs.card.dp.rx, &w);
         dfp21b_rx_telegram(&c->cs.card, &t);
     }
 }
@@ -157,13 +157,13 @@ static void card_rx_whole(void *ctx, const membus_telegram_t *tg)
 static bool master_takes_whole(void *ctx, const membus_telegram_t *tg)
 {
     dp_master_t *m = ctx;
-    dpm_whole_t w = whole_of(tg);
-    return dpm_whole_clean(&m->rx, &w);
+    dp_master_whole_t w = whole_of(tg);
+    return dp_master_whole_clean(&m->rx, &w);
 }
 
 static void master_rx_whole(void *ctx, const membus_telegram_t *tg)
 {
-    dpm_whole_t w = whole_of(tg);
+    dp_master_whole_t w = whole_of(tg);
     dp_master_rx_telegram(ctx, &w);
 }
 

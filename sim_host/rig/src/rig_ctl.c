@@ -192,13 +192,13 @@ static void snap_card(const rig_card_t *rc, rig_snap_card_t *s)
         s->setpoint_mrpm = md->speed_setpoint_mrpm;
         s->speed_mrpm = md->speed_actual_mrpm;
         s->current_mpct = md->current_mpct;
-        s->ramp_up_ms = movidrive_read_value(md, MD_IDX_P130_RAMP_UP, &v) ? v : 0;
-        s->ramp_down_ms = movidrive_read_value(md, MD_IDX_P131_RAMP_DOWN, &v) ? v : 0;
+        s->ramp_up_ms = movidrive_read_value(md, MOVIDRIVE_IDX_P130_RAMP_UP, &v) ? v : 0;
+        s->ramp_down_ms = movidrive_read_value(md, MOVIDRIVE_IDX_P131_RAMP_DOWN, &v) ? v : 0;
         s->di00 = md->cfg.terminal_enable;
     }
 }
 
-static void snap_slave(const dpm_slave_t *sl, rig_snap_slave_t *s)
+static void snap_slave(const dp_master_slave_t *sl, rig_snap_slave_t *s)
 {
     memset(s, 0, sizeof *s);
     s->address = sl->cfg.address;
@@ -328,8 +328,8 @@ static void run_card_param(rig_card_t *rc, rig_cmd_t *cmd)
     uint8_t service = cmd->type == RIG_CMD_PARAM_READ ? ML_SVC_READ
                       : cmd->flag                     ? ML_SVC_WRITE_VOLATILE
                                                       : ML_SVC_WRITE;
-    dpm_param_t build = {0};
-    dpm_param_start(&build, service, cmd->index, (uint32_t)cmd->value, req);
+    dp_master_param_t build = {0};
+    dp_master_param_start(&build, service, cmd->index, (uint32_t)cmd->value, req);
     movidrive_param(&rc->cs.md, req, rsp);
     cmd->status = 200;
     if ((rsp[0] & ML_MGMT_ERROR) != 0u) {
@@ -343,8 +343,8 @@ static void run_card_param(rig_card_t *rc, rig_cmd_t *cmd)
 
 static void set_slave_words(dp_master_t *m, unsigned idx, const rig_cmd_t *cmd)
 {
-    dpm_slave_t *sl = &m->slaves[idx];
-    uint8_t out[DPM_MAX_IO];
+    dp_master_slave_t *sl = &m->slaves[idx];
+    uint8_t out[DP_MASTER_MAX_IO];
     memcpy(out, sl->outputs, sl->out_len);
     size_t base = rig_ctl_has_param_channel(sl) ? ML_TELEGRAM_LEN : 0u;
     for (unsigned w = 0; w < cmd->num_words; w++) {
@@ -364,7 +364,7 @@ static void run_master_outputs(dp_master_t *m, rig_cmd_t *cmd)
         rig_cmd_fail(cmd, 404, "the master has no slave with that address");
         return;
     }
-    dpm_slave_t *sl = &m->slaves[idx];
+    dp_master_slave_t *sl = &m->slaves[idx];
     if (cmd->raw_given) {
         if (cmd->raw_len != sl->out_len) {
             cmd->status = 400;

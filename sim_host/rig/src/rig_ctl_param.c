@@ -15,7 +15,7 @@ int rig_ctl_slave_index(const dp_master_t *m, uint8_t address)
     return -1;
 }
 
-bool rig_ctl_has_param_channel(const dpm_slave_t *sl)
+bool rig_ctl_has_param_channel(const dp_master_slave_t *sl)
 {
     dfp21b_pd_cfg_t pd;
     return dfp21b_check_cfg(sl->cfg.cfg, sl->cfg.cfg_len, &pd) && pd.param_channel;
@@ -26,24 +26,24 @@ bool rig_ctl_has_param_channel(const dpm_slave_t *sl)
 static bool start_channel(rig_ctl_t *c, rig_cmd_t *cmd, unsigned idx)
 {
     rig_t *r = c->rig;
-    dpm_slave_t *sl = &r->master.slaves[idx];
+    dp_master_slave_t *sl = &r->master.slaves[idx];
     if (!rig_ctl_has_param_channel(sl) || sl->out_len < ML_TELEGRAM_LEN) {
         rig_cmd_fail(cmd, 409, "the slave's configuration has no parameter channel (F3/B7)");
         return false;
     }
     uint8_t service = !cmd->write ? ML_SVC_READ : cmd->flag ? ML_SVC_WRITE_VOLATILE
                                                              : ML_SVC_WRITE;
-    uint8_t out[DPM_MAX_IO];
+    uint8_t out[DP_MASTER_MAX_IO];
     memcpy(out, sl->outputs, sl->out_len);
-    dpm_param_sync(&c->param, sl->inputs);
-    dpm_param_start(&c->param, service, cmd->index, (uint32_t)cmd->value, out);
+    dp_master_param_sync(&c->param, sl->inputs);
+    dp_master_param_start(&c->param, service, cmd->index, (uint32_t)cmd->value, out);
     dp_master_set_outputs(&r->master, idx, out, sl->out_len);
     return true;
 }
 
-static bool advance_channel(rig_ctl_t *c, rig_cmd_t *cmd, const dpm_slave_t *sl)
+static bool advance_channel(rig_ctl_t *c, rig_cmd_t *cmd, const dp_master_slave_t *sl)
 {
-    if (!dpm_param_done(&c->param, sl->inputs)) {
+    if (!dp_master_param_done(&c->param, sl->inputs)) {
         return false;
     }
     cmd->status = 200;
@@ -58,7 +58,7 @@ static bool advance_channel(rig_ctl_t *c, rig_cmd_t *cmd, const dpm_slave_t *sl)
 
 /* ---- data set 47 (class 1 or class 2) ------------------------------------------------------ */
 
-static bool start_ds47(rig_ctl_t *c, const rig_cmd_t *cmd, dpm_acyc_port_t port)
+static bool start_ds47(rig_ctl_t *c, const rig_cmd_t *cmd, dp_master_acyc_port_t port)
 {
     memset(&c->ds47, 0, sizeof c->ds47);
     c->ds47_ref = (uint8_t)(c->ds47_ref % 255u + 1u); /* 1..255: reference 0 is refused */
@@ -71,7 +71,7 @@ static bool start_ds47(rig_ctl_t *c, const rig_cmd_t *cmd, dpm_acyc_port_t port)
     c->ds47.p[0].number = cmd->index;
     c->ds47.p[0].value = (uint32_t)cmd->value;
     memset(&c->call, 0, sizeof c->call);
-    if (dpm_ds47_start(&c->call, port, &c->ds47, NULL, NULL, rig_now_us(c->rig)) != 0) {
+    if (dp_master_ds47_start(&c->call, port, &c->ds47, NULL, NULL, rig_now_us(c->rig)) != 0) {
         return false;
     }
     rig_wake(c->rig);
@@ -88,16 +88,16 @@ static void ds47_result(const rig_ctl_t *c, rig_cmd_t *cmd)
                        c->call.error[0] != '\0' ? c->call.error : "negative DP-V1 response");
         return;
     }
-    dpm_ds47_rsp_t rsp;
+    dp_master_ds47_rsp_t rsp;
     char err[160];
-    if (!dpm_ds47_parse(&c->ds47, c->call.data, c->call.len, &rsp, err, sizeof err)) {
+    if (!dp_master_ds47_parse(&c->ds47, c->call.data, c->call.len, &rsp, err, sizeof err)) {
         cmd->status = 502;
         (void)snprintf(cmd->error, sizeof cmd->error, "data set 47: %.180s", err);
         return;
     }
     if (!rsp.p[0].ok) {
         cmd->refused = true;
-        dpm_ml_error_value_text(rsp.p[0].error, cmd->error, sizeof cmd->error);
+        dp_master_ml_error_value_text(rsp.p[0].error, cmd->error, sizeof cmd->error);
         return;
     }
     cmd->result = rsp.p[0].has_value ? (int32_t)rsp.p[0].value : cmd->value;
@@ -105,7 +105,7 @@ static void ds47_result(const rig_ctl_t *c, rig_cmd_t *cmd)
 
 /* ---- a class-2 connection per service ------------------------------------------------------ */
 
-static void c2_opened(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void c2_opened(void *ctx, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
     (void)now;
     rig_ctl_t *c = ctx;
@@ -113,7 +113,7 @@ static void c2_opened(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
     c->c2_open_ok = r->ok;
 }
 
-static void c2_aborted(void *ctx, const dpm_acyc_result_t *r, hal_time_us_t now)
+static void c2_aborted(void *ctx, const dp_master_acyc_result_t *r, hal_time_us_t now)
 {
     (void)r;
     (void)now;
@@ -131,24 +131,25 @@ static bool start_c2(rig_ctl_t *c, rig_cmd_t *cmd)
                                "runs (POST /api/v1/master/run)");
         return false;
     }
-    dpm_c2_cfg_t cc = {.slave = cmd->card, .address = r->master.cfg.address};
+    dp_master_c2_cfg_t cc = {.slave = cmd->card, .address = r->master.cfg.address};
     if (!c->c2_attached) {
-        dpm_c2_init(&c->c2, &cc);
+        dp_master_c2_init(&c->c2, &cc);
         if (dp_master_add_c2(&r->master, &c->c2) != 0) {
             rig_cmd_fail(cmd, 409, "the master has no room for another class-2 connection");
             return false;
         }
         c->c2_attached = true;
     }
-    if (dpm_c2_state(&c->c2) != DPM_C2_CLOSED || dpm_c2_busy(&c->c2) || c->c2.on_wire) {
+    if (dp_master_c2_state(&c->c2) != DP_MASTER_C2_CLOSED || dp_master_c2_busy(&c->c2) ||
+        c->c2.on_wire) {
         rig_cmd_fail(cmd, 409, "the last class-2 connection is still closing; try again");
         return false;
     }
-    dpm_c2_init(&c->c2, &cc); /* closed and off the wire: the master holds only the pointer */
+    dp_master_c2_init(&c->c2, &cc); /* closed and off the wire: the master holds only the pointer */
     c->c2_open_done = false;
     c->c2_open_ok = false;
     c->c2_abort_done = false;
-    if (dpm_c2_open(&c->c2, c2_opened, c, rig_now_us(r)) != 0) {
+    if (dp_master_c2_open(&c->c2, c2_opened, c, rig_now_us(r)) != 0) {
         rig_cmd_fail(cmd, 409, "the class-2 connection cannot be opened now");
         return false;
     }
@@ -160,8 +161,8 @@ static bool start_c2(rig_ctl_t *c, rig_cmd_t *cmd)
 /* Aborts the connection if it is open; true when nothing is left to wait for. */
 static bool close_c2(rig_ctl_t *c)
 {
-    if (dpm_c2_state(&c->c2) != DPM_C2_CLOSED &&
-        dpm_c2_abort(&c->c2, 0, c2_aborted, c, rig_now_us(c->rig)) == 0) {
+    if (dp_master_c2_state(&c->c2) != DP_MASTER_C2_CLOSED &&
+        dp_master_c2_abort(&c->c2, 0, c2_aborted, c, rig_now_us(c->rig)) == 0) {
         c->c2_stage = RIG_C2_CLOSING;
         rig_wake(c->rig);
         return false;
@@ -181,24 +182,24 @@ static bool advance_c2(rig_ctl_t *c, rig_cmd_t *cmd)
             cmd->status = 502;
             (void)snprintf(cmd->error, sizeof cmd->error,
                            "class-2 connection to slave %u not opened: %.150s", cmd->card,
-                           dpm_c2_error(&c->c2));
+                           dp_master_c2_error(&c->c2));
             c->c2_stage = RIG_C2_IDLE;
             return true;
         }
-        if (!start_ds47(c, cmd, dpm_c2_port(&c->c2))) {
+        if (!start_ds47(c, cmd, dp_master_c2_port(&c->c2))) {
             rig_cmd_fail(cmd, 409, "the class-2 connection did not take the request");
             return close_c2(c);
         }
         c->c2_stage = RIG_C2_CALLING;
         return false;
     case RIG_C2_CALLING:
-        if (!dpm_call_done(&c->call)) {
+        if (!dp_master_call_done(&c->call)) {
             return false;
         }
         ds47_result(c, cmd);
         return close_c2(c);
     case RIG_C2_CLOSING:
-        if (!c->c2_abort_done && dpm_c2_state(&c->c2) != DPM_C2_CLOSED) {
+        if (!c->c2_abort_done && dp_master_c2_state(&c->c2) != DP_MASTER_C2_CLOSED) {
             return false;
         }
         c->c2_stage = RIG_C2_IDLE;
@@ -222,17 +223,17 @@ bool rig_ctl_param_start(rig_ctl_t *c, rig_cmd_t *cmd)
         rig_cmd_fail(cmd, 404, "the master has no slave with that address");
         return false;
     }
-    dpm_slave_t *sl = &r->master.slaves[idx];
-    if (sl->phase != DPM_PHASE_DATA_EXCH) {
+    dp_master_slave_t *sl = &r->master.slaves[idx];
+    if (sl->phase != DP_MASTER_PHASE_DATA_EXCH) {
         cmd->status = 409;
         (void)snprintf(cmd->error, sizeof cmd->error, "slave %u is not in data exchange (%s)",
-                       sl->cfg.address, dpm_phase_name(sl->phase));
+                       sl->cfg.address, dp_master_phase_name(sl->phase));
         return false;
     }
     if (cmd->via == RIG_VIA_CHANNEL) {
         return start_channel(c, cmd, (unsigned)idx);
     }
-    if (!dpm_prm_is_dpv1(sl->cfg.prm, sl->cfg.prm_len)) {
+    if (!dp_master_prm_is_dpv1(sl->cfg.prm, sl->cfg.prm_len)) {
         rig_cmd_fail(cmd, 409, "the slave is not parameterised for DP-V1 (data set 47 needs it)");
         return false;
     }
@@ -257,7 +258,7 @@ bool rig_ctl_param_advance(rig_ctl_t *c, rig_cmd_t *cmd)
     if (cmd->via == RIG_VIA_CHANNEL) {
         return advance_channel(c, cmd, &r->master.slaves[idx]);
     }
-    if (!dpm_call_done(&c->call)) {
+    if (!dp_master_call_done(&c->call)) {
         return false;
     }
     ds47_result(c, cmd);

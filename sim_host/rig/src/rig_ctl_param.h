@@ -18,7 +18,7 @@ static inline void rig_cmd_fail(rig_cmd_t *cmd, int status, const char *text)
 /* The master's slave entry for a bus address, -1 if it has none. */
 int rig_ctl_slave_index(const dp_master_t *m, uint8_t address);
 /* The slave's configuration carries the 8-octet parameter channel (F3/B7) before the PD. */
-bool rig_ctl_has_param_channel(const dpm_slave_t *sl);
+bool rig_ctl_has_param_channel(const dp_master_slave_t *sl);
 
 /* Starts cmd (RIG_CMD_MASTER_PARAM); false when it finished at once (cmd has the error). */
 bool rig_ctl_param_start(rig_ctl_t *c, rig_cmd_t *cmd);

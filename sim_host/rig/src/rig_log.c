@@ -4,7 +4,7 @@
 #include <time.h>
 
 #include "dp_slave/dp_wire.h"
-#include "movidrive/md_names.h"
+#include "movidrive/movidrive_names.h"
 #include "sim_hal/sim_board.h"
 
 static const char *const level_names[] = {"error", "warn", "info", "debug"};
@@ -133,7 +133,7 @@ void rig_pi_text(const uint16_t *pi, unsigned n, char *out, size_t max)
 {
     char sw[160] = "";
     if (n > 0u) {
-        md_status_word_text(pi[0], sw, sizeof sw);
+        movidrive_status_word_text(pi[0], sw, sizeof sw);
     }
     snprintf(out, max, "PI1 %s%s%.1f rpm%s%.1f %% I_N", sw, n > 1u ? ", PI2 " : "",
              n > 1u ? (int16_t)pi[1] * 0.2 : 0.0, n > 2u ? ", PI3 " : "",
@@ -147,7 +147,7 @@ void rig_po_text(const uint16_t *po, unsigned n, char *out, size_t max)
 {
     char cw[160] = "";
     if (n > 0u) {
-        md_control_word_text(po[0], cw, sizeof cw);
+        movidrive_control_word_text(po[0], cw, sizeof cw);
     }
     if (n > 1u) {
         snprintf(out, max, "PO1 %s, PO2 %.1f rpm", cw, (int16_t)po[1] * 0.2);
@@ -285,12 +285,13 @@ static void log_param(void *ctx, unsigned card, uint8_t channel, const uint8_t *
     rig_log_level_t level = channel == DFP21B_CH_STATUS_POLL ? RIG_LOG_DEBUG : RIG_LOG_INFO;
     char src[16];
     card_source(l, card, src, sizeof src, "drive");
-    const md_param_info_t *p = md_param_info(index);
+    const movidrive_param_info_t *p = movidrive_param_info(index);
     char name[96];
     if (p != NULL) {
         snprintf(name, sizeof name, "%s %s", p->p_number, p->name);
-    } else if (index >= MD_IDX_IPOS_H0 && index < MD_IDX_IPOS_H0 + MD_IPOS_VARS) {
-        snprintf(name, sizeof name, "H%u", index - MD_IDX_IPOS_H0);
+    } else if (index >= MOVIDRIVE_IDX_IPOS_H0 &&
+               index < MOVIDRIVE_IDX_IPOS_H0 + MOVIDRIVE_IPOS_VARS) {
+        snprintf(name, sizeof name, "H%u", index - MOVIDRIVE_IDX_IPOS_H0);
     } else {
         snprintf(name, sizeof name, "index %u", index);
     }
@@ -305,7 +306,7 @@ static void log_param(void *ctx, unsigned card, uint8_t channel, const uint8_t *
     int32_t v = (int32_t)ml_data(rsp);
     if (p != NULL && (service == ML_SVC_READ || service == ML_SVC_WRITE ||
                       service == ML_SVC_WRITE_VOLATILE)) {
-        md_value_text(p, v, value, sizeof value);
+        movidrive_value_text(p, v, value, sizeof value);
     } else {
         snprintf(value, sizeof value, "%d", v);
     }
@@ -318,7 +319,7 @@ static void log_drive(void *ctx, unsigned card, const rig_drive_event_t *ev)
     rig_log_t *l = ctx;
     char src[16];
     card_source(l, card, src, sizeof src, "drive");
-    const char *fname = md_fault_name((uint8_t)ev->value);
+    const char *fname = movidrive_fault_name((uint8_t)ev->value);
     double n = ev->speed_mrpm / 1000.0;
     double target = ev->setpoint_mrpm / 1000.0;
     switch (ev->type) {
@@ -374,7 +375,7 @@ static void log_action(void *ctx, unsigned card, rig_action_type_t type, uint32_
                 "next power-up)", value);
         break;
     case RIG_ACTION_FAULT_INJECTED: {
-        const char *fname = md_fault_name((uint8_t)value);
+        const char *fname = movidrive_fault_name((uint8_t)value);
         rig_log(l, RIG_LOG_INFO, src, "action", "drive fault F%02u %s injected", value,
                 fname != NULL ? fname : "(unknown fault)");
         break;
@@ -384,7 +385,7 @@ static void log_action(void *ctx, unsigned card, rig_action_type_t type, uint32_
 
 /* ---- master -------------------------------------------------------------------------------- */
 
-static void log_inputs(rig_log_t *l, const dpm_event_t *ev)
+static void log_inputs(rig_log_t *l, const dp_master_event_t *ev)
 {
     const dp_master_t *m = &l->rig->master;
     unsigned i = 0;
@@ -395,8 +396,8 @@ static void log_inputs(rig_log_t *l, const dpm_event_t *ev)
         return;
     }
     size_t len = ev->len;
-    if (len > DPM_MAX_IO) {
-        len = DPM_MAX_IO;
+    if (len > DP_MASTER_MAX_IO) {
+        len = DP_MASTER_MAX_IO;
     }
     bool same = len == l->last_inputs_len[i] && memcmp(l->last_inputs[i], ev->data, len) == 0;
     if (same) {
@@ -404,7 +405,7 @@ static void log_inputs(rig_log_t *l, const dpm_event_t *ev)
     }
     memcpy(l->last_inputs[i], ev->data, len);
     l->last_inputs_len[i] = (uint16_t)len;
-    const dpm_slave_t *s = &m->slaves[i];
+    const dp_master_slave_t *s = &m->slaves[i];
     dfp21b_pd_cfg_t pd;
     char text[400];
     size_t n = 0;
@@ -431,32 +432,32 @@ static void log_inputs(rig_log_t *l, const dpm_event_t *ev)
     rig_log(l, RIG_LOG_INFO, "master", "master", "slave %u inputs: %s", s->cfg.address, text);
 }
 
-bool rig_master_event_text(const dpm_event_t *ev, bool *slave_silent, char *out, size_t n,
+bool rig_master_event_text(const dp_master_event_t *ev, bool *slave_silent, char *out, size_t n,
                            rig_log_level_t *level, const char **kind)
 {
     char text[256];
     switch (ev->type) {
-    case DPM_EV_PHASE:
-        if (*slave_silent && (ev->new_phase == DPM_PHASE_FDL_STATUS ||
-                              ev->new_phase == DPM_PHASE_BACKOFF)) {
+    case DP_MASTER_EV_PHASE:
+        if (*slave_silent && (ev->new_phase == DP_MASTER_PHASE_FDL_STATUS ||
+                              ev->new_phase == DP_MASTER_PHASE_BACKOFF)) {
             break;
         }
-        if (ev->new_phase > DPM_PHASE_FDL_STATUS) {
+        if (ev->new_phase > DP_MASTER_PHASE_FDL_STATUS) {
             *slave_silent = false;
         }
-        if (ev->new_phase == DPM_PHASE_DATA_EXCH) {
+        if (ev->new_phase == DP_MASTER_PHASE_DATA_EXCH) {
             return SAY(RIG_LOG_INFO, "master", "slave %u is in data exchange", ev->slave);
         }
-        if (ev->new_phase != DPM_PHASE_BACKOFF) {
+        if (ev->new_phase != DP_MASTER_PHASE_BACKOFF) {
             return SAY(RIG_LOG_INFO, "master", "slave %u: %s", ev->slave,
-                       dpm_phase_name(ev->new_phase));
+                       dp_master_phase_name(ev->new_phase));
         }
         break;
-    case DPM_EV_DIAG:
+    case DP_MASTER_EV_DIAG:
         rig_diag_text(ev->data, ev->len, text, sizeof text);
         return SAY(RIG_LOG_INFO, "diag", "slave %u diagnosis: %s", ev->slave, text);
-    case DPM_EV_FAULT:
-        if (ev->old_phase == DPM_PHASE_FDL_STATUS) {
+    case DP_MASTER_EV_FAULT:
+        if (ev->old_phase == DP_MASTER_PHASE_FDL_STATUS) {
             bool first = !*slave_silent;
             *slave_silent = true;
             if (first) {
@@ -467,24 +468,24 @@ bool rig_master_event_text(const dpm_event_t *ev, bool *slave_silent, char *out,
         }
         return SAY(RIG_LOG_WARN, "master", "slave %u: %s; start-up again later", ev->slave,
                    ev->text);
-    case DPM_EV_RETRY:
-        if (!*slave_silent && ev->old_phase != DPM_PHASE_FDL_STATUS) {
+    case DP_MASTER_EV_RETRY:
+        if (!*slave_silent && ev->old_phase != DP_MASTER_PHASE_FDL_STATUS) {
             return SAY(RIG_LOG_INFO, "master", "slave %u: no answer, retry", ev->slave);
         }
         break;
-    case DPM_EV_INPUTS: /* every cycle: each printer decides how to show them */
+    case DP_MASTER_EV_INPUTS: /* every cycle: each printer decides how to show them */
         break;
-    case DPM_EV_GLOBAL_CONTROL_SENT:
+    case DP_MASTER_EV_GLOBAL_CONTROL_SENT:
         return SAY(RIG_LOG_INFO, "master", "Global_Control 0x%02X to group 0x%02X (broadcast)",
                    ev->data[0], ev->data[1]);
     }
     return false;
 }
 
-static void log_master_event(void *ctx, const dpm_event_t *ev)
+static void log_master_event(void *ctx, const dp_master_event_t *ev)
 {
     rig_log_t *l = ctx;
-    if (ev->type == DPM_EV_INPUTS) {
+    if (ev->type == DP_MASTER_EV_INPUTS) {
         log_inputs(l, ev);
         return;
     }

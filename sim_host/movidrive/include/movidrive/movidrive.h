@@ -20,90 +20,98 @@
 #include "movilink/movilink_wire.h"
 
 /* Some indices the card, the demo and the tests use by name. */
-#define MD_IDX_FIRMWARE 8300u      /* P076, reads 0x311C7289 */
-#define MD_IDX_SPEED 8318u         /* P000, 0.001 rpm */
-#define MD_IDX_STATUS 8310u        /* P010..P013, low word = status word 1 */
-#define MD_IDX_P090 8451u
-#define MD_IDX_P100_SETPOINT_SOURCE 8461u
-#define MD_IDX_P101_CONTROL_SOURCE 8462u
-#define MD_IDX_P130_RAMP_UP 8470u
-#define MD_IDX_P131_RAMP_DOWN 8471u
-#define MD_IDX_P160_N11 8489u
-#define MD_IDX_P302_MAX_SPEED 8517u
-#define MD_IDX_P803_PARAM_LOCK 8595u
-#define MD_IDX_P819_FIELDBUS_TIMEOUT 8606u
-#define MD_IDX_P831_FIELDBUS_REACTION 8610u
-#define MD_IDX_P870_PO1 8304u
-#define MD_IDX_P876_PO_ENABLE 8622u
-#define MD_IDX_IPOS_H0 11000u
-#define MD_IPOS_VARS 512u
-#define MD_SOURCE_FIELDBUS_SETPOINT 3u /* P100 = FIELDBUS */
-#define MD_SOURCE_FIELDBUS_CONTROL 2u  /* P101 = FIELDBUS */
+#define MOVIDRIVE_IDX_FIRMWARE 8300u      /* P076, reads 0x311C7289 */
+#define MOVIDRIVE_IDX_SPEED 8318u         /* P000, 0.001 rpm */
+#define MOVIDRIVE_IDX_STATUS 8310u        /* P010..P013, low word = status word 1 */
+#define MOVIDRIVE_IDX_P090 8451u
+#define MOVIDRIVE_IDX_P100_SETPOINT_SOURCE 8461u
+#define MOVIDRIVE_IDX_P101_CONTROL_SOURCE 8462u
+#define MOVIDRIVE_IDX_P130_RAMP_UP 8470u
+#define MOVIDRIVE_IDX_P131_RAMP_DOWN 8471u
+#define MOVIDRIVE_IDX_P160_N11 8489u
+#define MOVIDRIVE_IDX_P302_MAX_SPEED 8517u
+#define MOVIDRIVE_IDX_P803_PARAM_LOCK 8595u
+#define MOVIDRIVE_IDX_P819_FIELDBUS_TIMEOUT 8606u
+#define MOVIDRIVE_IDX_P831_FIELDBUS_REACTION 8610u
+#define MOVIDRIVE_IDX_P870_PO1 8304u
+#define MOVIDRIVE_IDX_P876_PO_ENABLE 8622u
+#define MOVIDRIVE_IDX_IPOS_H0 11000u
+#define MOVIDRIVE_IPOS_VARS 512u
+/* Old spellings still used by tests/dpv1, which this rename leaves to its owner: remove both
+ * once that test says MOVIDRIVE_IDX_. */
+#define MD_IDX_P160_N11 MOVIDRIVE_IDX_P160_N11
+#define MD_IDX_IPOS_H0 MOVIDRIVE_IDX_IPOS_H0
+#define MOVIDRIVE_SOURCE_FIELDBUS_SETPOINT 3u /* P100 = FIELDBUS */
+#define MOVIDRIVE_SOURCE_FIELDBUS_CONTROL 2u  /* P101 = FIELDBUS */
 
 /* Status word 1, low byte (protocol.md §C3.3). */
-#define MD_SW_OUTPUT_STAGE_ENABLED 0x0001u
-#define MD_SW_READY 0x0002u
-#define MD_SW_PO_DATA_ENABLED 0x0004u
-#define MD_SW_RAMP_SET_2 0x0008u
-#define MD_SW_PARAM_SET_2 0x0010u
-#define MD_SW_FAULT 0x0020u
+#define MOVIDRIVE_SW_OUTPUT_STAGE_ENABLED 0x0001u
+#define MOVIDRIVE_SW_READY 0x0002u
+#define MOVIDRIVE_SW_PO_DATA_ENABLED 0x0004u
+#define MOVIDRIVE_SW_RAMP_SET_2 0x0008u
+#define MOVIDRIVE_SW_PARAM_SET_2 0x0010u
+#define MOVIDRIVE_SW_FAULT 0x0020u
 
 /* Control word 1, basic block (protocol.md §C3.1). */
-#define MD_CW_CONTROLLER_INHIBIT 0x0001u
-#define MD_CW_ENABLE_RAPID_STOP 0x0002u /* 1 = enable, 0 = rapid stop */
-#define MD_CW_ENABLE_STOP 0x0004u       /* 1 = enable, 0 = stop */
-#define MD_CW_HOLD 0x0008u
-#define MD_CW_RAMP_SET_2 0x0010u
-#define MD_CW_PARAM_SET_2 0x0020u
-#define MD_CW_RESET 0x0040u /* fault reset on the rising edge */
+#define MOVIDRIVE_CW_CONTROLLER_INHIBIT 0x0001u
+#define MOVIDRIVE_CW_ENABLE_RAPID_STOP 0x0002u /* 1 = enable, 0 = rapid stop */
+#define MOVIDRIVE_CW_ENABLE_STOP 0x0004u       /* 1 = enable, 0 = stop */
+#define MOVIDRIVE_CW_HOLD 0x0008u
+#define MOVIDRIVE_CW_RAMP_SET_2 0x0010u
+#define MOVIDRIVE_CW_PARAM_SET_2 0x0020u
+#define MOVIDRIVE_CW_RESET 0x0040u /* fault reset on the rising edge */
 
 /* Fault numbers the emulation raises. F28 for the fieldbus timeout is an assumption
  * (protocol.md §C3.3 lists it as inferred). */
-#define MD_FAULT_FIELDBUS_TIMEOUT 28u
+#define MOVIDRIVE_FAULT_FIELDBUS_TIMEOUT 28u
 
-#define MD_MAX_PARAMS 512u
+#define MOVIDRIVE_MAX_PARAMS 512u
+/* Widest index range (first to last table entry) the per-drive index-to-position table covers;
+ * the generated table spans 8300..8891. */
+#define MOVIDRIVE_SLOT_SPAN 1024u
 
-typedef struct md_param_def {
+typedef struct movidrive_param_def {
     uint16_t index;
     int32_t min;
     int32_t max;
     int32_t def;
     uint8_t quantity;   /* PNO quantity index (read scale), 0xFF none */
     int8_t conversion;  /* PNO conversion index */
-    uint8_t flags;      /* MD_PF_* */
+    uint8_t flags;      /* MOVIDRIVE_PF_* */
     uint32_t enum_mask; /* added: bit n set = value n defined (enumeration); 0 = no enumeration */
-} md_param_def_t;
+} movidrive_param_def_t;
 
-#define MD_PF_READ_ONLY 0x01u
-#define MD_PF_NON_VOLATILE 0x02u   /* kept in EEPROM ("N") */
-#define MD_PF_INHIBIT_REQUIRED 0x04u /* "R": write only with controller inhibit */
-#define MD_PF_LOCK_EXEMPT 0x08u    /* "S": writable even with parameter lock P803 */
-#define MD_PF_NO_VOLATILE 0x10u    /* write volatile not permitted */
-#define MD_PF_HAS_MIN 0x20u
-#define MD_PF_HAS_MAX 0x40u
-#define MD_PF_UNSIGNED 0x80u       /* added: min/max/value compared as uint32 (P092, P221, P222) */
+#define MOVIDRIVE_PF_READ_ONLY 0x01u
+#define MOVIDRIVE_PF_NON_VOLATILE 0x02u   /* kept in EEPROM ("N") */
+#define MOVIDRIVE_PF_INHIBIT_REQUIRED 0x04u /* "R": write only with controller inhibit */
+#define MOVIDRIVE_PF_LOCK_EXEMPT 0x08u    /* "S": writable even with parameter lock P803 */
+#define MOVIDRIVE_PF_NO_VOLATILE 0x10u    /* write volatile not permitted */
+#define MOVIDRIVE_PF_HAS_MIN 0x20u
+#define MOVIDRIVE_PF_HAS_MAX 0x40u
+/* added: min/max/value compared as uint32 (P092, P221, P222) */
+#define MOVIDRIVE_PF_UNSIGNED 0x80u
 
 /* Unit status (status word 1 high byte when bit 5 is clear; README.md lists the sources). */
-#define MD_UNIT_CONTROLLER_INHIBIT 1u
-#define MD_UNIT_NO_ENABLE 2u
-#define MD_UNIT_ENABLED 4u
-#define MD_UNIT_WAITING_FOR_DATA 16u
+#define MOVIDRIVE_UNIT_CONTROLLER_INHIBIT 1u
+#define MOVIDRIVE_UNIT_NO_ENABLE 2u
+#define MOVIDRIVE_UNIT_ENABLED 4u
+#define MOVIDRIVE_UNIT_WAITING_FOR_DATA 16u
 
 /* Read attribute, bytes 6..7 (MOVITRAC B coding, protocol.md §C1.3; assumed for MOVIDRIVE). */
-#define MD_ATTR_WRITE_ALLOWED 0x0001u
-#define MD_ATTR_EEPROM 0x0002u
-#define MD_ATTR_FACTORY_RAM 0x0004u
-#define MD_ATTR_FACTORY_EEPROM 0x0008u
-#define MD_ATTR_EEPROM_VALID_AT_INIT 0x0010u
-#define MD_ATTR_NO_INHIBIT_REQUIRED 0x0020u
+#define MOVIDRIVE_ATTR_WRITE_ALLOWED 0x0001u
+#define MOVIDRIVE_ATTR_EEPROM 0x0002u
+#define MOVIDRIVE_ATTR_FACTORY_RAM 0x0004u
+#define MOVIDRIVE_ATTR_FACTORY_EEPROM 0x0008u
+#define MOVIDRIVE_ATTR_EEPROM_VALID_AT_INIT 0x0010u
+#define MOVIDRIVE_ATTR_NO_INHIBIT_REQUIRED 0x0020u
 
 /* EEPROM image (inside the hal_nvm byte array): header "MDEE", version, record count, IPOS
  * count; records (index u16, value i32, big-endian) for every N parameter in table order;
  * then H0..H511. movidrive_eeprom_size() gives the bytes the NVM must offer. */
-#define MD_EE_MAGIC 0x4D444545u
-#define MD_EE_VERSION 1u
-#define MD_EE_HEADER 12u
-#define MD_EE_RECORD 6u
+#define MOVIDRIVE_EE_MAGIC 0x4D444545u
+#define MOVIDRIVE_EE_VERSION 1u
+#define MOVIDRIVE_EE_HEADER 12u
+#define MOVIDRIVE_EE_RECORD 6u
 
 typedef struct movidrive_cfg {
     hal_nvm_t eeprom;        /* ops == NULL: no persistence (values reset at every start) */
@@ -113,10 +121,10 @@ typedef struct movidrive_cfg {
 
 typedef struct movidrive {
     movidrive_cfg_t cfg;
-    const md_param_def_t *defs; /* the generated table */
+    const movidrive_param_def_t *defs; /* the generated table */
     size_t num_defs;
-    int32_t ram[MD_MAX_PARAMS];   /* current values, parallel to defs */
-    int32_t ipos[MD_IPOS_VARS];   /* H0..H511 */
+    int32_t ram[MOVIDRIVE_MAX_PARAMS];   /* current values, parallel to defs */
+    int32_t ipos[MOVIDRIVE_IPOS_VARS];   /* H0..H511 */
     /* drive state */
     uint16_t po[ML_MAX_PD];
     uint16_t control_word;
@@ -131,9 +139,9 @@ typedef struct movidrive {
     bool ticked;
     uint32_t eeprom_writes;
     /* added: */
-    int32_t ee[MD_MAX_PARAMS];      /* the EEPROM's values, parallel to defs (write volatile
+    int32_t ee[MOVIDRIVE_MAX_PARAMS];      /* the EEPROM's values, parallel to defs (write volatile
                                        changes ram only) */
-    int32_t ee_ipos[MD_IPOS_VARS];
+    int32_t ee_ipos[MOVIDRIVE_IPOS_VARS];
     bool ee_layout_ok;              /* the image in the NVM has this table's record layout;
                                        otherwise the next save writes the whole image */
     bool ee_usable;                 /* an NVM of sufficient size is configured */
@@ -154,6 +162,13 @@ typedef struct movidrive {
     int32_t current_mpct;           /* output current, 0.001 % I_N */
     int32_t active_current_mpct;
     bool have_fieldbus;             /* movidrive_fieldbus_status() was called */
+    /* Index -> position in defs (-1: none) for the table movidrive_init set: the drive model
+     * reads dozens of parameters per card poll, and a binary search for each was half of a
+     * replay's time. Used only while defs and num_defs are still that table. */
+    const movidrive_param_def_t *slot_defs;
+    size_t slot_num;
+    uint16_t slot_base;
+    int16_t slot[MOVIDRIVE_SLOT_SPAN];
 } movidrive_t;
 
 /* Loads defaults, then the EEPROM image if there is a valid one. Returns 0, or -1 with a reason
@@ -183,14 +198,14 @@ void movidrive_inject_fault(movidrive_t *md, uint8_t number);
 /* Bytes the EEPROM (hal_nvm) must offer for the image. */
 size_t movidrive_eeprom_size(void);
 /* The table entry of an index, NULL if none (H0..H511 share one entry). */
-const md_param_def_t *movidrive_param_def(const movidrive_t *md, uint16_t index);
+const movidrive_param_def_t *movidrive_param_def(const movidrive_t *md, uint16_t index);
 /* A parameter's current value as "Read" returns it; false for an unknown index. */
 bool movidrive_read_value(const movidrive_t *md, uint16_t index, int32_t *value);
 
 /* An in-process ml_link for the card: requests are answered through the given completion
  * function (normally dfp21b's) after `delay_us` of simulated time, to show that the card never
  * waits for its inverter. */
-typedef struct md_inproc_link {
+typedef struct movidrive_inproc_link {
     movidrive_t *md;
     void (*param_response)(void *card, uint8_t channel, const uint8_t rsp[ML_TELEGRAM_LEN]);
     void (*process_inputs)(void *card, const uint16_t *pi, uint8_t n);
@@ -203,10 +218,10 @@ typedef struct md_inproc_link {
     } ch[ML_MAX_CHANNELS];
     hal_time_us_t now;
     uint8_t pd_words;
-} md_inproc_link_t;
+} movidrive_inproc_link_t;
 
-ml_link_t md_inproc_link(md_inproc_link_t *l);
+ml_link_t movidrive_inproc_link(movidrive_inproc_link_t *l);
 /* Delivers due responses and fresh PI words. Returns the next deadline. */
-hal_time_us_t md_inproc_link_poll(md_inproc_link_t *l, hal_time_us_t now);
+hal_time_us_t movidrive_inproc_link_poll(movidrive_inproc_link_t *l, hal_time_us_t now);
 
 #endif

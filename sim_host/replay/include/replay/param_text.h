@@ -1,7 +1,8 @@
 /* MOVILINK parameter services in captured telegrams, named for people: the cyclic parameter
  * channel of Data_Exchange and data set 47 over DP-V1 ("write P100 setpoint source (8461) = 3
- * (FIELDBUS)"), with the names of the emulated MOVIDRIVE (movidrive/md_names.h). Pure functions;
- * the caller keeps the little context a data set 47 answer needs (which parameter was asked). */
+ * (FIELDBUS)"), with the names of the emulated MOVIDRIVE (movidrive/movidrive_names.h). Pure
+ * functions; the caller keeps the little context a data set 47 answer needs (which parameter was
+ * asked). */
 #ifndef REPLAY_PARAM_TEXT_H
 #define REPLAY_PARAM_TEXT_H
 

@@ -1,10 +1,10 @@
 /* Replaying a bus capture against the emulated DFP21B (docs/replay.md).
  *
- * The card (a rig card: sim_host/stations card_station, with the emulated MOVIDRIVE or none) sits
- * on the rig's in-memory bus (membus, simulated time) next to an injector port. Records are fed one at a time
- * (replay_feed): every telegram of the capture goes onto the bus at its recorded time, except
- * the card's own recorded answers: the card produces its own. Time starts at the first record,
- * where the card powers up (automatic baud search unless fixed_card_baud). A record stamped
+ * The card (a rig card: sim_host/sim_stations card_station, with the emulated MOVIDRIVE or none)
+ * sits on the rig's in-memory bus (membus, simulated time) next to an injector port. Records are
+ * fed one at a time (replay_feed): every telegram of the capture goes onto the bus at its recorded
+ * time, except the card's own recorded answers: the card produces its own. Time starts at the first
+ * record, where the card powers up (automatic baud search unless fixed_card_baud). A record stamped
  * earlier than the one before goes on after it (re-anchoring when it is a clock step: the records
  * after it keep their spacing from it); an idle gap in which the card has settled is shortened
  * by whole baud-search cycles (docs/replay.md, "Timing model").

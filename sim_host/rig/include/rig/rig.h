@@ -19,7 +19,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "dfp_lcm_bridge/lcm_segment.h"
+#include "lcm_bridge/lcm_segment.h"
 #include "sim_hal/membus.h"
 #include "sim_hal/tty_port.h"
 #include "sim_stations/stations.h"
@@ -73,7 +73,7 @@ typedef struct rig_tap {
                   const uint8_t rsp[ML_TELEGRAM_LEN]);
     void (*drive)(void *ctx, unsigned card, const rig_drive_event_t *ev);
     void (*action)(void *ctx, unsigned card, rig_action_type_t type, uint32_t value);
-    void (*master_event)(void *ctx, const dpm_event_t *ev);
+    void (*master_event)(void *ctx, const dp_master_event_t *ev);
 } rig_tap_t;
 
 typedef struct rig rig_t;

@@ -87,7 +87,7 @@ typedef struct rig_snap_card {
 
 typedef struct rig_snap_slave {
     uint8_t address;
-    uint8_t phase; /* dpm_phase_t */
+    uint8_t phase; /* dp_master_phase_t */
     uint32_t cycles;
     uint8_t outputs[64];
     uint16_t out_len;
@@ -110,7 +110,7 @@ typedef struct rig_snapshot {
     bool master_running;
     uint32_t master_baud;
     uint8_t num_slaves;
-    rig_snap_slave_t slaves[DPM_MAX_SLAVES];
+    rig_snap_slave_t slaves[DP_MASTER_MAX_SLAVES];
 } rig_snapshot_t;
 
 /* ---- commands ------------------------------------------------------------------------------ */
@@ -189,13 +189,13 @@ typedef struct rig_ctl {
     bool closing;
     /* the master's parameter service in progress (one at a time, like a PLC's FB) */
     int active_slot;          /* -1: none */
-    dpm_param_t param;
-    dpm_call_t call;
-    dpm_ds47_req_t ds47;
+    dp_master_param_t param;
+    dp_master_call_t call;
+    dp_master_ds47_req_t ds47;
     uint8_t ds47_ref;         /* request reference of the last data set 47 request */
     /* The class-2 connection of the master station (its own address), attached to the master
      * at the first class-2 service and opened for each one. */
-    dpm_c2_t c2;
+    dp_master_c2_t c2;
     bool c2_attached;
     rig_c2_stage_t c2_stage;
     bool c2_open_done;

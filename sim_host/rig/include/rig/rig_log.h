@@ -31,8 +31,8 @@ typedef struct rig_log {
     bool name_cards;     /* a line of cards: every card's lines carry its address, also
                           * before the second card exists */
     uint32_t baud_steps[RIG_MAX_CARDS];
-    uint8_t last_inputs[DPM_MAX_SLAVES][DPM_MAX_IO];
-    uint16_t last_inputs_len[DPM_MAX_SLAVES];
+    uint8_t last_inputs[DP_MASTER_MAX_SLAVES][DP_MASTER_MAX_IO];
+    uint16_t last_inputs_len[DP_MASTER_MAX_SLAVES];
 } rig_log_t;
 
 void rig_log_init(rig_log_t *l, rig_t *r, FILE *out);
@@ -45,12 +45,12 @@ void rig_vlog(rig_log_t *l, rig_log_level_t level, const char *source, const cha
 bool rig_log_level_parse(const char *text, rig_log_level_t *level);
 const char *rig_log_level_name(rig_log_level_t level);
 
-/* The log's text of a card's DP event and of a master event (not DPM_EV_INPUTS), with its
+/* The log's text of a card's DP event and of a master event (not DP_MASTER_EV_INPUTS), with its
  * level and kind; false when the event is not told. baud_steps and slave_silent carry state
  * between calls (search steps; a silent address told once). Every printer uses these. */
 bool rig_card_event_text(const dp_event_t *ev, const dfp21b_t *card, uint32_t *baud_steps, char *out,
                          size_t n, rig_log_level_t *level, const char **kind);
-bool rig_master_event_text(const dpm_event_t *ev, bool *slave_silent, char *out, size_t n,
+bool rig_master_event_text(const dp_master_event_t *ev, bool *slave_silent, char *out, size_t n,
                            rig_log_level_t *level, const char **kind);
 /* "Station_Not_Ready Prm_Req | Master_Add 2, ident 0x6003" for a Slave_Diag answer. */
 void rig_diag_text(const uint8_t *d, size_t len, char *out, size_t max);
