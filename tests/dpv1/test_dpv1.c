@@ -458,7 +458,7 @@ static void test_manual_examples(void)
               0x00, 0x0B, 0xB8),
             0x01, 0x40, 0x00, 0x01);
     int32_t v = 0;
-    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_IPOS_H0, &v));
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_IPOS_H0, &v));
     CHECK_EQ(v, 3000);
     CHECK_EQ(R.cs.md.eeprom_writes - ee0, 0);
     DS47_C1(B(0x02, 0x40, 0x00, 0x01, 0x10, 0x00, 0x2A, 0xF8, 0x00, 0x00),
@@ -474,7 +474,7 @@ static void test_manual_examples(void)
               0x04, 0x93, 0xE0),
             0x06, 0x02, 0x00, 0x01);
     CHECK_EQ(R.cs.md.eeprom_writes - ee0, 1);
-    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_P160_N11, &v));
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_P160_N11, &v));
     CHECK_EQ(v, 300000);
     DS47_C1(B(0x07, 0x01, 0x00, 0x01, 0x10, 0x00, 0x21, 0x29, 0x00, 0x00),
             0x07, 0x01, 0x00, 0x01, 0x43, 0x01, 0x00, 0x04, 0x93, 0xE0);
@@ -645,7 +645,7 @@ static void test_parameter_errors(void)
     DS47_C1(B(0x12, 0x01, 0x01, 0x01, 0x10, 0x00, 0x20, 0x6C, 0x00, 0x00),
             0x12, 0x81, 0x01, 0x01, 0x44, 0x01, 0x00, 0x19);
     int32_t v = -1;
-    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_IPOS_H0, &v));
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_IPOS_H0, &v));
     CHECK_EQ(v, 0); /* the axis-1 write was not executed */
     /* PROFIdrive attribute 0x20 (description): 44 01 00 05. */
     DS47_C1(B(0x13, 0x01, 0x00, 0x01, 0x20, 0x00, 0x20, 0x6C, 0x00, 0x00),
@@ -676,7 +676,7 @@ static void test_parameter_errors(void)
     /* MOVILINK reserved service (attribute 0x40): 0x0505. */
     DS47_C1(B(0x18, 0x40, 0x00, 0x01, 0x40, 0x00, 0x20, 0x6C, 0x00, 0x00),
             0x18, 0xC0, 0x00, 0x01, 0x44, 0x01, 0x05, 0x05);
-    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_P160_N11, &v));
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_P160_N11, &v));
     CHECK_EQ(v, 150000); /* none of the refused writes reached the inverter */
 }
 
@@ -689,7 +689,7 @@ static void nineteen_h(uint8_t wr[4 + 19 * 12], uint8_t rd[4 + 19 * 6], uint8_t 
     memcpy(rd, rh, 4);
     memcpy(rr, rh, 4);
     for (unsigned i = 0; i < 19u; i++) {
-        uint16_t idx = (uint16_t)(MD_IDX_IPOS_H0 + i);
+        uint16_t idx = (uint16_t)(MOVIDRIVE_IDX_IPOS_H0 + i);
         const uint8_t a[6] = {0x10, 0x00, (uint8_t)(idx >> 8), (uint8_t)idx, 0x00, 0x00};
         const uint8_t val[6] = {0x43, 0x01, 0x00, 0x00, 0x00, (uint8_t)(100 + i)};
         memcpy(&wr[4 + 6 * i], a, 6);
@@ -726,14 +726,14 @@ static void test_19_parameters_and_mixed_results(void)
             0x41, 0xC0, 0x00, 0x03, 0x40, 0x00, 0x43, 0x01, 0x31, 0x1C, 0x72, 0x89, 0x44, 0x01,
             0x08, 0x10);
     int32_t v = 0;
-    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_IPOS_H0, &v));
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_IPOS_H0, &v));
     CHECK_EQ(v, 7);
     /* Mixed PROFIdrive change: P160 = 200000 ok, index 1 fails (0x00). */
     DS47_C1(B(0x42, 0x02, 0x00, 0x02, 0x10, 0x00, 0x21, 0x29, 0x00, 0x00, 0x10, 0x00, 0x00,
               0x01, 0x00, 0x00, 0x43, 0x01, 0x00, 0x03, 0x0D, 0x40, 0x43, 0x01, 0x00, 0x00,
               0x00, 0x01),
             0x42, 0x82, 0x00, 0x02, 0x40, 0x00, 0x44, 0x01, 0x00, 0x00);
-    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_P160_N11, &v));
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_P160_N11, &v));
     CHECK_EQ(v, 200000);
 }
 
@@ -816,7 +816,7 @@ static void test_ds47_write_replaced_between_steps(void)
     uint8_t wr[4 + 19 * 12], rd[4 + 19 * 6], rr[4 + 19 * 6];
     nineteen_h(wr, rd, rr);
     int32_t h0_before = 0;
-    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_IPOS_H0, &h0_before));
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_IPOS_H0, &h0_before));
     uint8_t first[DPV1_MAX_PDU], second[DPV1_MAX_PDU];
     size_t fn = mk_write(first, DPV1_INDEX_DS47, wr, sizeof wr);
     /* the second: one MOVILINK read of 8300 */
@@ -833,7 +833,7 @@ static void test_ds47_write_replaced_between_steps(void)
     EXPECT_DU(M1, C1, C1, 0x5F, 0x00, 0x2F, 0x0A); /* the second Write's response */
     run_us(20000, 1000);
     int32_t h0 = -1;
-    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_IPOS_H0, &h0));
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_IPOS_H0, &h0));
     CHECK_EQ(h0, h0_before); /* the dropped Write's services never ran */
     send_b(M1, C1, C1, B(0x5E, 0x00, 0x2F, 0xF0));
     EXPECT_SC();
@@ -886,7 +886,7 @@ static void test_error_mapping(void)
               0x00, 0x00, 0x01),
             0x5B, 0x02, 0x00, 0x01);
     int32_t v = 0;
-    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_P160_N11, &v));
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_P160_N11, &v));
     CHECK_EQ(v, 1);
 }
 
@@ -1218,7 +1218,7 @@ static void test_msac1_reopen_while_service_runs(void)
               0x04, 0x93, 0xE0),
             0x02, 0x02, 0x00, 0x01);
     int32_t v = 0;
-    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_P160_N11, &v));
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_P160_N11, &v));
     CHECK_EQ(v, 300000);
 }
 
@@ -1298,7 +1298,7 @@ static void test_interleaving(void)
     CHECK(b5 >= 10u);
     CHECK(dx >= 40u);
     int32_t v = 0;
-    CHECK(movidrive_read_value(&R.cs.md, MD_IDX_IPOS_H0, &v));
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_IPOS_H0, &v));
     CHECK_EQ(v, 0x12345678);
     CHECK_EQ(dp_slave_state(&R.cs.card.dp), DP_STATE_DATA_EXCH);
 }

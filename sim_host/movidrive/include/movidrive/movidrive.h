@@ -37,10 +37,6 @@
 #define MOVIDRIVE_IDX_P876_PO_ENABLE 8622u
 #define MOVIDRIVE_IDX_IPOS_H0 11000u
 #define MOVIDRIVE_IPOS_VARS 512u
-/* Old spellings still used by tests/dpv1, which this rename leaves to its owner: remove both
- * once that test says MOVIDRIVE_IDX_. */
-#define MD_IDX_P160_N11 MOVIDRIVE_IDX_P160_N11
-#define MD_IDX_IPOS_H0 MOVIDRIVE_IDX_IPOS_H0
 #define MOVIDRIVE_SOURCE_FIELDBUS_SETPOINT 3u /* P100 = FIELDBUS */
 #define MOVIDRIVE_SOURCE_FIELDBUS_CONTROL 2u  /* P101 = FIELDBUS */
 
