@@ -693,6 +693,11 @@ static void check_expiry(uint32_t wd_ms, uint32_t prev_outputs)
     static const uint8_t zero[DP_MAX_IO_LEN];
     CHECK(R.a.out_len == 14u && memcmp(R.a.out, zero, 14) == 0);
     CHECK_EQ(dp_slave_wd_time_ms(&R.s), 0u);
+    /* The diagnosis is framed by the poll that changed it, so the first request after the
+     * expiry only addresses it (Prm_Req, no master). */
+    CHECK(R.s.diag_framed);
+    const dp_diag_buffer_t *d = &R.s.diag[R.s.diag_current];
+    CHECK_BYTES(&d->buf[FDL_TX_HEADROOM], 4u, 0x02, 0x05, 0x00, 0xFF);
 }
 
 static void test_watchdog_10ms_base(void)
