@@ -70,6 +70,8 @@ typedef struct rig {
     bool req_addressed;     /* addressed to the card itself */
     bool req_srd;           /* ... as SRD (a service with reply) */
     bool fcb_repeat;
+    uint8_t tx_frame[FDL_FRAME_MAX]; /* the reply, checked once the telegram is done */
+    size_t tx_len;
     bool last_accepted;
     bool tsyn_drop;         /* the card dropped this telegram for want of TSYN idle */     /* the last character completed a telegram (shadow) */
     bool wd_expired;
@@ -138,6 +140,20 @@ static int uart_transmit(void *ctx, const uint8_t *frame, size_t len, hal_time_u
     hal_time_us_t min_start = r.shadow.frame_end_t + hal_uart_bits_us(r.baud, FDL_MIN_TSDR_DEFAULT_BITS);
     PROPERTY(hal_time_diff(not_before, min_start) >= 0, "reply %d us before end + min TSDR",
              hal_time_diff(min_start, not_before));
+    PROPERTY(len <= sizeof r.tx_frame, "a reply of %zu octets", len);
+    memcpy(r.tx_frame, frame, len);
+    r.tx_len = len;
+    return 0;
+}
+
+/* What the reply says, checked once the card is done with the telegram: an FCB repeat is
+ * reported after the reply went out (the reply does not wait for the event). */
+static void check_reply(void)
+{
+    const fdl_msg_t *q = &r.req;
+    const uint8_t *frame = r.tx_frame;
+    size_t len = r.tx_len;
+    uint8_t code = (uint8_t)(q->fc & FDL_FC_CODE_MASK);
     bool srd = code == FDL_REQ_SRD_LOW || code == FDL_REQ_SRD_HIGH;
     if (r.fcb_repeat) {
         /* a retry: the previous answer to this master again, whatever the request says */
@@ -151,7 +167,7 @@ static int uart_transmit(void *ctx, const uint8_t *frame, size_t len, hal_time_u
     fdl_msg_t m;
     if (!fz_check_reply(frame, len, r.baud, &sc, &m)) {
         PROPERTY(code == FDL_REQ_SRD_LOW || code == FDL_REQ_SRD_HIGH, "SC to FC %02X", q->fc);
-        return 0;
+        return;
     }
     PROPERTY(m.da == q->sa && m.sa == r.address, "reply DA %u SA %u to a request from %u", m.da,
              m.sa, q->sa);
@@ -168,7 +184,6 @@ static int uart_transmit(void *ctx, const uint8_t *frame, size_t len, hal_time_u
                  "reply SAPs %u/%u FC %02X to a request %u/%u", m.dsap, m.ssap, m.fc, q->dsap,
                  q->ssap);
     }
-    return 0;
 }
 
 static const hal_uart_ops_t uart_ops = {.set_baud = uart_set_baud, .transmit = uart_transmit};
@@ -357,6 +372,9 @@ static void deliver_char(uint8_t byte, uint8_t flags, uint64_t dt_ns)
     if (!r.frame_now) {
         PROPERTY(!r.transmitted, "transmitted without a telegram");
         return;
+    }
+    if (r.transmitted) {
+        check_reply();
     }
     r.frame_now = false;
     /* A Data_Exchange the card executed: remember its outputs and the handshake edge. */
