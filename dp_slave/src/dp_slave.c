@@ -395,7 +395,7 @@ static void frame_diag(dp_slave_t *s, uint32_t status)
      * main-loop section that changes the state, which must stay within its budget. Its length
      * alone decides the delimiter: the six standard octets and the two SAPs make an SD3
      * telegram, anything more an SD2 one (protocol.md §A1.2). */
-    _Static_assert(DP_DIAG_STD_LEN + 2u == FDL_SD3_DU_LEN, "a bare diagnosis is an SD3 telegram");
+    _Static_assert(DP_DIAG_STD_LEN + FDL_SAPS_LEN == FDL_SD3_DU_LEN, "a bare diagnosis is an SD3 telegram");
     dp_diag_buffer_t *d = &s->diag[i];
     uint8_t ext = s->ext_diag_len;
     uint8_t *du = &d->buf[FDL_TX_HEADROOM];
@@ -403,7 +403,7 @@ static void frame_diag(dp_slave_t *s, uint32_t status)
     if (ext > 0u) {
         memcpy(&du[DP_DIAG_STD_LEN], s->ext_diag, ext);
     }
-    uint8_t *da = du - FDL_ADDR_FC_LEN - 2u;
+    uint8_t *da = du - FDL_ADDR_FC_LEN - FDL_SAPS_LEN;
     da[0] = FDL_ADDR_EXT; /* DA and DSAP are the requester's, written per request */
     da[1] = (uint8_t)(s->cfg.address | FDL_ADDR_EXT);
     da[FDL_FC_FROM_DA] = FDL_RSP_DL;
@@ -416,7 +416,7 @@ static void frame_diag(dp_slave_t *s, uint32_t status)
     } else {
         start = da - FDL_SD2_HEADER_LEN;
         start[0] = FDL_SD2;
-        start[1] = (uint8_t)(FDL_ADDR_FC_LEN + 2u + DP_DIAG_STD_LEN + ext);
+        start[1] = (uint8_t)(FDL_ADDR_FC_LEN + FDL_SAPS_LEN + DP_DIAG_STD_LEN + ext);
         start[2] = start[1];
         start[3] = FDL_SD2;
     }

@@ -60,14 +60,14 @@ parse_addressing(const uint8_t *addr, size_t du_len, fdl_msg_t *msg)
     msg->fc = addr[2];
     const uint8_t *du = &addr[FDL_ADDR_FC_LEN];
     /* Every DP SAP request: both extensions, one octet each, plain SAPs. */
-    if ((da & sa & FDL_ADDR_EXT) != 0u && du_len >= 2u &&
+    if ((da & sa & FDL_ADDR_EXT) != 0u && du_len >= FDL_SAPS_LEN &&
         ((du[0] | du[1]) & (FDL_AE_MORE | FDL_AE_SEGMENT)) == 0u) {
         msg->has_dsap = true;
         msg->dsap = du[0];
         msg->has_ssap = true;
         msg->ssap = du[1];
-        msg->data = &du[2];
-        msg->data_len = (uint8_t)(du_len - 2u);
+        msg->data = &du[FDL_SAPS_LEN];
+        msg->data_len = (uint8_t)(du_len - FDL_SAPS_LEN);
         return FDL_PARSE_OK;
     }
     size_t pos = 0;
@@ -256,7 +256,7 @@ bool fdl_parse_damaged(const uint8_t *octets, size_t len, fdl_msg_t *msg)
 size_t fdl_encode(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps, uint8_t dsap,
                   uint8_t ssap, const uint8_t *data, size_t data_len)
 {
-    size_t du_len = data_len + (saps ? 2u : 0u);
+    size_t du_len = data_len + (saps ? FDL_SAPS_LEN : 0u);
     if (du_len > FDL_DU_MAX) {
         return 0;
     }
@@ -310,7 +310,7 @@ const uint8_t *fdl_frame_in_place(uint8_t *buf, size_t du_len, uint8_t du_sum, u
     *--p = (uint8_t)((sa & FDL_ADDR_MASK) | addr_bits);
     *--p = (uint8_t)((da & FDL_ADDR_MASK) | addr_bits);
     sum += (uint32_t)p[0] + p[1] + p[2];
-    size_t total_du = du_len + (saps ? 2u : 0u);
+    size_t total_du = du_len + (saps ? FDL_SAPS_LEN : 0u);
     if (total_du == 0u) {
         *--p = FDL_SD1;
     } else if (total_du == FDL_SD3_DU_LEN) {

@@ -21,6 +21,7 @@
 #define FDL_SD2_HEADER_LEN 4u     /* 68 LE LEr 68: DA follows at offset 4 */
 #define FDL_ADDR_FC_LEN 3u        /* DA SA FC */
 #define FDL_FC_FROM_DA 2u         /* FC follows DA and SA */
+#define FDL_SAPS_LEN 2u           /* DSAP SSAP, one extension octet each, leading the DU */
 #define FDL_TRAILER_LEN 2u        /* FCS ED */
 #define FDL_SD2_OVERHEAD 6u /* 68 LE LEr 68 ... FCS 16 */
 #define FDL_LE_MIN 4u       /* DA SA FC + at least one DU octet (LE counts DA..DU) */
