@@ -4,7 +4,7 @@
 
 static uint16_t units_to_bytes(uint8_t len_octet_or_id, bool special_length_octet)
 {
-    uint8_t units = special_length_octet ? (uint8_t)((len_octet_or_id & 0x3Fu) + 1u)
+    uint8_t units = special_length_octet ? (uint8_t)((len_octet_or_id & DP_CFG_SPECIAL_LEN_MASK) + 1u)
                                          : (uint8_t)((len_octet_or_id & DP_CFG_LEN_MASK) + 1u);
     bool words = (len_octet_or_id & DP_CFG_WORDS) != 0u;
     return (uint16_t)(words ? units * 2u : units);
@@ -28,30 +28,28 @@ bool dp_cfg_io_lengths(const uint8_t *cfg, size_t len, uint16_t *out_len, uint16
             }
             continue;
         }
-        /* Special format: bits 7..6 say which length octets follow, bits 3..0 how many
-         * manufacturer octets (15 = none). */
-        uint8_t kind = (uint8_t)(id >> 6);
-        uint8_t vendor = (uint8_t)(id & 0x0Fu);
-        if (kind == 2u || kind == 3u) {
+        uint8_t kind = (uint8_t)(id >> DP_CFG_SPECIAL_KIND_SHIFT);
+        uint8_t vendor = (uint8_t)(id & DP_CFG_SPECIAL_VENDOR_MASK);
+        if (kind == DP_CFG_SPECIAL_OUT || kind == DP_CFG_SPECIAL_INOUT) {
             if (i >= len) {
                 return false;
             }
             out = (uint16_t)(out + units_to_bytes(cfg[i++], true));
         }
-        if (kind == 1u || kind == 3u) {
+        if (kind == DP_CFG_SPECIAL_IN || kind == DP_CFG_SPECIAL_INOUT) {
             if (i >= len) {
                 return false;
             }
             in = (uint16_t)(in + units_to_bytes(cfg[i++], true));
         }
-        if (vendor != 15u) {
+        if (vendor != DP_CFG_SPECIAL_NO_VENDOR) {
             if (len - i < vendor) {
                 return false;
             }
             i += vendor;
         }
     }
-    if (out > 244u || in > 244u) {
+    if (out > DP_IO_LEN_LIMIT || in > DP_IO_LEN_LIMIT) {
         return false;
     }
     *out_len = out;

@@ -10,6 +10,10 @@
 #include "dp_slave/fdl_wire.h"
 #include "dp_slave_internal.h"
 
+/* x * 0x01010101 adds the four octets of x into the top octet (carries leave it). */
+#define OCTET_SUM_MULTIPLIER 0x01010101u
+#define OCTET_SUM_SHIFT 24u
+
 const char *dp_state_name(dp_state_t st)
 {
     switch (st) {
@@ -234,7 +238,7 @@ static void adopt_prm(dp_slave_t *s, const fdl_msg_t *m, const uint8_t dpv1[3], 
     s->dpv1_mode = m->data_len >= DP_PRM_LEN_DPV1 && (dpv1[0] & DP_DPV1_1_ENABLE) != 0u;
     set_state(s, DP_STATE_WAIT_CFG, t);
     s->wd_on = wd_on;
-    uint32_t base_ms = (dpv1[0] & DP_DPV1_1_WD_BASE_1MS) != 0u ? 1u : 10u;
+    uint32_t base_ms = (dpv1[0] & DP_DPV1_1_WD_BASE_1MS) != 0u ? DP_WD_BASE_1MS_MS : DP_WD_BASE_MS;
     s->wd_time_ms = wd_on ? base_ms * p[DP_PRM_WD_FACT_1] * p[DP_PRM_WD_FACT_2] : 0u;
     s->wd_time_us = s->wd_time_ms * 1000u;
     s->wd_deadline = t + s->wd_time_us;
@@ -421,7 +425,7 @@ static void frame_diag(dp_slave_t *s, uint32_t status)
         start[3] = FDL_SD2;
     }
     /* The status word's four octets summed by one multiply (into its top octet). */
-    uint32_t sum = ((status * 0x01010101u) >> 24) + (s->cfg.ident >> 8) +
+    uint32_t sum = ((status * OCTET_SUM_MULTIPLIER) >> OCTET_SUM_SHIFT) + (s->cfg.ident >> 8) +
                    (s->cfg.ident & 0xFFu) + s->ext_diag_sum + da[1] + FDL_RSP_DL +
                    DP_SAP_SLAVE_DIAG;
     uint8_t *end = &du[DP_DIAG_STD_LEN + ext];

@@ -21,7 +21,7 @@ void fdl_collect_init(fdl_collect_t *c, uint8_t *buf, uint32_t baud, bool strict
 
 void fdl_collect_set_baud(fdl_collect_t *c, uint32_t baud)
 {
-    c->char_ns = hal_uart_char_ns(baud != 0u ? baud : 12000000u);
+    c->char_ns = hal_uart_char_ns(baud != 0u ? baud : HAL_UART_BAUD_MAX);
     c->len = 0;
     c->expected = 0;
     c->synced = true;

@@ -7,6 +7,8 @@
 /* The FCS is on the reply path twice (the request's check, the reply's encoding), so it adds
  * four octets per step: two 16-bit lanes per word hold the even and the odd octets, and a lane
  * cannot overflow within a telegram (64 words x 255 < 65536). */
+#define ALTERNATE_OCTETS 0x00FF00FFu
+
 uint8_t fdl_fcs(const uint8_t *p, size_t n)
 {
     uint32_t even = 0;
@@ -15,8 +17,8 @@ uint8_t fdl_fcs(const uint8_t *p, size_t n)
     for (; i + 4u <= n && i < FDL_FRAME_MAX; i += 4u) {
         uint32_t w;
         __builtin_memcpy(&w, &p[i], sizeof w); /* one load: the core is built without builtins */
-        even += w & 0x00FF00FFu;
-        odd += (w >> 8) & 0x00FF00FFu;
+        even += w & ALTERNATE_OCTETS;
+        odd += (w >> 8) & ALTERNATE_OCTETS;
     }
     uint32_t sum = even + (even >> 16) + odd + (odd >> 16);
     for (; i < n; i++) {

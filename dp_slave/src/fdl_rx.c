@@ -17,7 +17,7 @@ void fdl_rx_init(fdl_rx_t *rx, uint32_t baud, bool strict)
 
 void fdl_rx_set_baud(fdl_rx_t *rx, uint32_t baud)
 {
-    rx->char_ns = hal_uart_char_ns(baud != 0u ? baud : 12000000u);
+    rx->char_ns = hal_uart_char_ns(baud != 0u ? baud : HAL_UART_BAUD_MAX);
     uint64_t tsyn_ns = (uint64_t)FDL_TSYN_BITS * rx->char_ns / FDL_CHAR_BITS;
     rx->tsyn_short_ns =
         tsyn_ns > FDL_RX_GAP_TOLERANCE_NS ? (uint32_t)(tsyn_ns - FDL_RX_GAP_TOLERANCE_NS) : 0u;

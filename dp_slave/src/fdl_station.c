@@ -9,10 +9,10 @@
 
 uint32_t dp_baud_search_dwell_us(uint32_t baud)
 {
-    /* Two telegrams of the maximum 255 characters, but never below 20 ms, so a master that
+    /* Two telegrams of the maximum 255 characters, but never below 20 ms: a master that
      * repeats its requests every few milliseconds is heard on every rate it might use. */
-    uint64_t us = (2ull * FDL_FRAME_MAX * FDL_CHAR_BITS * 1000000ull) / baud;
-    return us < 20000u ? 20000u : (uint32_t)us;
+    uint64_t us = (2ull * FDL_FRAME_MAX * FDL_CHAR_BITS * HAL_US_PER_S) / baud;
+    return us < DP_BAUD_SEARCH_DWELL_MIN_US ? DP_BAUD_SEARCH_DWELL_MIN_US : (uint32_t)us;
 }
 
 void fdl_station_timing_changed(dp_slave_t *s)

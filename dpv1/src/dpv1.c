@@ -4,6 +4,7 @@
 
 #include "dp_slave/fdl_frame.h"
 #include "dpv1/dpv1_wire.h"
+#include "hal/hal_byte_order.h"
 
 static void conn_close(dpv1_conn_t *c)
 {
@@ -86,7 +87,7 @@ static dp_sap_answer_t resource_manager(dpv1_t *d, uint8_t master, uint8_t ssap,
                                         hal_time_us_t t)
 {
     if (len < DPV1_INITIATE_MIN || data[0] != DPV1_FN_INITIATE) {
-        return abort_reply(0x02u, reply); /* FE: bad request PDU */
+        return abort_reply(DPV1_ABORT_REASON_FE, reply);
     }
     int free_slot = -1;
     for (uint8_t i = 0; i < DPV1_C2_CONNECTIONS; i++) {
@@ -107,8 +108,8 @@ static dp_sap_answer_t resource_manager(dpv1_t *d, uint8_t master, uint8_t ssap,
     c->open = true;
     c->master = master;
     c->ssap = ssap;
-    uint32_t timeout_10ms = (uint32_t)((data[4] << 8) | data[5]);
-    c->send_timeout_us = (timeout_10ms == 0u ? 1u : timeout_10ms) * 10000u;
+    uint32_t timeout_10ms = hal_get_be16(&data[DPV1_INITIATE_SEND_TIMEOUT]);
+    c->send_timeout_us = (timeout_10ms == 0u ? 1u : timeout_10ms) * DPV1_SEND_TIMEOUT_UNIT_US;
     c->last_rx = t;
     (void)mailbox_request(c, data, len, reply); /* Initiate.res comes from poll */
     uint8_t *du = &reply->buf[FDL_TX_HEADROOM];
@@ -293,10 +294,10 @@ static size_t do_initiate(uint8_t *rsp)
 {
     rsp[0] = DPV1_FN_INITIATE;
     rsp[1] = DPV1_MAX_DATA;
-    rsp[2] = 0x01; /* Features_Supported_1: DPV1_RW */
-    rsp[3] = 0x00;
-    memset(&rsp[4], 0, 8);
-    return 12;
+    rsp[2] = DPV1_FEATURES_1_DPV1_RW;
+    rsp[3] = 0x00; /* Features_Supported_2 */
+    memset(&rsp[4], 0, DPV1_INITIATE_RES_HEAD_LEN - 4u); /* profile features and ident: 0 */
+    return DPV1_INITIATE_RES_HEAD_LEN;
 }
 
 static void serve(dpv1_t *d, dpv1_conn_t *c, bool class2, hal_time_us_t now)

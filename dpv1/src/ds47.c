@@ -23,18 +23,18 @@ void ds47_reset(ds47_t *d)
 static uint16_t profidrive_error(uint16_t movilink)
 {
     if ((movilink >> 8) != ML_CLASS_OTHER) {
-        return (uint16_t)(0x0080u + (movilink & 0xFFu));
+        return (uint16_t)(PD_ERR_MANUFACTURER_BASE + (movilink & 0xFFu));
     }
     switch (movilink & 0xFFu) {
-    case ML_ADD_ILLEGAL_INDEX: return 0x00u;
-    case ML_ADD_READ_ONLY: return 0x01u;
+    case ML_ADD_ILLEGAL_INDEX: return PD_ERR_PARAMETER_NUMBER;
+    case ML_ADD_READ_ONLY: return PD_ERR_READ_ONLY;
     case ML_ADD_TOO_HIGH:
-    case ML_ADD_TOO_LOW: return 0x02u;
-    case ML_ADD_VALUE_NOT_PERMITTED: return 0x14u;
+    case ML_ADD_TOO_LOW: return PD_ERR_LIMIT_EXCEEDED;
+    case ML_ADD_VALUE_NOT_PERMITTED: return PD_ERR_VALUE_IMPERMISSIBLE;
     case ML_ADD_PARAMETER_LOCK:
     case ML_ADD_CONTROLLER_INHIBIT_REQUIRED:
-    case ML_ADD_OUTPUT_STAGE_ENABLED: return 0x11u;
-    default: return (uint16_t)(0x0080u + (movilink & 0xFFu));
+    case ML_ADD_OUTPUT_STAGE_ENABLED: return PD_ERR_OPERATING_STATE;
+    default: return (uint16_t)(PD_ERR_MANUFACTURER_BASE + (movilink & 0xFFu));
     }
 }
 
@@ -65,20 +65,20 @@ static void parse_address(ds47_t *d, uint8_t i, const uint8_t *a)
         uint8_t svc = (uint8_t)(attr >> DS47_ATTR_ML_SERVICE_SHIFT);
         p->service = svc;
         if (svc != ML_SVC_READ && svc != ML_SVC_WRITE && svc != ML_SVC_WRITE_VOLATILE) {
-            fail(d, i, 0, 0x0505u);
+            fail(d, i, 0, ML_ERROR_ILLEGAL_PARAMETER);
             p->service = svc; /* still decides whether a value block follows */
         }
     } else {
         p->service = d->id == DS47_ID_CHANGE ? ML_SVC_WRITE : ML_SVC_READ;
         if (attr != DS47_ATTR_VALUE) {
-            fail(d, i, 0x05u, 0);
+            fail(d, i, PD_ERR_DATA_TYPE, 0);
             p->service = d->id == DS47_ID_CHANGE ? ML_SVC_WRITE : ML_SVC_NONE;
         }
     }
     if (p->ok && hal_get_be16(&a[4]) != 0u) {
-        fail(d, i, 0x03u, 0x0810u);
+        fail(d, i, PD_ERR_SUBINDEX, ML_ERROR_ILLEGAL_INDEX);
     } else if (p->ok && a[1] > 1u) {
-        fail(d, i, 0x04u, 0x0810u);
+        fail(d, i, PD_ERR_NO_ARRAY, ML_ERROR_ILLEGAL_INDEX);
     }
 }
 
@@ -91,20 +91,20 @@ static bool parse_value(ds47_t *d, uint8_t i, const uint8_t *req, size_t len)
         return true;
     }
     size_t pos = d->pos;
-    if (pos + 2u > len) {
+    if (pos + DS47_VALUE_HEADER_LEN > len) {
         return false;
     }
     uint8_t format = req[pos];
     uint8_t count = req[pos + 1u];
-    pos += 2u;
+    pos += DS47_VALUE_HEADER_LEN;
     size_t bytes = format == DS47_FORMAT_DWORD ? 4u * count : 2u * count;
     if (pos + bytes > len) {
         return false;
     }
     if (p->ok && format != DS47_FORMAT_DWORD) {
-        fail(d, i, 0x17u, 0x0810u);
+        fail(d, i, PD_ERR_FORMAT, ML_ERROR_ILLEGAL_INDEX);
     } else if (p->ok && count != 1u) {
-        fail(d, i, 0x18u, 0x0810u);
+        fail(d, i, PD_ERR_VALUE_COUNT, ML_ERROR_ILLEGAL_INDEX);
     } else if (p->ok) {
         p->value = hal_get_be32(&req[pos]);
     }
@@ -130,7 +130,9 @@ static void finish(ds47_t *d)
         }
     }
     d->all_ok = failed == 0u;
-    d->rsp_len = (uint8_t)(4u + 4u * failed + 6u * read + (d->all_ok ? 0u : 2u * written));
+    d->rsp_len = (uint8_t)(DS47_HEADER_LEN + DS47_ERROR_ENTRY_LEN * failed +
+                          DS47_READ_ENTRY_LEN * read +
+                          (d->all_ok ? 0u : DS47_WRITE_ENTRY_LEN * written));
     d->state = DS47_DONE;
 }
 
@@ -145,9 +147,11 @@ static void on_done(void *ctx, uint8_t channel, const uint8_t rsp[ML_TELEGRAM_LE
     }
     ds47_param_t *p = &d->p[d->next];
     if ((rsp[ML_OFF_MANAGEMENT] & ML_MGMT_ERROR) != 0u) {
-        uint16_t movilink = (uint16_t)((rsp[4] << 8) | rsp[7]);
-        if (rsp[4] != ML_CLASS_OTHER) {
-            movilink = (uint16_t)((rsp[4] << 8) | rsp[5]); /* 0x0505, 0x0602, 0x0608 */
+        /* Class 8 carries its reason in the additional code; the card's own classes 5 and 6
+         * in the code octet (0x0505, 0x0602, 0x0608). */
+        uint16_t movilink = ML_ERROR_WORD(rsp[ML_OFF_ERROR_CLASS], rsp[ML_OFF_ERROR_ADD_LOW]);
+        if (rsp[ML_OFF_ERROR_CLASS] != ML_CLASS_OTHER) {
+            movilink = ML_ERROR_WORD(rsp[ML_OFF_ERROR_CLASS], rsp[ML_OFF_ERROR_CODE]);
         }
         fail(d, d->next, profidrive_error(movilink), movilink);
     } else if (!is_write(p->service)) {
@@ -197,7 +201,7 @@ static uint8_t start_write(ds47_t *d, const uint8_t *req, size_t len)
         return DPV1_ERR_STATE_CONFLICT;
     }
     d->state = DS47_IDLE; /* a new request drops an unread response */
-    if (len < 4u) {
+    if (len < DS47_HEADER_LEN) {
         return DPV1_ERR_INVALID_RANGE;
     }
     uint8_t id = req[1];
@@ -214,7 +218,7 @@ static uint8_t start_write(ds47_t *d, const uint8_t *req, size_t len)
     d->n = n;
     d->next = 0;
     d->parse_pass = 0;
-    d->pos = 4;
+    d->pos = DS47_HEADER_LEN;
     d->state = DS47_PARSING;
     return 0;
 }
@@ -234,7 +238,7 @@ static uint8_t accept(ds47_t *d, size_t len, hal_time_us_t now)
     if (d->axis != 0u) {
         for (uint8_t i = 0; i < d->n; i++) {
             d->p[i].ok = false;
-            d->p[i].value = 0x0019u; /* axis nonexistent: the MOVIDRIVE has no sub-axes */
+            d->p[i].value = PD_ERR_AXIS_NONEXISTENT; /* the MOVIDRIVE has no sub-axes */
         }
     }
     d->generation++;
@@ -259,11 +263,11 @@ uint8_t ds47_write_step(ds47_t *d, const uint8_t *req, size_t len, hal_time_us_t
             d->next = 0;
         }
         if (d->parse_pass == 0u) {
-            if ((size_t)d->pos + 6u > len) {
+            if ((size_t)d->pos + DS47_ADDRESS_LEN > len) {
                 return refuse(d);
             }
             parse_address(d, d->next, &req[d->pos]);
-            d->pos = (uint8_t)(d->pos + 6u);
+            d->pos = (uint8_t)(d->pos + DS47_ADDRESS_LEN);
         } else if (d->next == d->n) {
             /* Starting the first service is a step of its own (it sends a MOVILINK request). */
             return k == 0u ? accept(d, len, now) : DS47_IN_PROGRESS;
@@ -297,8 +301,8 @@ uint8_t ds47_read_begin(const ds47_t *d, uint8_t *out, size_t max, ds47_read_cur
     out[2] = d->axis;
     out[3] = d->n;
     cur->entry = 0;
-    cur->len = 4;
-    cur->sum = fdl_fcs(out, 4u);
+    cur->len = DS47_HEADER_LEN;
+    cur->sum = fdl_fcs(out, DS47_HEADER_LEN);
     return 0;
 }
 

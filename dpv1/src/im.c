@@ -17,27 +17,27 @@ static void put_text(uint8_t *p, const char *s, size_t width)
 
 void im_build_record0(const im_identity_t *id, uint8_t out[IM_RECORD_LEN])
 {
-    memset(out, 0, IM_RECORD_LEN); /* 10-octet manufacturer header: unused */
-    size_t n = 10;
+    memset(out, 0, IM_RECORD_LEN); /* the manufacturer header: unused */
+    size_t n = IM0_HEADER_LEN;
     hal_put_be16(&out[n], id->manufacturer_id);
     n += 2u;
-    put_text(&out[n], id->order_id, 20u);
-    n += 20u;
-    put_text(&out[n], id->serial, 16u);
-    n += 16u;
+    put_text(&out[n], id->order_id, IM0_ORDER_ID_LEN);
+    n += IM0_ORDER_ID_LEN;
+    put_text(&out[n], id->serial, IM0_SERIAL_LEN);
+    n += IM0_SERIAL_LEN;
     hal_put_be16(&out[n], id->hardware_revision);
     n += 2u;
-    memcpy(&out[n], id->software_revision, 4u);
-    n += 4u;
+    memcpy(&out[n], id->software_revision, IM0_SOFTWARE_REVISION_LEN);
+    n += IM0_SOFTWARE_REVISION_LEN;
     hal_put_be16(&out[n], id->revision_counter);
     n += 2u;
     hal_put_be16(&out[n], id->profile_id);
     n += 2u;
     hal_put_be16(&out[n], id->profile_specific_type);
     n += 2u;
-    out[n++] = 0x01; /* IM_VERSION 1.1 */
-    out[n++] = 0x01;
-    hal_put_be16(&out[n], 0x001Eu); /* IM_SUPPORTED: I&M1..I&M4 */
+    out[n++] = IM0_VERSION_MAJOR;
+    out[n++] = IM0_VERSION_MINOR;
+    hal_put_be16(&out[n], IM0_SUPPORTED_IM1_TO_IM4);
 }
 
 void im_init(im_t *im, const im_identity_t *id, hal_nvm_t nvm, size_t nvm_offset)
@@ -95,7 +95,7 @@ uint8_t im_write(im_t *im, const uint8_t *data, size_t len, uint16_t *selected)
     memcpy(rec, &data[IM_CALL_HEADER_LEN], IM_RECORD_LEN);
     if (store(im) != 0) {
         memcpy(rec, old, sizeof old);
-        return 0xA1u; /* application: write error */
+        return DPV1_ERR_WRITE_ERROR;
     }
     *selected = fi;
     return 0;

@@ -164,7 +164,7 @@ void sbus_card_link_init(sbus_card_link_t *l, const sbus_card_link_cfg_t *cfg)
 {
     memset(l, 0, sizeof *l);
     l->cfg = *cfg;
-    l->cfg.address &= 0x3Fu;
+    l->cfg.address &= SBUS_ADDRESS_MASK;
     if (l->cfg.timeout_us == 0u) {
         l->cfg.timeout_us = SBUS_PARAM_TIMEOUT_US;
     }
@@ -260,7 +260,7 @@ void sbus_inverter_init(sbus_inverter_t *inv, const sbus_inverter_cfg_t *cfg)
 {
     memset(inv, 0, sizeof *inv);
     inv->cfg = *cfg;
-    inv->cfg.address &= 0x3Fu;
+    inv->cfg.address &= SBUS_ADDRESS_MASK;
 }
 
 static void inverter_param(sbus_inverter_t *inv, uint16_t rsp_id, const hal_can_frame_t *f)

@@ -312,7 +312,9 @@ static inline uint32_t dp_slave_wd_time_ms(const dp_slave_t *s)
 const char *dp_state_name(dp_state_t st);
 const char *dp_baud_state_name(dp_baud_state_t st);
 
-/* Dwell time on one rate during the baud search: long enough for two longest telegrams. */
+/* Dwell time on one rate during the baud search: long enough for two longest telegrams, and
+ * never below DP_BAUD_SEARCH_DWELL_MIN_US. */
+#define DP_BAUD_SEARCH_DWELL_MIN_US 20000u
 uint32_t dp_baud_search_dwell_us(uint32_t baud);
 
 #endif

@@ -45,6 +45,14 @@
 #define DP_DPV1_1_DIS_STOP_CONTROL 0x02u
 #define DP_DPV1_1_DIS_START_CONTROL 0x01u
 
+#define DP_DPV1_3_PRM_STRUCTURE 0x08u
+#define DP_DPV1_3_ALARM_MODE_MASK 0x07u
+
+/* The watchdog counts WD_Fact_1 x WD_Fact_2 in units of 10 ms, or of 1 ms with
+ * DP_DPV1_1_WD_BASE_1MS. */
+#define DP_WD_BASE_MS 10u
+#define DP_WD_BASE_1MS_MS 1u
+
 /* Slave_Diag DU: six standard octets. */
 #define DP_DIAG_STATUS_1 0u
 #define DP_DIAG_STATUS_2 1u
@@ -92,5 +100,20 @@
 #define DP_CFG_DIR_OUT 0x20u
 #define DP_CFG_DIR_INOUT 0x30u
 #define DP_CFG_LEN_MASK 0x0Fu
+/* A general identifier: flags, direction and units - 1 in the low nibble. */
+#define DP_CFG_GENERAL(flags, units) ((flags) | ((units) - 1u))
+
+/* Special identifier format (protocol.md §A3.3): bits 7..6 say which length octets follow,
+ * bits 3..0 how many manufacturer octets (15: none). A length octet counts 1..64 units. */
+#define DP_CFG_SPECIAL_KIND_SHIFT 6u
+#define DP_CFG_SPECIAL_OUT 2u
+#define DP_CFG_SPECIAL_IN 1u
+#define DP_CFG_SPECIAL_INOUT 3u
+#define DP_CFG_SPECIAL_VENDOR_MASK 0x0Fu
+#define DP_CFG_SPECIAL_NO_VENDOR 15u
+#define DP_CFG_SPECIAL_LEN_MASK 0x3Fu
+
+/* The largest input or output image a configuration may describe (a Data_Exchange DU). */
+#define DP_IO_LEN_LIMIT 244u
 
 #endif

@@ -33,12 +33,19 @@
 #define DPV1_MAX_DATA 240u
 #define DPV1_MAX_PDU (DPV1_HEADER_LEN + DPV1_MAX_DATA)
 #define DPV1_INITIATE_MIN 20u
+/* Initiate (protocol.md §A4.4): the request's Send_Timeout (u16, in 10 ms) at octet 4; the
+ * response's 12-octet head, Features_Supported_1 b0 = DPV1_RW. */
+#define DPV1_INITIATE_SEND_TIMEOUT 4u
+#define DPV1_SEND_TIMEOUT_UNIT_US 10000u
+#define DPV1_INITIATE_RES_HEAD_LEN 12u
+#define DPV1_FEATURES_1_DPV1_RW 0x01u
 
 #define DPV1_INDEX_DS47 47u
 #define DPV1_INDEX_IM 255u
 
 /* Abort: Subnet, Instance | Reason (instance 0x10 = MSAC_C2), reserved. */
 #define DPV1_ABORT_INSTANCE_C2 0x10u
+#define DPV1_ABORT_REASON_FE 0x02u /* the request PDU is malformed */
 #define DPV1_ABORT_REASON_TIMEOUT 0x03u
 #define DPV1_ABORT_REASON_RESOURCE 0x0Fu
 
@@ -57,6 +64,30 @@
 #define DS47_FORMAT_ZERO 0x40u
 #define DS47_FORMAT_DWORD 0x43u
 #define DS47_FORMAT_ERROR 0x44u
+/* Request header: Request Reference, Request/Response ID, Axis, number of parameters; then an
+ * address block per parameter, then a value block per writing parameter (format, count,
+ * values). A response entry: format, count and the DWORD value, or an error word. */
+#define DS47_HEADER_LEN 4u
+#define DS47_ADDRESS_LEN 6u
+#define DS47_VALUE_HEADER_LEN 2u
+#define DS47_READ_ENTRY_LEN 6u
+#define DS47_ERROR_ENTRY_LEN 4u
+#define DS47_WRITE_ENTRY_LEN 2u
+
+/* PROFIdrive error numbers the card answers (protocol.md §A5.3, §B7.4); MOVILINK errors other
+ * than the mapped class-8 codes go to the manufacturer range at 0x80 + their code octet. */
+#define PD_ERR_PARAMETER_NUMBER 0x00u
+#define PD_ERR_READ_ONLY 0x01u
+#define PD_ERR_LIMIT_EXCEEDED 0x02u
+#define PD_ERR_SUBINDEX 0x03u
+#define PD_ERR_NO_ARRAY 0x04u
+#define PD_ERR_DATA_TYPE 0x05u
+#define PD_ERR_OPERATING_STATE 0x11u
+#define PD_ERR_VALUE_IMPERMISSIBLE 0x14u
+#define PD_ERR_FORMAT 0x17u
+#define PD_ERR_VALUE_COUNT 0x18u
+#define PD_ERR_AXIS_NONEXISTENT 0x19u
+#define PD_ERR_MANUFACTURER_BASE 0x80u
 
 /* I&M through the call service on index 255 (protocol.md §A7). */
 #define IM_RECORD_LEN 64u
@@ -64,5 +95,16 @@
 #define IM_FN_CALL 0x08u
 #define IM_INDEX_0 65000u
 #define IM_INDEX_LAST 65004u
+/* I&M0 record layout (protocol.md §A7): a 10-octet manufacturer header, then the fields below
+ * in order, texts blank-padded. IM_SUPPORTED 0x001E: I&M1..I&M4. */
+#define IM0_HEADER_LEN 10u
+#define IM0_ORDER_ID_LEN 20u
+#define IM0_SERIAL_LEN 16u
+#define IM0_SOFTWARE_REVISION_LEN 4u
+#define IM0_VERSION_MAJOR 0x01u
+#define IM0_VERSION_MINOR 0x01u
+#define IM0_SUPPORTED_IM1_TO_IM4 0x001Eu
+/* The application's error class for a write that could not be stored (Error_Code_1). */
+#define DPV1_ERR_WRITE_ERROR 0xA1u
 
 #endif

@@ -18,10 +18,10 @@
 
 typedef struct im_identity {
     uint16_t manufacturer_id;  /* 0x010A = SEW-EURODRIVE */
-    char order_id[21];         /* blank-padded to 20 in the record */
-    char serial[17];           /* blank-padded to 16 */
+    char order_id[IM0_ORDER_ID_LEN + 1u]; /* blank-padded in the record */
+    char serial[IM0_SERIAL_LEN + 1u];
     uint16_t hardware_revision;
-    uint8_t software_revision[4]; /* 'V', major, minor, bugfix */
+    uint8_t software_revision[IM0_SOFTWARE_REVISION_LEN]; /* 'V', major, minor, bugfix */
     uint16_t revision_counter;
     uint16_t profile_id;
     uint16_t profile_specific_type;

@@ -7,6 +7,19 @@
 
 const uint8_t dfp21b_default_cfg[2] = {0xF3u, 0xF2u};
 
+/* The parameter channel's identifiers (manual §4.1): 4 I/O words or 8 I/O octets, consistent
+ * over the whole length. */
+#define CFG_PARAM_CHANNEL_WORDS DP_CFG_GENERAL(DP_CFG_CONSISTENT | DP_CFG_WORDS | DP_CFG_DIR_INOUT, 4u)
+#define CFG_PARAM_CHANNEL_OCTETS DP_CFG_GENERAL(DP_CFG_CONSISTENT | DP_CFG_DIR_INOUT, 8u)
+/* The station address: DIP switches 2^0..2^6 (manual §3.2, protocol.md §B1). */
+#define DIP_ADDRESS_MASK 0x7Fu
+/* P090 codes beyond the predefined configurations (protocol.md §C4). */
+#define P090_UNIVERSAL 254u
+#define P090_NONE 255u
+/* Status word 1 (protocol.md §C3.3): bit 5 fault/warning, the high octet its number. */
+#define STATUS_WORD_FAULT 0x20u
+#define STATUS_WORD_FAULT_SHIFT 8u
+
 /* ---- configuration (manual §4.1, §8.1; protocol.md §B3) -------------------------------------- */
 
 typedef struct ident_info {
@@ -31,8 +44,7 @@ static bool decode_general(uint8_t b, ident_info_t *info)
 
 static bool is_param_channel(uint8_t b)
 {
-    /* 4 I/O words or 8 I/O octets, consistent over the whole length. */
-    return b == 0xF3u || b == 0xB7u;
+    return b == CFG_PARAM_CHANNEL_WORDS || b == CFG_PARAM_CHANNEL_OCTETS;
 }
 
 /* Process-data module: one I/O identifier, or an output and an input identifier. Lengths in
@@ -112,7 +124,7 @@ bool dfp21b_check_user_prm(const uint8_t *prm, size_t len, bool *diag_alarm)
     if (prm[1] != 0u) {
         return false;
     }
-    if ((prm[2] & (uint8_t)~0x0Fu) != 0u) { /* Prm_Structure and Alarm_Mode only */
+    if ((prm[2] & (uint8_t)~(DP_DPV1_3_PRM_STRUCTURE | DP_DPV1_3_ALARM_MODE_MASK)) != 0u) {
         return false;
     }
     if (memcmp(&prm[3], block, sizeof block) != 0 || prm[8] > 1u) {
@@ -132,7 +144,7 @@ size_t dfp21b_p090_text(const dfp21b_pd_cfg_t *pd, char *out, size_t max)
     if (!pd->valid) {
         buf[n++] = '0';
     } else {
-        if (pd->pd_words >= 10u) {
+        if (pd->pd_words >= DFP21B_MAX_PD) { /* 10 PD: the only two-digit count */
             buf[n++] = '1';
             buf[n++] = '0';
         } else {
@@ -355,7 +367,7 @@ void dfp21b_init(dfp21b_t *c, const dfp21b_cfg_t *cfg, hal_time_us_t now)
     if (cfg->dip.ops != NULL && cfg->dip.ops->read != NULL) {
         dip = cfg->dip.ops->read(cfg->dip.ctx);
     }
-    c->address = (uint8_t)(dip & 0x7Fu);
+    c->address = (uint8_t)(dip & DIP_ADDRESS_MASK);
     c->on_bus = c->address <= DFP21B_MAX_ADDRESS;
     ml_client_init(&c->ml, cfg->inverter, 0);
     ml_channel_init(&c->param, &c->ml, DFP21B_CH_CYCLIC);
@@ -388,15 +400,15 @@ void dfp21b_rx_telegram(dfp21b_t *c, const fdl_rx_telegram_t *tg)
 static uint8_t p090_code(const dfp21b_pd_cfg_t *pd)
 {
     if (!pd->valid) {
-        return 255u;
+        return P090_NONE;
     }
-    static const uint8_t words[5] = {1u, 2u, 3u, 6u, 10u};
-    for (uint8_t i = 0; i < 5u; i++) {
+    static const uint8_t words[] = {1u, 2u, 3u, 6u, 10u};
+    for (uint8_t i = 0; i < (uint8_t)sizeof words; i++) {
         if (pd->pd_words == words[i]) {
             return (uint8_t)(2u * i + (pd->param_channel ? 0u : 1u));
         }
     }
-    return 254u;
+    return P090_UNIVERSAL;
 }
 
 static void push_fieldbus_status(dfp21b_t *c)
@@ -505,8 +517,9 @@ static void on_status(void *ctx, uint8_t channel, const uint8_t rsp[ML_TELEGRAM_
     if ((rsp[ML_OFF_MANAGEMENT] & ML_MGMT_ERROR) != 0u) {
         return;
     }
-    uint32_t sw = ml_data(rsp) & 0xFFFFu;
-    dfp21b_set_inverter_fault(c, (sw & 0x20u) != 0u ? (uint8_t)(sw >> 8) : 0u);
+    uint16_t sw = (uint16_t)ml_data(rsp);
+    dfp21b_set_inverter_fault(
+        c, (sw & STATUS_WORD_FAULT) != 0u ? (uint8_t)(sw >> STATUS_WORD_FAULT_SHIFT) : 0u);
 }
 
 static void poll_inverter_status(dfp21b_t *c, hal_time_us_t now)

@@ -27,6 +27,13 @@
 /* The ten PROFIBUS rates, in the order the baud search walks them (highest first). */
 #define HAL_UART_NUM_BAUDS 10u
 extern const uint32_t hal_uart_bauds[HAL_UART_NUM_BAUDS];
+/* The highest rate: where a station starts listening before it knows the bus's rate. */
+#define HAL_UART_BAUD_MAX 12000000u
+
+/* Start, 8 data, even parity, stop. */
+#define HAL_UART_CHAR_BITS 11u
+#define HAL_NS_PER_S 1000000000ull
+#define HAL_US_PER_S 1000000ull
 
 typedef struct hal_uart_ops {
     /* Switch the receiver and transmitter to a new rate. Returns 0 or a negative error. Called
@@ -45,13 +52,13 @@ typedef struct hal_uart {
 /* Duration of one 11-bit character in nanoseconds at the given rate. */
 static inline uint32_t hal_uart_char_ns(uint32_t baud)
 {
-    return (uint32_t)((11ull * 1000000000ull + baud / 2u) / baud);
+    return (uint32_t)((HAL_UART_CHAR_BITS * HAL_NS_PER_S + baud / 2u) / baud);
 }
 
 /* n bit times in microseconds, rounded up. */
 static inline uint32_t hal_uart_bits_us(uint32_t baud, uint32_t bits)
 {
-    return (uint32_t)(((uint64_t)bits * 1000000ull + baud - 1u) / baud);
+    return (uint32_t)(((uint64_t)bits * HAL_US_PER_S + baud - 1u) / baud);
 }
 
 #endif

@@ -6,6 +6,8 @@
 
 #include <stdint.h>
 
+#include "hal/hal_byte_order.h"
+
 #define ML_TELEGRAM_LEN 8u
 
 #define ML_OFF_MANAGEMENT 0u
@@ -13,6 +15,11 @@
 #define ML_OFF_INDEX_HIGH 2u
 #define ML_OFF_INDEX_LOW 3u
 #define ML_OFF_DATA 4u
+/* An error reply's data octets: class, code, additional code (high, low). */
+#define ML_OFF_ERROR_CLASS 4u
+#define ML_OFF_ERROR_CODE 5u
+#define ML_OFF_ERROR_ADD_HIGH 6u
+#define ML_OFF_ERROR_ADD_LOW 7u
 
 /* Management byte. */
 #define ML_MGMT_SERVICE_MASK 0x0Fu
@@ -58,32 +65,34 @@
 #define ML_ADD_NOT_SAVED 0x1Fu
 #define ML_ADD_OUTPUT_STAGE_ENABLED 0x20u
 
+/* A MOVILINK error as one word, class in the high octet (protocol.md §B7.3): 0x0810 illegal
+ * index, 0x0505 wrong management coding. */
+#define ML_ERROR_WORD(err_class, code) ((uint16_t)(((err_class) << 8) | (code)))
+#define ML_ERROR_ILLEGAL_INDEX ML_ERROR_WORD(ML_CLASS_OTHER, ML_ADD_ILLEGAL_INDEX)
+#define ML_ERROR_ILLEGAL_PARAMETER ML_ERROR_WORD(ML_CLASS_SERVICE, ML_CODE_ILLEGAL_PARAMETER)
+
 static inline uint16_t ml_index(const uint8_t *t)
 {
-    return (uint16_t)((t[ML_OFF_INDEX_HIGH] << 8) | t[ML_OFF_INDEX_LOW]);
+    return hal_get_be16(&t[ML_OFF_INDEX_HIGH]);
 }
 
 static inline uint32_t ml_data(const uint8_t *t)
 {
-    return ((uint32_t)t[4] << 24) | ((uint32_t)t[5] << 16) | ((uint32_t)t[6] << 8) | t[7];
+    return hal_get_be32(&t[ML_OFF_DATA]);
 }
 
 static inline void ml_put_data(uint8_t *t, uint32_t v)
 {
-    t[4] = (uint8_t)(v >> 24);
-    t[5] = (uint8_t)(v >> 16);
-    t[6] = (uint8_t)(v >> 8);
-    t[7] = (uint8_t)v;
+    hal_put_be32(&t[ML_OFF_DATA], v);
 }
 
 /* An error reply: management with the error bit, class/code/additional code in the data. */
 static inline void ml_put_error(uint8_t *t, uint8_t err_class, uint8_t code, uint16_t add)
 {
     t[ML_OFF_MANAGEMENT] = (uint8_t)(t[ML_OFF_MANAGEMENT] | ML_MGMT_ERROR);
-    t[4] = err_class;
-    t[5] = code;
-    t[6] = (uint8_t)(add >> 8);
-    t[7] = (uint8_t)add;
+    t[ML_OFF_ERROR_CLASS] = err_class;
+    t[ML_OFF_ERROR_CODE] = code;
+    hal_put_be16(&t[ML_OFF_ERROR_ADD_HIGH], add);
 }
 
 #endif

@@ -52,6 +52,11 @@
 #define SBUS_PD_WORDS 3u
 #define SBUS_PD_LEN 6u
 #define SBUS_PARAM_BIT 0x200u
+/* Identifier: parameter bit, the 6-bit address in bits 8..3, the function in bits 2..0
+ * (protocol.md §C2.1). */
+#define SBUS_ADDRESS_MASK 0x3Fu
+#define SBUS_ADDRESS_SHIFT 3u
+#define SBUS_FN_MASK 7u
 #define SBUS_FN_PO 3u
 #define SBUS_FN_PI 4u
 #define SBUS_FN_PO_SYNC 5u
@@ -71,7 +76,8 @@
 /* Identifier helpers; a = SBus address 0..63 (P813) or group address (P814). */
 static inline uint16_t sbus_id(uint8_t a, bool param, uint8_t fn)
 {
-    return (uint16_t)((param ? SBUS_PARAM_BIT : 0u) | ((a & 0x3Fu) << 3) | (fn & 7u));
+    return (uint16_t)((param ? SBUS_PARAM_BIT : 0u) | ((a & SBUS_ADDRESS_MASK) << SBUS_ADDRESS_SHIFT) |
+                      (fn & SBUS_FN_MASK));
 }
 static inline uint16_t sbus_id_po(uint8_t a) { return sbus_id(a, false, SBUS_FN_PO); }
 static inline uint16_t sbus_id_pi(uint8_t a) { return sbus_id(a, false, SBUS_FN_PI); }
@@ -85,8 +91,11 @@ static inline uint16_t sbus_id_group_param(uint8_t g)
 {
     return sbus_id(g, true, SBUS_FN_GROUP_PARAM);
 }
-static inline uint8_t sbus_id_address(uint16_t id) { return (uint8_t)((id >> 3) & 0x3Fu); }
-static inline uint8_t sbus_id_function(uint16_t id) { return (uint8_t)(id & 7u); }
+static inline uint8_t sbus_id_address(uint16_t id)
+{
+    return (uint8_t)((id >> SBUS_ADDRESS_SHIFT) & SBUS_ADDRESS_MASK);
+}
+static inline uint8_t sbus_id_function(uint16_t id) { return (uint8_t)(id & SBUS_FN_MASK); }
 static inline bool sbus_id_is_param(uint16_t id) { return (id & SBUS_PARAM_BIT) != 0u; }
 
 /* PD words <-> the 6 octets of a PO/PI frame, big-endian. n < 3 pads with 0; n > 3 is cut. */
