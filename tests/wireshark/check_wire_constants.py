@@ -3,7 +3,8 @@
 
 tools/wireshark/profibus_*.lua name the codes of the wire (delimiters, FDL function and
 response codes, SAPs, DP-V1 function numbers and error codes, data set 47 ids, formats and
-attributes, I&M indices, MOVILINK services and errors) in Lua tables of its own; the firmware
+attributes, the PROFIdrive error numbers the card answers, I&M indices, MOVILINK services
+and errors) in Lua tables of its own; the firmware
 takes them from fdl_wire.h, dp_wire.h, dpv1_wire.h and movilink_wire.h. Each C macro below is
 looked up in its Lua table by the name the dissector shows for it, and the two values must
 agree; where a Lua table should hold nothing but header codes, every entry must be claimed by a
@@ -87,6 +88,7 @@ CHECKS = [
     ("DPV1_ERR_INVALID_RANGE", "invalid range"),
     ("DPV1_ERR_NOT_SUPPORTED", "feature not supported"))] + [
     ("DPV1_ABORT_INSTANCE_C2", "abort_instances", "MSAC_C2", shift4),
+    ("DPV1_ABORT_REASON_FE", "abort_reasons", "FE bad request PDU"),
     ("DPV1_ABORT_REASON_TIMEOUT", "abort_reasons", "TO connection timeout"),
     ("DPV1_ABORT_REASON_RESOURCE", "abort_reasons", "RES resource"),
     ("DS47_ID_REQUEST", "ds47_ids", "request parameter"),
@@ -103,6 +105,14 @@ CHECKS = [
     ("DS47_FORMAT_DWORD", "ds47_formats", "Double word"),
     ("DS47_FORMAT_ERROR", "ds47_formats", "Error"),
     ("IM_INDEX_0", "im_records", "I&M0"), ("IM_INDEX_LAST", "im_records", "I&M4"),
+] + [("PD_ERR_" + m, "profidrive_errors", n) for m, n in (
+    ("PARAMETER_NUMBER", "impermissible parameter number"),
+    ("READ_ONLY", "parameter value cannot be changed"),
+    ("LIMIT_EXCEEDED", "low or high limit exceeded"), ("SUBINDEX", "faulty subindex"),
+    ("NO_ARRAY", "no array"), ("DATA_TYPE", "incorrect data type"),
+    ("OPERATING_STATE", "request cannot be executed because of operating state"),
+    ("VALUE_IMPERMISSIBLE", "value impermissible"), ("FORMAT", "illegal format"),
+    ("VALUE_COUNT", "number of values inconsistent"), ("AXIS_NONEXISTENT", "axis nonexistent"))] + [
     # movilink_wire.h
     ("ML_SVC_NONE", "ml_services", "no service"), ("ML_SVC_READ", "ml_services", "read"),
     ("ML_SVC_WRITE", "ml_services", "write"),
