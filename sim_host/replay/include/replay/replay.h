@@ -447,5 +447,16 @@ int replay_run_file(replay_t *r, const replay_input_t *src, volatile const int *
 /* The same through replay_scan_feed. */
 int replay_scan_file(replay_scan_t *s, const replay_input_t *src, volatile const int *stop,
                      replay_progress_t progress, void *ctx, replay_file_status_t *st);
+/* The first `records` records (or fewer) through replay_scan_feed. */
+int replay_scan_file_head(replay_scan_t *s, const replay_input_t *src, uint64_t records,
+                          volatile const int *stop, replay_file_status_t *st);
+/* One pass through both: every record to replay_scan_feed, then to replay_feed (then
+ * replay_finish). The first pass and the replay in one reading of the file, for a replay set
+ * up from a guess at what the first pass will find: the caller checks the guess against the
+ * finished scan, and replays again when it was wrong (the replay depends on nothing but its
+ * options and the records). */
+int replay_scan_run_file(replay_scan_t *s, replay_t *r, const replay_input_t *src,
+                         volatile const int *stop, replay_progress_t progress, void *ctx,
+                         replay_file_status_t *st);
 
 #endif
