@@ -78,8 +78,15 @@ typedef struct scan_and_replay {
 static void feed_both(void *target, const cap_record_t *rec)
 {
     scan_and_replay_t *b = target;
-    replay_scan_feed(b->scan, rec);
-    replay_feed(b->replay, rec);
+    if (rec->len == 0u) {
+        replay_scan_feed(b->scan, rec);
+        replay_feed(b->replay, rec);
+        return;
+    }
+    replay_frame_t m; /* read once for both */
+    replay_frame_parse(rec->data, rec->len, &m);
+    replay_scan_feed_frame(b->scan, rec, &m);
+    replay_feed_frame(b->replay, rec, &m);
 }
 
 int replay_run_file(replay_t *r, const replay_input_t *src, volatile const int *stop,

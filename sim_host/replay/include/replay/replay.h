@@ -263,6 +263,8 @@ typedef struct replay {
 int replay_init(replay_t *r, const replay_options_t *opt, char *err, size_t errlen);
 /* One record, in file order. */
 void replay_feed(replay_t *r, const cap_record_t *rec);
+/* The same for a record of at least one octet that m is replay_frame_parse's reading of. */
+void replay_feed_frame(replay_t *r, const cap_record_t *rec, const replay_frame_t *m);
 /* After the last record: lets the card answer the last request and closes the check. */
 void replay_finish(replay_t *r);
 
@@ -372,10 +374,17 @@ typedef struct replay_scan {
     replay_scan_pair_t need;  /* the pair of records needing the highest rate */
     replay_scan_pair_t need2; /* the pair needing the highest rate after it */
     replay_scan_station_t station[REPLAY_SCAN_MAX];
+    /* A line's bounds on an answer's start after a request of bounds_len octets (0: none yet),
+     * per rate: before early_below[i] - 1 us it is too early, after late_above[i] too late. */
+    size_t bounds_len;
+    uint64_t early_below[HAL_UART_NUM_BAUDS];
+    uint64_t late_above[HAL_UART_NUM_BAUDS];
 } replay_scan_t;
 
 void replay_scan_init(replay_scan_t *s);
 void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec);
+/* The same for a record of at least one octet that m is replay_frame_parse's reading of. */
+void replay_scan_feed_frame(replay_scan_t *s, const cap_record_t *rec, const replay_frame_t *m);
 /* Addresses (0..125) that answered and never acted as a master, ascending. Returns how many
  * (at most max are written). */
 unsigned replay_scan_result(const replay_scan_t *s, uint8_t *out, unsigned max);
