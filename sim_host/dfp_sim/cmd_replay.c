@@ -285,6 +285,109 @@ static int finish_replay(const replay_args_t *a, const replay_file_status_t *st)
     return status;
 }
 
+/* The replay set up from rc_state.inferred, through the file once (with scan: the first pass
+ * along with it). Returns 0, or the exit status after reporting. */
+static int replay_pass(const replay_args_t *a, replay_scan_t *scan, replay_file_status_t *st)
+{
+    int rc = start_replay(a);
+    if (rc != 0) {
+        return rc;
+    }
+    progress_t prog;
+    progress_begin(&prog, "replay");
+    if (rc_state.verbose) {
+        prog.on = false; /* the trace is on stdout; keep the terminal readable */
+    }
+    replay_input_t src = {.path = a->file, .format = a->format, .lcm_channel = a->lcm_channel};
+    rc = scan != NULL
+             ? replay_scan_run_file(scan, &rc_state.replay, &src, &cli_stop, progress_show,
+                                    &prog, st)
+             : replay_run_file(&rc_state.replay, &src, &cli_stop, progress_show, &prog, st);
+    progress_end(&prog);
+    if (rc != 0) {
+        cli_error("%s", st->error);
+        close_outputs();
+        return EXIT_USAGE;
+    }
+    return 0;
+}
+
+/* Records the first pass looks at before the replay starts, when it goes along with the
+ * replay: enough for the card's first request and its answer, and the kind of timing, in
+ * any capture seen so far. */
+#define GUESS_RECORDS 4096u
+
+/* The first pass along with the replay saves reading the file twice. It needs a file that can
+ * be read again should the guess be wrong, and nothing that shows the replay while it runs
+ * (a wrong guess replays again). */
+static bool one_pass_possible(const replay_args_t *a)
+{
+    struct stat fst;
+    return a->speed == REPLAY_SPEED_MAX && !a->verbose && a->lcm_url == NULL &&
+           a->http == NULL && stat(a->file, &fst) == 0 && S_ISREG(fst.st_mode);
+}
+
+/* What the replay is set up from: the options replay_init gets from replay_inferred_t. */
+static bool same_setup(const replay_inferred_t *x, const replay_inferred_t *y)
+{
+    return x->address == y->address && x->baud == y->baud &&
+           x->baud_override == y->baud_override && x->fixed_baud == y->fixed_baud &&
+           x->delay_us == y->delay_us;
+}
+
+/* The guess from the first records of the file: 1 when they do not settle the address (the
+ * two passes then), else 0 with the guess in rc_state.inferred, or the exit status. */
+static int guess_setup(const replay_args_t *a, replay_scan_t *scan)
+{
+    replay_file_status_t st;
+    replay_input_t src = {.path = a->file, .format = a->format, .lcm_channel = a->lcm_channel};
+    replay_scan_init(scan);
+    if (replay_scan_file_head(scan, &src, GUESS_RECORDS, &cli_stop, &st) != 0) {
+        cli_error("%s", st.error);
+        return EXIT_USAGE;
+    }
+    if (st.interrupted) {
+        cli_error("replay: interrupted");
+        return 1;
+    }
+    char err[1400];
+    return replay_infer(scan, &st, &a->given, &rc_state.inferred, err, sizeof err) == 0 ? 0
+                                                                                          : -1;
+}
+
+/* The replay with the first pass along with it; once more when the whole file says otherwise
+ * than its first records (the replay then is the one the two passes would give). */
+static int replay_one_pass(const replay_args_t *a, replay_file_status_t *st)
+{
+    static replay_scan_t scan;
+    int rc = guess_setup(a, &scan);
+    if (rc < 0) {
+        rc = first_pass(a, &rc_state.inferred);
+        return rc != 0 ? rc : replay_pass(a, NULL, st);
+    }
+    if (rc != 0) {
+        return rc;
+    }
+    replay_scan_init(&scan);
+    if ((rc = replay_pass(a, &scan, st)) != 0 || st->interrupted) {
+        return rc; /* interrupted: reported as replayed, with what it was set up from */
+    }
+    replay_inferred_t found;
+    char err[1400];
+    if (replay_infer(&scan, st, &a->given, &found, err, sizeof err) != 0) {
+        cli_error("replay: %s", err);
+        close_outputs();
+        return EXIT_USAGE;
+    }
+    bool same = same_setup(&found, &rc_state.inferred);
+    rc_state.inferred = found;
+    if (same) {
+        return 0;
+    }
+    close_outputs();
+    return replay_pass(a, NULL, st);
+}
+
 int cmd_replay(int argc, char **argv)
 {
     static replay_args_t a;
@@ -295,25 +398,11 @@ int cmd_replay(int argc, char **argv)
     }
     rc_state.verbose = a.verbose;
     cli_catch_stop_signals();
-    if ((rc = first_pass(&a, &rc_state.inferred)) != 0) {
-        return rc;
-    }
-    if ((rc = start_replay(&a)) != 0) {
-        return rc;
-    }
-    progress_t prog;
-    progress_begin(&prog, "replay");
-    if (rc_state.verbose) {
-        prog.on = false; /* the trace is on stdout; keep the terminal readable */
-    }
     replay_file_status_t st;
-    replay_input_t src = {.path = a.file, .format = a.format, .lcm_channel = a.lcm_channel};
-    rc = replay_run_file(&rc_state.replay, &src, &cli_stop, progress_show, &prog, &st);
-    progress_end(&prog);
-    if (rc != 0) {
-        cli_error("%s", st.error);
-        close_outputs();
-        return EXIT_USAGE;
+    if (one_pass_possible(&a)) {
+        rc = replay_one_pass(&a, &st);
+    } else if ((rc = first_pass(&a, &rc_state.inferred)) == 0) {
+        rc = replay_pass(&a, NULL, &st);
     }
-    return finish_replay(&a, &st);
+    return rc != 0 ? rc : finish_replay(&a, &st);
 }

@@ -290,7 +290,10 @@ static int next_pcap(cap_reader_t *r, cap_record_t *rec)
                  r->records + 1, at, pcap_geterr(p));
         return -1;
     }
-    memset(rec, 0, offsetof(cap_record_t, data));
+    /* Every field set here or in fill_record: clearing the record first was a tenth of the
+     * reading. */
+    rec->error_flags = 0;
+    rec->dir = CAP_DIR_UNKNOWN;
     rec->position = at >= 0 ? (uint64_t)at : 0;
     rec->has_time = true;
     rec->t_ns = (uint64_t)h->ts.tv_sec * 1000000000ull + (uint64_t)h->ts.tv_usec;

@@ -3,59 +3,110 @@
  * error memory P080..P084, reset). README.md "Drive model". */
 #include "movidrive_internal.h"
 
+/* The parameters behind movidrive_derived_t, in the order of its key[]. */
+static const uint16_t derived_index[MOVIDRIVE_DERIVED_KEYS] = {
+    MOVIDRIVE_IDX_P100_SETPOINT_SOURCE, MOVIDRIVE_IDX_P101_CONTROL_SOURCE,
+    MOVIDRIVE_IDX_P876_PO_ENABLE,       MOVIDRIVE_IDX_P870_PO1,
+    MOVIDRIVE_IDX_P870_PO1 + 1u,        MOVIDRIVE_IDX_P870_PO1 + 2u,
+    IDX_P873_PI1,                       IDX_P873_PI1 + 1u,
+    IDX_P873_PI1 + 2u,                  MOVIDRIVE_IDX_P302_MAX_SPEED,
+    IDX_P303_CURRENT_LIMIT,
+};
+
+void movidrive_derive_into(const movidrive_t *md, movidrive_derived_t *d)
+{
+    d->defs = md->defs;
+    d->num_defs = md->num_defs;
+    d->complete = true;
+    for (unsigned i = 0; i < MOVIDRIVE_DERIVED_KEYS; i++) {
+        int k = movidrive_find_def(md, derived_index[i]);
+        d->pos[i] = (int16_t)k;
+        d->key[i] = k < 0 ? 0 : md->ram[k];
+        d->complete = d->complete && k >= 0;
+    }
+    d->setpoint_from_bus = d->key[DK_P100] == MOVIDRIVE_SOURCE_FIELDBUS_SETPOINT;
+    d->control_from_bus = d->key[DK_P101] == MOVIDRIVE_SOURCE_FIELDBUS_CONTROL;
+    d->po_enabled = d->key[DK_P876] == 1 && (d->setpoint_from_bus || d->control_from_bus);
+    for (unsigned f = 0; f < MOVIDRIVE_DERIVED_PO_FUNCTIONS; f++) {
+        d->po_first[f] = 3u;
+    }
+    for (uint8_t i = 0; i < 3u; i++) {
+        int32_t f = d->key[DK_P870 + i];
+        if (f >= 0 && f < (int32_t)MOVIDRIVE_DERIVED_PO_FUNCTIONS && d->po_first[f] == 3u) {
+            d->po_first[f] = i;
+        }
+    }
+}
+
 bool movidrive_po_data_enabled(const movidrive_t *md)
 {
-    return movidrive_ram_value(md, MOVIDRIVE_IDX_P876_PO_ENABLE) == 1 &&
-           (movidrive_ram_value(md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE) ==
-                MOVIDRIVE_SOURCE_FIELDBUS_SETPOINT ||
-            movidrive_ram_value(md, MOVIDRIVE_IDX_P101_CONTROL_SOURCE) ==
-                MOVIDRIVE_SOURCE_FIELDBUS_CONTROL);
+    movidrive_derived_t scratch;
+    return movidrive_derived(md, &scratch)->po_enabled;
 }
 
 bool movidrive_cw_in_effect(const movidrive_t *md)
 {
-    return movidrive_ram_value(md, MOVIDRIVE_IDX_P101_CONTROL_SOURCE) ==
-               MOVIDRIVE_SOURCE_FIELDBUS_CONTROL &&
-           movidrive_po_data_enabled(md) && md->po_received;
+    movidrive_derived_t scratch;
+    return movidrive_cw_in_effect_d(md, movidrive_derived(md, &scratch));
 }
 
-bool movidrive_po_word(const movidrive_t *md, int32_t function, uint16_t *word)
+bool movidrive_po_word_d(const movidrive_t *md, const movidrive_derived_t *d, int32_t function,
+                         uint16_t *word)
 {
-    for (uint8_t i = 0; i < 3 && i < md->po_count; i++) {
-        if (movidrive_ram_value(md, (uint16_t)(MOVIDRIVE_IDX_P870_PO1 + i)) == function) {
-            *word = md->po[i];
-            return true;
+    /* The first of PO1..PO3 described as function counts, and only if it was received. */
+    uint8_t i = 3u;
+    if (function >= 0 && function < (int32_t)MOVIDRIVE_DERIVED_PO_FUNCTIONS) {
+        i = d->po_first[function];
+    } else {
+        for (uint8_t k = 0; k < 3u && i == 3u; k++) {
+            i = d->key[DK_P870 + k] == function ? k : i;
         }
+    }
+    if (i < 3u && i < md->po_count) {
+        *word = md->po[i];
+        return true;
     }
     return false;
 }
 
-bool movidrive_ramp_set_2(const movidrive_t *md)
+bool movidrive_po_word(const movidrive_t *md, int32_t function, uint16_t *word)
 {
-    return movidrive_cw_in_effect(md) && (md->control_word & MOVIDRIVE_CW_RAMP_SET_2);
+    movidrive_derived_t scratch;
+    return movidrive_po_word_d(md, movidrive_derived(md, &scratch), function, word);
 }
 
-uint16_t movidrive_compute_control_word(const movidrive_t *md)
+bool movidrive_ramp_set_2(const movidrive_t *md)
 {
-    if (!movidrive_cw_in_effect(md)) {
+    movidrive_derived_t scratch;
+    return movidrive_ramp_set_2_d(md, movidrive_derived(md, &scratch));
+}
+
+static uint16_t control_word_d(const movidrive_t *md, const movidrive_derived_t *d)
+{
+    if (!movidrive_cw_in_effect_d(md, d)) {
         return 0;
     }
     uint16_t w;
-    if (movidrive_po_word(md, PO_CTRL_WORD_1, &w)) {
+    if (movidrive_po_word_d(md, d, PO_CTRL_WORD_1, &w)) {
         return w;
     }
-    if (movidrive_po_word(md, PO_CTRL_WORD_2, &w)) {
+    if (movidrive_po_word_d(md, d, PO_CTRL_WORD_2, &w)) {
         return (uint16_t)(w & 0x00FFu); /* basic block; high byte: virtual terminals (ignored) */
     }
     return 0; /* no control word assigned: no enable */
 }
 
-static int32_t max_speed_mrpm(const movidrive_t *md)
+uint16_t movidrive_compute_control_word(const movidrive_t *md)
 {
-    int32_t nmax = movidrive_ram_value(md, MOVIDRIVE_IDX_P302_MAX_SPEED);
+    movidrive_derived_t scratch;
+    return control_word_d(md, movidrive_derived(md, &scratch));
+}
+
+static int32_t max_speed_mrpm(const movidrive_t *md, const movidrive_derived_t *d)
+{
+    int32_t nmax = d->key[DK_P302];
     uint16_t w;
-    if (movidrive_po_data_enabled(md) && md->po_received &&
-        movidrive_po_word(md, PO_MAX_SPEED, &w)) {
+    if (d->po_enabled && md->po_received && movidrive_po_word_d(md, d, PO_MAX_SPEED, &w)) {
         int32_t po_max = (int32_t)(int16_t)w * 200;
         if (po_max >= 0 && po_max < nmax) {
             nmax = po_max;
@@ -64,20 +115,18 @@ static int32_t max_speed_mrpm(const movidrive_t *md)
     return nmax;
 }
 
-static int32_t compute_setpoint(const movidrive_t *md)
+static int32_t compute_setpoint(const movidrive_t *md, const movidrive_derived_t *d)
 {
-    if (movidrive_ram_value(md, MOVIDRIVE_IDX_P100_SETPOINT_SOURCE) !=
-            MOVIDRIVE_SOURCE_FIELDBUS_SETPOINT ||
-        !movidrive_po_data_enabled(md) || !md->po_received) {
+    if (!d->setpoint_from_bus || !d->po_enabled || !md->po_received) {
         return 0; /* other sources (analog, fixed setpoints via terminals) are not emulated */
     }
-    int32_t nmax = max_speed_mrpm(md);
+    int32_t nmax = max_speed_mrpm(md, d);
     int64_t n = 0;
     uint16_t w;
-    if (movidrive_po_word(md, PO_SPEED, &w)) {
+    if (movidrive_po_word_d(md, d, PO_SPEED, &w)) {
         n = (int64_t)(int16_t)w * 200;
-    } else if (movidrive_po_word(md, PO_SPEED_PERCENT, &w)) {
-        n = (int64_t)(int16_t)w * movidrive_ram_value(md, MOVIDRIVE_IDX_P302_MAX_SPEED) / 0x4000;
+    } else if (movidrive_po_word_d(md, d, PO_SPEED_PERCENT, &w)) {
+        n = (int64_t)(int16_t)w * d->key[DK_P302] / 0x4000;
     }
     if (n > nmax) {
         n = nmax;
@@ -105,10 +154,10 @@ static uint8_t reaction_mode(uint8_t reaction)
     }
 }
 
-static uint8_t compute_mode(const movidrive_t *md)
+static uint8_t compute_mode(const movidrive_t *md, const movidrive_derived_t *d)
 {
     uint16_t cw = md->control_word;
-    bool bus = movidrive_cw_in_effect(md);
+    bool bus = movidrive_cw_in_effect_d(md, d);
     if (!md->cfg.terminal_enable || (bus && (cw & MOVIDRIVE_CW_CONTROLLER_INHIBIT))) {
         return MODE_INHIBIT;
     }
@@ -136,8 +185,9 @@ static uint8_t compute_mode(const movidrive_t *md)
 
 void movidrive_evaluate(movidrive_t *md)
 {
-    md->control_word = movidrive_compute_control_word(md);
-    md->mode = compute_mode(md);
+    const movidrive_derived_t *d = movidrive_derive(md);
+    md->control_word = control_word_d(md, d);
+    md->mode = compute_mode(md, d);
     switch (md->mode) {
     case MODE_INHIBIT:
     case MODE_IMMEDIATE:
@@ -148,7 +198,7 @@ void movidrive_evaluate(movidrive_t *md)
         break;
     case MODE_RUN:
         md->output_stage_enabled = true;
-        md->speed_setpoint_mrpm = compute_setpoint(md);
+        md->speed_setpoint_mrpm = compute_setpoint(md, d);
         break;
     default: /* stop kinds: ramp to 0 if running, then the output stage goes off */
         md->speed_setpoint_mrpm = 0;
@@ -157,7 +207,7 @@ void movidrive_evaluate(movidrive_t *md)
         }
         break;
     }
-    movidrive_update_currents(md);
+    movidrive_update_currents(md, d);
 }
 
 /* ---------------------------------------------------------------------------------------------

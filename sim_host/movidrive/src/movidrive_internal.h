@@ -145,6 +145,72 @@ int movidrive_ee_save_params(movidrive_t *md, size_t first, size_t last);
 /* IPOS variable H<i>. 0 or -1. */
 int movidrive_ee_save_ipos(movidrive_t *md, size_t i);
 
+/* ---- the derived view of the model's parameters (movidrive_control.c) ---- */
+
+/* Positions of the parameters in movidrive_derived_t.key[]. */
+enum {
+    DK_P100,
+    DK_P101,
+    DK_P876,
+    DK_P870,
+    DK_P873 = DK_P870 + 3,
+    DK_P302 = DK_P873 + 3,
+    DK_P303,
+};
+
+/* Whether d still holds for md: the same table, the same values. Without a branch per value
+ * (it runs several times per card poll); a table that lacks one of them is never current. */
+static inline bool movidrive_derived_current(const movidrive_t *md, const movidrive_derived_t *d)
+{
+    if (d->defs != md->defs || d->num_defs != md->num_defs || !d->complete) {
+        return false;
+    }
+    uint32_t diff = 0;
+    for (unsigned i = 0; i < MOVIDRIVE_DERIVED_KEYS; i++) {
+        diff |= (uint32_t)(md->ram[d->pos[i]] ^ d->key[i]);
+    }
+    return diff == 0u;
+}
+
+/* Works the derived view out from md's parameters. */
+void movidrive_derive_into(const movidrive_t *md, movidrive_derived_t *d);
+
+/* md's own derived view when current, else one worked out into scratch (const callers). */
+static inline const movidrive_derived_t *movidrive_derived(const movidrive_t *md,
+                                                           movidrive_derived_t *scratch)
+{
+    if (movidrive_derived_current(md, &md->derived)) {
+        return &md->derived;
+    }
+    movidrive_derive_into(md, scratch);
+    return scratch;
+}
+
+/* Brings md's own derived view up to date and returns it. */
+static inline const movidrive_derived_t *movidrive_derive(movidrive_t *md)
+{
+    if (!movidrive_derived_current(md, &md->derived)) {
+        movidrive_derive_into(md, &md->derived);
+    }
+    return &md->derived;
+}
+
+/* The control word comes from the bus (P101 = FIELDBUS, PO enabled, PO received). */
+static inline bool movidrive_cw_in_effect_d(const movidrive_t *md, const movidrive_derived_t *d)
+{
+    return d->control_from_bus && d->po_enabled && md->po_received;
+}
+
+/* movidrive_po_word over a derived view. */
+bool movidrive_po_word_d(const movidrive_t *md, const movidrive_derived_t *d, int32_t function,
+                         uint16_t *word);
+
+/* Control word bit 4 from the bus. */
+static inline bool movidrive_ramp_set_2_d(const movidrive_t *md, const movidrive_derived_t *d)
+{
+    return movidrive_cw_in_effect_d(md, d) && (md->control_word & MOVIDRIVE_CW_RAMP_SET_2);
+}
+
 /* ---- control source and drive mode (movidrive_control.c) ---- */
 
 /* Status bit 2: P876 = YES and P100 or P101 = FIELDBUS. */
@@ -170,11 +236,13 @@ void movidrive_fault_reset(movidrive_t *md);
 /* ---- motion (movidrive_motion.c) ---- */
 
 /* Output and active current from the speed and its change in the last tick. */
-void movidrive_update_currents(movidrive_t *md);
+void movidrive_update_currents(movidrive_t *md, const movidrive_derived_t *d);
 
 /* ---- process input data (movidrive_process_data.c) ---- */
 
 /* PI word i (0..ML_MAX_PD-1) as P873..P875 describe it. */
 uint16_t movidrive_pi_word(const movidrive_t *md, uint8_t i);
+/* Status word 1 over a derived view. */
+uint16_t movidrive_status_word_d(const movidrive_t *md, const movidrive_derived_t *d);
 
 #endif

@@ -8,9 +8,10 @@
 #define MAX_STEP_US 1000000u        /* integration step: keeps the products in int64 */
 
 /* Ramp time in ms for a 3000 rpm change: `up` = |n| growing, `positive` = CW rotation. */
-static int32_t ramp_ms(const movidrive_t *md, bool up, bool positive)
+static int32_t ramp_ms(const movidrive_t *md, const movidrive_derived_t *d, bool up,
+                       bool positive)
 {
-    bool set2 = movidrive_ramp_set_2(md);
+    bool set2 = movidrive_ramp_set_2_d(md, d);
     switch (md->mode) {
     case MODE_RAPID:
         return movidrive_ram_value(md, set2 ? IDX_P146_STOP_RAMP2 : IDX_P136_STOP_RAMP);
@@ -20,7 +21,7 @@ static int32_t ramp_ms(const movidrive_t *md, bool up, bool positive)
         break;
     }
     uint16_t w;
-    if (movidrive_po_data_enabled(md) && md->po_received && movidrive_po_word(md, PO_RAMP, &w)) {
+    if (d->po_enabled && md->po_received && movidrive_po_word_d(md, d, PO_RAMP, &w)) {
         return w; /* PO "RAMP": ms, up and down alike (I: 1 digit = 1 ms as on MOVIMOT) */
     }
     if (positive) {
@@ -37,7 +38,7 @@ static int32_t ramp_ms(const movidrive_t *md, bool up, bool positive)
 
 /* Moves the actual speed towards the setpoint for dt_us of simulated time. A reversal is two
  * segments: down to 0 on the down ramp, then up on the other direction's up ramp. */
-static void integrate_speed(movidrive_t *md, uint32_t dt_us)
+static void integrate_speed(movidrive_t *md, const movidrive_derived_t *d, uint32_t dt_us)
 {
     /* budget in 0.001 rpm x ms: a ramp of t ms moves RAMP_REFERENCE_MRPM per t ms */
     int64_t budget = (int64_t)dt_us * (RAMP_REFERENCE_MRPM / US_PER_MS) + md->ramp_residue;
@@ -55,7 +56,7 @@ static void integrate_speed(movidrive_t *md, uint32_t dt_us)
             seg_end = ((n > 0 && target > 0) || (n < 0 && target < 0)) ? target : 0;
         }
         bool positive = n > 0 || (n == 0 && target > 0);
-        int64_t t = ramp_ms(md, up, positive);
+        int64_t t = ramp_ms(md, d, up, positive);
         if (t <= 0) {
             md->speed_actual_mrpm = seg_end;
             continue;
@@ -90,7 +91,7 @@ static int32_t abs32(int32_t v)
     return v < 0 ? -v : v;
 }
 
-void movidrive_update_currents(movidrive_t *md)
+void movidrive_update_currents(movidrive_t *md, const movidrive_derived_t *d)
 {
     if (!md->output_stage_enabled) {
         md->current_mpct = 0;
@@ -102,7 +103,7 @@ void movidrive_update_currents(movidrive_t *md)
     int32_t accel = md->accel != 0 ? ACCEL_MPCT : 0;
     int32_t active = load + (md->accel > 0 ? accel : -accel);
     int32_t out = MAGNETISING_MPCT + load + accel;
-    int32_t limit = movidrive_ram_value(md, IDX_P303_CURRENT_LIMIT);
+    int32_t limit = d->key[DK_P303];
     if (limit > 0 && out > limit) {
         out = limit;
     }
@@ -132,12 +133,13 @@ hal_time_us_t movidrive_tick(movidrive_t *md, hal_time_us_t now)
     }
     md->last_tick = now;
     movidrive_evaluate(md);
+    const movidrive_derived_t *d = movidrive_derive(md);
     int32_t before = md->speed_actual_mrpm;
     uint32_t left = (uint32_t)dt;
     while (left > 0) {
         uint32_t chunk = left > MAX_STEP_US ? MAX_STEP_US : left;
         int32_t n0 = md->speed_actual_mrpm;
-        integrate_speed(md, chunk);
+        integrate_speed(md, d, chunk);
         advance_position(md, n0, chunk);
         left -= chunk;
     }

@@ -25,28 +25,28 @@ void movidrive_process_outputs(movidrive_t *md, const uint16_t *po, uint8_t n)
         md->po_received = true;
     }
     uint16_t prev = md->control_word;
+    const movidrive_derived_t *d = movidrive_derive(md);
     uint16_t cw = movidrive_compute_control_word(md);
-    if (movidrive_cw_in_effect(md) && (cw & MOVIDRIVE_CW_RESET) && !(prev & MOVIDRIVE_CW_RESET)) {
+    if (movidrive_cw_in_effect_d(md, d) && (cw & MOVIDRIVE_CW_RESET) &&
+        !(prev & MOVIDRIVE_CW_RESET)) {
         movidrive_fault_reset(md);
     }
     movidrive_evaluate(md);
 }
 
 /* Status word 1 high byte without a fault or warning (README.md "Status word 1"). */
-static uint8_t unit_status(const movidrive_t *md)
+static uint8_t unit_status(const movidrive_t *md, const movidrive_derived_t *d)
 {
     if (md->mode == MODE_INHIBIT) {
         return MOVIDRIVE_UNIT_CONTROLLER_INHIBIT;
     }
-    if (movidrive_ram_value(md, MOVIDRIVE_IDX_P101_CONTROL_SOURCE) ==
-            MOVIDRIVE_SOURCE_FIELDBUS_CONTROL &&
-        movidrive_po_data_enabled(md) && !md->po_received) {
+    if (d->control_from_bus && d->po_enabled && !md->po_received) {
         return MOVIDRIVE_UNIT_WAITING_FOR_DATA;
     }
     return md->mode == MODE_RUN ? MOVIDRIVE_UNIT_ENABLED : MOVIDRIVE_UNIT_NO_ENABLE;
 }
 
-uint16_t movidrive_status_word(const movidrive_t *md)
+uint16_t movidrive_status_word_d(const movidrive_t *md, const movidrive_derived_t *d)
 {
     uint16_t sw = 0;
     if (md->output_stage_enabled) {
@@ -55,13 +55,13 @@ uint16_t movidrive_status_word(const movidrive_t *md)
     if (md->fault == 0) {
         sw |= MOVIDRIVE_SW_READY;
     }
-    if (movidrive_po_data_enabled(md)) {
+    if (d->po_enabled) {
         sw |= MOVIDRIVE_SW_PO_DATA_ENABLED;
     }
-    if (movidrive_ramp_set_2(md)) {
+    if (movidrive_ramp_set_2_d(md, d)) {
         sw |= MOVIDRIVE_SW_RAMP_SET_2;
     }
-    if (movidrive_cw_in_effect(md) && (md->control_word & MOVIDRIVE_CW_PARAM_SET_2)) {
+    if (movidrive_cw_in_effect_d(md, d) && (md->control_word & MOVIDRIVE_CW_PARAM_SET_2)) {
         sw |= MOVIDRIVE_SW_PARAM_SET_2;
     }
     uint8_t high;
@@ -72,9 +72,15 @@ uint16_t movidrive_status_word(const movidrive_t *md)
         sw |= MOVIDRIVE_SW_FAULT;
         high = md->warning_code;
     } else {
-        high = unit_status(md);
+        high = unit_status(md, d);
     }
     return (uint16_t)(sw | (high << 8));
+}
+
+uint16_t movidrive_status_word(const movidrive_t *md)
+{
+    movidrive_derived_t scratch;
+    return movidrive_status_word_d(md, movidrive_derived(md, &scratch));
 }
 
 static uint16_t clamp_int16(int64_t v)
@@ -82,13 +88,13 @@ static uint16_t clamp_int16(int64_t v)
     return (uint16_t)(int16_t)(v > INT16_MAX ? INT16_MAX : v < INT16_MIN ? INT16_MIN : v);
 }
 
-uint16_t movidrive_pi_word(const movidrive_t *md, uint8_t i)
+static uint16_t pi_word_d(const movidrive_t *md, const movidrive_derived_t *d, uint8_t i)
 {
     if (i >= 3) {
         return md->ipos_pi[i];
     }
     int32_t n = md->speed_actual_mrpm;
-    switch (movidrive_ram_value(md, (uint16_t)(IDX_P873_PI1 + i))) {
+    switch (d->key[DK_P873 + i]) {
     case PI_SPEED: /* rounded half away from zero */
         return clamp_int16((n + (n < 0 ? -SPEED_MRPM_PER_DIGIT / 2 : SPEED_MRPM_PER_DIGIT / 2)) /
                            SPEED_MRPM_PER_DIGIT);
@@ -101,13 +107,13 @@ uint16_t movidrive_pi_word(const movidrive_t *md, uint8_t i)
     case PI_POSITION_HI:
         return (uint16_t)((uint32_t)md->position_inc >> 16);
     case PI_STATUS_WORD_1:
-        return movidrive_status_word(md);
+        return movidrive_status_word_d(md, d);
     case PI_STATUS_WORD_2:
     case PI_STATUS_WORD_3:
         /* basic block as status word 1; high byte (virtual outputs) not known: 0 */
-        return (uint16_t)(movidrive_status_word(md) & 0x00FFu);
+        return (uint16_t)(movidrive_status_word_d(md, d) & 0x00FFu);
     case PI_SPEED_PERCENT: {
-        int32_t nmax = movidrive_ram_value(md, MOVIDRIVE_IDX_P302_MAX_SPEED);
+        int32_t nmax = d->key[DK_P302];
         return nmax <= 0 ? 0u : clamp_int16((int64_t)n * SPEED_PERCENT_FULL / nmax);
     }
     case PI_IPOS:
@@ -117,9 +123,17 @@ uint16_t movidrive_pi_word(const movidrive_t *md, uint8_t i)
     }
 }
 
+uint16_t movidrive_pi_word(const movidrive_t *md, uint8_t i)
+{
+    movidrive_derived_t scratch;
+    return pi_word_d(md, movidrive_derived(md, &scratch), i);
+}
+
 void movidrive_process_inputs(const movidrive_t *md, uint16_t *pi, uint8_t n)
 {
+    movidrive_derived_t scratch;
+    const movidrive_derived_t *d = movidrive_derived(md, &scratch);
     for (uint8_t i = 0; i < n; i++) {
-        pi[i] = i < ML_MAX_PD ? movidrive_pi_word(md, i) : 0;
+        pi[i] = i < ML_MAX_PD ? pi_word_d(md, d, i) : 0;
     }
 }

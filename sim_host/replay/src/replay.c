@@ -601,18 +601,30 @@ void replay_feed(replay_t *r, const cap_record_t *rec)
     }
     replay_frame_t m;
     replay_frame_parse(rec->data, rec->len, &m);
-    if (is_card_answer(r, &m)) {
+    replay_feed_frame(r, rec, &m);
+}
+
+void replay_feed_frame(replay_t *r, const cap_record_t *rec, const replay_frame_t *m)
+{
+    if (!r->started) {
+        r->started = true;
+        r->wall_start_ns = host_clock_mono_ns();
+    }
+    if (r->interrupted) {
+        return;
+    }
+    if (is_card_answer(r, m)) {
         count_record(r, rec);
         own_answer_recorded(r, rec);
         return;
     }
     uint32_t baud = replay_bus_baud(r, rec);
-    uint64_t t = schedule(r, rec, &m, baud);
+    uint64_t t = schedule(r, rec, m, baud);
     if (r->interrupted || !run_to(r, t)) {
         return; /* stopped in the gap before it: the record was not replayed */
     }
     count_record(r, rec);
-    inject(r, rec, &m, t, baud);
+    inject(r, rec, m, t, baud);
 }
 
 void replay_finish(replay_t *r)

@@ -26,6 +26,22 @@ static void scan_keep_pair(replay_scan_t *s, const replay_scan_pair_t *p)
  * a line could have carried it. On a line the answer begins no earlier than min TSDR after the
  * request's end and (from the DFP21B) no later than its max TSDR; a microsecond of slack either
  * way for rounded timestamps. */
+static void line_bounds(replay_scan_t *s, size_t req_len)
+{
+    s->bounds_len = req_len;
+    for (unsigned i = 0; i < HAL_UART_NUM_BAUDS; i++) {
+        uint64_t baud = hal_uart_bauds[i];
+        uint64_t req_ns = 11u * (uint64_t)req_len * 1000000000ull / baud;
+        uint64_t min_tsdr_ns = FDL_MIN_TSDR_DEFAULT_BITS * 1000000000ull / baud;
+        uint64_t max_tsdr_ns = REPLAY_CARD_MAX_TSDR_MIN_BITS * 1000000000ull / baud;
+        if (max_tsdr_ns < REPLAY_CARD_MAX_TSDR_NS) {
+            max_tsdr_ns = REPLAY_CARD_MAX_TSDR_NS;
+        }
+        s->early_below[i] = req_ns + min_tsdr_ns;
+        s->late_above[i] = req_ns + max_tsdr_ns + 1000u;
+    }
+}
+
 static void station_pair(replay_scan_t *s, uint8_t addr, uint64_t gap_ns, size_t req_len)
 {
     replay_scan_station_t *st = &s->station[addr & 0x7Fu];
@@ -36,16 +52,12 @@ static void station_pair(replay_scan_t *s, uint8_t addr, uint64_t gap_ns, size_t
         st->max_gap_ns = gap_ns;
     }
     st->pairs++;
+    if (s->bounds_len != req_len) {
+        line_bounds(s, req_len); /* requests mostly have the length of the one before */
+    }
     for (unsigned i = 0; i < HAL_UART_NUM_BAUDS; i++) {
-        uint64_t baud = hal_uart_bauds[i];
-        uint64_t req_ns = 11u * (uint64_t)req_len * 1000000000ull / baud;
-        uint64_t min_tsdr_ns = FDL_MIN_TSDR_DEFAULT_BITS * 1000000000ull / baud;
-        uint64_t max_tsdr_ns = REPLAY_CARD_MAX_TSDR_MIN_BITS * 1000000000ull / baud;
-        if (max_tsdr_ns < REPLAY_CARD_MAX_TSDR_NS) {
-            max_tsdr_ns = REPLAY_CARD_MAX_TSDR_NS;
-        }
-        bool early = gap_ns + 1000u < req_ns + min_tsdr_ns;
-        bool late = gap_ns > req_ns + max_tsdr_ns + 1000u;
+        bool early = gap_ns + 1000u < s->early_below[i];
+        bool late = gap_ns > s->late_above[i];
         if (early || late) {
             st->off_line[i]++;
         }
@@ -59,7 +71,7 @@ static void station_pair(replay_scan_t *s, uint8_t addr, uint64_t gap_ns, size_t
 static void scan_timing(replay_scan_t *s, const cap_record_t *rec, bool answers_prev,
                         uint8_t answerer)
 {
-    if (replay_is_profibus_baud(rec->baud)) {
+    if (rec->baud != 0u && replay_is_profibus_baud(rec->baud)) {
         s->recorded_baud = rec->baud;
     }
     if (!rec->has_time || rec->problem[0] != '\0') {
@@ -128,18 +140,24 @@ uint32_t replay_scan_rate(const replay_scan_t *s, replay_scan_rate_t *why)
 
 void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec)
 {
-    s->records++;
     if (rec->len == 0u) {
+        s->records++;
         return; /* an unreadable text line: nothing was on the wire */
     }
     replay_frame_t m;
     replay_frame_parse(rec->data, rec->len, &m);
+    replay_scan_feed_frame(s, rec, &m);
+}
+
+void replay_scan_feed_frame(replay_scan_t *s, const cap_record_t *rec, const replay_frame_t *m)
+{
+    s->records++;
     bool was_request = s->prev_request;
     uint8_t da = s->prev_da;
     s->prev_request = false;
-    bool answered = was_request && (m.kind == REPLAY_KIND_SC ||
-                                    (m.kind == REPLAY_KIND_RESPONSE && m.has_header &&
-                                     m.sa == da));
+    bool answered = was_request && (m->kind == REPLAY_KIND_SC ||
+                                    (m->kind == REPLAY_KIND_RESPONSE && m->has_header &&
+                                     m->sa == da));
     if (was_request && s->station[da].first == 1u) {
         s->station[da].first = answered ? 2u : 3u;
     }
@@ -148,26 +166,26 @@ void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec)
     if (rec->problem[0] != '\0') {
         return; /* a damaged record says nothing reliable about who is who */
     }
-    switch (m.kind) {
+    switch (m->kind) {
     case REPLAY_KIND_REQUEST:
-        s->master[m.sa] = true;
-        s->prev_request = m.da != FDL_ADDR_BROADCAST && replay_expects_answer(&m);
-        s->prev_da = m.da;
-        if (s->prev_request && s->station[m.da].first == 0u) {
-            s->station[m.da].first = 1u;
-            s->station[m.da].first_record = rec->index;
+        s->master[m->sa] = true;
+        s->prev_request = m->da != FDL_ADDR_BROADCAST && replay_expects_answer(m);
+        s->prev_da = m->da;
+        if (s->prev_request && s->station[m->da].first == 0u) {
+            s->station[m->da].first = 1u;
+            s->station[m->da].first_record = rec->index;
         }
         return;
     case REPLAY_KIND_TOKEN:
-        if (m.has_header) {
-            s->master[m.sa] = true;
-            s->master[m.da] = true;
+        if (m->has_header) {
+            s->master[m->sa] = true;
+            s->master[m->da] = true;
         }
         return;
     case REPLAY_KIND_RESPONSE:
         /* Masters answer FDL status requests with their station type; slaves with 00. */
-        if ((m.fc & FDL_FC_STATION_MASK) == 0u) {
-            s->answers[m.sa]++;
+        if ((m->fc & FDL_FC_STATION_MASK) == 0u) {
+            s->answers[m->sa]++;
         }
         return;
     case REPLAY_KIND_SC:

@@ -109,6 +109,28 @@ typedef struct movidrive_param_def {
 #define MOVIDRIVE_EE_HEADER 12u
 #define MOVIDRIVE_EE_RECORD 6u
 
+/* The parameters the drive model consults on every poll: P100, P101, P876, P870..P872,
+ * P873..P875, P302, P303. */
+#define MOVIDRIVE_DERIVED_KEYS 11u
+/* PO function codes (P870..P872 values) below this have their first PO slot noted. */
+#define MOVIDRIVE_DERIVED_PO_FUNCTIONS 16u
+
+/* What the drive model derives from those parameters, with their positions and the values it
+ * was derived from. Kept while the table and those values stay the same, so that the model
+ * does not look the same parameters up dozens of times per card poll; a value changed by any
+ * means (a service, the EEPROM, a test writing ram[]) makes it stale, never wrong. */
+typedef struct movidrive_derived {
+    const movidrive_param_def_t *defs; /* the table it was derived for */
+    size_t num_defs;
+    bool complete;                       /* the table has all of them (else never current) */
+    int16_t pos[MOVIDRIVE_DERIVED_KEYS]; /* positions in ram[], -1: not in the table (0) */
+    int32_t key[MOVIDRIVE_DERIVED_KEYS]; /* the values derived from */
+    bool setpoint_from_bus;              /* P100 = FIELDBUS */
+    bool control_from_bus;               /* P101 = FIELDBUS */
+    bool po_enabled;                     /* status bit 2 */
+    uint8_t po_first[MOVIDRIVE_DERIVED_PO_FUNCTIONS]; /* function -> first PO1..PO3 slot, 3 none */
+} movidrive_derived_t;
+
 typedef struct movidrive_cfg {
     hal_nvm_t eeprom;        /* ops == NULL: no persistence (values reset at every start) */
     uint8_t sbus_address;    /* P813 */
@@ -165,6 +187,7 @@ typedef struct movidrive {
     size_t slot_num;
     uint16_t slot_base;
     int16_t slot[MOVIDRIVE_SLOT_SPAN];
+    movidrive_derived_t derived; /* brought up to date by every evaluation */
 } movidrive_t;
 
 /* Loads defaults, then the EEPROM image if there is a valid one. Returns 0, or -1 with a reason

@@ -263,6 +263,8 @@ typedef struct replay {
 int replay_init(replay_t *r, const replay_options_t *opt, char *err, size_t errlen);
 /* One record, in file order. */
 void replay_feed(replay_t *r, const cap_record_t *rec);
+/* The same for a record of at least one octet that m is replay_frame_parse's reading of. */
+void replay_feed_frame(replay_t *r, const cap_record_t *rec, const replay_frame_t *m);
 /* After the last record: lets the card answer the last request and closes the check. */
 void replay_finish(replay_t *r);
 
@@ -372,10 +374,17 @@ typedef struct replay_scan {
     replay_scan_pair_t need;  /* the pair of records needing the highest rate */
     replay_scan_pair_t need2; /* the pair needing the highest rate after it */
     replay_scan_station_t station[REPLAY_SCAN_MAX];
+    /* A line's bounds on an answer's start after a request of bounds_len octets (0: none yet),
+     * per rate: before early_below[i] - 1 us it is too early, after late_above[i] too late. */
+    size_t bounds_len;
+    uint64_t early_below[HAL_UART_NUM_BAUDS];
+    uint64_t late_above[HAL_UART_NUM_BAUDS];
 } replay_scan_t;
 
 void replay_scan_init(replay_scan_t *s);
 void replay_scan_feed(replay_scan_t *s, const cap_record_t *rec);
+/* The same for a record of at least one octet that m is replay_frame_parse's reading of. */
+void replay_scan_feed_frame(replay_scan_t *s, const cap_record_t *rec, const replay_frame_t *m);
 /* Addresses (0..125) that answered and never acted as a master, ascending. Returns how many
  * (at most max are written). */
 unsigned replay_scan_result(const replay_scan_t *s, uint8_t *out, unsigned max);
@@ -447,5 +456,16 @@ int replay_run_file(replay_t *r, const replay_input_t *src, volatile const int *
 /* The same through replay_scan_feed. */
 int replay_scan_file(replay_scan_t *s, const replay_input_t *src, volatile const int *stop,
                      replay_progress_t progress, void *ctx, replay_file_status_t *st);
+/* The first `records` records (or fewer) through replay_scan_feed. */
+int replay_scan_file_head(replay_scan_t *s, const replay_input_t *src, uint64_t records,
+                          volatile const int *stop, replay_file_status_t *st);
+/* One pass through both: every record to replay_scan_feed, then to replay_feed (then
+ * replay_finish). The first pass and the replay in one reading of the file, for a replay set
+ * up from a guess at what the first pass will find: the caller checks the guess against the
+ * finished scan, and replays again when it was wrong (the replay depends on nothing but its
+ * options and the records). */
+int replay_scan_run_file(replay_scan_t *s, replay_t *r, const replay_input_t *src,
+                         volatile const int *stop, replay_progress_t progress, void *ctx,
+                         replay_file_status_t *st);
 
 #endif
