@@ -358,7 +358,7 @@ static bool fault_reset_holding(const fault_reset_t *fr, unsigned num_slaves)
 
 /* What ends a stretch of the run, checked at every master event: the runner returns as soon as
  * it is met instead of at the end of its 20 ms slice, which added up to 20 ms of cycles nobody
- * asked for at the end of a run and again when leaving (a third of the time of a run of 2 000
+ * asked for at the end of a run and again when leaving (about an eighth of a run of 2 000
  * cycles over a PTY). A signal is seen at the next event or, on a silent bus, the slice end. */
 typedef struct run_goal {
     const dp_master_t *m;
