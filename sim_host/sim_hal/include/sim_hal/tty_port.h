@@ -7,7 +7,8 @@
  *
  * One thread runs everything: tty_runner_run_until() waits on all ports with poll(), hands
  * received characters to each port's station and calls the stations' poll functions at their
- * deadlines. Other descriptors (a CAN socket) and port-less timers can join the same loop
+ * deadlines (a deadline at most 100 us away is waited for by polling without blocking, since a
+ * timed sleep returns tens of microseconds late). Other descriptors (a CAN socket) and port-less timers can join the same loop
  * (tty_runner_add_fd, tty_runner_add_timer). transmit() is called from inside those callbacks and blocks until its not_before
  * instant, so a frame always leaves in one piece.
  *
