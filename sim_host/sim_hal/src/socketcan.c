@@ -1,12 +1,12 @@
 /* SocketCAN backend of the HAL CAN. See sim_hal/socketcan.h. Built with _GNU_SOURCE. */
 #include "sim_hal/socketcan.h"
+#include "sim_hal/error_text.h"
 
 #include <errno.h>
 #include <linux/can.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
 #include <net/if_arp.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/ioctl.h>
@@ -16,20 +16,6 @@
 
 /* Frames read per receive call at most, so one busy bus cannot starve the rest of the runner. */
 #define SOCKETCAN_RX_BATCH 256
-
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (err == NULL || errlen == 0u) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    (void)vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
 
 static const char *hint_for(int e, const char *ifname, char *buf, size_t len)
 {
@@ -51,7 +37,7 @@ static int fail_errno(socketcan_t *s, const char *ifname, char *err, size_t errl
 {
     int e = errno;
     char hint[160];
-    set_err(err, errlen, "cannot open CAN interface %s: %s%s", ifname, strerror(e),
+    sim_error_text(err, errlen, "cannot open CAN interface %s: %s%s", ifname, strerror(e),
             hint_for(e, ifname, hint, sizeof hint));
     if (s->fd >= 0) {
         (void)close(s->fd);
@@ -63,7 +49,7 @@ static int fail_errno(socketcan_t *s, const char *ifname, char *err, size_t errl
 
 static int fail_msg(socketcan_t *s, const char *ifname, const char *why, char *err, size_t errlen)
 {
-    set_err(err, errlen, "cannot open CAN interface %s: %s", ifname, why);
+    sim_error_text(err, errlen, "cannot open CAN interface %s: %s", ifname, why);
     if (s->fd >= 0) {
         (void)close(s->fd);
         s->fd = -1;
@@ -79,7 +65,7 @@ int socketcan_open(socketcan_t *s, const char *ifname, hal_can_rx_fn rx, void *r
     s->rx = rx;
     s->rx_ctx = rx_ctx;
     if (ifname == NULL || ifname[0] == '\0' || strlen(ifname) >= IFNAMSIZ) {
-        set_err(err, errlen, "cannot open CAN interface '%s': invalid interface name",
+        sim_error_text(err, errlen, "cannot open CAN interface '%s': invalid interface name",
                 ifname != NULL ? ifname : "");
         return -1;
     }

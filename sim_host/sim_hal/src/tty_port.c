@@ -2,12 +2,12 @@
  * suppression and transmit. The runner that drives ports is tty_runner.c. See sim_hal/tty_port.h
  * for the model. Built with _GNU_SOURCE. */
 #include "sim_hal/tty_port.h"
+#include "sim_hal/error_text.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <linux/serial.h>
 #include <poll.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/ioctl.h>
@@ -79,20 +79,6 @@ static void wait_until(hal_time_us_t t)
 
 /* ---------------------------------------------------------------------------------------------
  * Line settings */
-
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (err == NULL || errlen == 0u) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    (void)vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
 
 static bool standard_speed(uint32_t baud, speed_t *code)
 {
@@ -284,25 +270,25 @@ static int configure(tty_port_t *p, uint32_t baud, char *err, size_t errlen)
     struct termios t;
     int fl = fcntl(p->fd, F_GETFL);
     if (fl < 0 || fcntl(p->fd, F_SETFL, fl | O_NONBLOCK) != 0) {
-        set_err(err, errlen, "%s: cannot make non-blocking: %s", p->name, strerror(errno));
+        sim_error_text(err, errlen, "%s: cannot make non-blocking: %s", p->name, strerror(errno));
         return -1;
     }
     if (tcgetattr(p->fd, &t) != 0) {
-        set_err(err, errlen, "%s is not a terminal: %s", p->name, strerror(errno));
+        sim_error_text(err, errlen, "%s is not a terminal: %s", p->name, strerror(errno));
         return -1;
     }
     make_8e1(&t);
     if (apply_termios(p->fd, &t) != 0 || check_parity(p) != 0) {
-        set_err(err, errlen, "%s: cannot set raw 8E1: %s", p->name, strerror(errno));
+        sim_error_text(err, errlen, "%s: cannot set raw 8E1: %s", p->name, strerror(errno));
         return -1;
     }
     if (set_speed(p->fd, baud) != 0) {
-        set_err(err, errlen, "%s: cannot set %u baud: %s", p->name, (unsigned)baud,
+        sim_error_text(err, errlen, "%s: cannot set %u baud: %s", p->name, (unsigned)baud,
                 strerror(errno));
         return -1;
     }
     if (enable_rs485(p) != 0 || enable_low_latency(p) != 0) {
-        set_err(err, errlen, "%s: serial driver failed: %s", p->name, strerror(errno));
+        sim_error_text(err, errlen, "%s: serial driver failed: %s", p->name, strerror(errno));
         return -1;
     }
     p->baud = baud;
@@ -322,7 +308,7 @@ int tty_port_open(tty_port_t *p, const char *path, uint32_t baud, char *err, siz
     (void)snprintf(p->name, sizeof p->name, "%s", path);
     int fd = open(path, O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
-        set_err(err, errlen, "cannot open %s: %s", path, strerror(errno));
+        sim_error_text(err, errlen, "cannot open %s: %s", path, strerror(errno));
         return -1;
     }
     p->fd = fd;
@@ -339,7 +325,7 @@ int tty_port_open_fd(tty_port_t *p, int fd, uint32_t baud, char *err, size_t err
     port_reset(p);
     (void)snprintf(p->name, sizeof p->name, "fd %d", fd);
     if (fd < 0) {
-        set_err(err, errlen, "invalid file descriptor %d", fd);
+        sim_error_text(err, errlen, "invalid file descriptor %d", fd);
         return -1;
     }
     p->fd = fd;
