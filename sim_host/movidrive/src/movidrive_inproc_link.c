@@ -12,6 +12,13 @@ static void push_inputs(movidrive_inproc_link_t *l)
     }
     uint16_t pi[ML_MAX_PD];
     movidrive_process_inputs(l->md, pi, l->pd_words);
+    size_t bytes = (size_t)l->pd_words * sizeof pi[0];
+    if (l->pushed_valid && l->pushed_words == l->pd_words && memcmp(l->pushed, pi, bytes) == 0) {
+        return;
+    }
+    memcpy(l->pushed, pi, bytes);
+    l->pushed_words = l->pd_words;
+    l->pushed_valid = true;
     l->process_inputs(l->card, pi, l->pd_words);
 }
 
@@ -55,7 +62,7 @@ ml_link_t movidrive_inproc_link(movidrive_inproc_link_t *l)
     return (ml_link_t){.ops = &inproc_ops, .ctx = l};
 }
 
-hal_time_us_t movidrive_inproc_link_poll(movidrive_inproc_link_t *l, hal_time_us_t now)
+hal_time_us_t movidrive_inproc_link_advance(movidrive_inproc_link_t *l, hal_time_us_t now)
 {
     l->now = now;
     hal_time_us_t next = movidrive_tick(l->md, now);
@@ -76,6 +83,12 @@ hal_time_us_t movidrive_inproc_link_poll(movidrive_inproc_link_t *l, hal_time_us
             next = hal_time_earlier(next, l->ch[c].due);
         }
     }
+    return next;
+}
+
+hal_time_us_t movidrive_inproc_link_poll(movidrive_inproc_link_t *l, hal_time_us_t now)
+{
+    hal_time_us_t next = movidrive_inproc_link_advance(l, now);
     push_inputs(l);
     return next;
 }

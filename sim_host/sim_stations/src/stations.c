@@ -17,18 +17,21 @@ static hal_time_us_t earlier(hal_time_us_t a, hal_time_us_t b)
     return hal_time_diff(a, b) < 0 ? a : b;
 }
 
-/* The card's main loop and, with the emulated inverter, the inverter's: answers that became due
- * are delivered before the card builds its next input image. */
+/* The card's main loop and, with the emulated inverter, the inverter's: the drive's time runs
+ * to now under the old outputs before the card hands it new ones, and answers that became due
+ * are delivered before the card builds its next input image. Only the image left at the end is
+ * ever sent (a reply goes out from inside rx, never between these calls), so PI are pushed once
+ * after the card's poll; the link pushes only words that changed, so the card's second poll
+ * runs only when the image really changes. */
 static hal_time_us_t card_poll(void *ctx, hal_time_us_t now)
 {
     card_station_t *c = ctx;
     if (c->inverter != CARD_INVERTER_SIM) {
         return dfp21b_poll(&c->card, now);
     }
-    hal_time_us_t next = movidrive_inproc_link_poll(&c->movidrive_link, now);
-    next = earlier(next, movidrive_tick(&c->md, now));
+    hal_time_us_t next = movidrive_inproc_link_advance(&c->movidrive_link, now);
     next = earlier(next, dfp21b_poll(&c->card, now));
-    /* PI for the PO just taken */
+    /* PI for the PO just taken and for parameter writes the card's poll started */
     next = earlier(next, movidrive_inproc_link_poll(&c->movidrive_link, now));
     if (c->card.inputs_dirty) {
         next = earlier(next, dfp21b_poll(&c->card, now));

@@ -237,10 +237,19 @@ typedef struct movidrive_inproc_link {
     } ch[ML_MAX_CHANNELS];
     hal_time_us_t now;
     uint8_t pd_words;
+    /* What the card was last given: unchanged PI words are not pushed again, so the card does
+     * not rebuild an input image that would come out the same. */
+    bool pushed_valid;
+    uint8_t pushed_words;
+    uint16_t pushed[ML_MAX_PD];
 } movidrive_inproc_link_t;
 
 ml_link_t movidrive_inproc_link(movidrive_inproc_link_t *l);
-/* Delivers due responses and fresh PI words. Returns the next deadline. */
+/* Delivers due responses and PI words that changed since the last push. Returns the next
+ * deadline. */
 hal_time_us_t movidrive_inproc_link_poll(movidrive_inproc_link_t *l, hal_time_us_t now);
+/* The same without the PI push: the drive's time runs to now and due responses arrive. For a
+ * caller whose next step (the card taking outputs) pushes PI anyway and polls again after. */
+hal_time_us_t movidrive_inproc_link_advance(movidrive_inproc_link_t *l, hal_time_us_t now);
 
 #endif
