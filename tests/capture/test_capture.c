@@ -290,6 +290,78 @@ static void test_long_record_is_cut_and_marked(void)
     cap_reader_close(&r);
 }
 
+/* Records are read a chunk (CAP_PCAP_CHUNK octets) at a time: a record that straddles two
+ * chunks, and one longer than a chunk, come out whole and in place, and the records after them
+ * too; a file cut inside a record header names that record and its byte. */
+static void test_pcap_records_across_chunks(void)
+{
+    char p[600];
+    path_of(p, sizeof p, "chunks.pcap");
+    cap_writer_t w;
+    char err[256];
+    cap_writer_options_t opt = {.format = CAP_FORMAT_PCAP, .nanosecond = true};
+    CHECK_EQ(cap_writer_open(&w, p, &opt, 0, err, sizeof err), 0);
+    enum { BEFORE = 1500, AFTER = 1500, HUGE = 3 * CAP_PCAP_CHUNK / 2 };
+    static uint8_t huge[HUGE];
+    memset(huge, 0xA5, sizeof huge);
+    for (uint32_t i = 0; i < BEFORE + 1 + AFTER; i++) {
+        bool is_huge = i == BEFORE;
+        CHECK_EQ(cap_writer_frame(&w, 1000ull * i + 7u, is_huge ? huge : dx,
+                                  is_huge ? sizeof huge : sizeof dx, CAP_DIR_UNKNOWN), 0);
+    }
+    CHECK_EQ(cap_writer_close(&w), 0);
+    cap_reader_t r;
+    CHECK_EQ(cap_reader_open(&r, p, CAP_FORMAT_AUTO, err, sizeof err), 0);
+    static cap_record_t rec;
+    uint64_t at = 24;
+    for (uint32_t i = 0; i < BEFORE + 1 + AFTER; i++) {
+        CHECK_EQ(cap_reader_next(&r, &rec), 1);
+        CHECK_EQ(rec.index, i + 1u);
+        CHECK_EQ(rec.position, at);
+        CHECK_EQ(rec.t_ns, 1000ull * i + 7u);
+        if (i == BEFORE) {
+            CHECK_EQ(rec.orig_len, HUGE);
+            CHECK_EQ(rec.len, CAP_MAX_RECORD);
+            CHECK_EQ(rec.data[CAP_MAX_RECORD - 1u], 0xA5);
+            at += 16u + HUGE;
+        } else {
+            CHECK_EQ(rec.len, sizeof dx);
+            CHECK(memcmp(rec.data, dx, sizeof dx) == 0);
+            CHECK_STR(rec.problem, "");
+            at += 16u + sizeof dx;
+        }
+    }
+    CHECK_EQ(cap_reader_next(&r, &rec), 0);
+    cap_reader_close(&r);
+
+    /* The same file cut 7 octets into the header of record 1 502. */
+    static uint8_t buf[24 + (BEFORE + AFTER) * (16 + sizeof dx) + 16 + HUGE];
+    size_t n = read_file(p, buf, sizeof buf);
+    CHECK_EQ(n, sizeof buf);
+    size_t cut = 24u + BEFORE * (16u + sizeof dx) + 16u + HUGE + 7u;
+    char bad[600];
+    path_of(bad, sizeof bad, "chunks-cut.pcap");
+    write_file(bad, buf, cut);
+    int last;
+    char rerr[1024];
+    uint64_t records = 0;
+    CHECK_EQ(cap_reader_open(&r, bad, CAP_FORMAT_AUTO, err, sizeof err), 0);
+    while ((last = cap_reader_next(&r, &rec)) == 1) {
+        records++;
+    }
+    snprintf(rerr, sizeof rerr, "%s", r.error);
+    cap_reader_close(&r);
+    CHECK_EQ(records, BEFORE + 1u);
+    CHECK_EQ(last, -1);
+    char want[200];
+    snprintf(want, sizeof want, "record %u at byte %zu: truncated record header: 7 of 16 octets",
+             BEFORE + 2u, cut - 7u);
+    if (strstr(rerr, want) == NULL) {
+        fprintf(stderr, "  error \"%s\" lacks \"%s\"\n", rerr, want);
+        CHECK(false);
+    }
+}
+
 static void test_writer_refusals(void)
 {
     cap_writer_t w;
@@ -389,6 +461,7 @@ int main(int argc, char **argv)
     RUN_TEST(test_unreadable_files_refused_at_open);
     RUN_TEST(test_damaged_pcap_reports_position);
     RUN_TEST(test_long_record_is_cut_and_marked);
+    RUN_TEST(test_pcap_records_across_chunks);
     RUN_TEST(test_writer_refusals);
     RUN_TEST(test_text_round_trip_and_bad_lines);
     RUN_TEST(test_format_names);

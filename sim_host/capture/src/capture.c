@@ -1,8 +1,8 @@
-/* Capture files: pcap and pcapng through libpcap, text through text_import, LCM logs through
- * cap_lcm; writing pcap (pcap_writer), pcapng and text here.
+/* Capture files: pcap and pcapng opened by libpcap (standard pcap records then read by
+ * cap_pcap), text through text_import, LCM logs through cap_lcm; writing pcap (pcap_writer),
+ * pcapng and text here.
  *
- * libpcap reads both pcap flavours and pcapng, and checks record headers, but it neither
- * writes pcapng nor exposes pcapng options; the one option replay needs (if_speed, the baud
+ * libpcap reads pcapng and checks its record headers, but it neither writes pcapng nor exposes pcapng options; the one option replay needs (if_speed, the baud
  * rate) is read here from the interface description block before libpcap takes over. */
 #include "capture/capture.h"
 
@@ -14,6 +14,7 @@
 
 #include "capture/pcap_writer.h"
 #include "cap_lcm.h"
+#include "cap_pcap.h"
 #include "hal/hal_uart.h"
 
 #define PCAPNG_SHB 0x0A0D0D0Au
@@ -23,8 +24,6 @@
 #define PCAPNG_OPT_IF_SPEED 8u
 #define PCAPNG_OPT_IF_TSRESOL 9u
 #define PCAPNG_OPT_EPB_FLAGS 2u
-#define PCAP_FILE_HEADER_LEN 24u   /* pcap: magic, version, zone, sigfigs, snaplen, link type */
-#define PCAP_RECORD_HEADER_LEN 16u /* pcap: seconds, fraction, captured and wire length */
 
 const char *cap_format_name(cap_format_t f)
 {
@@ -185,6 +184,7 @@ static int open_pcap(cap_reader_t *r, char *err, size_t errlen)
     r->pcap = p;
     if (r->format == CAP_FORMAT_PCAP) {
         r->file_pos = PCAP_FILE_HEADER_LEN; /* positions follow from the lengths (next_pcap) */
+        (void)cap_pcap_chunked_start(r);
     }
     return 0;
 }
@@ -271,12 +271,37 @@ static void fill_record(cap_reader_t *r, cap_record_t *rec, const uint8_t *data,
     rec->index = r->records;
 }
 
+void cap_pcap_fill(cap_reader_t *r, cap_record_t *rec, uint64_t t_ns, const uint8_t *data,
+                   uint32_t caplen, uint32_t wire_len)
+{
+    /* Every field set here or in fill_record: clearing the record first was a tenth of the
+     * reading. */
+    rec->error_flags = 0;
+    rec->dir = CAP_DIR_UNKNOWN;
+    rec->position = r->file_pos;
+    rec->has_time = true;
+    rec->t_ns = t_ns;
+    rec->baud = r->if_baud;
+    fill_record(r, rec, data, caplen);
+    if (wire_len > caplen) {
+        snprintf(rec->problem, sizeof rec->problem, "cut when captured: %u of %u octets",
+                 caplen, wire_len);
+        rec->orig_len = wire_len;
+    } else if (wire_len < caplen) {
+        /* libpcap lets this through; the record header itself is damaged. */
+        snprintf(rec->problem, sizeof rec->problem,
+                 "record header damaged: %u octets captured of %u on the wire", caplen,
+                 wire_len);
+    }
+}
+
 static int next_pcap(cap_reader_t *r, cap_record_t *rec)
 {
+    if (r->chunk.on) {
+        return cap_pcap_next(r, rec);
+    }
     pcap_t *p = r->pcap;
-    /* A pcap file is its header and then records of a header and the captured octets, so the
-     * position is counted; ftell() on every record was a third of a replay's time. pcapng has
-     * blocks libpcap skips, so it asks the file. */
+    /* pcapng has blocks libpcap skips, so the position comes from the file. */
     FILE *f = r->format == CAP_FORMAT_PCAPNG ? pcap_file(p) : NULL;
     long at = f != NULL ? ftell(f) : (long)r->file_pos;
     struct pcap_pkthdr *h;
@@ -290,25 +315,9 @@ static int next_pcap(cap_reader_t *r, cap_record_t *rec)
                  r->records + 1, at, pcap_geterr(p));
         return -1;
     }
-    /* Every field set here or in fill_record: clearing the record first was a tenth of the
-     * reading. */
-    rec->error_flags = 0;
-    rec->dir = CAP_DIR_UNKNOWN;
-    rec->position = at >= 0 ? (uint64_t)at : 0;
-    rec->has_time = true;
-    rec->t_ns = (uint64_t)h->ts.tv_sec * 1000000000ull + (uint64_t)h->ts.tv_usec;
-    rec->baud = r->if_baud;
-    fill_record(r, rec, data, h->caplen);
-    if (h->len > h->caplen) {
-        snprintf(rec->problem, sizeof rec->problem, "cut when captured: %u of %u octets",
-                 h->caplen, h->len);
-        rec->orig_len = h->len;
-    } else if (h->len < h->caplen) {
-        /* libpcap lets this through; the record header itself is damaged. */
-        snprintf(rec->problem, sizeof rec->problem,
-                 "record header damaged: %u octets captured of %u on the wire", h->caplen,
-                 h->len);
-    }
+    r->file_pos = at >= 0 ? (uint64_t)at : 0;
+    cap_pcap_fill(r, rec, (uint64_t)h->ts.tv_sec * 1000000000ull + (uint64_t)h->ts.tv_usec, data,
+                  h->caplen, h->len);
     if (f == NULL) {
         r->file_pos += PCAP_RECORD_HEADER_LEN + h->caplen;
     } else {

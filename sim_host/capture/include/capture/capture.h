@@ -24,6 +24,9 @@
 #include "capture/record.h"
 #include "capture/text_import.h"
 
+/* Octets a classic pcap file is read in at a time: a few hundred telegram records. */
+#define CAP_PCAP_CHUNK 16384u
+
 typedef struct cap_reader {
     cap_format_t format;
     uint32_t linktype; /* pcap/pcapng: 257 or 147; 0 for text and LCM */
@@ -44,6 +47,15 @@ typedef struct cap_reader {
     char lcm_note[240];
     text_import_state_t text;
     char line_buf[TEXT_IMPORT_MAX_LINE + 2];
+    /* Classic pcap records read a chunk at a time (src/cap_pcap.c). */
+    struct {
+        bool on;
+        bool big_endian;
+        bool nano;
+        size_t len;
+        size_t pos;
+        uint8_t buf[CAP_PCAP_CHUNK];
+    } chunk;
 } cap_reader_t;
 
 /* Opens path in the given format (AUTO: by content). Returns 0, or -1 with a one-line reason in
