@@ -2,8 +2,9 @@
  * cap_pcap), text through text_import, LCM logs through cap_lcm; writing pcap (pcap_writer),
  * pcapng and text here.
  *
- * libpcap reads pcapng and checks its record headers, but it neither writes pcapng nor exposes pcapng options; the one option replay needs (if_speed, the baud
- * rate) is read here from the interface description block before libpcap takes over. */
+ * libpcap reads pcapng and checks its record headers, but it neither writes pcapng nor
+ * exposes pcapng options; the one option replay needs (if_speed, the baud rate) is read here
+ * from the interface description block before libpcap takes over. */
 #include "capture/capture.h"
 
 #include <errno.h>
