@@ -42,7 +42,9 @@ static void link_process_outputs(void *ctx, const uint16_t *po, uint8_t n)
     }
     movidrive_process_outputs(l->md, po, n);
     l->pd_words = n;
-    push_inputs(l);
+    if (!l->pi_on_poll_only) {
+        push_inputs(l);
+    }
 }
 
 static void link_fieldbus_status(void *ctx, const ml_fieldbus_status_t *status)

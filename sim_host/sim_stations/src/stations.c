@@ -21,8 +21,8 @@ static hal_time_us_t earlier(hal_time_us_t a, hal_time_us_t b)
  * to now under the old outputs before the card hands it new ones, and answers that became due
  * are delivered before the card builds its next input image. Only the image left at the end is
  * ever sent (a reply goes out from inside rx, never between these calls), so PI are pushed once
- * after the card's poll; the link pushes only words that changed, so the card's second poll
- * runs only when the image really changes. */
+ * after the card's poll (pi_on_poll_only); the link pushes only words that changed, so the
+ * card's second poll runs only when the image really changes. */
 static hal_time_us_t card_poll(void *ctx, hal_time_us_t now)
 {
     card_station_t *c = ctx;
@@ -146,7 +146,7 @@ static bool start_inverter(card_station_t *c, const card_options_t *opt, char *e
     c->movidrive_link = (movidrive_inproc_link_t){
         .md = &c->md, .param_response = card_station_param_response,
         .process_inputs = card_station_process_inputs, .card = c,
-        .delay_us = opt->inverter_delay_us};
+        .delay_us = opt->inverter_delay_us, .pi_on_poll_only = true};
     return nrc != 0 || mrc != 0;
 }
 

@@ -237,6 +237,9 @@ typedef struct movidrive_inproc_link {
     } ch[ML_MAX_CHANNELS];
     hal_time_us_t now;
     uint8_t pd_words;
+    /* process_outputs leaves the PI push to the next movidrive_inproc_link_poll(), for a
+     * caller that polls the link right after the card's poll, before any reply can go out. */
+    bool pi_on_poll_only;
     /* What the card was last given: unchanged PI words are not pushed again, so the card does
      * not rebuild an input image that would come out the same. */
     bool pushed_valid;
