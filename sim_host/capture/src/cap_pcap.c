@@ -52,26 +52,31 @@ bool cap_pcap_chunked_start(cap_reader_t *r)
     return false;
 }
 
-/* At least want octets from chunk.pos on, if the file has them: the rest of the chunk moves to
- * its start and the file fills it up. Returns how many there are (fewer only at the end). */
-static size_t have(cap_reader_t *r, size_t want)
+static size_t left(const cap_reader_t *r)
 {
-    size_t left = r->chunk.len - r->chunk.pos;
-    if (left >= want) {
-        return left;
+    return r->chunk.len - r->chunk.pos;
+}
+
+/* At least want octets from chunk.pos on, if the file has them: the rest of the chunk moves to
+ * its start and the file fills it up. False when the file ends first (left() says how many
+ * there are then). */
+static bool have(cap_reader_t *r, size_t want)
+{
+    if (left(r) >= want) {
+        return true;
     }
-    memmove(r->chunk.buf, r->chunk.buf + r->chunk.pos, left);
+    memmove(r->chunk.buf, r->chunk.buf + r->chunk.pos, left(r));
+    r->chunk.len = left(r);
     r->chunk.pos = 0;
-    r->chunk.len = left;
     FILE *f = pcap_file(r->pcap);
     while (r->chunk.len < want) {
         size_t got = fread(r->chunk.buf + r->chunk.len, 1, sizeof r->chunk.buf - r->chunk.len, f);
         if (got == 0u) {
-            break;
+            return false;
         }
         r->chunk.len += got;
     }
-    return r->chunk.len;
+    return true;
 }
 
 /* The record that starts at r->file_pos, number `record`, ends before its length says. */
@@ -93,11 +98,10 @@ static int fail(cap_reader_t *r, uint64_t record, const char *what, size_t got, 
 static bool skip(cap_reader_t *r, uint32_t n)
 {
     while (n > 0u) {
-        size_t avail = have(r, 1);
-        if (avail == 0u) {
+        if (!have(r, 1)) {
             return false;
         }
-        size_t step = avail < n ? avail : n;
+        size_t step = left(r) < n ? left(r) : n;
         r->chunk.pos += step;
         n -= (uint32_t)step;
     }
@@ -106,15 +110,12 @@ static bool skip(cap_reader_t *r, uint32_t n)
 
 int cap_pcap_next(cap_reader_t *r, cap_record_t *rec)
 {
-    size_t avail = have(r, PCAP_RECORD_HEADER_LEN);
-    if (avail == 0u) {
+    if (!have(r, PCAP_RECORD_HEADER_LEN)) {
         FILE *f = pcap_file(r->pcap);
-        return f != NULL && ferror(f)
-                   ? fail(r, r->records + 1, "record header", 0, PCAP_RECORD_HEADER_LEN)
-                   : 0;
-    }
-    if (avail < PCAP_RECORD_HEADER_LEN) {
-        return fail(r, r->records + 1, "record header", avail, PCAP_RECORD_HEADER_LEN);
+        if (left(r) == 0u && (f == NULL || !ferror(f))) {
+            return 0;
+        }
+        return fail(r, r->records + 1, "record header", left(r), PCAP_RECORD_HEADER_LEN);
     }
     const uint8_t *h = r->chunk.buf + r->chunk.pos;
     bool be = r->chunk.big_endian;
@@ -129,14 +130,13 @@ int cap_pcap_next(cap_reader_t *r, cap_record_t *rec)
         return -1;
     }
     r->chunk.pos += PCAP_RECORD_HEADER_LEN;
-    size_t first = caplen < sizeof r->chunk.buf ? caplen : sizeof r->chunk.buf;
-    avail = have(r, first);
-    if (avail < first) {
-        return fail(r, r->records + 1, "record", avail, caplen);
+    uint32_t first = caplen < CAP_PCAP_CHUNK ? caplen : CAP_PCAP_CHUNK;
+    if (!have(r, first)) {
+        return fail(r, r->records + 1, "record", left(r), caplen);
     }
     cap_pcap_fill(r, rec, t_ns, r->chunk.buf + r->chunk.pos, caplen, wire_len);
     r->chunk.pos += first;
-    if (caplen > first && !skip(r, caplen - (uint32_t)first)) {
+    if (!skip(r, caplen - first)) {
         return fail(r, r->records, "record", first, caplen); /* counted by cap_pcap_fill */
     }
     r->file_pos += PCAP_RECORD_HEADER_LEN + (uint64_t)caplen;
