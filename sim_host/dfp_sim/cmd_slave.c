@@ -1,5 +1,6 @@
-/* dfp-sim slave: the card (or a line of cards) on a real tty or a PTY, or on a virtual segment
- * over LCM (--bus lcm:CHANNEL), in wall-clock time. Timing on a PC is relaxed (see fdl_rx.h):
+/* dfp-sim slave: the card (or a line of cards) on a real tty or a PTY, on a PTY pair of its own
+ * (--pty LINK, pty_link.h), or on a virtual segment over LCM (--bus lcm:CHANNEL), in wall-clock
+ * time. Timing on a PC is relaxed (see fdl_rx.h):
  * the OS delivers bytes in chunks. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -8,6 +9,7 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "pty_link.h"
 #include "session.h"
 #include "can/inverter_can.h"
 #include "sim_hal/file_nvm.h"
@@ -17,6 +19,7 @@
 
 typedef struct slave_opts {
     medium_opts_t med;
+    const char *pty; /* --pty LINK */
     const char *lcm_url;
     capture_opts_t capture;
     instrument_opts_t io;
@@ -37,6 +40,7 @@ typedef struct slave_opts {
 static const char **text_option(slave_opts_t *o, const char *opt)
 {
     if (strcmp(opt, "--lcm") == 0) return &o->lcm_url;
+    if (strcmp(opt, "--pty") == 0) return &o->pty;
     if (strcmp(opt, "--address") == 0) return &o->address_text;
     if (strcmp(opt, "--inverter") == 0) return &o->inverter;
     if (strcmp(opt, "--eeprom") == 0) return &o->eeprom;
@@ -175,6 +179,25 @@ static bool slave_files_usable(const slave_opts_t *o)
     return true;
 }
 
+/* --pty makes its own port: no other medium beside it, and LINK no file of somebody else's. */
+static bool slave_pty_check(const slave_opts_t *o)
+{
+    if (o->pty == NULL) {
+        return true;
+    }
+    if (o->med.dev != NULL || o->med.bus != NULL) {
+        cli_error("slave: --pty LINK makes the card's own PTY pair: it excludes --port and --bus");
+        return false;
+    }
+    char why[600];
+    if (!pty_link_usable(o->pty, why, sizeof why)) {
+        cli_error("slave: --pty %s: refused (give a path that does not exist yet, or an old "
+                  "link to replace)", why);
+        return false;
+    }
+    return true;
+}
+
 /* The command line into o: 0, or EXIT_USAGE after reporting. */
 static int slave_parse(slave_opts_t *o, int argc, char **argv)
 {
@@ -185,13 +208,13 @@ static int slave_parse(slave_opts_t *o, int argc, char **argv)
             return EXIT_USAGE;
         }
     }
-    if (o->med.dev == NULL && o->med.bus == NULL) {
-        cli_error("slave: --port DEV is required (a tty such as /dev/ttyUSB0, or a PTY), or --bus "
-                  "lcm:CHANNEL");
+    if (o->med.dev == NULL && o->med.bus == NULL && o->pty == NULL) {
+        cli_error("slave: --port DEV is required (a tty such as /dev/ttyUSB0, or a PTY), or --pty "
+                  "LINK (a PTY pair of the card's own), or --bus lcm:CHANNEL");
         return EXIT_USAGE;
     }
-    if (!medium_check(&o->med, "slave") || !slave_addresses(o) || !slave_inverter_kind(o) ||
-        (o->num_cards > 1u && !slave_line_of_cards(o)) || !slave_files_usable(o)) {
+    if (!medium_check(&o->med, "slave") || !slave_pty_check(o) || !slave_addresses(o) ||
+        !slave_inverter_kind(o) || (o->num_cards > 1u && !slave_line_of_cards(o)) || !slave_files_usable(o)) {
         return EXIT_USAGE;
     }
     return 0;
@@ -267,11 +290,17 @@ static bool slave_add_cards(session_t *s, const slave_opts_t *o, ml_link_t exter
     return true;
 }
 
-static void print_start_line(const session_t *s, const slave_opts_t *o)
+static void print_start_line(const session_t *s, const slave_opts_t *o, const pty_link_t *pty)
 {
-    char name[300];
-    printf("dfp-sim slave: DFP21B on %s, DIP address %s, %s%s%s; inverter: %s%s%s\n",
-           session_medium_name(s, &o->med, name, sizeof name), o->address_text,
+    char name[700];
+    const char *medium = name;
+    if (o->pty != NULL) {
+        (void)snprintf(name, sizeof name, "its own PTY %s (masters open %s)", pty->pts, o->pty);
+    } else {
+        medium = session_medium_name(s, &o->med, name, sizeof name);
+    }
+    printf("dfp-sim slave: DFP21B on %s, DIP address %s, %s%s%s; inverter: %s%s%s\n", medium,
+           o->address_text,
            o->baud != 0u ? "fixed " : "automatic baud rate",
            o->baud != 0u ? report_baud_text(o->baud) : "",
            o->med.bus != NULL || s->rig.port.parity_ok ? "" : " (device has no parity: a PTY)",
@@ -305,29 +334,30 @@ static void log_stop(session_t *s, const slave_opts_t *o)
     }
 }
 
-int cmd_slave(int argc, char **argv)
+/* The card's run on the medium of o (pty: its own PTY pair, already made, or NULL). */
+static int slave_session(const slave_opts_t *o, const pty_link_t *pty)
 {
-    static slave_opts_t o;
     static session_t s;
     static inverter_can_t can_link;
-    int rc = slave_parse(&o, argc, argv);
-    if (rc != 0) {
-        return rc;
-    }
-    int16_t station = (int16_t)(o.num_cards == 1u ? o.addresses[0] : -1); /* -1: several */
-    if (!session_open(&s, &o.med, station, o.baud != 0u ? o.baud : hal_uart_bauds[0],
-                      &o.capture, &o.io, o.echo)) {
+    int rc;
+    int16_t station = (int16_t)(o->num_cards == 1u ? o->addresses[0] : -1); /* -1: several */
+    if (!session_open(&s, &o->med, station, o->baud != 0u ? o->baud : hal_uart_bauds[0],
+                      &o->capture, &o->io, o->echo)) {
         return 1;
+    }
+    if (pty != NULL) { /* errors name the device, not "fd 3" */
+        (void)snprintf(s.rig.port.name, sizeof s.rig.port.name, "%s", pty->pts);
     }
     card_station_t *first = &s.rig.cards[0].cs;
     s.rep.card = &first->card;
-    if (o.lcm_url != NULL && session_telemetry(&s, o.lcm_url, &first->card, o.addresses[0]) != 0) {
+    if (o->lcm_url != NULL &&
+        session_telemetry(&s, o->lcm_url, &first->card, o->addresses[0]) != 0) {
         return session_end(&s, 1);
     }
     ml_link_t external = {0};
-    if (o.kind == CARD_INVERTER_LINK) {
+    if (o->kind == CARD_INVERTER_LINK) {
         char err[256];
-        if (inverter_can_open(&can_link, o.inverter, card_station_param_response,
+        if (inverter_can_open(&can_link, o->inverter, card_station_param_response,
                               card_station_process_inputs, first, s.rig.runner, err,
                               sizeof err) != 0) {
             cli_error("%s", err);
@@ -335,16 +365,38 @@ int cmd_slave(int argc, char **argv)
         }
         external = inverter_can_link(&can_link);
     }
-    print_start_line(&s, &o);
-    rc = slave_add_cards(&s, &o, external) ? instrument_start_http(&s.in, &s.rig, &o.io, "slave",
-                                                                   false)
-                                           : 1;
+    print_start_line(&s, o, pty);
+    rc = slave_add_cards(&s, o, external)
+             ? instrument_start_http(&s.in, &s.rig, &o->io, "slave", false)
+             : 1;
     if (rc == 0) {
-        rc = slave_run(&s, &o);
-        log_stop(&s, &o);
+        rc = slave_run(&s, o);
+        log_stop(&s, o);
     }
-    if (o.kind == CARD_INVERTER_LINK) {
+    if (o->kind == CARD_INVERTER_LINK) {
         inverter_can_close(&can_link);
     }
     return session_end(&s, rc);
+}
+
+int cmd_slave(int argc, char **argv)
+{
+    static slave_opts_t o;
+    static pty_link_t pty;
+    int rc = slave_parse(&o, argc, argv);
+    if (rc != 0 || o.pty == NULL) {
+        return rc != 0 ? rc : slave_session(&o, NULL);
+    }
+    cli_catch_stop_signals(); /* from now on a signal ends the run through pty_link_close */
+    char err[800];
+    if (pty_link_open(&pty, o.pty, err, sizeof err) != 0) {
+        cli_error("%s", err);
+        return 1;
+    }
+    o.med.use_fd = true;
+    o.med.fd = pty.master_fd;
+    pty_link_hand_over(&pty); /* session_open owns it now, on failure too */
+    rc = slave_session(&o, &pty);
+    pty_link_close(&pty);
+    return rc;
 }

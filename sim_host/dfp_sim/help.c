@@ -57,11 +57,14 @@ static const help_cmd_t commands[] = {
      "at wall-clock speed and then keeps going, panel and API up, until Ctrl-C",
      NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG | NOTE_LCM},
     {"slave",
-     "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] [--address N|N-M,...]\n"
+     "--port DEV|--pty LINK|--bus lcm:CHANNEL [--lcm-url URL] [--address N|N-M,...]\n"
      "[--baud RATE|auto] [--capture FILE] [--duration S]\n"
      "[--inverter sim|none|can:IFACE[:ADDR]] [--eeprom FILE|DIR] [--card-nvm FILE|DIR]\n"
      "[--echo-suppress] [--lcm URL] [--http [ADDR:]PORT] [LOG OPTIONS]",
      "the emulated card on a tty (USB-RS485 adapter) or PTY until SIGINT/SIGTERM;\n"
+     "--pty LINK makes a PTY pair itself (no socat) and LINK a symbolic link to its\n"
+     "other end, the serial device a master opens (a PLC tool, pyprofibus, dfp-sim\n"
+     "master); an old link there is replaced, anything else refused; removed at exit;\n"
      "--bus lcm:CHANNEL puts it on a virtual segment over LCM instead, shared with the\n"
      "stations of other processes or machines (--lcm-url, else $LCM_DEFAULT_URL, else\n"
      "LCM's default udpm://239.255.76.67:7667?ttl=0);\n"
@@ -188,7 +191,8 @@ static const help_item_t exit_codes[] = {
           "convert), a device or an output file that cannot be opened or written"},
     {"2", "bad command line: unknown command or option, bad or missing value, unknown PARAM;\n"
           "an input file that cannot be read or is not a capture (convert, replay), a\n"
-          "--eeprom or --card-nvm path that is no regular file; a --http port that is taken"},
+          "--eeprom or --card-nvm path that is no regular file, a --pty path that is no\n"
+          "symbolic link; a --http port that is taken"},
 };
 
 static const help_item_t environment[] = {

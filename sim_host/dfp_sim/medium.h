@@ -10,6 +10,10 @@ typedef struct medium_opts {
     const char *dev;
     const char *bus;
     const char *lcm_url;
+    /* Not an option: the command opened the tty itself (slave --pty: the master side of its
+     * own PTY pair, which has no path). dev is then NULL. */
+    bool use_fd;
+    int fd;
 } medium_opts_t;
 
 /* --port / --bus / --lcm-url. Returns 1 when argv[*i] was one of them, 0 when not, -1 on a

@@ -2,6 +2,7 @@
 #include "session.h"
 
 #include <time.h>
+#include <unistd.h>
 
 #include "cli.h"
 #include "lcm_bridge/lcm_segment.h"
@@ -62,6 +63,8 @@ bool session_open(session_t *s, const medium_opts_t *m, int16_t station_address,
     char err[320];
     rig_cfg_t rc = {.medium = m->bus != NULL ? RIG_MEDIUM_LCM : RIG_MEDIUM_TTY,
                     .device = m->dev,
+                    .use_fd = m->use_fd,
+                    .fd = m->fd,
                     .lcm_channel = m->bus != NULL ? dfp_lcm_segment_channel(m->bus) : NULL,
                     .lcm_url = m->lcm_url,
                     .lcm_station_address = station_address,
@@ -73,6 +76,9 @@ bool session_open(session_t *s, const medium_opts_t *m, int16_t station_address,
     (void)rig_add_tap(&s->rig, &taps);
     if (rig_open(&s->rig, err, sizeof err) != 0) {
         cli_error("%s", err);
+        if (m->use_fd) {
+            (void)close(m->fd); /* a port that failed to open leaves it with us */
+        }
         return false;
     }
     s->rep.now_ns = session_now_ns;

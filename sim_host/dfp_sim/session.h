@@ -22,7 +22,8 @@ typedef struct session {
 } session_t;
 
 /* Builds the rig on the port or the segment with the log, capture and telemetry taps, and
- * catches SIGINT/SIGTERM. Returns false after reporting the reason (nothing left open). */
+ * catches SIGINT/SIGTERM. Returns false after reporting the reason (nothing left open). With
+ * m->use_fd the session owns m->fd from the call on, and closes it on failure too. */
 bool session_open(session_t *s, const medium_opts_t *m, int16_t station_address, uint32_t baud,
                   const capture_opts_t *capture, const instrument_opts_t *io, bool echo);
 /* --lcm URL: the telemetry of card, with the medium's own time origin. Returns 0 or -1. */

@@ -22,7 +22,8 @@ driven in-process for a bounded time. Asserted:
   - dfp-sim printed a line containing "Data_Exch" and exited 0 on SIGTERM.
 Scenarios: module "Param + 3 PD" (F3 F2, 14 bytes each way) from the GSD, and the universal
 "4 PD" module F3 alone (8 bytes each way, so pyprofibus sends SD3), added to a test-only copy of
-the GSD.
+the GSD; then "Param + 3 PD" again without socat: `dfp-sim slave --pty TMP/b` makes the PTY pair
+itself and pyprofibus opens the link TMP/b, which dfp-sim removes on SIGTERM.
 
 Prints one line per check and "N passed, M failed"; exit 0 when all passed, 1 otherwise, 77 (a
 ctest skip) when pyprofibus, pyserial or socat is missing. On a failure it prints dfp-sim's and
@@ -96,6 +97,9 @@ SCENARIOS = [
                      words(0x0000, 0x0000, 0x0000, 0x0000)],
     },
 ]
+# The card's own PTY pair (dfp-sim slave --pty LINK) instead of socat's.
+SCENARIOS.append(dict(SCENARIOS[0], name="Param + 3 PD over dfp-sim slave --pty (no socat)",
+                      medium="pty"))
 
 
 def wait_for(pred, timeout, step=0.02):
@@ -388,23 +392,31 @@ def run_scenario(c, pb, sc, dfp_sim, gsd_dir, baud, verbose):
         conf = os.path.join(tmp, "pyprofibus.conf")
         write_conf(conf, b, baud, gsd_path, sc["module"], sc["size"])
 
-        with open(socat_err, "w") as err:
-            socat = subprocess.Popen(["socat", "-d", "-d", "pty,raw,echo=0,link=" + a,
-                                      "pty,raw,echo=0,link=" + b],
-                                     stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                     stderr=err)
-        if not c.check(wait_for(lambda: os.path.exists(a) and os.path.exists(b), 5.0),
-                       tag + "socat PTY pair up"):
-            return
+        own_pty = sc.get("medium") == "pty"
+        if not own_pty:
+            with open(socat_err, "w") as err:
+                socat = subprocess.Popen(["socat", "-d", "-d", "pty,raw,echo=0,link=" + a,
+                                          "pty,raw,echo=0,link=" + b],
+                                         stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                         stderr=err)
+            if not c.check(wait_for(lambda: os.path.exists(a) and os.path.exists(b), 5.0),
+                           tag + "socat PTY pair up"):
+                return
         with open(sim_out, "w") as out, open(sim_err, "w") as err:
-            sim = subprocess.Popen([dfp_sim, "slave", "--inverter", "none", "--port", a,
-                                    "--address", str(SLAVE_ADDR),
-                                    "--baud", str(baud)],
+            sim = subprocess.Popen([dfp_sim, "slave", "--inverter", "none"] +
+                                   (["--pty", b] if own_pty else ["--port", a]) +
+                                   ["--address", str(SLAVE_ADDR), "--baud", str(baud)],
                                    stdin=subprocess.DEVNULL, stdout=out, stderr=err)
-        # dfp-sim prints its banner once the port is open; pyprofibus would retry anyway.
+        # dfp-sim prints its banner once the port is open (and its link made); pyprofibus would
+        # retry anyway.
         wait_for(lambda: sim.poll() is not None or "dfp-sim" in read_text(sim_out), 3.0)
         if not c.check(sim.poll() is None, tag + "dfp-sim slave running",
                        "exited with %r" % sim.poll()):
+            return
+        if own_pty and not c.check(os.path.islink(b) and
+                                   os.readlink(b).startswith("/dev/pts/"),
+                                   tag + "dfp-sim made the link to its PTY's slave side",
+                                   "%s: %r" % (b, os.readlink(b) if os.path.islink(b) else None)):
             return
 
         with contextlib.redirect_stdout(log):
@@ -427,6 +439,8 @@ def run_scenario(c, pb, sc, dfp_sim, gsd_dir, baud, verbose):
         if sim is not None:
             c.check("Data_Exch" in sim_text, tag + "dfp-sim printed a Data_Exch state line")
             c.check(sim_rc == 0, tag + "dfp-sim exited 0 on SIGTERM", "exit %r" % sim_rc)
+            if sc.get("medium") == "pty":
+                c.check(not os.path.lexists(b), tag + "dfp-sim removed its link on SIGTERM")
         elapsed = time.monotonic() - t_start
         print("     %s%.2f s" % (tag, elapsed))
         if c.failed != failed_before or verbose:
