@@ -8,14 +8,18 @@ side in one run: prints figures and ratios, asserts nothing.
   2. in process: start-up + Data_Exchange cycles of the built-in master with the card on the
      in-memory bus (`dfp-bench --cycles N --baud 12000000`) against pyprofibus's master with its
      in-process dummy slave (CpPhyDummySlave), the same configuration Param + 3 PD;
-  3. PTY: `dfp-sim master` against `dfp-sim slave` over a socat PTY pair at a nominal
-     1.5 Mbit/s, against pyprofibus's master with the same `dfp-sim slave`, Data_Exchange cycles
-     per second of wall time (a PTY has no bit timing: the rate only sets the timeouts).
+  3. PTY: `dfp-sim master` against `dfp-sim slave --pty LINK` (the card's own PTY pair, the
+     master on LINK) at a nominal 1.5 Mbit/s, against pyprofibus's master with the same
+     `dfp-sim slave`, Data_Exchange cycles per second of wall time (a PTY has no bit timing: the
+     rate only sets the timeouts). --pty-medium socat puts a socat PTY pair between them instead
+     (`dfp-sim slave --port` on one end, the master on the other), as before --pty existed;
+     both: one line each.
 
 Each figure is the best of --runs runs (the machine's other load only ever slows a run down).
 
     tools/bench/ratio_bench.py [--build DIR] [--python PY] [--telegrams N] [--cycles N]
-                               [--pty-cycles N] [--baud RATE] [--runs N] [--dir DIR]
+                               [--pty-cycles N] [--pty-medium direct|socat|both]
+                               [--baud RATE] [--runs N] [--dir DIR]
 """
 import argparse
 import os
@@ -134,18 +138,30 @@ def ratio_inprocess(a, dfp_bench, tmp):
 
 # ---- 3. PTY: dfp-sim master against pyprofibus, both with dfp-sim slave ---------------------
 
-def with_slave(a, dfp_sim, tmp, fn):
-    """A fresh socat PTY pair with dfp-sim slave on one end; fn(other end) runs the master."""
+def slave_cmd(a, dfp_sim, medium_args):
+    return [dfp_sim, "slave"] + medium_args + ["--address", str(SLAVE_ADDR), "--baud",
+                                               str(a.baud), "--inverter", "none", "--quiet"]
+
+
+def with_slave(a, dfp_sim, tmp, medium, fn):
+    """A fresh dfp-sim slave on its own PTY pair (direct) or on one end of a socat pair;
+    fn(the device the master opens) runs the master."""
     pa, pb = os.path.join(tmp, "pty_a"), os.path.join(tmp, "pty_b")
-    socat = subprocess.Popen(["socat", "pty,raw,echo=0,link=" + pa, "pty,raw,echo=0,link=" + pb],
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    slave = None
+    socat = slave = None
     try:
-        if not wait_for(lambda: os.path.exists(pa) and os.path.exists(pb), 5.0):
-            sys.exit("ratio_bench: socat did not make the PTY pair")
-        slave = subprocess.Popen([dfp_sim, "slave", "--port", pa, "--address", str(SLAVE_ADDR),
-                                  "--baud", str(a.baud), "--inverter", "none", "--quiet"],
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        if medium == "direct":
+            slave = subprocess.Popen(slave_cmd(a, dfp_sim, ["--pty", pb]),
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            if not wait_for(lambda: os.path.islink(pb), 5.0):
+                sys.exit("ratio_bench: dfp-sim slave --pty did not make its link")
+        else:
+            socat = subprocess.Popen(["socat", "pty,raw,echo=0,link=" + pa,
+                                      "pty,raw,echo=0,link=" + pb],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            if not wait_for(lambda: os.path.exists(pa) and os.path.exists(pb), 5.0):
+                sys.exit("ratio_bench: socat did not make the PTY pair")
+            slave = subprocess.Popen(slave_cmd(a, dfp_sim, ["--port", pa]),
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         time.sleep(0.3)
         return fn(pb)
     finally:
@@ -153,7 +169,7 @@ def with_slave(a, dfp_sim, tmp, fn):
         stop_process(socat)
 
 
-def ratio_pty(a, dfp_sim, tmp):
+def ratio_pty(a, dfp_sim, tmp, medium):
     conf = os.path.join(tmp, "pty.conf")
 
     def ours_once(dev):
@@ -165,21 +181,33 @@ def ratio_pty(a, dfp_sim, tmp):
     def theirs_once(dev):
         return pyprofibus_rate(a, conf, dev, a.baud, a.pty_cycles)
 
-    ours = max(with_slave(a, dfp_sim, tmp, ours_once) for _ in range(a.runs))
-    theirs = max(with_slave(a, dfp_sim, tmp, theirs_once) for _ in range(a.runs))
-    print("PTY:        %d Data_Exchange cycles against dfp-sim slave at a nominal %d bit/s, "
-          "start-up included: dfp-sim master %.0f cycles/s; pyprofibus master %.0f cycles/s"
-          % (a.pty_cycles, a.baud, ours, theirs))
+    ours_all = [with_slave(a, dfp_sim, tmp, medium, ours_once) for _ in range(a.runs)]
+    theirs_all = [with_slave(a, dfp_sim, tmp, medium, theirs_once) for _ in range(a.runs)]
+    ours, theirs = max(ours_all), max(theirs_all)
+    ran = ("dfp-sim slave --pty LINK, the master on LINK" if medium == "direct" else
+           "socat pty,raw,echo=0 pair, dfp-sim slave --port on one end, the master on the other")
+    print("PTY (%s):%s %d Data_Exchange cycles against dfp-sim slave at a nominal %d bit/s, "
+          "start-up included (%s): dfp-sim master %.0f cycles/s (runs %s); pyprofibus master "
+          "%.0f cycles/s (runs %s)"
+          % (medium, " " * (6 - len(medium)), a.pty_cycles, a.baud, ran, ours,
+             " ".join("%.0f" % x for x in ours_all), theirs,
+             " ".join("%.0f" % x for x in theirs_all)))
     return ours / theirs
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build", default=os.path.join(ROOT, "build", "host"))
-    ap.add_argument("--python", default=os.path.join(ROOT, "build", "venv", "bin", "python3"))
+    venv_python = os.path.join(ROOT, "build", "venv", "bin", "python3")
+    # The checkout's venv (it has pyprofibus), else the interpreter running this (a worktree
+    # without a venv of its own, run by another checkout's).
+    ap.add_argument("--python", default=venv_python if os.access(venv_python, os.X_OK)
+                    else sys.executable)
     ap.add_argument("--telegrams", type=int, default=1000000)
     ap.add_argument("--cycles", type=int, default=1000000)
     ap.add_argument("--pty-cycles", type=int, default=2000)
+    ap.add_argument("--pty-medium", choices=("direct", "socat", "both"), default="direct",
+                    help="the PTY pair: dfp-sim slave --pty's own (default), socat's, or both")
     ap.add_argument("--baud", type=int, default=1500000)
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--dir", help="for the captures (default: a temporary directory)")
@@ -191,19 +219,21 @@ def main():
     for tool in (dfp_sim, dfp_bench, a.python):
         if not os.access(tool, os.X_OK):
             sys.exit("ratio_bench: %s is not executable (build first, or --build DIR)" % tool)
-    for tool in ("tshark", "socat"):
+    for tool in ("tshark",) + (("socat",) if a.pty_medium != "direct" else ()):
         if shutil.which(tool) is None:
             sys.exit("ratio_bench: %s not found" % tool)
     tmp = tempfile.mkdtemp(prefix="dfp-ratio-", dir=a.dir)
     try:
         r1 = ratio_replay(a, dfp_sim, tmp)
         r2 = ratio_inprocess(a, dfp_bench, tmp)
-        r3 = ratio_pty(a, dfp_sim, tmp)
+        media = ("direct", "socat") if a.pty_medium == "both" else (a.pty_medium,)
+        r3 = [(m, ratio_pty(a, dfp_sim, tmp, m)) for m in media]
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     print("ratio replay / tshark:               %.1fx" % r1)
     print("ratio in-process / pyprofibus dummy: %.1fx" % r2)
-    print("ratio PTY master / pyprofibus:       %.2fx" % r3)
+    for m, r in r3:
+        print("ratio PTY master / pyprofibus (%s):%s %.2fx" % (m, " " * (6 - len(m)), r))
     return 0
 
 
