@@ -233,7 +233,7 @@ def main():
     print("ratio replay / tshark:               %.1fx" % r1)
     print("ratio in-process / pyprofibus dummy: %.1fx" % r2)
     for m, r in r3:
-        print("ratio PTY master / pyprofibus (%s):%s %.2fx" % (m, " " * (6 - len(m)), r))
+        print("ratio PTY master / pyprofibus:       %.2fx (%s)" % (r, m))
     return 0
 
 
