@@ -214,7 +214,8 @@ static int slave_parse(slave_opts_t *o, int argc, char **argv)
         return EXIT_USAGE;
     }
     if (!medium_check(&o->med, "slave") || !slave_pty_check(o) || !slave_addresses(o) ||
-        !slave_inverter_kind(o) || (o->num_cards > 1u && !slave_line_of_cards(o)) || !slave_files_usable(o)) {
+        !slave_inverter_kind(o) || (o->num_cards > 1u && !slave_line_of_cards(o)) ||
+        !slave_files_usable(o)) {
         return EXIT_USAGE;
     }
     return 0;
