@@ -300,6 +300,30 @@ static void test_address_above_125_shown_in_p093(void)
     CHECK_EQ(p819(), 500);
 }
 
+/* A power cycle restarts the card with an empty input image while its drive runs on: once the
+ * master has it in Data_Exch again, the PI words are the drive's, even though the drive's
+ * words did not change meanwhile (the in-process link hands over only changed words, and must
+ * hand over all of them to a card that forgot them). */
+static void test_power_cycled_card_gets_the_drives_pi_again(void)
+{
+    setup(0, 0x01);
+    membus_run_for_us(&rig.bus, 5000);
+    uint16_t before[3];
+    movidrive_process_inputs(&rig.cards[0].cs.md, before, 3);
+    CHECK(before[0] != 0u);
+    CHECK_EQ(pi_word(0), before[0]);
+    rig_card_power_cycle(&rig.cards[0], rig_now_us(&rig));
+    CHECK_EQ(rig.cards[0].cs.card.pi[0], 0u); /* the restarted card has forgotten them */
+    membus_run_for_us(&rig.bus, 50000);
+    CHECK_EQ(rig.master.slaves[0].phase, DP_MASTER_PHASE_DATA_EXCH);
+    uint16_t after[3];
+    movidrive_process_inputs(&rig.cards[0].cs.md, after, 3);
+    CHECK_EQ(after[0], before[0]);
+    for (unsigned i = 0; i < 3u; i++) {
+        CHECK_EQ(pi_word(i), after[i]);
+    }
+}
+
 /* Regression: deadlines that started at 0 never came due once the clock was past 2^31 us. */
 static void test_everything_works_after_35_minutes_of_uptime(void)
 {
@@ -321,6 +345,7 @@ int main(void)
     RUN_TEST(test_no_ext_diag_with_alarm_off);
     RUN_TEST(test_p819_written_elsewhere_stays_until_next_set_prm);
     RUN_TEST(test_address_above_125_shown_in_p093);
+    RUN_TEST(test_power_cycled_card_gets_the_drives_pi_again);
     RUN_TEST(test_everything_works_after_35_minutes_of_uptime);
     return check_report();
 }

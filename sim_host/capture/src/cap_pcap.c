@@ -28,6 +28,9 @@ static uint32_t get32(const uint8_t *p, bool big_endian)
 
 bool cap_pcap_chunked_start(cap_reader_t *r)
 {
+    if (pcap_file(r->pcap) == NULL) {
+        return false; /* not a savefile libpcap reads through stdio: it reads the records */
+    }
     FILE *f = fopen(r->path, "rb");
     if (f == NULL) {
         return false; /* libpcap has it open: it reads the records then */

@@ -94,3 +94,8 @@ hal_time_us_t movidrive_inproc_link_poll(movidrive_inproc_link_t *l, hal_time_us
     push_inputs(l);
     return next;
 }
+
+void movidrive_inproc_link_card_restarted(movidrive_inproc_link_t *l)
+{
+    l->pushed_valid = false;
+}

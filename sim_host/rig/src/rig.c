@@ -446,6 +446,9 @@ void rig_card_power_cycle(rig_card_t *c, hal_time_us_t now)
     c->cs.dip.switches = c->next_address;
     dfp21b_cfg_t cfg = c->cs.card.cfg;
     dfp21b_init(&c->cs.card, &cfg, now);
+    if (c->cs.inverter == CARD_INVERTER_SIM) {
+        movidrive_inproc_link_card_restarted(&c->cs.movidrive_link);
+    }
     rig_wake(c->rig);
 }
 

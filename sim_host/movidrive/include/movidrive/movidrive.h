@@ -254,5 +254,7 @@ hal_time_us_t movidrive_inproc_link_poll(movidrive_inproc_link_t *l, hal_time_us
 /* The same without the PI push: the drive's time runs to now and due responses arrive. For a
  * caller whose next step (the card taking outputs) pushes PI anyway and polls again after. */
 hal_time_us_t movidrive_inproc_link_advance(movidrive_inproc_link_t *l, hal_time_us_t now);
+/* The card restarted and forgot the PI it was given: the next push hands over every word. */
+void movidrive_inproc_link_card_restarted(movidrive_inproc_link_t *l);
 
 #endif
