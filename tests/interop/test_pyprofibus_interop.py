@@ -111,6 +111,20 @@ def wait_for(pred, timeout, step=0.02):
     return pred()
 
 
+def start_socat_pair(a, b, err_path=None):
+    """socat joining two fresh raw PTYs linked at a and b (with -d -d its log goes to err_path);
+    returns the process and whether both links appeared within 5 s."""
+    err = open(err_path, "w") if err_path is not None else subprocess.DEVNULL
+    try:
+        p = subprocess.Popen(["socat"] + (["-d", "-d"] if err_path is not None else []) +
+                             ["pty,raw,echo=0,link=" + a, "pty,raw,echo=0,link=" + b],
+                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err)
+    finally:
+        if err_path is not None:
+            err.close()
+    return p, wait_for(lambda: os.path.exists(a) and os.path.exists(b), 5.0)
+
+
 def stop_process(p, sig=signal.SIGTERM, timeout=5.0):
     """Stop one child we started; returns its exit code (None if it had to be killed)."""
     if p is None:
@@ -394,13 +408,8 @@ def run_scenario(c, pb, sc, dfp_sim, gsd_dir, baud, verbose):
 
         own_pty = sc.get("medium") == "pty"
         if not own_pty:
-            with open(socat_err, "w") as err:
-                socat = subprocess.Popen(["socat", "-d", "-d", "pty,raw,echo=0,link=" + a,
-                                          "pty,raw,echo=0,link=" + b],
-                                         stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                         stderr=err)
-            if not c.check(wait_for(lambda: os.path.exists(a) and os.path.exists(b), 5.0),
-                           tag + "socat PTY pair up"):
+            socat, up = start_socat_pair(a, b, socat_err)
+            if not c.check(up, tag + "socat PTY pair up"):
                 return
         with open(sim_out, "w") as out, open(sim_err, "w") as err:
             sim = subprocess.Popen([dfp_sim, "slave", "--inverter", "none"] +

@@ -71,7 +71,7 @@ import time
 
 from checker import pyprofibus_main  # sibling modules in tests/interop
 from test_pyprofibus_interop import (MASTER_ADDR, SD2, make_tap_phy, read_text,
-                                     stop_process, wait_for, words)
+                                     start_socat_pair, stop_process, wait_for, words)
 
 ADDRS = (4, 5, 6)
 MODULE = "Param + 3 PD"
@@ -496,13 +496,8 @@ def run(c, pb, args):
     drives = [Drive(x) for x in ADDRS]
     t_start = time.monotonic()
     try:
-        with open(socat_err, "w") as err:
-            socat = subprocess.Popen(["socat", "-d", "-d", "pty,raw,echo=0,link=" + a,
-                                      "pty,raw,echo=0,link=" + b],
-                                     stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                     stderr=err)
-        if not c.check(wait_for(lambda: os.path.exists(a) and os.path.exists(b), 5.0),
-                       "socat PTY pair up"):
+        socat, up = start_socat_pair(a, b, socat_err)
+        if not c.check(up, "socat PTY pair up"):
             return
         with open(sim_out, "w") as out, open(sim_err, "w") as err:
             sim = subprocess.Popen([args.dfp_sim, "slave", "--port", a, "--address",

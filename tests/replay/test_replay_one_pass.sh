@@ -10,8 +10,7 @@ sim=$1
 here=$(dirname "$0")
 golden=$here/golden
 . "$here/../cli/lib.sh"
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
+with_tmp
 
 # same_both DESCRIPTION FILE ARG...: exit status, text report and JSON report of one pass
 # equal to those of two passes.
@@ -41,23 +40,7 @@ same_both "multimaster.pcap --address 5" "$golden/multimaster.pcap" --check --ad
   --inverter none
 
 # A mismatch: the 60th Data_Exchange answer with PI1's low octet + 1 (FCS fixed).
-python3 - "$golden/data_exchange.pcap" "$tmp/altered.pcap" <<'PY'
-import struct, sys
-d = bytearray(open(sys.argv[1], 'rb').read())
-o, seen = 24, 0
-while o < len(d):
-    incl = struct.unpack_from('<I', d, o + 8)[0]
-    f = d[o + 16:o + 16 + incl]
-    if f[0] == 0x68 and f[5] == 0x04 and f[6] == 0x08:
-        seen += 1
-        if seen == 60:
-            p = o + 16 + 7 + 8 + 1
-            d[p] = (d[p] + 1) & 0xFF
-            d[o + 16 + incl - 2] = sum(d[o + 16 + 4:o + 16 + incl - 2]) & 0xFF
-            break
-    o += 16 + incl
-open(sys.argv[2], 'wb').write(d)
-PY
+python3 "$here/alter_answers.py" "$golden/data_exchange.pcap" "$tmp/altered.pcap" >/dev/null
 same_both "altered reply" "$tmp/altered.pcap" --check
 expect_exit 1 "altered reply differs" -- "$sim" replay "$tmp/altered.pcap" --check
 expect_in "altered reply result" "result: DIFFERENT: 1 of 127 replies differ" "$out"

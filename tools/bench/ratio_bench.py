@@ -33,8 +33,8 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "tests", "interop"))
 # pyprofibus's configuration and the PTY plumbing, as the interop tests use them
-from test_pyprofibus_interop import (MASTER_ADDR, SLAVE_ADDR, stop_process,  # noqa: E402
-                                     wait_for, write_conf)
+from test_pyprofibus_interop import (MASTER_ADDR, SLAVE_ADDR,  # noqa: E402
+                                     start_socat_pair, stop_process, wait_for, write_conf)
 
 CFG = "F3F2"  # Param + 3 PD: 14 octets each way
 IO_LEN = 14
@@ -155,10 +155,8 @@ def with_slave(a, dfp_sim, tmp, medium, fn):
             if not wait_for(lambda: os.path.islink(pb), 5.0):
                 sys.exit("ratio_bench: dfp-sim slave --pty did not make its link")
         else:
-            socat = subprocess.Popen(["socat", "pty,raw,echo=0,link=" + pa,
-                                      "pty,raw,echo=0,link=" + pb],
-                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-            if not wait_for(lambda: os.path.exists(pa) and os.path.exists(pb), 5.0):
+            socat, up = start_socat_pair(pa, pb)
+            if not up:
                 sys.exit("ratio_bench: socat did not make the PTY pair")
             slave = subprocess.Popen(slave_cmd(a, dfp_sim, ["--port", pa]),
                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
