@@ -26,3 +26,16 @@ pty_pair() { # a socat PTY pair at $tmp/a and $tmp/b
   for _ in $(seq 50); do [ -e "$tmp/a" ] && [ -e "$tmp/b" ] && return 0; sleep 0.1; done
   echo "socat did not create the PTY pair" >&2; return 1
 }
+# dx_cycles CAPTURE: Data_Exchange cycles (to station 4, from the master at 2) in a master's text
+# capture that got their reply. A cycle is a run of requests with the same FC (a repeat after a
+# lost reply keeps it; a start-up service to the station ends the run, since it resets the FCB)
+# and counts once, at its first reply; a cycle whose every try went unanswered does not count, so
+# a loaded machine that loses a reply does not change the count.
+dx_cycles() {
+  awk '$2 == "TX" && $3 == "68" && $7 == "04" && $8 == "02" {
+         if ($9 != fc || restart) run++; fc = $9; restart = 0; req = run; next }
+       $2 == "TX" { if ($3 == "68" && $7 == "84") restart = 1; req = 0; next }
+       $2 == "RX" && req && $3 == "68" && $7 == "02" && $8 == "04" {
+         if (req != counted) n++; counted = req; req = 0 }
+       END { print n + 0 }' "$1"
+}
