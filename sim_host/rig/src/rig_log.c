@@ -435,7 +435,7 @@ static void log_inputs(rig_log_t *l, const dp_master_event_t *ev)
 bool rig_master_event_text(const dp_master_event_t *ev, bool *slave_silent, char *out, size_t n,
                            rig_log_level_t *level, const char **kind)
 {
-    char text[256];
+    char text[RIG_CTL_TEXT - 32u]; /* the diagnosis with its "slave N diagnosis: " in front fits out */
     switch (ev->type) {
     case DP_MASTER_EV_PHASE:
         if (*slave_silent && (ev->new_phase == DP_MASTER_PHASE_FDL_STATUS ||
