@@ -5,7 +5,8 @@
 # the trace twice), so the two ways are compared by their --report json files and their text
 # reports, which must be the same octets: on every golden capture, on one with a reply altered,
 # on a capture longer than the guess, and on one whose first 4096 records do not show the
-# card's first request (the guess is wrong and the replay runs again).
+# card's first request (the guess is wrong and the replay runs again). A replay held to one CPU
+# (no reading thread) gives the same reports as one on two.
 sim=$1
 here=$(dirname "$0")
 golden=$here/golden
@@ -84,4 +85,23 @@ same_both "first request to the card after record 4096" "$tmp/late.pcap" --check
   --baud 1.5M
 expect_exit 0 "late first request" -- "$sim" replay "$tmp/late.pcap" --check --address 4 --baud 1.5M
 expect_in "the whole file decides" "fixed at the bus rate (inferred: the capture's first request to it, record 5001, is answered" "$out"
+
+# Held to one CPU, the replay reads the file in its own thread, not in a second one: the same
+# exit status and the same reports, also for a mismatch and a file cut inside a record (the
+# records before the cut are replayed, the error names the record).
+head -c $(( $(stat -c %s "$tmp/long.pcap") - 7 )) "$tmp/long.pcap" >"$tmp/cut.pcap"
+for f in long.pcap altered.pcap cut.pcap; do
+  "$sim" replay "$tmp/$f" --check --report json "$tmp/two_cpus.json" >"$tmp/two_cpus.txt" 2>&1
+  two=$?
+  taskset -c 0 "$sim" replay "$tmp/$f" --check --report json "$tmp/one_cpu.json" \
+    >"$tmp/one_cpu.txt" 2>&1
+  one=$?
+  if [ "$one" = "$two" ]; then ok; else bad "$f: exit $one on one CPU, $two on two"; fi
+  if cmp -s "$tmp/one_cpu.json" "$tmp/two_cpus.json" && cmp -s "$tmp/one_cpu.txt" "$tmp/two_cpus.txt"
+  then ok; else
+    bad "$f: reports differ on one CPU:"$'\n'"$(diff "$tmp/one_cpu.txt" "$tmp/two_cpus.txt" | head -20)"
+  fi
+done
+expect_in "the cut file's error" "truncated record: 16 of 23 octets" "$(cat "$tmp/one_cpu.txt")"
+expect_in "the cut file's records before the cut" "result: INCOMPLETE" "$(cat "$tmp/one_cpu.txt")"
 finish

@@ -1,5 +1,6 @@
 /* Streaming a capture file through the replay or the address scan. */
 #include <pthread.h>
+#include <sched.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -256,6 +257,13 @@ static void stream_threaded(pipe_t *p, pthread_t reader, const stream_job_t *job
     show_progress(job, n, st->interrupted ? pos : p->rd.file_pos, p->rd.file_size, true);
 }
 
+/* A process held to one CPU (taskset, a container's cpuset) would only pay for the hand-over. */
+static int cpus_to_run_on(void)
+{
+    cpu_set_t set;
+    return sched_getaffinity(0, sizeof set, &set) == 0 ? CPU_COUNT(&set) : 1;
+}
+
 static int stream(const replay_input_t *src, const stream_job_t *job, replay_file_status_t *st)
 {
     memset(st, 0, sizeof *st);
@@ -274,7 +282,8 @@ static int stream(const replay_input_t *src, const stream_job_t *job, replay_fil
     st->linktype = p->rd.linktype;
     p->scan = job->scan;
     pthread_t reader;
-    if (job->replay != NULL && job->limit == 0u && pthread_mutex_init(&p->mu, NULL) == 0) {
+    if (job->replay != NULL && job->limit == 0u && cpus_to_run_on() > 1 &&
+        pthread_mutex_init(&p->mu, NULL) == 0) {
         if (pthread_cond_init(&p->cv, NULL) == 0) {
             if (start_reader(&reader, p) == 0) {
                 stream_threaded(p, reader, job, st);
