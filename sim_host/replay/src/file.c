@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "capture/capture.h"
 #include "replay/replay.h"
@@ -257,11 +258,15 @@ static void stream_threaded(pipe_t *p, pthread_t reader, const stream_job_t *job
     show_progress(job, n, st->interrupted ? pos : p->rd.file_pos, p->rd.file_size, true);
 }
 
-/* A process held to one CPU (taskset, a container's cpuset) would only pay for the hand-over. */
-static int cpus_to_run_on(void)
+/* A second thread for the reading only pays on a second CPU (not for a process held to one by
+ * taskset or a container's cpuset), and only reads a regular file: a read from a pipe or FIFO
+ * may block for good, and a replay stopped by SIGINT would then wait for its reader forever. */
+static bool reader_thread_pays(const char *path)
 {
     cpu_set_t set;
-    return sched_getaffinity(0, sizeof set, &set) == 0 ? CPU_COUNT(&set) : 1;
+    struct stat fst;
+    return sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 1 &&
+           stat(path, &fst) == 0 && S_ISREG(fst.st_mode);
 }
 
 static int stream(const replay_input_t *src, const stream_job_t *job, replay_file_status_t *st)
@@ -282,7 +287,7 @@ static int stream(const replay_input_t *src, const stream_job_t *job, replay_fil
     st->linktype = p->rd.linktype;
     p->scan = job->scan;
     pthread_t reader;
-    if (job->replay != NULL && job->limit == 0u && cpus_to_run_on() > 1 &&
+    if (job->replay != NULL && job->limit == 0u && reader_thread_pays(src->path) &&
         pthread_mutex_init(&p->mu, NULL) == 0) {
         if (pthread_cond_init(&p->cv, NULL) == 0) {
             if (start_reader(&reader, p) == 0) {
