@@ -20,8 +20,11 @@ core=(dp_slave dpv1 movilink firmware/dfp21b)
 gcovr=${GCOVR:-/usr/bin/gcovr}
 [ -x "$gcovr" ] || gcovr=$(command -v gcovr) || { echo "coverage: gcovr not found"; exit 1; }
 
+# Atomic counters: the replay reads its file on a second thread (sim_host/replay/src/file.c),
+# and two threads adding to the same plain counter leave counts gcov prints as negative, which
+# gcovr refuses to read.
 cmake --preset host -B "$build" -DCMAKE_BUILD_TYPE=Debug \
-      "-DCMAKE_C_FLAGS=--coverage -O0" -DCMAKE_EXE_LINKER_FLAGS=--coverage \
+      "-DCMAKE_C_FLAGS=--coverage -fprofile-update=atomic -O0" -DCMAKE_EXE_LINKER_FLAGS=--coverage \
       ${COVERAGE_CMAKE_ARGS:-} >/dev/null
 cmake --build "$build"
 
