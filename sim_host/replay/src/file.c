@@ -155,24 +155,40 @@ static uint64_t replay_take(pipe_t *p, uint64_t n)
     return head;
 }
 
-static void replay_stops_reading(pipe_t *p)
-{
-    pthread_mutex_lock(&p->mu);
-    p->quit = true;
-    pthread_cond_broadcast(&p->cv);
-    pthread_mutex_unlock(&p->mu);
-}
-
-/* Signals go to the replay's thread, which watches stop; the reader never sees them. */
+/* Signals go to the replay's thread, which watches stop; the reader never sees them. 0, or -1
+ * when no thread could start (the caller then reads in its own thread). */
 static int start_reader(pthread_t *t, pipe_t *p)
 {
+    if (pthread_mutex_init(&p->mu, NULL) != 0) {
+        return -1;
+    }
+    if (pthread_cond_init(&p->cv, NULL) != 0) {
+        pthread_mutex_destroy(&p->mu);
+        return -1;
+    }
     sigset_t all;
     sigset_t old;
     sigfillset(&all);
     pthread_sigmask(SIG_SETMASK, &all, &old);
     int rc = pthread_create(t, NULL, reader_thread, p);
     pthread_sigmask(SIG_SETMASK, &old, NULL);
-    return rc;
+    if (rc != 0) {
+        pthread_cond_destroy(&p->cv);
+        pthread_mutex_destroy(&p->mu);
+        return -1;
+    }
+    return 0;
+}
+
+static void join_reader(pthread_t t, pipe_t *p)
+{
+    pthread_mutex_lock(&p->mu);
+    p->quit = true;
+    pthread_cond_broadcast(&p->cv);
+    pthread_mutex_unlock(&p->mu);
+    pthread_join(t, NULL);
+    pthread_cond_destroy(&p->cv);
+    pthread_mutex_destroy(&p->mu);
 }
 
 typedef struct stream_job {
@@ -248,8 +264,7 @@ static void stream_threaded(pipe_t *p, pthread_t reader, const stream_job_t *job
         n++;
         show_progress(job, n, pos, p->rd.file_size, false);
     }
-    replay_stops_reading(p);
-    pthread_join(reader, NULL);
+    join_reader(reader, p);
     st->records = n;
     if (!st->interrupted && p->rc < 0) {
         st->read_error = true;
@@ -288,18 +303,8 @@ static int stream(const replay_input_t *src, const stream_job_t *job, replay_fil
     p->scan = job->scan;
     pthread_t reader;
     if (job->replay != NULL && job->limit == 0u && reader_thread_pays(src->path) &&
-        pthread_mutex_init(&p->mu, NULL) == 0) {
-        if (pthread_cond_init(&p->cv, NULL) == 0) {
-            if (start_reader(&reader, p) == 0) {
-                stream_threaded(p, reader, job, st);
-            } else {
-                stream_here(p, job, st);
-            }
-            pthread_cond_destroy(&p->cv);
-        } else {
-            stream_here(p, job, st);
-        }
-        pthread_mutex_destroy(&p->mu);
+        start_reader(&reader, p) == 0) {
+        stream_threaded(p, reader, job, st);
     } else {
         stream_here(p, job, st);
     }
