@@ -10,10 +10,13 @@ side in one run: prints figures and ratios, asserts nothing.
      in-process dummy slave (CpPhyDummySlave), the same configuration Param + 3 PD;
   3. PTY: `dfp-sim master` against `dfp-sim slave --pty LINK` (the card's own PTY pair, the
      master on LINK) at a nominal 1.5 Mbit/s, against pyprofibus's master with the same
-     `dfp-sim slave`, Data_Exchange cycles per second of wall time (a PTY has no bit timing: the
-     rate only sets the timeouts). --pty-medium socat puts a socat PTY pair between them instead
-     (`dfp-sim slave --port` on one end, the master on the other), as before --pty existed;
-     both: one line each.
+     `dfp-sim slave`, Data_Exchange cycles per second of wall time (a PTY has no bit timing:
+     the rate sets the timeouts and the waits the line's rules demand, TSYN before a request and
+     min TSDR before a reply). --pty-medium socat puts a socat PTY pair between them instead
+     (`dfp-sim slave --port` on one end, the master on the other); both: one line each. After
+     the ratios, the ceiling those two waits put on the PTY ratio: no master that keeps them
+     can run faster than one cycle per 44 bit times, so its ratio to pyprofibus's measured
+     rate cannot exceed that.
 
 Each figure is the best of --runs runs (the machine's other load only ever slows a run down).
 
@@ -189,7 +192,19 @@ def ratio_pty(a, dfp_sim, tmp, medium):
           % (medium, " " * (6 - len(medium)), a.pty_cycles, a.baud, ran, ours,
              " ".join("%.0f" % x for x in ours_all), theirs,
              " ".join("%.0f" % x for x in theirs_all)))
-    return ours / theirs
+    return ours / theirs, theirs
+
+
+# The waits a PTY cannot shorten: the master's idle before each request (TSYN, 33 bit) and the
+# slave's minimum station delay before its reply (min TSDR, 11 bit by default). A PTY moves
+# octets without bit time, so these are all of a cycle's line time; a master that keeps them
+# runs at most 1 / (44 bit) cycles per second, whatever its own speed and the kernel's.
+TSYN_BITS, MIN_TSDR_BITS = 33, 11
+
+
+def pty_ceiling(baud, theirs):
+    most = baud / float(TSYN_BITS + MIN_TSDR_BITS)
+    return most, most / theirs
 
 
 def main():
@@ -224,13 +239,18 @@ def main():
         r1 = ratio_replay(a, dfp_sim, tmp)
         r2 = ratio_inprocess(a, dfp_bench, tmp)
         media = ("direct", "socat") if a.pty_medium == "both" else (a.pty_medium,)
-        r3 = [(m, ratio_pty(a, dfp_sim, tmp, m)) for m in media]
+        r3 = [(m,) + ratio_pty(a, dfp_sim, tmp, m) for m in media]
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     print("ratio replay / tshark:               %.1fx" % r1)
     print("ratio in-process / pyprofibus dummy: %.1fx" % r2)
-    for m, r in r3:
+    for m, r, theirs in r3:
         print("ratio PTY master / pyprofibus:       %.2fx (%s)" % (r, m))
+    for m, r, theirs in r3:
+        most, ceiling = pty_ceiling(a.baud, theirs)
+        print("ceiling PTY master / pyprofibus:     %.2fx (%s: TSYN + min TSDR = %d bit at %d "
+              "bit/s allow at most %.0f cycles/s)"
+              % (ceiling, m, TSYN_BITS + MIN_TSDR_BITS, a.baud, most))
     return 0
 
 
