@@ -234,6 +234,11 @@ static bool accept_request(dp_slave_t *s, fdl_msg_t *m, hal_time_us_t t, bool *f
     if (m->da != s->cfg.address && !broadcast) {
         return false;
     }
+    if (m->sa == FDL_ADDR_BROADCAST) {
+        /* 127 is the global address, a destination only (protocol.md §A1.3): served, such a
+         * telegram would lock the slave to "master 127" and be answered to everyone. */
+        return false;
+    }
     if (tsyn_violated(s)) {
         s->rx.error_count[FDL_RX_ERR_TSYN]++;
         dp_slave_emit(s, DP_EV_RX_ERROR, t, FDL_RX_ERR_TSYN, m->sa);

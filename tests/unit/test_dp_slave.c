@@ -229,6 +229,26 @@ static void bring_up(uint8_t status, uint8_t f1, uint8_t f2, uint8_t group, cons
 
 /* ---- FDL level ---------------------------------------------------------------------------- */
 
+/* Source address 127 is the global address, never a station: such a telegram (damaged in a way
+ * the FCS missed, or forged) is not served, so it neither locks the slave to "master 127" nor
+ * draws a reply sent to everyone. */
+static void test_source_address_127_not_served(void)
+{
+    rig_init(BAUD, 0);
+    uint8_t p[16];
+    size_t n = mk_prm(p, 0x80, 0, 0, 0, IDENT, 0, PRM_TAIL, sizeof PRM_TAIL);
+    n = mk_sap_req(R.f, SLAVE, FDL_ADDR_BROADCAST, 0x6D, DP_SAP_SET_PRM, p, n);
+    CHECK(!req(R.f, n));
+    CHECK_EQ(dp_slave_state(&R.s), DP_STATE_WAIT_PRM);
+    CHECK_EQ(dp_slave_master(&R.s), 0xFF);
+    n = mk_sap_req(R.f, SLAVE, FDL_ADDR_BROADCAST, 0x6D, DP_SAP_SLAVE_DIAG, NULL, 0);
+    CHECK(!req(R.f, n));
+    CHECK_EQ(R.u.tx_count, 0u);
+    CHECK(set_prm(&R.m2, 0x80, 0, 0, 0, IDENT, 0, PRM_TAIL, sizeof PRM_TAIL));
+    LAST_IS(0xE5);
+    CHECK_EQ(dp_slave_master(&R.s), 2);
+}
+
 static void test_fdl_status(void)
 {
     rig_init(BAUD, 0);
@@ -1409,6 +1429,7 @@ static void test_srd_low(void)
 int main(void)
 {
     RUN_TEST(test_fdl_status);
+    RUN_TEST(test_source_address_127_not_served);
     RUN_TEST(test_wrong_da_ignored);
     RUN_TEST(test_broadcast_srd_not_answered);
     RUN_TEST(test_unsupported_sap);
