@@ -20,14 +20,34 @@ void fdl_station_timing_changed(dp_slave_t *s)
     s->min_tsdr_us = hal_uart_bits_us(s->baud, s->min_tsdr_bits);
 }
 
-static void select_baud(dp_slave_t *s, uint32_t baud)
+/* Returns false when the UART cannot make the rate; the station then keeps its old one. */
+static bool select_baud(dp_slave_t *s, uint32_t baud)
 {
+    if (s->cfg.uart.ops != NULL && s->cfg.uart.ops->set_baud != NULL &&
+        s->cfg.uart.ops->set_baud(s->cfg.uart.ctx, baud) != 0) {
+        return false;
+    }
     s->baud = baud;
     fdl_station_timing_changed(s);
     fdl_rx_set_baud(&s->rx, baud);
-    if (s->cfg.uart.ops != NULL && s->cfg.uart.ops->set_baud != NULL) {
-        (void)s->cfg.uart.ops->set_baud(s->cfg.uart.ctx, baud);
+    return true;
+}
+
+/* The next rate of the search, from hal_uart_bauds[from] on, that the UART can make. A refused
+ * rate is passed over: left in place, the UART would go on listening at the old rate, and a
+ * telegram heard there would make the refused rate the line's (its timing, P092). */
+static void search_from(dp_slave_t *s, uint8_t from, hal_time_us_t now)
+{
+    uint8_t i = from;
+    for (unsigned tries = 0; tries < HAL_UART_NUM_BAUDS; tries++) {
+        if (select_baud(s, hal_uart_bauds[i])) {
+            break;
+        }
+        i = (uint8_t)((i + 1u) % HAL_UART_NUM_BAUDS);
     }
+    s->baud_index = i;
+    s->baud_deadline = now + dp_baud_search_dwell_us(s->baud);
+    dp_slave_emit(s, DP_EV_BAUD_SET, now, s->baud, 0);
 }
 
 void fdl_station_watchdog_changed(dp_slave_t *s)
@@ -44,13 +64,16 @@ void fdl_station_start_baud(dp_slave_t *s, hal_time_us_t now)
 {
     if (s->cfg.fixed_baud != 0u) {
         s->baud_state = DP_BAUD_FIXED;
-        select_baud(s, s->cfg.fixed_baud);
+        /* A fixed rate the UART refuses leaves the station deaf; its rate is still the one
+         * configured, so P092 and the timing say what was asked for. */
+        if (!select_baud(s, s->cfg.fixed_baud)) {
+            s->baud = s->cfg.fixed_baud;
+            fdl_station_timing_changed(s);
+            fdl_rx_set_baud(&s->rx, s->baud);
+        }
     } else {
         s->baud_state = DP_BAUD_SEARCH;
-        s->baud_index = 0;
-        select_baud(s, hal_uart_bauds[0]);
-        s->baud_deadline = now + dp_baud_search_dwell_us(s->baud);
-        dp_slave_emit(s, DP_EV_BAUD_SET, now, s->baud, 0);
+        search_from(s, 0u, now);
     }
 }
 
@@ -61,18 +84,16 @@ hal_time_us_t fdl_station_poll(dp_slave_t *s, hal_time_us_t now)
         return next;
     }
     if (hal_time_reached(now, s->baud_deadline)) {
+        uint8_t from = 0u;
         if (s->baud_state == DP_BAUD_CONTROL) {
             s->baud_state = DP_BAUD_SEARCH;
-            s->baud_index = 0;
             s->line_active = false;
             s->addressed_reported = false;
             dp_slave_emit(s, DP_EV_BAUD_LOST, now, s->baud, 0);
         } else {
-            s->baud_index = (uint8_t)((s->baud_index + 1u) % HAL_UART_NUM_BAUDS);
+            from = (uint8_t)((s->baud_index + 1u) % HAL_UART_NUM_BAUDS);
         }
-        select_baud(s, hal_uart_bauds[s->baud_index]);
-        s->baud_deadline = now + dp_baud_search_dwell_us(s->baud);
-        dp_slave_emit(s, DP_EV_BAUD_SET, now, s->baud, 0);
+        search_from(s, from, now);
     }
     return hal_time_earlier(next, s->baud_deadline);
 }

@@ -118,9 +118,11 @@ static void rx_dp(void *st, uint8_t b, uint8_t flags, hal_time_us_t t)
     dp_slave_rx_char(st, b, flags, t);
 }
 
-static void rig_init(uint32_t fixed_baud, uint32_t baud_control_ms)
+/* uart_max_baud: the fastest rate the fake UART makes (0: every rate). */
+static void rig_init_uart(uint32_t fixed_baud, uint32_t baud_control_ms, uint32_t uart_max_baud)
 {
     memset(&R, 0, sizeof R);
+    R.u.max_baud = uart_max_baud;
     R.a.tx_count = &R.u.tx_count;
     line_init(&R.l, fixed_baud != 0u ? fixed_baud : 12000000u, rx_dp, &R.s, &R.u);
     dp_slave_cfg_t cfg = {
@@ -140,6 +142,11 @@ static void rig_init(uint32_t fixed_baud, uint32_t baud_control_ms)
     dp_slave_init(&R.s, &cfg, line_now_us(&R.l));
     R.m2.addr = 2;
     R.m3.addr = 3;
+}
+
+static void rig_init(uint32_t fixed_baud, uint32_t baud_control_ms)
+{
+    rig_init_uart(fixed_baud, baud_control_ms, 0u);
 }
 
 static bool req(const uint8_t *f, size_t n) { return line_request(&R.l, f, n); }
@@ -1197,6 +1204,36 @@ static void test_baud_search_steps(void)
     CHECK_EQ(ev_count(&R.a.log, DP_EV_BAUD_FOUND), 0u);
 }
 
+/* A UART that cannot make 12 Mbit/s (the reference MCU's USART tops out at 10.5 Mbit/s): the
+ * search passes over the rate instead of believing it while the UART still listens at the old
+ * one, so a telegram heard at power-up or after the search wrapped is taken at its real rate. */
+static void test_baud_search_skips_refused_rate(void)
+{
+    rig_init_uart(0, 0, 10500000u);
+    hal_time_us_t t = line_now_us(&R.l);
+    CHECK_EQ(dp_slave_baud(&R.s), 6000000u);
+    CHECK_EQ(R.u.refused, 1u);
+    CHECK_EQ(R.u.baud_count, 1u);
+    CHECK(ev_last(&R.a.log, DP_EV_BAUD_SET) != NULL &&
+          ev_last(&R.a.log, DP_EV_BAUD_SET)->value == 6000000u);
+    for (unsigned k = 1; k < HAL_UART_NUM_BAUDS; k++) {
+        t += dp_baud_search_dwell_us(hal_uart_bauds[k]);
+        (void)dp_slave_poll(&R.s, t);
+    }
+    /* From 9.6 kbit/s the search wraps to 6 Mbit/s, past 12 Mbit/s again. */
+    CHECK_EQ(dp_slave_baud(&R.s), 6000000u);
+    CHECK_EQ(R.u.refused, 2u);
+    CHECK_EQ(R.u.baud_count, (unsigned)HAL_UART_NUM_BAUDS);
+    CHECK_EQ(ev_count(&R.a.log, DP_EV_BAUD_SET), (unsigned)HAL_UART_NUM_BAUDS);
+    R.l.baud = 6000000u;
+    R.l.now_ns = (uint64_t)t * 1000u;
+    CHECK(REQ(F_FDL_REQ));
+    LAST_IS(0x10, 0x02, 0x04, 0x00, 0x06, 0x16);
+    CHECK_EQ(dp_slave_baud_state(&R.s), DP_BAUD_CONTROL);
+    CHECK_EQ(dp_slave_baud(&R.s), 6000000u);
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + hal_uart_bits_us(6000000u, 11u));
+}
+
 static void test_baud_found(void)
 {
     rig_init(0, 0);
@@ -1466,6 +1503,7 @@ int main(void)
     RUN_TEST(test_min_tsdr);
     RUN_TEST(test_min_tsdr_12m);
     RUN_TEST(test_baud_search_steps);
+    RUN_TEST(test_baud_search_skips_refused_rate);
     RUN_TEST(test_baud_found);
     RUN_TEST(test_baud_control_expiry);
     RUN_TEST(test_unlock_releases);

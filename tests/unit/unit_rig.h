@@ -28,13 +28,19 @@ typedef struct fake_uart {
     uint8_t last[FDL_FRAME_MAX + 1u];
     size_t last_len;
     hal_time_us_t last_not_before;
-    unsigned baud_count;
+    unsigned baud_count; /* rates taken */
     uint32_t bauds[FAKE_UART_MAX_BAUDS];
+    uint32_t max_baud;   /* 0: every rate; else faster rates are refused, as a real UART's */
+    unsigned refused;
 } fake_uart_t;
 
 static inline int fake_uart_set_baud(void *ctx, uint32_t baud)
 {
     fake_uart_t *u = ctx;
+    if (u->max_baud != 0u && baud > u->max_baud) {
+        u->refused++;
+        return -1;
+    }
     if (u->baud_count < FAKE_UART_MAX_BAUDS) {
         u->bauds[u->baud_count] = baud;
     }
