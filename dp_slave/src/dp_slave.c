@@ -119,6 +119,7 @@ static void set_state(dp_slave_t *s, dp_state_t next, hal_time_us_t t)
         clear_outputs(s, DP_OUTPUTS_SAFE_STATE);
         s->sync_mode = false;
         s->freeze_mode = false;
+        s->master_clear = false;
     }
     s->state = next;
     s->diag_framed = false; /* the watchdog's expiry changes the state outside the receive path */
@@ -488,7 +489,13 @@ static void svc_global_control(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t 
     if (groups != 0u && (groups & s->group_ident) == 0u) {
         return;
     }
-    if ((cmd & DP_GC_CLEAR_DATA) != 0u) {
+    /* A class-1 master announces Clear or Operate in every Global_Control it sends, at least
+     * once per Data_Control_Time (IEC 61158-6-3, the master's operation mode). In Clear it goes
+     * on sending a slave without Fail_Safe outputs of full length, every octet 0: substitutes,
+     * not its application's data. They are handed over as they come, marked DP_OUTPUTS_CLEAR
+     * until the master is back in Operate, so that no device takes them for a request. */
+    s->master_clear = (cmd & DP_GC_CLEAR_DATA) != 0u;
+    if (s->master_clear) {
         clear_outputs(s, DP_OUTPUTS_CLEAR);
     }
     /* When both a command and its cancellation are set, the cancellation wins. Sync and Freeze
@@ -563,7 +570,12 @@ static void svc_data_exchange(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t
     }
     reply_inputs(s, m);
     fdl_station_send_now(s, t);
-    if (take && s->sync_mode) {
+    if (take && s->master_clear) {
+        /* What a master in Clear sends takes effect at once, Sync or not, and is marked. */
+        memcpy(s->outputs, m->data, s->out_len);
+        s->sync_latched = false;
+        give_outputs(s, s->outputs, s->out_len, DP_OUTPUTS_CLEAR);
+    } else if (take && s->sync_mode) {
         memcpy(s->latched_outputs, m->data, s->out_len);
         s->sync_latched = true;
     } else if (take) {

@@ -1464,6 +1464,82 @@ static void finish(void)
         finish();                                                                              \
     } while (0)
 
+/* ---- The cyclic channel while the master is in Clear --------------------------------------
+ * A master in Clear (PLC stopped, Auto_Clear) goes on sending this card, which has no
+ * Fail_Safe, 14 octets of zeros. They are not a parameter request with handshake 0: taken as
+ * one, the next service with handshake 0 would never run (and be answered "done" with zeros),
+ * and the unchanged last request would run a second time back in Operate. */
+
+static void send_gc(uint8_t ma, uint8_t cmd)
+{
+    const uint8_t d[2] = {cmd, 0};
+    size_t len = mk_sap_req(R.f, FDL_ADDR_BROADCAST, ma, FDL_FC_REQUEST | FDL_REQ_SDN_HIGH,
+                            DP_SAP_GLOBAL_CONTROL, d, 2);
+    (void)line_request(&R.l, R.f, len); /* SDN: no reply */
+}
+
+/* The 8 octets of the parameter channel, PO1..PO3 = 0; three cycles, the main loop after each. */
+static void dx_param_cycles(const uint8_t p[8])
+{
+    uint8_t out[14] = {0};
+    memcpy(out, p, 8);
+    for (int i = 0; i < 3; i++) {
+        send_dx(M1, out, sizeof out);
+        main_loop();
+    }
+}
+
+static const uint8_t PARAM_ZERO[8] = {0};
+
+static void test_clear_zeros_are_no_request(void)
+{
+    setup(0);
+    startup(USER_DPV1);
+    const uint8_t read_8300[8] = {0x41, 0x00, 0x20, 0x6C, 0, 0, 0, 0}; /* handshake 1 */
+    dx_param_cycles(read_8300);
+    CHECK_EQ(R.cs.card.param.services, 1);
+    uint8_t before[8];
+    memcpy(before, ml_channel_reply(&R.cs.card.param), 8);
+    CHECK_EQ(before[0], 0x41);
+    send_gc(M1, DP_GC_CLEAR_DATA);
+    main_loop();
+    dx_param_cycles(PARAM_ZERO);
+    CHECK_EQ(R.cs.card.param.services, 1);
+    CHECK(memcmp(ml_channel_reply(&R.cs.card.param), before, 8) == 0);
+    /* Operate again; the PLC had toggled to its next job, read 8301 with handshake 0. */
+    send_gc(M1, 0x00);
+    const uint8_t read_8301[8] = {0x01, 0x00, 0x20, 0x6D, 0, 0, 0, 0};
+    dx_param_cycles(read_8301);
+    CHECK_EQ(R.cs.card.param.services, 2);
+    const uint8_t *rsp = ml_channel_reply(&R.cs.card.param);
+    CHECK_EQ(rsp[0], 0x01);
+    CHECK_EQ(rsp[2], 0x20);
+    CHECK_EQ(rsp[3], 0x6D);
+}
+
+static void test_clear_does_not_repeat_the_last_write(void)
+{
+    setup(0);
+    startup(USER_DPV1);
+    const uint8_t write_h0_5[8] = {0x73, 0x00, 0x2A, 0xF8, 0, 0, 0, 5}; /* volatile, handshake 1 */
+    dx_param_cycles(write_h0_5);
+    int32_t v = 0;
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_IPOS_H0, &v));
+    CHECK_EQ(v, 5);
+    /* A class-2 tool sets H0 := 7 meanwhile. */
+    c2_open(__LINE__, 3, 0);
+    DS47(3, 0, SSAP_C2, B(0x01, 0x40, 0x00, 0x01, 0x30, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x43,
+                          0x01, 0x00, 0x00, 0x00, 0x07),
+         0x01, 0x40, 0x00, 0x01);
+    send_gc(M1, DP_GC_CLEAR_DATA);
+    dx_param_cycles(PARAM_ZERO);
+    send_gc(M1, 0x00);
+    dx_param_cycles(write_h0_5); /* the PLC's output image, unchanged */
+    CHECK_EQ(R.cs.card.param.services, 1);
+    CHECK(movidrive_read_value(&R.cs.md, MOVIDRIVE_IDX_IPOS_H0, &v));
+    CHECK_EQ(v, 7);
+}
+
 int main(void)
 {
     RUN(test_startup_inputs);
@@ -1490,5 +1566,7 @@ int main(void)
     RUN(test_interleaving);
     RUN(test_im);
     RUN(test_im_persistence);
+    RUN(test_clear_zeros_are_no_request);
+    RUN(test_clear_does_not_repeat_the_last_write);
     return check_report();
 }

@@ -868,6 +868,45 @@ static void test_gc_clear_data(void)
     CHECK(memcmp(R.a.out, zero, 14) == 0);
 }
 
+/* A master in Clear sends full-length outputs (zeros for a slave without Fail_Safe) until a
+ * Global_Control without Clear_Data says it is back in Operate: they are handed over as sent
+ * but marked CLEAR, so a device does not take them for its application's data. */
+static void test_gc_clear_mode(void)
+{
+    rig_init(BAUD, 0);
+    bring_up(0xB0, 0, 0, 0, CFG_P3PD, sizeof CFG_P3PD); /* Lock | Sync_Req | Freeze_Req */
+    static const uint8_t zero[14];
+    CHECK(dx(&R.m2, DX14, sizeof DX14));
+    CHECK_EQ(R.a.out_reason, DP_OUTPUTS_DATA);
+    CHECK(!gc(&R.m2, DP_GC_CLEAR_DATA, 0));
+    CHECK(dx(&R.m2, zero, sizeof zero));
+    CHECK_EQ(R.u.last[6], FDL_RSP_DL);
+    CHECK_EQ(R.a.outputs_calls, 3u);
+    CHECK_EQ(R.a.out_reason, DP_OUTPUTS_CLEAR);
+    CHECK(R.a.out_len == 14u && memcmp(R.a.out, zero, 14) == 0);
+    /* Still Clear: Sync with Clear_Data latches nothing, the telegram counts at once. */
+    CHECK(!gc(&R.m2, DP_GC_CLEAR_DATA | DP_GC_SYNC, 0));
+    CHECK(dx(&R.m2, DX14, sizeof DX14));
+    CHECK_EQ(R.a.outputs_calls, 5u);
+    CHECK_EQ(R.a.out_reason, DP_OUTPUTS_CLEAR);
+    CHECK(memcmp(R.a.out, DX14, 14) == 0);
+    /* A Global_Control for another group says nothing about this slave. */
+    CHECK(!gc(&R.m2, 0x00, 0x02));
+    CHECK(dx(&R.m2, zero, sizeof zero));
+    CHECK_EQ(R.a.out_reason, DP_OUTPUTS_CLEAR);
+    /* Operate (Unsync too): the next telegram is data again. */
+    CHECK(!gc(&R.m2, DP_GC_UNSYNC, 0));
+    CHECK(dx(&R.m2, DX14, sizeof DX14));
+    CHECK_EQ(R.a.out_reason, DP_OUTPUTS_DATA);
+    CHECK(memcmp(R.a.out, DX14, 14) == 0);
+    /* Clear ends with Data_Exch too: after the watchdog or a new parameterisation the master
+     * starts over in whatever mode its next Global_Control says. */
+    CHECK(!gc(&R.m2, DP_GC_CLEAR_DATA, 0));
+    bring_up(0x80, 0, 0, 0, CFG_P3PD, sizeof CFG_P3PD);
+    CHECK(dx(&R.m2, DX14, sizeof DX14));
+    CHECK_EQ(R.a.out_reason, DP_OUTPUTS_DATA);
+}
+
 static void test_gc_sync(void)
 {
     rig_init(BAUD, 0);
@@ -1491,6 +1530,7 @@ int main(void)
     RUN_TEST(test_watchdog_in_wait_cfg);
     RUN_TEST(test_no_watchdog);
     RUN_TEST(test_gc_clear_data);
+    RUN_TEST(test_gc_clear_mode);
     RUN_TEST(test_gc_sync);
     RUN_TEST(test_gc_freeze);
     RUN_TEST(test_gc_group_select);

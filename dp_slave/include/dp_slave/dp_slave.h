@@ -73,7 +73,9 @@ typedef struct dp_event {
 
 typedef enum dp_outputs_reason {
     DP_OUTPUTS_DATA = 0,    /* new outputs from Data_Exchange (or released by Sync/Unsync) */
-    DP_OUTPUTS_CLEAR,       /* Global_Control Clear_Data or an empty (fail-safe) telegram */
+    DP_OUTPUTS_CLEAR,       /* Global_Control Clear_Data, an empty (fail-safe) telegram, or
+                             * a Data_Exchange (its octets as sent) while the master is in
+                             * Clear: substitute values, not the master's application data */
     DP_OUTPUTS_SAFE_STATE,  /* left Data_Exch (watchdog, new parameterisation, unlock) */
 } dp_outputs_reason_t;
 
@@ -235,6 +237,7 @@ typedef struct dp_slave {
     bool sync_mode;
     bool freeze_mode;
     bool sync_latched;
+    bool master_clear; /* the owner's last Global_Control had Clear_Data: it is in Clear */
 
     uint8_t cfg_data[DP_MAX_CFG_LEN];
     uint8_t cfg_len;

@@ -19,6 +19,7 @@
 #define GEN_STEP_US 500u
 #define GEN_FOREIGN_EVERY 10u      /* cycles between the second master's turns */
 #define GEN_DS47_EVERY 20u         /* cycles between class-1 data set 47 calls */
+#define GEN_OUT_LEN 14u            /* Param + 3 PD: the channel's 8 octets and PO1..PO3 */
 #define GEN_PARAM_GIVE_UP 500u     /* cycles after which a channel service counts as lost */
 #define GEN_FOREIGN_STEPS 5u
 
@@ -171,7 +172,7 @@ typedef struct gen {
     uint32_t pc_next_cycle;
     uint32_t pc_started_cycle;
     unsigned pc_step;
-    uint8_t out[14];
+    uint8_t out[GEN_OUT_LEN];
     /* DP-V1 */
     dp_master_call_t call;
     bool call_running;
@@ -295,6 +296,14 @@ static void pc_watch(gen_t *g, const dp_master_slave_t *s)
     }
 }
 
+/* The card's outputs on the wire: the PLC's image, or zeros while the master is in Clear (what a
+ * class-1 master sends a slave without Fail_Safe then; the image is kept for Operate). */
+static void put_outputs(gen_t *g)
+{
+    static const uint8_t clear[GEN_OUT_LEN];
+    dp_master_set_outputs(g->master, 0, g->fault_stage == 3 ? clear : g->out, sizeof g->out);
+}
+
 static void param_channel(gen_t *g)
 {
     dp_master_slave_t *s = card_slave(g);
@@ -321,7 +330,7 @@ static void param_channel(gen_t *g)
     pc_service_t p = pc_round(g->pc_step);
     g->pc_step++;
     dp_master_param_start(&g->pc, p.svc, p.index, p.value, g->out);
-    dp_master_set_outputs(g->master, 0, g->out, sizeof g->out);
+    put_outputs(g);
     g->pc_started_cycle = s->cycles;
 }
 
@@ -496,20 +505,22 @@ static void fault_silence(gen_t *g, const dp_master_slave_t *s)
     }
 }
 
-/* Global_Control Clear_Data, then Operate. */
+/* Global_Control Clear_Data, 20 ms in Clear (zero outputs), then Operate. */
 static void fault_clear_data(gen_t *g, const dp_master_slave_t *s)
 {
     if (g->fault_stage == 2) {
         if (s->cycles >= g->opt.cycles / 2u && s->phase == DP_MASTER_PHASE_DATA_EXCH) {
             dp_master_global_control(g->master, DP_GC_CLEAR_DATA, 0);
-            wake_master(g);
             g->fault_stage = 3;
+            put_outputs(g);
+            wake_master(g);
             g->fault_until_ns = bus_ns(g) + 20000000ull;
         }
     } else if (bus_ns(g) >= g->fault_until_ns) {
         dp_master_global_control(g->master, 0x00, 0);
-        wake_master(g);
         g->fault_stage = 4;
+        put_outputs(g);
+        wake_master(g);
     }
 }
 
