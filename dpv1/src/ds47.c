@@ -56,6 +56,16 @@ static bool writes(const ds47_t *d, const ds47_param_t *p)
 }
 
 /* One address block: attribute, elements, number, subindex. */
+/* The card has values only: neither description nor text (manual §6.3, PROFIdrive errors). */
+static uint16_t attribute_error(uint8_t attr)
+{
+    switch (attr) {
+    case DS47_ATTR_DESCRIPTION: return PD_ERR_NO_DESCRIPTION;
+    case DS47_ATTR_TEXT: return PD_ERR_NO_TEXT;
+    default: return PD_ERR_ADDRESS;
+    }
+}
+
 static void parse_address(ds47_t *d, uint8_t i, const uint8_t *a)
 {
     ds47_param_t *p = &d->p[i];
@@ -71,7 +81,7 @@ static void parse_address(ds47_t *d, uint8_t i, const uint8_t *a)
     } else {
         p->service = d->id == DS47_ID_CHANGE ? ML_SVC_WRITE : ML_SVC_READ;
         if (attr != DS47_ATTR_VALUE) {
-            fail(d, i, PD_ERR_DATA_TYPE, 0);
+            fail(d, i, attribute_error(attr), 0);
             p->service = d->id == DS47_ID_CHANGE ? ML_SVC_WRITE : ML_SVC_NONE;
         }
     }
@@ -80,6 +90,35 @@ static void parse_address(ds47_t *d, uint8_t i, const uint8_t *a)
     } else if (p->ok && a[1] > 1u) {
         fail(d, i, PD_ERR_NO_ARRAY, ML_ERROR_ILLEGAL_INDEX);
     }
+}
+
+/* Octets of a value block's values: count values of the format's size, padded to a word (a zero
+ * octet after an odd count keeps the telegram's word structure, protocol.md §A5.2). False for
+ * a format whose size is unknown: the rest of the request cannot be found. */
+static bool value_octets(uint8_t format, uint8_t count, size_t *octets)
+{
+    size_t size;
+    switch (format) {
+    case DS47_FORMAT_BOOLEAN:
+    case DS47_FORMAT_INTEGER8:
+    case DS47_FORMAT_UNSIGNED8:
+    case DS47_FORMAT_VISIBLE_STRING:
+    case DS47_FORMAT_OCTET_STRING:
+    case DS47_FORMAT_BYTE: size = 1u; break;
+    case DS47_FORMAT_INTEGER16:
+    case DS47_FORMAT_UNSIGNED16:
+    case DS47_FORMAT_WORD:
+    case DS47_FORMAT_ERROR: size = 2u; break;
+    case DS47_FORMAT_INTEGER32:
+    case DS47_FORMAT_UNSIGNED32:
+    case DS47_FORMAT_FLOAT:
+    case DS47_FORMAT_DWORD: size = 4u; break;
+    case DS47_FORMAT_ZERO: size = 0u; break;
+    default: return false;
+    }
+    size_t n = size * count;
+    *octets = n + (n & 1u);
+    return true;
 }
 
 /* The value block of a writing parameter (value blocks follow the address blocks, in order).
@@ -97,8 +136,8 @@ static bool parse_value(ds47_t *d, uint8_t i, const uint8_t *req, size_t len)
     uint8_t format = req[pos];
     uint8_t count = req[pos + 1u];
     pos += DS47_VALUE_HEADER_LEN;
-    size_t bytes = format == DS47_FORMAT_DWORD ? 4u * count : 2u * count;
-    if (pos + bytes > len) {
+    size_t bytes = 0u;
+    if (!value_octets(format, count, &bytes) || pos + bytes > len) {
         return false;
     }
     if (p->ok && format != DS47_FORMAT_DWORD) {

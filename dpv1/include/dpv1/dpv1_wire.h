@@ -56,12 +56,27 @@
 #define DS47_ID_MOVILINK 0x40u
 #define DS47_ID_ERROR 0x80u
 #define DS47_ATTR_VALUE 0x10u
+#define DS47_ATTR_DESCRIPTION 0x20u
+#define DS47_ATTR_TEXT 0x30u
 /* In a MOVILINK request (id 0x40) the attribute's high nibble is the MOVILINK service. */
 #define DS47_ATTR_ML_SERVICE_SHIFT 4u
 #define DS47_ATTR_ML_READ 0x10u
 #define DS47_ATTR_ML_WRITE 0x20u
 #define DS47_ATTR_ML_WRITE_VOLATILE 0x30u
+/* Value formats: PROFIdrive data types 0x01..0x0A, then Zero, Byte, Word, DWord, Error. */
+#define DS47_FORMAT_BOOLEAN 0x01u
+#define DS47_FORMAT_INTEGER8 0x02u
+#define DS47_FORMAT_INTEGER16 0x03u
+#define DS47_FORMAT_INTEGER32 0x04u
+#define DS47_FORMAT_UNSIGNED8 0x05u
+#define DS47_FORMAT_UNSIGNED16 0x06u
+#define DS47_FORMAT_UNSIGNED32 0x07u
+#define DS47_FORMAT_FLOAT 0x08u
+#define DS47_FORMAT_VISIBLE_STRING 0x09u
+#define DS47_FORMAT_OCTET_STRING 0x0Au
 #define DS47_FORMAT_ZERO 0x40u
+#define DS47_FORMAT_BYTE 0x41u
+#define DS47_FORMAT_WORD 0x42u
 #define DS47_FORMAT_DWORD 0x43u
 #define DS47_FORMAT_ERROR 0x44u
 /* Request header: Request Reference, Request/Response ID, Axis, number of parameters; then an
@@ -82,8 +97,11 @@
 #define PD_ERR_SUBINDEX 0x03u
 #define PD_ERR_NO_ARRAY 0x04u
 #define PD_ERR_DATA_TYPE 0x05u
+#define PD_ERR_NO_DESCRIPTION 0x09u
+#define PD_ERR_NO_TEXT 0x0Fu
 #define PD_ERR_OPERATING_STATE 0x11u
 #define PD_ERR_VALUE_IMPERMISSIBLE 0x14u
+#define PD_ERR_ADDRESS 0x16u
 #define PD_ERR_FORMAT 0x17u
 #define PD_ERR_VALUE_COUNT 0x18u
 #define PD_ERR_AXIS_NONEXISTENT 0x19u
