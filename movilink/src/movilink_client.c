@@ -91,6 +91,9 @@ hal_time_us_t ml_client_poll(ml_client_t *c, hal_time_us_t now)
             c->timeouts++;
             p->quarantine = true;
             p->deadline = now + c->timeout_us;
+            if (c->link.ops != NULL && c->link.ops->param_cancel != NULL) {
+                c->link.ops->param_cancel(c->link.ctx, i);
+            }
             fail_hardware(c, i);
         }
         next = hal_time_earlier(next, p->deadline);

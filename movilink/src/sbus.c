@@ -132,6 +132,15 @@ static int card_param_request(void *ctx, uint8_t channel, const uint8_t req[ML_T
     return transmit_request(l, sc, channel, req);
 }
 
+static void card_param_cancel(void *ctx, uint8_t channel)
+{
+    sbus_card_link_t *l = ctx;
+    if (channel < ML_MAX_CHANNELS && l->queue[channel].waiting) {
+        l->queue[channel].waiting = false;
+        l->cancelled++;
+    }
+}
+
 static void card_process_outputs(void *ctx, const uint16_t *po, uint8_t n)
 {
     sbus_card_link_t *l = ctx;
@@ -158,6 +167,7 @@ static const ml_link_ops_t sbus_card_ops = {
     .param_request = card_param_request,
     .process_outputs = card_process_outputs,
     .fieldbus_status = card_fieldbus_status,
+    .param_cancel = card_param_cancel,
 };
 
 void sbus_card_link_init(sbus_card_link_t *l, const sbus_card_link_cfg_t *cfg)
@@ -241,7 +251,7 @@ hal_time_us_t sbus_card_link_poll(sbus_card_link_t *l, hal_time_us_t now)
     for (uint8_t i = 0; i < 2u; i++) {
         sbus_outstanding_t *o = &l->out[i];
         if (o->busy && hal_time_reached(now, o->deadline)) {
-            o->busy = false; /* the service client has answered class 6 code 2 by now */
+            o->busy = false; /* the service client has answered 6/2 and waited out a late answer */
             l->timeouts++;
             send_next(l, (uint8_t)(i + 1u));
             arm(l, now);

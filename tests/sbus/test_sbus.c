@@ -695,6 +695,132 @@ static void test_lossy_bus(void)
     printf("lossy bus (20 %% frame loss): %d answered, %d ended with 6/2\n", answered, failed);
 }
 
+/* ---- The link under the service client with the production timeouts ----------------------
+ * One SBus parameter channel for every card channel (the reference board), the link's default
+ * SBUS_PARAM_TIMEOUT_US and the client's ML_RESPONSE_TIMEOUT_US. The telegram has no tag, so
+ * the channel must stay closed while an answer may still come for a request the client gave
+ * up on; a request the client gave up on before it was sent must never go out. */
+
+typedef struct wire {
+    hal_can_frame_t f[16];
+    unsigned n;
+} wire_t;
+
+static int wire_send(void *ctx, const hal_can_frame_t *f)
+{
+    wire_t *w = ctx;
+    if (w->n < 16u) {
+        w->f[w->n++] = *f;
+    }
+    return 0;
+}
+
+static const hal_can_ops_t wire_ops = {.send = wire_send};
+
+static struct {
+    wire_t wire;
+    sbus_card_link_t link;
+    ml_client_t client;
+} P;
+
+static void p_to_client(void *card, uint8_t channel, const uint8_t rsp[ML_TELEGRAM_LEN])
+{
+    (void)card;
+    ml_client_response(&P.client, channel, rsp);
+}
+
+static void p_setup(void)
+{
+    memset(&P, 0, sizeof P);
+    sbus_card_link_cfg_t cfg = {.can = {.ops = &wire_ops, .ctx = &P.wire}, .address = 1,
+                                .param_response = p_to_client};
+    sbus_card_link_init(&P.link, &cfg);
+    ml_client_init(&P.client, sbus_card_link(&P.link), 0);
+}
+
+static void p_run(hal_time_us_t from, hal_time_us_t to)
+{
+    for (hal_time_us_t now = from; now <= to; now += 1000u) {
+        (void)sbus_card_link_poll(&P.link, now);
+        (void)ml_client_poll(&P.client, now);
+    }
+}
+
+static void p_inverter_answers(const uint8_t rsp[ML_TELEGRAM_LEN], hal_time_us_t now)
+{
+    hal_can_frame_t f = {.id = sbus_id_param_rsp(1), .len = 8};
+    memcpy(f.data, rsp, 8);
+    sbus_card_link_rx(&P.link, &f, now);
+}
+
+static void test_link_holds_channel_while_client_waits(void)
+{
+    p_setup();
+    done_rec_t d1 = {0};
+    done_rec_t d0 = {0};
+    const uint8_t p302_5[8] = {0x33, 0x00, 0x21, 0x45, 0x00, 0x00, 0x00, 0x05};
+    const uint8_t p302_max[8] = {0x33, 0x00, 0x21, 0x45, 0x7F, 0xFF, 0xFF, 0xFF};
+    CHECK_EQ(ml_client_request(&P.client, 1, p302_5, on_done, &d1, 0), 0); /* MSAC1 */
+    p_run(0, 110000u);
+    CHECK_EQ(ml_client_request(&P.client, 0, p302_max, on_done, &d0, 110000u), 0); /* cyclic */
+    CHECK_EQ(P.wire.n, 1); /* waits: the first request still holds the SBus channel */
+    /* Inside the client's 200 ms: the answer is the first request's, as it should be. */
+    p_inverter_answers(p302_5, 120000u);
+    CHECK_EQ(d1.calls, 1);
+    CHECK_BYTES(d1.rsp, 8, 0x33, 0x00, 0x21, 0x45, 0x00, 0x00, 0x00, 0x05);
+    CHECK_EQ(P.wire.n, 2); /* now the cyclic channel's request goes out */
+    CHECK_BYTES(P.wire.f[1].data, 8, 0x33, 0x00, 0x21, 0x45, 0x7F, 0xFF, 0xFF, 0xFF);
+    const uint8_t too_high[8] = {0xB3, 0x00, 0x21, 0x45, 0x08, 0x00, 0x00, 0x15};
+    p_inverter_answers(too_high, 125000u);
+    CHECK_EQ(d0.calls, 1);
+    CHECK_BYTES(d0.rsp, 8, 0xB3, 0x00, 0x21, 0x45, 0x08, 0x00, 0x00, 0x15);
+}
+
+static void test_late_answer_goes_to_its_own_channel(void)
+{
+    p_setup();
+    done_rec_t d1 = {0};
+    done_rec_t d0 = {0};
+    const uint8_t p302_5[8] = {0x33, 0x00, 0x21, 0x45, 0x00, 0x00, 0x00, 0x05};
+    const uint8_t read_p302[8] = {0x31, 0x00, 0x21, 0x45, 0x00, 0x00, 0x00, 0x00};
+    CHECK_EQ(ml_client_request(&P.client, 1, p302_5, on_done, &d1, 0), 0);
+    p_run(0, 210000u); /* the client answers 6/2 at 200 ms */
+    CHECK_EQ(d1.calls, 1);
+    CHECK_BYTES(d1.rsp, 8, 0xB3, 0x00, 0x21, 0x45, 0x06, 0x02, 0x00, 0x00);
+    CHECK_EQ(ml_client_request(&P.client, 0, read_p302, on_done, &d0, 210000u), 0);
+    CHECK_EQ(P.wire.n, 1); /* still held for the late answer */
+    /* The late answer to the write: dropped by the client's quarantine, not taken as the read's. */
+    p_inverter_answers(p302_5, 250000u);
+    CHECK_EQ(d0.calls, 0);
+    CHECK_EQ(d1.calls, 1);
+    CHECK_EQ(P.client.stale_responses, 1);
+    CHECK_EQ(P.wire.n, 2);
+    CHECK_BYTES(P.wire.f[1].data, 8, 0x31, 0x00, 0x21, 0x45, 0x00, 0x00, 0x00, 0x00);
+    const uint8_t value[8] = {0x31, 0x00, 0x21, 0x45, 0x00, 0x00, 0x00, 0x05};
+    p_inverter_answers(value, 260000u);
+    CHECK_EQ(d0.calls, 1);
+    CHECK_BYTES(d0.rsp, 8, 0x31, 0x00, 0x21, 0x45, 0x00, 0x00, 0x00, 0x05);
+}
+
+static void test_request_given_up_unsent_never_goes_out(void)
+{
+    p_setup();
+    done_rec_t d1 = {0};
+    done_rec_t d0 = {0};
+    const uint8_t read_h0_[8] = {0x31, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x00, 0x00};
+    const uint8_t h0_9[8] = {0x33, 0x00, 0x2A, 0xF9, 0x00, 0x00, 0x00, 0x09};
+    CHECK_EQ(ml_client_request(&P.client, 1, read_h0_, on_done, &d1, 0), 0);
+    p_run(0, 5000u);
+    CHECK_EQ(ml_client_request(&P.client, 0, h0_9, on_done, &d0, 5000u), 0); /* waits */
+    p_run(5000u, 300000u); /* no answer at all: both clients give up, the write while waiting */
+    CHECK_EQ(d0.calls, 1);
+    CHECK_BYTES(d0.rsp, 8, 0xB3, 0x00, 0x2A, 0xF9, 0x06, 0x02, 0x00, 0x00);
+    CHECK_EQ(P.link.cancelled, 1);
+    p_run(300000u, 900000u); /* the link gives the channel up too */
+    CHECK_EQ(P.link.timeouts, 1);
+    CHECK_EQ(P.wire.n, 1); /* the write the master was told to repeat never reached the drive */
+}
+
 int main(void)
 {
     RUN_TEST(test_identifiers);
@@ -712,5 +838,8 @@ int main(void)
     RUN_TEST(test_inverter_side);
     RUN_TEST(test_with_service_client);
     RUN_TEST(test_lossy_bus);
+    RUN_TEST(test_link_holds_channel_while_client_waits);
+    RUN_TEST(test_late_answer_goes_to_its_own_channel);
+    RUN_TEST(test_request_given_up_unsent_never_goes_out);
     return check_report();
 }

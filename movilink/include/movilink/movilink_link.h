@@ -48,6 +48,11 @@ typedef struct ml_link_ops {
     void (*process_outputs)(void *ctx, const uint16_t *po, uint8_t n);
     /* Fieldbus state changed (monitor values, timeout). Optional. */
     void (*fieldbus_status)(void *ctx, const ml_fieldbus_status_t *status);
+    /* The client gave up on the channel's request and answered class 6 code 2, which tells the
+     * master to repeat it. A request the link still holds unsent must now never be sent, or
+     * the repetition would make it run twice. One already sent keeps its answer routed to the
+     * channel (the client drops it). Optional: a link that sends at once holds nothing. */
+    void (*param_cancel)(void *ctx, uint8_t channel);
 } ml_link_ops_t;
 
 typedef struct ml_link {

@@ -21,6 +21,8 @@
  *     the channel-2 identifiers are inferred). Each SBus channel carries one request at a time:
  *     requests for the other card channels wait in the link (in arrival order) until the
  *     response arrives or SBUS_PARAM_TIMEOUT_US passes without one, and then go out.
+ *   - param_cancel(channel): the client gave up; a request of that channel still waiting is
+ *     dropped unsent.
  *   - process_outputs: one PO frame per call (PO1..PO3).
  *   - fieldbus_status: nothing on the wire; SBus has no telegram for it. When the DP watchdog
  *     expires (status.timeout), the card stops sending PO frames until the timeout clears, so
@@ -45,6 +47,7 @@
 
 #include "hal/hal_can.h"
 #include "hal/hal_time.h"
+#include "movilink/movilink_client.h"
 #include "movilink/movilink_link.h"
 #include "movilink/movilink_wire.h"
 
@@ -67,10 +70,13 @@
 #define SBUS_FN_GROUP_PARAM 6u
 #define SBUS_FN_PARAM2_RSP 7u
 
-/* A card-side request without a response is given up after this long (the service client's own
- * deadline, ML_RESPONSE_TIMEOUT_US, decides what the master sees). */
+/* How long a request without a response holds its SBus channel. The telegram has no tag, so an
+ * answer is known only by service and index: the channel must stay closed to the other card
+ * channels for as long as the service client waits for the answer and then for a late one
+ * (ML_RESPONSE_TIMEOUT_US each), or a late answer could complete another channel's request
+ * for the same index. What the master sees is decided by the client's own deadline. */
 #ifndef SBUS_PARAM_TIMEOUT_US
-#define SBUS_PARAM_TIMEOUT_US 100000u
+#define SBUS_PARAM_TIMEOUT_US (2u * ML_RESPONSE_TIMEOUT_US)
 #endif
 
 /* Identifier helpers; a = SBus address 0..63 (P813) or group address (P814). */
@@ -141,6 +147,7 @@ typedef struct sbus_card_link {
     uint32_t responses;
     uint32_t stale_responses;  /* matched no outstanding request */
     uint32_t timeouts;
+    uint32_t cancelled;        /* waiting requests dropped unsent: the client gave up on them */
     uint32_t po_frames;
     uint32_t po_withheld;      /* process_outputs calls while po_stopped */
     uint32_t pi_frames;

@@ -107,10 +107,18 @@ static void wrap_fieldbus_status(void *ctx, const ml_fieldbus_status_t *st)
     s.ops->fieldbus_status(s.ctx, st);
 }
 
+static void wrap_param_cancel(void *ctx, uint8_t channel)
+{
+    inverter_can_t *l = ctx;
+    ml_link_t s = sbus_card_link(&l->link);
+    s.ops->param_cancel(s.ctx, channel);
+}
+
 static const ml_link_ops_t inverter_can_ops = {
     .param_request = wrap_param_request,
     .process_outputs = wrap_process_outputs,
     .fieldbus_status = wrap_fieldbus_status,
+    .param_cancel = wrap_param_cancel,
 };
 
 ml_link_t inverter_can_link(inverter_can_t *l)

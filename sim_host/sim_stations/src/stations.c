@@ -77,10 +77,19 @@ static void observed_fieldbus_status(void *ctx, const ml_fieldbus_status_t *stat
     }
 }
 
+static void observed_param_cancel(void *ctx, uint8_t channel)
+{
+    card_station_t *c = ctx;
+    if (c->inverter_link.ops->param_cancel != NULL) {
+        c->inverter_link.ops->param_cancel(c->inverter_link.ctx, channel);
+    }
+}
+
 static const ml_link_ops_t observed_link_ops = {
     .param_request = observed_param_request,
     .process_outputs = observed_process_outputs,
     .fieldbus_status = observed_fieldbus_status,
+    .param_cancel = observed_param_cancel,
 };
 
 void card_station_process_inputs(void *card_station, const uint16_t *pi, uint8_t n)
