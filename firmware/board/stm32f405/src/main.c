@@ -46,10 +46,10 @@
 #ifndef DFP_BOARD_SBUS_BITRATE
 #define DFP_BOARD_SBUS_BITRATE 500000u
 #endif
-/* TIM2's kernel clock: twice PCLK1 when APB1 is divided (RM0090 §7.2), as on this board;
- * QEMU's model counts at 1 GHz whatever RCC says. */
+/* TIM2's kernel clock from the clocks clock.c set up (board.h); QEMU's model counts at 1 GHz
+ * whatever RCC says. */
 #ifndef DFP_BOARD_TIM2_HZ
-#define DFP_BOARD_TIM2_HZ (2u * clocks.pclk1_hz)
+#define DFP_BOARD_TIM2_HZ board_tim2_hz(&clocks)
 #endif
 #define FW_VERSION_MAJOR 0u
 #define FW_VERSION_MINOR 6u

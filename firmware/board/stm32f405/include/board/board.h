@@ -36,7 +36,7 @@
 typedef enum board_clock_source {
     BOARD_CLOCK_PLL_HSE = 0, /* 8 MHz crystal -> PLL 168 MHz */
     BOARD_CLOCK_PLL_HSI,     /* no crystal: HSI 16 MHz -> PLL 168 MHz (UART rates within 1 %) */
-    BOARD_CLOCK_HSI_ONLY,    /* PLL did not lock: 16 MHz, the card runs slowly */
+    BOARD_CLOCK_HSI_ONLY,    /* PLL did not lock: HSI 16 MHz, AHB and APBs /1; the card runs slowly */
     BOARD_CLOCK_NOT_MODELLED, /* RCC reads as zero (QEMU): the machine's fixed 168 MHz */
 } board_clock_source_t;
 
@@ -46,6 +46,13 @@ typedef struct board_clocks {
     uint32_t pclk1_hz;
     uint32_t pclk2_hz;
 } board_clocks_t;
+
+/* TIM2's kernel clock (RM0090 §7.2): PCLK1 when APB1 runs undivided, 2 x PCLK1 when it is
+ * divided (the HSI-only fallback runs it /1, the PLL set-up /4). Derived, not stored: RAM. */
+static inline uint32_t board_tim2_hz(const board_clocks_t *c)
+{
+    return c->pclk1_hz < c->hclk_hz ? 2u * c->pclk1_hz : c->pclk1_hz;
+}
 
 board_clocks_t board_clock_init(rcc_regs_t *rcc, flash_regs_t *flash);
 const char *board_clock_source_name(board_clock_source_t s);
