@@ -1038,6 +1038,35 @@ static void test_leds_dip(void)
     CHECK_EQ(hd.ops->read(hd.ctx), 4);
 }
 
+/* ---- interrupt priorities ------------------------------------------------------------------- */
+/* USART1 stamps each character with TIM2 in its handler, and strict timing tolerates only
+ * 1 - frac(character time) of extra latency (167 ns at 6 Mbit/s): nothing but the fault
+ * handlers may preempt it, SysTick (~0.6-0.9 µs) included. SysTick stays above the core's
+ * BASEPRI (deadlines and LEDs during main-loop sections); PendSV and CAN are below it. */
+static void test_irq_priorities(void)
+{
+    uint8_t ipr[82];
+    memset(ipr, 0xEE, sizeof ipr);
+    uint32_t shpr3 = 0x0000A5A5u; /* DebugMonitor and reserved bytes: kept */
+    board_irq_priorities(ipr, &shpr3);
+    CHECK_EQ(ipr[IRQ_USART1], 0x10);
+    CHECK_EQ(ipr[IRQ_CAN1_RX0], 0x40);
+    CHECK_EQ(shpr3, 0x2030A5A5u); /* SysTick 2, PendSV 3 */
+    unsigned untouched = 0;
+    for (unsigned i = 0; i < sizeof ipr; i++) {
+        untouched += ipr[i] == 0xEEu;
+    }
+    CHECK_EQ(untouched, sizeof ipr - 2u);
+    uint32_t usart1 = ipr[IRQ_USART1], can = ipr[IRQ_CAN1_RX0];
+    uint32_t systick = shpr3 >> 24, pendsv = (shpr3 >> 16) & 0xFFu;
+    uint32_t basepri = BOARD_PRIO_CORE << BOARD_PRIO_SHIFT; /* core_enter */
+    CHECK((BOARD_PRIO_FAULT << BOARD_PRIO_SHIFT) < usart1); /* faults still preempt it */
+    CHECK(usart1 < systick && usart1 < pendsv && usart1 < can);
+    CHECK(systick < basepri);                   /* not masked by the core's sections */
+    CHECK(pendsv >= basepri && can >= basepri); /* masked by them */
+    CHECK(((usart1 | systick | pendsv | can) & 0x0Fu) == 0u); /* only the 4 implemented bits */
+}
+
 /* ---- clock and fault record ----------------------------------------------------------------- */
 /* What the silicon makes of CFGR (RM0090 §7.3.3 for the codes, §7.2 for the timers): SYSCLK from
  * SW, HCLK through HPRE, PCLK1/2 through PPRE1/2, and APB1's timers at 2 x PCLK1 when APB1 is
@@ -1171,6 +1200,7 @@ int main(void)
     RUN_TEST(test_bxcan);
     RUN_TEST(test_timebase);
     RUN_TEST(test_leds_dip);
+    RUN_TEST(test_irq_priorities);
     RUN_TEST(test_clock);
     RUN_TEST(test_fault_record);
     return check_report();

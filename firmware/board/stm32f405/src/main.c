@@ -150,9 +150,9 @@ static void card_event(void *ctx, const dp_event_t *ev)
 
 /* ---- set-up ---------------------------------------------------------------------------------- */
 
-static void nvic_enable(uint32_t irq, uint32_t prio)
+/* The interrupt's priority was set by board_irq_priorities in board_init. */
+static void nvic_enable(uint32_t irq)
 {
-    NVIC_IPR[irq] = (uint8_t)(prio << BOARD_PRIO_SHIFT);
     NVIC_ICPR[irq / 32u] = 1u << (irq % 32u);
     NVIC_ISER[irq / 32u] = 1u << (irq % 32u);
 }
@@ -167,9 +167,9 @@ static void board_init(void)
     TIM2->ARR = 0xFFFFFFFFu;
     TIM2->EGR = TIM_EGR_UG; /* the prescaler is buffered: load it now */
     TIM2->CR1 = TIM_CR1_CEN;
-    /* SysTick priority (SHPR3 bits 31..24). */
-    SCB_SHPR3 = (SCB_SHPR3 & 0x0000FFFFu) | ((BOARD_PRIO_SYSTICK << BOARD_PRIO_SHIFT) << 24) |
-                ((BOARD_PRIO_CORE << BOARD_PRIO_SHIFT) << 16); /* PendSV: bits 23..16 */
+    /* Before SysTick starts: USART1 above SysTick, whose handler would otherwise delay the
+     * TIM2 stamp of a character by up to ~0.9 µs (board.h). */
+    board_irq_priorities(NVIC_IPR, &SCB_SHPR3);
     SCB_SHCSR |= (1u << 16) | (1u << 17) | (1u << 18); /* MemManage, BusFault, UsageFault */
     timebase_init(&tb, SYSTICK, clocks.hclk_hz, &TIM2->CNT);
     board_leds_init(&leds);
@@ -283,7 +283,7 @@ __attribute__((noinline)) static ml_link_t start_inverter_link(void)
     if (bxcan_init(&can, &ccfg) == 0) {
         scfg.can = bxcan_hal(&can);
         sbus_up = true;
-        nvic_enable(IRQ_CAN1_RX0, BOARD_PRIO_CAN);
+        nvic_enable(IRQ_CAN1_RX0);
     }
 #ifdef DFP_BOARD_LOOPBACK_INVERTER
     else {
@@ -359,7 +359,7 @@ __attribute__((noinline)) static void start_card(ml_link_t inverter)
     board_basepri(BOARD_PRIO_CORE);
     dfp21b_init(&card, &cfg, now_us());
     board_basepri(0);
-    nvic_enable(IRQ_USART1, BOARD_PRIO_USART);
+    nvic_enable(IRQ_USART1);
 }
 
 #ifdef DFP_BOARD_EXIT_SILENCE_MS

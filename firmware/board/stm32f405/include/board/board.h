@@ -7,12 +7,19 @@
  *   LEDs    RUN PB0, BUS FAULT PB1  active high
  *   DIP     PC0..PC6 = 2^0..2^6     switch ON pulls to ground (internal pull-ups)
  *
- * Interrupt priorities (4 bits, lower = more urgent): SysTick 0 (the time base must never
- * stall), USART1 1 (characters into the driver's ring, transmit steps: never masked, so no
- * character is lost and no reply stalls mid-frame), PendSV 2 (the core's receive-to-reply
- * path: the ring into dfp21b_rx_char), CAN1 RX0 3. The main loop masks priority >= 2 with
- * BASEPRI while it runs the core's poll, so the reply path and the main loop never work on
- * the card at the same time (the core has no locks; see docs/porting.md). */
+ * Interrupt priorities (4 bits, lower = more urgent; board_irq_priorities() writes them):
+ *   0  MemManage, BusFault, UsageFault (their reset value): a fault in any handler below is
+ *      recorded as itself instead of escalating to HardFault
+ *   1  USART1: characters into the driver's collector, transmit steps. Never masked, so no
+ *      character is lost and no reply stalls mid-frame; and nothing preempts it, because each
+ *      character is stamped with TIM2 in its handler and strict timing leaves only
+ *      1 - frac(character time) of stamp jitter (167 ns at 6 Mbit/s, docs/porting.md)
+ *   2  SysTick: deadline flag and LED patterns; a few µs late is harmless (time is TIM2)
+ *   3  PendSV: the core's receive-to-reply path (the queue into dfp21b_rx_telegram)
+ *   4  CAN1 RX0
+ * The main loop masks priority >= 3 with BASEPRI while it runs the core's poll, so the reply
+ * path and the main loop never work on the card at the same time (the core has no locks; see
+ * docs/porting.md). */
 #ifndef BOARD_BOARD_H
 #define BOARD_BOARD_H
 
@@ -27,11 +34,16 @@
 #define BOARD_PCLK2_HZ 84000000u
 #define BOARD_HSI_HZ 16000000u
 
-#define BOARD_PRIO_SYSTICK 0u
+#define BOARD_PRIO_FAULT 0u /* SHPR1's reset value, left as it is */
 #define BOARD_PRIO_USART 1u
-#define BOARD_PRIO_CORE 2u /* PendSV */
-#define BOARD_PRIO_CAN 3u
-#define BOARD_PRIO_SHIFT 4u
+#define BOARD_PRIO_SYSTICK 2u
+#define BOARD_PRIO_CORE 3u /* PendSV, and the BASEPRI of the main loop's core sections */
+#define BOARD_PRIO_CAN 4u
+#define BOARD_PRIO_SHIFT 4u /* the F405 implements the top 4 bits of each priority byte */
+
+/* Writes the priorities above: USART1's and CAN1 RX0's NVIC_IPR bytes, SysTick's and PendSV's
+ * bytes of SCB_SHPR3 (PM0214 §4.3.7, §4.4.8); the other bytes are kept. */
+void board_irq_priorities(volatile uint8_t *nvic_ipr, volatile uint32_t *scb_shpr3);
 
 typedef enum board_clock_source {
     BOARD_CLOCK_PLL_HSE = 0, /* 8 MHz crystal -> PLL 168 MHz */
