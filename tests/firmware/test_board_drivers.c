@@ -1183,6 +1183,21 @@ static void test_fault_record(void)
     CHECK(strstr(line, " cfsr=0x00008200") != NULL);
     CHECK(strstr(line, " bfar=0xfffffff0") != NULL);
     CHECK_EQ(board_fault_format(&r, line, 12), 11); /* truncated, terminated */
+
+    /* The start after the fault takes the record: marked shown, so a later reset (NRST, a
+     * debugger) finds no fresh record and shows no pattern; the fields stay for a debugger. */
+    board_fault_record_t before = r;
+    board_fault_mark_shown(&r);
+    CHECK_EQ(r.magic, BOARD_FAULT_SHOWN);
+    CHECK(r.magic != BOARD_FAULT_MAGIC);
+    CHECK(memcmp(&r.count, &before.count, sizeof r - offsetof(board_fault_record_t, count)) == 0);
+    board_fault_format(&r, line, sizeof line);
+    CHECK_STR(line, "fault: none");
+    board_fault_mark_shown(&r); /* the next start: stays shown */
+    CHECK_EQ(r.magic, BOARD_FAULT_SHOWN);
+    r.magic = 0x12345678u; /* power-up garbage is not turned into a shown record */
+    board_fault_mark_shown(&r);
+    CHECK_EQ(r.magic, 0x12345678u);
 }
 
 int main(void)

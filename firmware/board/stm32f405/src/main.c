@@ -15,7 +15,8 @@
  *   QEMU image   DFP_BOARD_FIXED_BAUD, relaxed timing, DFP_BOARD_DIP_OVERRIDE, semihosting:
  *                prints a summary and exits with a verdict after DFP_BOARD_EXIT_SILENCE_MS
  *                without a character, once it has been in Data_Exch
- *   fault image  DFP_BOARD_FAULT_TEST: runs into a bus fault on purpose (fault record test) */
+ *   fault image  DFP_BOARD_FAULT_TEST: runs into a bus fault on purpose, then resets once more
+ *                (fault record test: the record is shown by the next start only) */
 #include <stdbool.h>
 #include <stdint.h>
 #include <string.h>
@@ -248,7 +249,8 @@ static void report_and_exit(void)
 }
 #endif
 
-/* A fault handler's record from before the reset (RAM kept over it): print it under test. */
+/* A fault handler's record from before the reset (RAM kept over it): shown once, by the start
+ * the fault's reset caused; printed under test. */
 __attribute__((noinline)) static bool take_previous_fault(void)
 {
     bool had_fault = board_fault.magic == BOARD_FAULT_MAGIC;
@@ -261,13 +263,47 @@ __attribute__((noinline)) static bool take_previous_fault(void)
         semihost_write0("\n");
     }
 #endif
-#ifdef DFP_BOARD_FAULT_TEST
-    semihost_write0("fault test: reading 0xFFFFFFF0\n");
-    board_fault.magic = 0;
-    (void)*(volatile uint32_t *)0xFFFFFFF0u;
-#endif
+    board_fault_mark_shown(&board_fault);
     return had_fault;
 }
+
+#ifdef DFP_BOARD_FAULT_TEST
+/* Three starts in one QEMU run, each after a SYSRESETREQ, which keeps RAM (QEMU reloads only
+ * the image's contents, not its NOLOAD sections): 1 faults on purpose, 2 must show the record
+ * and resets as NRST or a debugger would, 3 must not show it. */
+#define FAULT_TEST_MAGIC 0x7E57FA17u
+static struct {
+    uint32_t magic;
+    uint32_t starts;
+} fault_test __attribute__((section(".noinit")));
+
+static void fault_test_step(bool pattern)
+{
+    if (fault_test.magic != FAULT_TEST_MAGIC) {
+        fault_test.magic = FAULT_TEST_MAGIC;
+        fault_test.starts = 0;
+    }
+    fault_test.starts++;
+    char line[] = "fault test: start 0, fault pattern ";
+    line[18] = (char)('0' + fault_test.starts % 10u);
+    semihost_write0(line);
+    semihost_write0(pattern ? "on\n" : "off\n");
+    if (fault_test.starts == 1u) {
+        semihost_write0("fault test: reading 0xFFFFFFF0\n");
+        (void)*(volatile uint32_t *)0xFFFFFFF0u;
+    }
+    if (fault_test.starts == 2u) {
+        __asm volatile("dsb" ::: "memory");
+        SCB_AIRCR = 0x05FA0004u; /* SYSRESETREQ, RAM kept */
+        for (;;) {
+        }
+    }
+    if (board_fault.magic == BOARD_FAULT_SHOWN && board_fault.bfar == 0xFFFFFFF0u) {
+        semihost_write0("fault test: the shown record is kept for a debugger\n");
+    }
+    semihost_exit(pattern || fault_test.starts != 3u ? 1u : 0u);
+}
+#endif
 
 /* The card <-> inverter link: SBus on bxCAN, or the stand-in loop in test images. Without a
  * CAN controller (QEMU) or transceiver the card runs without inverter: PI words echo PO words
@@ -392,6 +428,9 @@ int main(void)
     board_init();
     bool had_fault = take_previous_fault();
     leds.fault_pattern = had_fault; /* BUS FAULT at 4 Hz until the card is in Data_Exch (below) */
+#ifdef DFP_BOARD_FAULT_TEST
+    fault_test_step(leds.fault_pattern);
+#endif
     start_card(start_inverter_link());
 #ifdef DFP_BOARD_EXIT_SILENCE_MS
     silence_watch_t silence = {.last_telegrams = 0, .last_activity = now_us()};

@@ -70,11 +70,15 @@ board_clocks_t board_clock_init(rcc_regs_t *rcc, flash_regs_t *flash);
 const char *board_clock_source_name(board_clock_source_t s);
 
 /* Fault record: survives a reset (.noinit RAM), readable with a debugger (`p board_fault`) or
- * at the next power-up. */
+ * at the next start, which shows it (BUS FAULT pattern) and marks it shown: only the reset the
+ * fault caused shows it, a later NRST or debugger reset does not. A shown record keeps its
+ * fields for the debugger (magic BOARD_FAULT_SHOWN) until the next fault overwrites it. */
 #define BOARD_FAULT_MAGIC 0xFA017EC0u
+#define BOARD_FAULT_SHOWN 0xFA017EC1u
 typedef struct board_fault_record {
     uint32_t magic;
-    uint32_t count;       /* faults since the record was last cleared */
+    uint32_t count;       /* faults since a start last took the record: 1, more if faults came
+                           * back before main got to it (in board_init, say) */
     uint32_t exception;   /* 3 HardFault, 4 MemManage, 5 BusFault, 6 UsageFault, 16+ IRQ */
     uint32_t r0, r1, r2, r3, r12, lr, pc, xpsr; /* the stacked frame */
     uint32_t sp;          /* stack pointer before the exception */
@@ -83,6 +87,9 @@ typedef struct board_fault_record {
 } board_fault_record_t;
 
 extern board_fault_record_t board_fault;
+/* A start has taken the record for display: mark it shown (a record that is not a fresh one is
+ * left as it is). */
+void board_fault_mark_shown(board_fault_record_t *r);
 /* Formats the record as one line of text ("fault: HardFault pc=0x... lr=... cfsr=..."). */
 unsigned board_fault_format(const board_fault_record_t *r, char *out, unsigned max);
 
