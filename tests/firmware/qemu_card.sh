@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The DFP21B image on QEMU's netduinoplus2 (STM32F405), USART1 on a PTY, driven by dfp-sim:
-#   1. fault image: a deliberate bus fault leaves a readable record; semihosting exit 3
+#   1. fault image, three starts in one run (SYSRESETREQ keeps RAM): a deliberate bus fault
+#      leaves a readable record; the start after it shows the record (BUS FAULT pattern) and
+#      resets; the start after that shows nothing, the record kept for a debugger; exit 0
 #   2. card without inverter (QEMU has no bxCAN): start-up, Data_Exchange (PI echo PO),
 #      I&M0 by class 1 and class 2, a parameter read answered 0x0602 (no inverter);
 #      the image's own verdict (semihosting exit 0: served a master, no character error,
@@ -88,10 +90,19 @@ t0=$(date +%s%N)
 out=$(timeout 30 "$qemu" "${QEMU_ARGS[@]}" -serial null \
         -kernel "$img_dir/dfp21b-stm32f405-fault.elf" 2>&1)
 rc=$?
-expect_eq "fault image ends with semihosting exit 3" "$rc" "3"
+expect_eq "fault image: third start shows no fault (semihosting exit 0)" "$rc" "0"
 expect_has "fault record names the bus fault" "$out" "fault: BusFault exc=0x00000005"
 expect_has "fault record: precise bus error, BFAR valid" "$out" "cfsr=0x00008200"
 expect_has "fault record: the faulting address" "$out" "bfar=0xfffffff0"
+expect_has "first start: no fault pattern" "$out" "fault test: start 1, fault pattern off"
+expect_has "start after the fault: the record" \
+  "$(printf '%s\n' "$out" | grep '^previous fault:')" "BusFault exc=0x00000005"
+expect_has "start after the fault: count 1" "$(printf '%s\n' "$out" | grep '^previous fault:')" \
+  "count=0x00000001"
+expect_has "start after the fault: fault pattern" "$out" "fault test: start 2, fault pattern on"
+expect_eq "the record is shown by one start only" "$(printf '%s\n' "$out" | grep -c '^previous fault:')" "1"
+expect_has "second reset after the fault: no fault pattern" "$out" "fault test: start 3, fault pattern off"
+expect_has "the shown record stays for a debugger" "$out" "the shown record is kept for a debugger"
 
 # ---- 2. card without inverter ------------------------------------------------------------------
 if start_image dfp21b-stm32f405-qemu; then

@@ -1038,8 +1038,88 @@ static void test_leds_dip(void)
     CHECK_EQ(hd.ops->read(hd.ctx), 4);
 }
 
+/* ---- interrupt priorities ------------------------------------------------------------------- */
+/* USART1 stamps each character with TIM2 in its handler, and strict timing tolerates only
+ * 1 - frac(character time) of extra latency (167 ns at 6 Mbit/s): nothing but the fault
+ * handlers may preempt it, SysTick (~0.6-0.9 µs) included. SysTick stays above the core's
+ * BASEPRI (deadlines and LEDs during main-loop sections); PendSV and CAN are below it. */
+static void test_irq_priorities(void)
+{
+    uint8_t ipr[82];
+    memset(ipr, 0xEE, sizeof ipr);
+    uint32_t shpr3 = 0x0000A5A5u; /* DebugMonitor and reserved bytes: kept */
+    board_irq_priorities(ipr, &shpr3);
+    CHECK_EQ(ipr[IRQ_USART1], 0x10);
+    CHECK_EQ(ipr[IRQ_CAN1_RX0], 0x40);
+    CHECK_EQ(shpr3, 0x2030A5A5u); /* SysTick 2, PendSV 3 */
+    unsigned untouched = 0;
+    for (unsigned i = 0; i < sizeof ipr; i++) {
+        untouched += ipr[i] == 0xEEu;
+    }
+    CHECK_EQ(untouched, sizeof ipr - 2u);
+    uint32_t usart1 = ipr[IRQ_USART1], can = ipr[IRQ_CAN1_RX0];
+    uint32_t systick = shpr3 >> 24, pendsv = (shpr3 >> 16) & 0xFFu;
+    uint32_t basepri = BOARD_PRIO_CORE << BOARD_PRIO_SHIFT; /* core_enter */
+    CHECK((BOARD_PRIO_FAULT << BOARD_PRIO_SHIFT) < usart1); /* faults still preempt it */
+    CHECK(usart1 < systick && usart1 < pendsv && usart1 < can);
+    CHECK(systick < basepri);                   /* not masked by the core's sections */
+    CHECK(pendsv >= basepri && can >= basepri); /* masked by them */
+    CHECK(((usart1 | systick | pendsv | can) & 0x0Fu) == 0u); /* only the 4 implemented bits */
+}
+
 /* ---- clock and fault record ----------------------------------------------------------------- */
-static void test_clock_and_fault(void)
+/* What the silicon makes of CFGR (RM0090 §7.3.3 for the codes, §7.2 for the timers): SYSCLK from
+ * SW, HCLK through HPRE, PCLK1/2 through PPRE1/2, and APB1's timers at 2 x PCLK1 when APB1 is
+ * divided. Worked out from the register model, independently of what board_clock_init reports. */
+typedef struct hw_clocks {
+    uint32_t hclk, pclk1, pclk2, tim2;
+} hw_clocks_t;
+
+static uint32_t apb_div(uint32_t code)
+{
+    return code < 4u ? 1u : 2u << (code - 4u); /* 0xx /1, 100 /2, 101 /4, 110 /8, 111 /16 */
+}
+
+static hw_clocks_t hw_clocks(const rcc_regs_t *rcc)
+{
+    uint32_t sysclk = (rcc->CFGR & RCC_CFGR_SW_MASK) == RCC_CFGR_SW_PLL ? 168000000u : 16000000u;
+    uint32_t hpre = (rcc->CFGR >> 4) & 0xFu;
+    uint32_t hdiv = hpre < 8u ? 1u : hpre < 12u ? 2u << (hpre - 8u) : 64u << (hpre - 12u);
+    uint32_t ppre1 = (rcc->CFGR >> RCC_CFGR_PPRE1_SHIFT) & 7u;
+    hw_clocks_t h = {.hclk = sysclk / hdiv};
+    h.pclk1 = h.hclk / apb_div(ppre1);
+    h.pclk2 = h.hclk / apb_div((rcc->CFGR >> RCC_CFGR_PPRE2_SHIFT) & 7u);
+    h.tim2 = apb_div(ppre1) == 1u ? h.pclk1 : 2u * h.pclk1;
+    return h;
+}
+
+/* The reported clocks against the hardware's, and what main.c computes from them: TIM2 must
+ * count microseconds, USART1 (APB2) and bxCAN (APB1) must run at the wanted rates. */
+static void check_clock_use(const rcc_regs_t *rcc, board_clocks_t c, uint32_t baud)
+{
+    hw_clocks_t h = hw_clocks(rcc);
+    CHECK_EQ(c.hclk_hz, h.hclk);
+    CHECK_EQ(c.pclk1_hz, h.pclk1);
+    CHECK_EQ(c.pclk2_hz, h.pclk2);
+    CHECK_EQ(board_tim2_hz(&c), h.tim2);
+    uint32_t psc = timebase_prescaler(board_tim2_hz(&c));
+    CHECK_EQ(h.tim2 / (psc + 1u), 1000000u);
+    CHECK_EQ(h.tim2 % (psc + 1u), 0u);
+    uint32_t brr = 0;
+    bool over8 = false;
+    CHECK(rs485_uart_brr(c.pclk2_hz, baud, &brr, &over8));
+    /* RM0090 §30.3.4: baud = f_PCLK / (8 x (2 - OVER8) x USARTDIV), the fraction in 1/16 or
+     * (OVER8) 1/8 in BRR's low bits. */
+    uint32_t div_x = over8 ? ((brr >> 4) << 3) | (brr & 7u) : brr;
+    uint32_t actual = h.pclk2 / div_x;
+    CHECK(actual * 1000u >= baud * 997u && actual * 1000u <= baud * 1003u);
+    uint32_t btr = 0;
+    CHECK(bxcan_timing(c.pclk1_hz, 500000u, &btr));
+    uint32_t tq = 1u + ((btr >> 16) & 0xFu) + 1u + ((btr >> 20) & 7u) + 1u;
+    CHECK_EQ(h.pclk1 / (((btr & 0x3FFu) + 1u) * tq), 500000u);
+}
+
+static void test_clock(void)
 {
     rcc_regs_t rcc = {0};
     flash_regs_t fl = {0};
@@ -1047,15 +1127,47 @@ static void test_clock_and_fault(void)
     CHECK_EQ(c.source, BOARD_CLOCK_NOT_MODELLED);
     CHECK_EQ(c.hclk_hz, 168000000u);
     CHECK_EQ(c.pclk2_hz, 84000000u);
-    /* silicon out of reset, but no crystal and a PLL that never locks */
+    CHECK_EQ(board_tim2_hz(&c), 84000000u);
+    /* silicon out of reset, but no crystal and a PLL that never locks; CFGR holds dividers
+     * (from a boot loader, say) that the 16 MHz fallback must not keep */
     rcc.CR = RCC_CR_HSION | RCC_CR_HSIRDY;
+    rcc.CFGR = RCC_CFGR_HPRE_MASK | RCC_CFGR_PPRE1_MASK | RCC_CFGR_PPRE2_MASK;
     c = board_clock_init(&rcc, &fl);
     CHECK_EQ(c.source, BOARD_CLOCK_HSI_ONLY);
     CHECK_EQ(c.hclk_hz, 16000000u);
+    CHECK_EQ(c.pclk1_hz, 16000000u);
+    CHECK_EQ(c.pclk2_hz, 16000000u);
+    CHECK_EQ(rcc.CFGR & (RCC_CFGR_SW_MASK | RCC_CFGR_HPRE_MASK), 0u); /* HSI, AHB /1 */
+    CHECK_EQ((rcc.CFGR >> RCC_CFGR_PPRE1_SHIFT) & 7u, 0u);           /* APB1 /1 */
+    CHECK_EQ((rcc.CFGR >> RCC_CFGR_PPRE2_SHIFT) & 7u, 0u);           /* APB2 /1 */
     CHECK_EQ(rcc.PLLCFGR & 0x3Fu, 16u);          /* PLLM from HSI */
     CHECK_EQ((rcc.PLLCFGR >> 6) & 0x1FFu, 336u); /* PLLN */
     CHECK_EQ(fl.ACR & 7u, 5u);                   /* 5 wait states */
+    check_clock_use(&rcc, c, 500000u);
+    check_clock_use(&rcc, c, 19200u);
+    /* the PLL locks, but SWS never shows it as SYSCLK: the same fallback */
+    rcc.CR = RCC_CR_HSION | RCC_CR_HSIRDY | RCC_CR_PLLRDY;
+    rcc.CFGR = 0;
+    c = board_clock_init(&rcc, &fl);
+    CHECK_EQ(c.source, BOARD_CLOCK_HSI_ONLY);
+    CHECK_EQ(rcc.CFGR & (RCC_CFGR_SW_MASK | RCC_CFGR_HPRE_MASK | RCC_CFGR_PPRE1_MASK |
+                         RCC_CFGR_PPRE2_MASK), 0u);
+    check_clock_use(&rcc, c, 500000u);
+    /* the PLL from HSI runs: APB1 /4, APB2 /2 (RM0090 §7.3.3 codes 101 and 100) */
+    rcc.CFGR = RCC_CFGR_SWS_PLL;
+    c = board_clock_init(&rcc, &fl);
+    CHECK_EQ(c.source, BOARD_CLOCK_PLL_HSI);
+    CHECK_EQ(rcc.CFGR & RCC_CFGR_SW_MASK, RCC_CFGR_SW_PLL);
+    CHECK_EQ((rcc.CFGR >> RCC_CFGR_PPRE1_SHIFT) & 7u, 5u);
+    CHECK_EQ((rcc.CFGR >> RCC_CFGR_PPRE2_SHIFT) & 7u, 4u);
+    CHECK_EQ(c.pclk1_hz, 42000000u);
+    CHECK_EQ(c.pclk2_hz, 84000000u);
+    check_clock_use(&rcc, c, 6000000u);
+    check_clock_use(&rcc, c, 9600u);
+}
 
+static void test_fault_record(void)
+{
     board_fault_record_t r = {0};
     char line[320];
     board_fault_format(&r, line, sizeof line);
@@ -1071,6 +1183,21 @@ static void test_clock_and_fault(void)
     CHECK(strstr(line, " cfsr=0x00008200") != NULL);
     CHECK(strstr(line, " bfar=0xfffffff0") != NULL);
     CHECK_EQ(board_fault_format(&r, line, 12), 11); /* truncated, terminated */
+
+    /* The start after the fault takes the record: marked shown, so a later reset (NRST, a
+     * debugger) finds no fresh record and shows no pattern; the fields stay for a debugger. */
+    board_fault_record_t before = r;
+    board_fault_mark_shown(&r);
+    CHECK_EQ(r.magic, BOARD_FAULT_SHOWN);
+    CHECK(r.magic != BOARD_FAULT_MAGIC);
+    CHECK(memcmp(&r.count, &before.count, sizeof r - offsetof(board_fault_record_t, count)) == 0);
+    board_fault_format(&r, line, sizeof line);
+    CHECK_STR(line, "fault: none");
+    board_fault_mark_shown(&r); /* the next start: stays shown */
+    CHECK_EQ(r.magic, BOARD_FAULT_SHOWN);
+    r.magic = 0x12345678u; /* power-up garbage is not turned into a shown record */
+    board_fault_mark_shown(&r);
+    CHECK_EQ(r.magic, 0x12345678u);
 }
 
 int main(void)
@@ -1088,6 +1215,8 @@ int main(void)
     RUN_TEST(test_bxcan);
     RUN_TEST(test_timebase);
     RUN_TEST(test_leds_dip);
-    RUN_TEST(test_clock_and_fault);
+    RUN_TEST(test_irq_priorities);
+    RUN_TEST(test_clock);
+    RUN_TEST(test_fault_record);
     return check_report();
 }

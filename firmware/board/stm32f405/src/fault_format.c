@@ -1,4 +1,5 @@
-/* Text form of the fault record; separate from the handlers so host tests can check it. */
+/* Text form of the fault record, and its life after a start took it; separate from the
+ * handlers and main so host tests can check them. */
 #include "board/board.h"
 
 static unsigned put_str(char *out, unsigned pos, unsigned max, const char *s)
@@ -61,4 +62,11 @@ unsigned board_fault_format(const board_fault_record_t *r, char *out, unsigned m
     }
     out[p] = '\0';
     return p;
+}
+
+void board_fault_mark_shown(board_fault_record_t *r)
+{
+    if (r->magic == BOARD_FAULT_MAGIC) {
+        r->magic = BOARD_FAULT_SHOWN; /* the fault handler starts the count afresh from it */
+    }
 }

@@ -15,7 +15,8 @@
  *   QEMU image   DFP_BOARD_FIXED_BAUD, relaxed timing, DFP_BOARD_DIP_OVERRIDE, semihosting:
  *                prints a summary and exits with a verdict after DFP_BOARD_EXIT_SILENCE_MS
  *                without a character, once it has been in Data_Exch
- *   fault image  DFP_BOARD_FAULT_TEST: runs into a bus fault on purpose (fault record test) */
+ *   fault image  DFP_BOARD_FAULT_TEST: runs into a bus fault on purpose, then resets once more
+ *                (fault record test: the record is shown by the next start only) */
 #include <stdbool.h>
 #include <stdint.h>
 #include <string.h>
@@ -46,10 +47,10 @@
 #ifndef DFP_BOARD_SBUS_BITRATE
 #define DFP_BOARD_SBUS_BITRATE 500000u
 #endif
-/* TIM2's kernel clock: twice PCLK1 when APB1 is divided (RM0090 §7.2), as on this board;
- * QEMU's model counts at 1 GHz whatever RCC says. */
+/* TIM2's kernel clock from the clocks clock.c set up (board.h); QEMU's model counts at 1 GHz
+ * whatever RCC says. */
 #ifndef DFP_BOARD_TIM2_HZ
-#define DFP_BOARD_TIM2_HZ (2u * clocks.pclk1_hz)
+#define DFP_BOARD_TIM2_HZ board_tim2_hz(&clocks)
 #endif
 #define FW_VERSION_MAJOR 0u
 #define FW_VERSION_MINOR 6u
@@ -150,9 +151,9 @@ static void card_event(void *ctx, const dp_event_t *ev)
 
 /* ---- set-up ---------------------------------------------------------------------------------- */
 
-static void nvic_enable(uint32_t irq, uint32_t prio)
+/* The interrupt's priority was set by board_irq_priorities in board_init. */
+static void nvic_enable(uint32_t irq)
 {
-    NVIC_IPR[irq] = (uint8_t)(prio << BOARD_PRIO_SHIFT);
     NVIC_ICPR[irq / 32u] = 1u << (irq % 32u);
     NVIC_ISER[irq / 32u] = 1u << (irq % 32u);
 }
@@ -167,9 +168,9 @@ static void board_init(void)
     TIM2->ARR = 0xFFFFFFFFu;
     TIM2->EGR = TIM_EGR_UG; /* the prescaler is buffered: load it now */
     TIM2->CR1 = TIM_CR1_CEN;
-    /* SysTick priority (SHPR3 bits 31..24). */
-    SCB_SHPR3 = (SCB_SHPR3 & 0x0000FFFFu) | ((BOARD_PRIO_SYSTICK << BOARD_PRIO_SHIFT) << 24) |
-                ((BOARD_PRIO_CORE << BOARD_PRIO_SHIFT) << 16); /* PendSV: bits 23..16 */
+    /* Before SysTick starts: USART1 above SysTick, whose handler would otherwise delay the
+     * TIM2 stamp of a character by up to ~0.9 µs (board.h). */
+    board_irq_priorities(NVIC_IPR, &SCB_SHPR3);
     SCB_SHCSR |= (1u << 16) | (1u << 17) | (1u << 18); /* MemManage, BusFault, UsageFault */
     timebase_init(&tb, SYSTICK, clocks.hclk_hz, &TIM2->CNT);
     board_leds_init(&leds);
@@ -248,7 +249,8 @@ static void report_and_exit(void)
 }
 #endif
 
-/* A fault handler's record from before the reset (RAM kept over it): print it under test. */
+/* A fault handler's record from before the reset (RAM kept over it): shown once, by the start
+ * the fault's reset caused; printed under test. */
 __attribute__((noinline)) static bool take_previous_fault(void)
 {
     bool had_fault = board_fault.magic == BOARD_FAULT_MAGIC;
@@ -261,13 +263,47 @@ __attribute__((noinline)) static bool take_previous_fault(void)
         semihost_write0("\n");
     }
 #endif
-#ifdef DFP_BOARD_FAULT_TEST
-    semihost_write0("fault test: reading 0xFFFFFFF0\n");
-    board_fault.magic = 0;
-    (void)*(volatile uint32_t *)0xFFFFFFF0u;
-#endif
+    board_fault_mark_shown(&board_fault);
     return had_fault;
 }
+
+#ifdef DFP_BOARD_FAULT_TEST
+/* Three starts in one QEMU run, each after a SYSRESETREQ, which keeps RAM (QEMU reloads only
+ * the image's contents, not its NOLOAD sections): 1 faults on purpose, 2 must show the record
+ * and resets as NRST or a debugger would, 3 must not show it. */
+#define FAULT_TEST_MAGIC 0x7E57FA17u
+static struct {
+    uint32_t magic;
+    uint32_t starts;
+} fault_test __attribute__((section(".noinit")));
+
+static void fault_test_step(bool pattern)
+{
+    if (fault_test.magic != FAULT_TEST_MAGIC) {
+        fault_test.magic = FAULT_TEST_MAGIC;
+        fault_test.starts = 0;
+    }
+    fault_test.starts++;
+    char line[] = "fault test: start 0, fault pattern ";
+    line[18] = (char)('0' + fault_test.starts % 10u);
+    semihost_write0(line);
+    semihost_write0(pattern ? "on\n" : "off\n");
+    if (fault_test.starts == 1u) {
+        semihost_write0("fault test: reading 0xFFFFFFF0\n");
+        (void)*(volatile uint32_t *)0xFFFFFFF0u;
+    }
+    if (fault_test.starts == 2u) {
+        __asm volatile("dsb" ::: "memory");
+        SCB_AIRCR = 0x05FA0004u; /* SYSRESETREQ, RAM kept */
+        for (;;) {
+        }
+    }
+    if (board_fault.magic == BOARD_FAULT_SHOWN && board_fault.bfar == 0xFFFFFFF0u) {
+        semihost_write0("fault test: the shown record is kept for a debugger\n");
+    }
+    semihost_exit(pattern || fault_test.starts != 3u ? 1u : 0u);
+}
+#endif
 
 /* The card <-> inverter link: SBus on bxCAN, or the stand-in loop in test images. Without a
  * CAN controller (QEMU) or transceiver the card runs without inverter: PI words echo PO words
@@ -283,7 +319,7 @@ __attribute__((noinline)) static ml_link_t start_inverter_link(void)
     if (bxcan_init(&can, &ccfg) == 0) {
         scfg.can = bxcan_hal(&can);
         sbus_up = true;
-        nvic_enable(IRQ_CAN1_RX0, BOARD_PRIO_CAN);
+        nvic_enable(IRQ_CAN1_RX0);
     }
 #ifdef DFP_BOARD_LOOPBACK_INVERTER
     else {
@@ -359,7 +395,7 @@ __attribute__((noinline)) static void start_card(ml_link_t inverter)
     board_basepri(BOARD_PRIO_CORE);
     dfp21b_init(&card, &cfg, now_us());
     board_basepri(0);
-    nvic_enable(IRQ_USART1, BOARD_PRIO_USART);
+    nvic_enable(IRQ_USART1);
 }
 
 #ifdef DFP_BOARD_EXIT_SILENCE_MS
@@ -392,6 +428,9 @@ int main(void)
     board_init();
     bool had_fault = take_previous_fault();
     leds.fault_pattern = had_fault; /* BUS FAULT at 4 Hz until the card is in Data_Exch (below) */
+#ifdef DFP_BOARD_FAULT_TEST
+    fault_test_step(leds.fault_pattern);
+#endif
     start_card(start_inverter_link());
 #ifdef DFP_BOARD_EXIT_SILENCE_MS
     silence_watch_t silence = {.last_telegrams = 0, .last_activity = now_us()};

@@ -7,12 +7,19 @@
  *   LEDs    RUN PB0, BUS FAULT PB1  active high
  *   DIP     PC0..PC6 = 2^0..2^6     switch ON pulls to ground (internal pull-ups)
  *
- * Interrupt priorities (4 bits, lower = more urgent): SysTick 0 (the time base must never
- * stall), USART1 1 (characters into the driver's ring, transmit steps: never masked, so no
- * character is lost and no reply stalls mid-frame), PendSV 2 (the core's receive-to-reply
- * path: the ring into dfp21b_rx_char), CAN1 RX0 3. The main loop masks priority >= 2 with
- * BASEPRI while it runs the core's poll, so the reply path and the main loop never work on
- * the card at the same time (the core has no locks; see docs/porting.md). */
+ * Interrupt priorities (4 bits, lower = more urgent; board_irq_priorities() writes them):
+ *   0  MemManage, BusFault, UsageFault (their reset value): a fault in any handler below is
+ *      recorded as itself instead of escalating to HardFault
+ *   1  USART1: characters into the driver's collector, transmit steps. Never masked, so no
+ *      character is lost and no reply stalls mid-frame; and nothing preempts it, because each
+ *      character is stamped with TIM2 in its handler and strict timing leaves only
+ *      1 - frac(character time) of stamp jitter (167 ns at 6 Mbit/s, docs/porting.md)
+ *   2  SysTick: deadline flag and LED patterns; a few µs late is harmless (time is TIM2)
+ *   3  PendSV: the core's receive-to-reply path (the queue into dfp21b_rx_telegram)
+ *   4  CAN1 RX0
+ * The main loop masks priority >= 3 with BASEPRI while it runs the core's poll, so the reply
+ * path and the main loop never work on the card at the same time (the core has no locks; see
+ * docs/porting.md). */
 #ifndef BOARD_BOARD_H
 #define BOARD_BOARD_H
 
@@ -27,16 +34,21 @@
 #define BOARD_PCLK2_HZ 84000000u
 #define BOARD_HSI_HZ 16000000u
 
-#define BOARD_PRIO_SYSTICK 0u
+#define BOARD_PRIO_FAULT 0u /* SHPR1's reset value, left as it is */
 #define BOARD_PRIO_USART 1u
-#define BOARD_PRIO_CORE 2u /* PendSV */
-#define BOARD_PRIO_CAN 3u
-#define BOARD_PRIO_SHIFT 4u
+#define BOARD_PRIO_SYSTICK 2u
+#define BOARD_PRIO_CORE 3u /* PendSV, and the BASEPRI of the main loop's core sections */
+#define BOARD_PRIO_CAN 4u
+#define BOARD_PRIO_SHIFT 4u /* the F405 implements the top 4 bits of each priority byte */
+
+/* Writes the priorities above: USART1's and CAN1 RX0's NVIC_IPR bytes, SysTick's and PendSV's
+ * bytes of SCB_SHPR3 (PM0214 §4.3.7, §4.4.8); the other bytes are kept. */
+void board_irq_priorities(volatile uint8_t *nvic_ipr, volatile uint32_t *scb_shpr3);
 
 typedef enum board_clock_source {
     BOARD_CLOCK_PLL_HSE = 0, /* 8 MHz crystal -> PLL 168 MHz */
     BOARD_CLOCK_PLL_HSI,     /* no crystal: HSI 16 MHz -> PLL 168 MHz (UART rates within 1 %) */
-    BOARD_CLOCK_HSI_ONLY,    /* PLL did not lock: 16 MHz, the card runs slowly */
+    BOARD_CLOCK_HSI_ONLY,    /* PLL did not lock: HSI 16 MHz, AHB and APBs /1; the card runs slowly */
     BOARD_CLOCK_NOT_MODELLED, /* RCC reads as zero (QEMU): the machine's fixed 168 MHz */
 } board_clock_source_t;
 
@@ -47,15 +59,26 @@ typedef struct board_clocks {
     uint32_t pclk2_hz;
 } board_clocks_t;
 
+/* TIM2's kernel clock (RM0090 §7.2): PCLK1 when APB1 runs undivided, 2 x PCLK1 when it is
+ * divided (the HSI-only fallback runs it /1, the PLL set-up /4). Derived, not stored: RAM. */
+static inline uint32_t board_tim2_hz(const board_clocks_t *c)
+{
+    return c->pclk1_hz < c->hclk_hz ? 2u * c->pclk1_hz : c->pclk1_hz;
+}
+
 board_clocks_t board_clock_init(rcc_regs_t *rcc, flash_regs_t *flash);
 const char *board_clock_source_name(board_clock_source_t s);
 
 /* Fault record: survives a reset (.noinit RAM), readable with a debugger (`p board_fault`) or
- * at the next power-up. */
+ * at the next start, which shows it (BUS FAULT pattern) and marks it shown: only the reset the
+ * fault caused shows it, a later NRST or debugger reset does not. A shown record keeps its
+ * fields for the debugger (magic BOARD_FAULT_SHOWN) until the next fault overwrites it. */
 #define BOARD_FAULT_MAGIC 0xFA017EC0u
+#define BOARD_FAULT_SHOWN 0xFA017EC1u
 typedef struct board_fault_record {
     uint32_t magic;
-    uint32_t count;       /* faults since the record was last cleared */
+    uint32_t count;       /* faults since a start last took the record: 1, more if faults came
+                           * back before main got to it (in board_init, say) */
     uint32_t exception;   /* 3 HardFault, 4 MemManage, 5 BusFault, 6 UsageFault, 16+ IRQ */
     uint32_t r0, r1, r2, r3, r12, lr, pc, xpsr; /* the stacked frame */
     uint32_t sp;          /* stack pointer before the exception */
@@ -64,6 +87,9 @@ typedef struct board_fault_record {
 } board_fault_record_t;
 
 extern board_fault_record_t board_fault;
+/* A start has taken the record for display: mark it shown (a record that is not a fresh one is
+ * left as it is). */
+void board_fault_mark_shown(board_fault_record_t *r);
 /* Formats the record as one line of text ("fault: HardFault pc=0x... lr=... cfsr=..."). */
 unsigned board_fault_format(const board_fault_record_t *r, char *out, unsigned max);
 

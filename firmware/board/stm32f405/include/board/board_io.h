@@ -2,8 +2,8 @@
  *
  * Blinking is the backend's job (hal_led.h): the LED state is kept here and the SysTick calls
  * board_leds_tick() every millisecond. Patterns: ON, OFF, BLINK (1 Hz, 50 %: "flashing" in the
- * DFP21B manual §3.7) and, board-only, FAULT (BUS FAULT alone at 4 Hz, RUN as set) after a
- * fault record was found at power-up, until Data_Exch. The DIP switches are read once
+ * DFP21B manual §3.7) and, board-only, FAULT (BUS FAULT alone at 4 Hz, RUN as set) in the
+ * start right after a fault (a fresh fault record), until Data_Exch. The DIP switches are read once
  * (dfp21b_init calls read()). */
 #ifndef BOARD_BOARD_IO_H
 #define BOARD_BOARD_IO_H

@@ -94,9 +94,17 @@ typedef struct rcc_regs {
 #define RCC_CR_PLLON (1u << 24)
 #define RCC_CR_PLLRDY (1u << 25)
 #define RCC_PLLCFGR_SRC_HSE (1u << 22)
+#define RCC_CFGR_SW_MASK 3u
 #define RCC_CFGR_SW_PLL 2u
 #define RCC_CFGR_SWS_MASK (3u << 2)
 #define RCC_CFGR_SWS_PLL (2u << 2)
+#define RCC_CFGR_HPRE_MASK (0xFu << 4)
+#define RCC_CFGR_PPRE1_SHIFT 10u /* APB1: 0xx /1, 100 /2, 101 /4, 110 /8, 111 /16 */
+#define RCC_CFGR_PPRE2_SHIFT 13u /* APB2: the same code */
+#define RCC_CFGR_PPRE1_MASK (7u << RCC_CFGR_PPRE1_SHIFT)
+#define RCC_CFGR_PPRE2_MASK (7u << RCC_CFGR_PPRE2_SHIFT)
+#define RCC_CFGR_PPRE_DIV2 4u
+#define RCC_CFGR_PPRE_DIV4 5u
 #define RCC_AHB1ENR_GPIOA (1u << 0)
 #define RCC_AHB1ENR_GPIOB (1u << 1)
 #define RCC_AHB1ENR_GPIOC (1u << 2)
