@@ -135,9 +135,8 @@ static int card_param_request(void *ctx, uint8_t channel, const uint8_t req[ML_T
 static void card_param_cancel(void *ctx, uint8_t channel)
 {
     sbus_card_link_t *l = ctx;
-    if (channel < ML_MAX_CHANNELS && l->queue[channel].waiting) {
+    if (channel < ML_MAX_CHANNELS) {
         l->queue[channel].waiting = false;
-        l->cancelled++;
     }
 }
 

@@ -147,7 +147,6 @@ typedef struct sbus_card_link {
     uint32_t responses;
     uint32_t stale_responses;  /* matched no outstanding request */
     uint32_t timeouts;
-    uint32_t cancelled;        /* waiting requests dropped unsent: the client gave up on them */
     uint32_t po_frames;
     uint32_t po_withheld;      /* process_outputs calls while po_stopped */
     uint32_t pi_frames;
