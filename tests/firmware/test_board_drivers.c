@@ -632,25 +632,26 @@ static void test_uart_rx_char_errors(void)
     CHECK_EQ(u.rx_telegrams, 1);
 }
 
-/* (4) A pause inside a telegram (strict: idle above FDL_RX_GAP_TOLERANCE_NS; relaxed: above
- * 20 ms). */
+/* (4) A pause inside a telegram (strict: stamps more than the character time rounded up to
+ * whole µs plus FDL_RX_GAP_TOLERANCE_NS apart, fdl_gap.h; relaxed: above 20 ms). */
 static void test_uart_rx_gap(void)
 {
     uart_setup(1500000u, true);
-    /* 8 µs from character to character is 667 ns idle: within the tolerance */
+    /* 8 and 9 µs from character to character (7.333 µs characters): the rounding and 1 µs of
+     * interrupt latency, no pause */
     for (unsigned i = 0; i < sizeof sd1; i++) {
-        rx_char(sd1[i], 0u, 200u + i + (i >= 3u ? 7u : 0u));
+        rx_char(sd1[i], 0u, 200u + i + (i >= 3u ? 7u : 0u) + (i >= 4u ? 8u : 0u));
     }
-    /* 9 µs is 1667 ns idle: a pause; the character after it starts the next telegram */
+    /* 10 µs is 2667 ns idle: a pause; the character after it starts the next telegram */
     for (unsigned i = 0; i < 3u; i++) {
         rx_char(sd1b[i], 0u, 300u + i);
     }
-    CHECK_EQ(rx_frame(sd1, sizeof sd1, 311u), 316u);
+    CHECK_EQ(rx_frame(sd1, sizeof sd1, 312u), 317u);
     CHECK_EQ(rxl.pending, 3);
     CHECK_EQ(drain(), 3u);
-    check_telegram(0, sd1, sizeof sd1, 0, 212u, UINT32_MAX);
-    check_error(1, FDL_RX_ERR_GAP, 311u);
-    check_telegram(2, sd1, sizeof sd1, 1, 316u, 9000u - CHAR_NS_1M5);
+    check_telegram(0, sd1, sizeof sd1, 0, 220u, UINT32_MAX);
+    check_error(1, FDL_RX_ERR_GAP, 312u);
+    check_telegram(2, sd1, sizeof sd1, 1, 317u, 10000u - CHAR_NS_1M5);
     CHECK_EQ(u.rx_telegrams, 2);
     /* relaxed timing (QEMU, PTY): the same 9 µs inside a telegram is no pause */
     uart_setup(1500000u, false);

@@ -150,9 +150,9 @@ static void send_telegram(fz_t *f, uint8_t op)
         frame[at] = fz_u8(f);
         n++;
     } else if (how == 6u) {
-        /* stamps (tolerance µs - 1 .. + 1) apart, sub-µs phase from the input */
+        /* stamps (the strict pause threshold - 1 .. + 1) apart, sub-µs phase from the input */
         uint32_t c = hal_uart_char_ns(R.baud);
-        uint64_t target = ((uint64_t)(c + FDL_RX_GAP_TOLERANCE_NS) / 1000u - 1u + fz_u8(f) % 3u) * 1000u;
+        uint64_t target = ((uint64_t)fdl_gap_pause_us(true, c, 0u) - 1u + fz_u8(f) % 3u) * 1000u;
         pause_at = target > c ? target - c + fz_u8(f) % 1000u : 0u;
     }
     for (size_t k = 0; k < n; k++) {

@@ -67,7 +67,9 @@ static void check_frame(rig_t *r)
             hist_entry_t *p = hist_at(r, n - k);
             int32_t dt = hal_time_diff(e->t, p->t);
             uint64_t dt_ns = dt < 0 ? 0u : (uint64_t)dt * 1000u;
-            PROPERTY(dt_ns <= (uint64_t)r->char_ns + FDL_RX_GAP_TOLERANCE_NS,
+            /* at most the character time rounded up to the µs stamps, plus the tolerance */
+            uint64_t char_up_ns = ((uint64_t)r->char_ns + 999u) / 1000u * 1000u;
+            PROPERTY(dt_ns <= char_up_ns + FDL_RX_GAP_TOLERANCE_NS,
                      "strict timing accepted a %lld ns pause inside a telegram",
                      (long long)dt_ns - (long long)r->char_ns);
         }

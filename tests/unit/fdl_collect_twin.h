@@ -29,6 +29,7 @@
 #include <string.h>
 
 #include "dp_slave/fdl_collect.h"
+#include "dp_slave/fdl_gap.h"
 #include "dp_slave/fdl_rx.h"
 #include "dp_slave/fdl_wire.h"
 #include "hal/hal_time.h"

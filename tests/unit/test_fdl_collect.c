@@ -269,38 +269,40 @@ static void test_back_to_back_9k6(void)
 
 static void test_gap_inside_strict(void)
 {
-    /* 12 Mbit/s: stamps 1 µs apart are 83 ns idle, 2 µs apart 1083 ns > 1000: a gap. The
-     * character after the gap is a start delimiter (SC): both count GAP, then the SC. */
+    /* 12 Mbit/s, 917 ns characters: the threshold is ceil(0.917) + 1 = 2 µs between stamps
+     * (fdl_gap.h), so stamps 2 µs apart (1083 ns idle) are no gap, 3 µs apart (2083 ns) are.
+     * The character after the gap is a start delimiter (SC): both count GAP, then the SC. */
     line_init(12000000u, true, 0u);
     line_at_us(0x10, 0, 100);
-    line_at_us(0x04, 0, 101);
-    line_at_us(0x02, 0, 102);
-    line_at_us(FDL_SC, 0, 104);
+    line_at_us(0x04, 0, 102);
+    line_at_us(0x02, 0, 103);
+    line_at_us(FDL_SC, 0, 106);
     both_count(2);
     both_error(0, FDL_RX_ERR_GAP, 3);
-    check_frame_ev(&L.ref[1], F_SC, 1, 104u, 1083u, 3);
-    check_frame_ev(&L.col[1], F_SC, 1, 104u, 1083u, 3);
+    check_frame_ev(&L.ref[1], F_SC, 1, 106u, 2083u, 3);
+    check_frame_ev(&L.col[1], F_SC, 1, 106u, 2083u, 3);
     /* fdl_rx_char returned FRAME for that character and only counted the GAP; the collector
      * reported both (FDL_COLLECT_ERROR | FDL_COLLECT_TELEGRAM). */
     CHECK_EQ(L.tw.ref.error_count[FDL_RX_ERR_GAP], 1u);
     CHECK_EQ(L.tw.core.error_count[FDL_RX_ERR_GAP], 1u);
 
-    /* 9.6 kbit/s, 1145833 ns characters: 1146 µs apart is 167 ns idle, 1147 µs is 1167 ns. */
+    /* 9.6 kbit/s, 1145833 ns characters: threshold 1146 + 1 µs, so 1147 µs apart (1167 ns idle)
+     * is no gap, 1148 µs (2167 ns) is. */
     line_init(9600u, true, 0u);
     uint64_t t = 5000;
     for (size_t k = 0; k < sizeof F_FDL_REQ; k++) {
         line_at_us(F_FDL_REQ[k], 0, t);
-        t += 1146u;
+        t += k % 2u == 0u ? 1146u : 1147u;
     }
     both_count(1);
-    both_frame(0, F_FDL_REQ, sizeof F_FDL_REQ, 5000u + 5u * 1146u, UINT32_MAX, 5);
+    both_frame(0, F_FDL_REQ, sizeof F_FDL_REQ, 5000u + 3u * 1146u + 2u * 1147u, UINT32_MAX, 5);
     t += 100000u;
     line_at_us(0x10, 0, t);
-    line_at_us(0x04, 0, t + 1146u);
-    line_at_us(FDL_SC, 0, t + 1146u + 1147u);
+    line_at_us(0x04, 0, t + 1147u);
+    line_at_us(FDL_SC, 0, t + 1147u + 1148u);
     both_count(3);
     both_error(1, FDL_RX_ERR_GAP, 8);
-    both_frame(2, F_SC, 1, (hal_time_us_t)(t + 2293u), 1167u, 8);
+    both_frame(2, F_SC, 1, (hal_time_us_t)(t + 2295u), 2167u, 8);
     verdicts(0, 0, 0, 0, 0);
 }
 
@@ -764,7 +766,7 @@ static uint64_t random_idle(rng_t *r)
     case 1: return rng_below(r, 3000);
     case 2: return 33u * bit_ns + rng_below(r, (uint32_t)bit_ns);
     case 3: return rng_below(r, 40) * bit_ns;
-    case 4: return near_us(r, (c + FDL_RX_GAP_TOLERANCE_NS) / 1000u); /* strict pause */
+    case 4: return near_us(r, fdl_gap_pause_us(true, c, 0u)); /* strict pause */
     case 5: return near_us(r, FDL_RX_RELAXED_GAP_US_DEFAULT);
     case 6: return near_us(r, FDL_RX_RELAXED_RESYNC_US_DEFAULT);
     default: return rng_below(r, 30000000);

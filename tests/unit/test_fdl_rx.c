@@ -357,9 +357,10 @@ static void test_gap_inside_strict(void)
     CHECK_EQ(f.rx.error_count[FDL_RX_ERR_GAP], 1u);
     /* The character after the pause is taken as a new start (0x4F is no SD). */
     CHECK_EQ(f.rx.error_count[FDL_RX_ERR_SD], 1u);
-    /* Gap after the SD2 header. */
+    /* Gap after the SD2 header: 4 bit times (2.7 µs) are a pause at any sub-µs phase, since
+     * the threshold is the character time rounded up to whole µs plus 1 µs (fdl_gap.h). */
     feed(&f, F_SET_PRM, 4);
-    feed_flags(&f, &F_SET_PRM[4], sizeof F_SET_PRM - 4u, NULL, 2u);
+    feed_flags(&f, &F_SET_PRM[4], sizeof F_SET_PRM - 4u, NULL, 4u);
     CHECK_EQ(f.frames, 0u);
     CHECK_EQ(f.rx.error_count[FDL_RX_ERR_GAP], 2u);
     /* A telegram broken by a gap, whose tail is itself a complete telegram, yields only that. */

@@ -11,8 +11,9 @@
  *  - pause: idle inside a telegram, which ends it (FDL_RX_ERR_GAP); the character after it may
  *    start the next telegram;
  *  - resync: enough silence after an error to trust a start delimiter again.
- * Strict timing (exact timestamps: MCU, in-memory bus) tolerates FDL_RX_GAP_TOLERANCE_NS of idle,
- * the rounding of µs timestamps; resync needs a pause. Relaxed timing (an OS delivers bytes in
+ * Strict timing (exact timestamps: MCU, in-memory bus) tolerates FDL_RX_GAP_TOLERANCE_NS of idle
+ * beyond the rounding of the character time to the µs timestamps (an interrupt's latency);
+ * resync needs a pause. Relaxed timing (an OS delivers bytes in
  * chunks with one timestamp) counts a distance above relaxed_gap_us as a pause and one of
  * relaxed_resync_us as a resync. A timestamp earlier than the previous one is clock jitter
  * (two clocks): no idle and no pause, but in relaxed timing a resync, since timestamps that run
@@ -37,12 +38,15 @@ typedef struct fdl_gap {
     bool resync;
 } fdl_gap_t;
 
-/* The longest distance between two characters' timestamps, in µs, that is no pause: for strict
- * timing idle_ns <= tolerance, i.e. dt_us * 1000 <= char_ns + tolerance, exactly so for whole
- * µs. A per-character fast path compares against it without computing idle_ns. */
+/* The longest distance between two characters' timestamps, in µs, that is no pause. Strict
+ * timing allows the tolerance on top of the character time rounded up to whole µs: stamps are
+ * whole µs, so back-to-back characters are stamped ceil(character time) apart at a sub-µs phase
+ * where the first stamp is late, and the tolerance is then all an interrupt's latency may add
+ * (at least 1 µs at every rate; with the character time rounded down it was 1 - frac, 83 ns at
+ * 19.2 kbit/s). A per-character fast path compares against it without computing idle_ns. */
 static inline uint32_t fdl_gap_pause_us(bool strict, uint32_t char_ns, uint32_t relaxed_gap_us)
 {
-    return strict ? char_ns / 1000u + FDL_RX_GAP_TOLERANCE_NS / 1000u : relaxed_gap_us;
+    return strict ? (char_ns + 999u) / 1000u + FDL_RX_GAP_TOLERANCE_NS / 1000u : relaxed_gap_us;
 }
 
 /* dt_us: hal_time_diff(this timestamp, the previous one); pause_us from fdl_gap_pause_us(). */
