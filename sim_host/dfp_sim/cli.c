@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "hal/hal_uart.h"
 
@@ -18,6 +19,69 @@ void cli_error(const char *fmt, ...)
     vfprintf(stderr, fmt, ap);
     fputc('\n', stderr);
     va_end(ap);
+}
+
+/* The directory part of path ("." for a bare name) into buf; the name after it. */
+static const char *split_dir(const char *path, char *buf, size_t n)
+{
+    const char *slash = strrchr(path, '/');
+    if (slash == NULL) {
+        (void)snprintf(buf, n, ".");
+        return path;
+    }
+    (void)snprintf(buf, n, "%.*s", slash == path ? 1 : (int)(slash - path), path);
+    return slash + 1;
+}
+
+bool cli_same_file(const char *a, const char *b)
+{
+    if (strcmp(a, b) == 0) {
+        return true;
+    }
+    struct stat sa;
+    struct stat sb;
+    bool a_exists = stat(a, &sa) == 0;
+    bool b_exists = stat(b, &sb) == 0;
+    if (a_exists || b_exists) {
+        return a_exists && b_exists && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    }
+    /* Neither is there yet: whichever is created first is the other one as well. */
+    char da[4096];
+    char db[4096];
+    const char *na = split_dir(a, da, sizeof da);
+    const char *nb = split_dir(b, db, sizeof db);
+    return strcmp(na, nb) == 0 && stat(da, &sa) == 0 && stat(db, &sb) == 0 &&
+           sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+bool cli_files_distinct(const char *cmd, const cli_file_t *files, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        for (size_t k = i + 1u; files[i].path != NULL && k < n; k++) {
+            if (files[k].path != NULL && cli_same_file(files[i].path, files[k].path)) {
+                cli_error("%s: %s and %s are the same file (%s, %s): refused before anything "
+                          "was opened (give each its own file)", cmd, files[i].option,
+                          files[k].option, files[i].path, files[k].path);
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+const char *cli_lcm_log_written(const char *url, char *buf, size_t n)
+{
+    if (url == NULL || strncmp(url, "file://", 7) != 0) {
+        return NULL;
+    }
+    const char *path = url + 7;
+    const char *query = strchr(path, '?');
+    /* LCM's file provider reads unless told mode=w (or a, appending). */
+    if (query == NULL || (strstr(query, "mode=w") == NULL && strstr(query, "mode=a") == NULL)) {
+        return NULL;
+    }
+    (void)snprintf(buf, n, "%.*s", (int)(query - path), path);
+    return buf;
 }
 
 const char *cli_value(int argc, char **argv, int *i)

@@ -21,6 +21,22 @@ bool cli_address_list(const char *text, uint8_t *out, size_t max, size_t *n);
 const char *cli_value(int argc, char **argv, int *i);
 void cli_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
+/* A file the command line names, with the option or operand that names it ("--capture",
+ * "IN"); path NULL: not given. */
+typedef struct cli_file {
+    const char *option;
+    const char *path;
+} cli_file_t;
+/* Whether a and b are one file: the same name, the same device and inode when both exist, or,
+ * when neither exists yet, the same name in the same directory ("new.ee", "./new.ee"). */
+bool cli_same_file(const char *a, const char *b);
+/* False after reporting "CMD: A and B are the same file (PATH_A, PATH_B): ..." when two of
+ * files[0..n) are one file. For every command that writes a file the user names: opening it
+ * would truncate another file of the same command line (an input, an EEPROM) before it is read. */
+bool cli_files_distinct(const char *cmd, const cli_file_t *files, size_t n);
+/* The log an LCM URL writes ("file://OUT.lcm?mode=w" or mode=a) into buf, else NULL. */
+const char *cli_lcm_log_written(const char *url, char *buf, size_t n);
+
 /* Set by SIGINT/SIGTERM once cli_catch_stop_signals() ran: a running command ends cleanly. */
 extern volatile int cli_stop;
 void cli_catch_stop_signals(void);

@@ -5,7 +5,6 @@
 #include <inttypes.h>
 #include <stdio.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "capture/capture.h"
 #include "cli.h"
@@ -115,17 +114,8 @@ static int convert_parse(convert_opts_t *o, int argc, char **argv)
         cli_error("convert needs an input and an output file: dfp-sim convert IN OUT");
         return EXIT_USAGE;
     }
-    /* By identity, not by name: "a.pcap" and "./a.pcap" are one file, and opening OUT for
-     * writing would truncate the input under the reader. */
-    struct stat in_st;
-    struct stat out_st;
-    if (strcmp(o->in, o->out) == 0 ||
-        (stat(o->in, &in_st) == 0 && stat(o->out, &out_st) == 0 &&
-         in_st.st_dev == out_st.st_dev && in_st.st_ino == out_st.st_ino)) {
-        cli_error("convert: IN and OUT are the same file (%s, %s)", o->in, o->out);
-        return EXIT_USAGE;
-    }
-    return 0;
+    const cli_file_t files[] = {{"IN", o->in}, {"OUT", o->out}};
+    return cli_files_distinct("convert", files, 2u) ? 0 : EXIT_USAGE;
 }
 
 /* What the copy met on its way. */

@@ -278,7 +278,11 @@ static int demo_parse(demo_opts_t *o, int argc, char **argv)
             return EXIT_USAGE;
         }
     }
-    return 0;
+    char lcm_log[512];
+    const cli_file_t files[] = {{"--capture", o->capture.path},
+                                {"--lcm", cli_lcm_log_written(o->lcm_url, lcm_log,
+                                                              sizeof lcm_log)}};
+    return cli_files_distinct("demo", files, 2u) ? 0 : EXIT_USAGE;
 }
 
 /* The capture and the LCM telemetry. False after reporting. */

@@ -198,9 +198,11 @@ static int inverter_parse(inverter_opts_t *o, int argc, char **argv)
         } else if (strcmp(opt, "--eeprom") == 0) {
             if ((o->eeprom = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
             char why[300];
-            if (file_nvm_check_path(o->eeprom, why, sizeof why) != 0) {
-                cli_error("inverter: --eeprom %s: refused (give a regular file, or a path "
-                          "where one can be created)", why);
+            int rc = file_nvm_check_path(o->eeprom, why, sizeof why);
+            if (rc != 0) {
+                cli_error("inverter: --eeprom %s: refused%s", why,
+                          rc == FILE_NVM_NOT_FILE ? " (give a regular file, or a path where "
+                                                    "one can be created)" : "");
                 return EXIT_USAGE;
             }
         } else if (strcmp(opt, "--duration") == 0) {
@@ -222,8 +224,9 @@ static int inverter_parse(inverter_opts_t *o, int argc, char **argv)
     return 0;
 }
 
-/* The emulated drive with its EEPROM; problems with either are reported, not fatal. */
-static void drive_init(const inverter_opts_t *o)
+/* The emulated drive with its EEPROM; problems with either are reported, not fatal, but for a
+ * file another process took since the command line was checked: EXIT_USAGE, as that check. */
+static int drive_init(const inverter_opts_t *o)
 {
     char err[256] = "";
     movidrive_cfg_t cfg = {.sbus_address = (uint8_t)o->address, .terminal_enable = true};
@@ -233,11 +236,15 @@ static void drive_init(const inverter_opts_t *o)
         if (file_nvm_open(&inv.nvm, o->eeprom, movidrive_eeprom_size(), err, sizeof err) != 0) {
             (void)fprintf(stderr, "dfp-sim inverter: %s\n", err); /* err names the file */
         }
+        if (inv.nvm.loaded == FILE_NVM_IMAGE_IN_USE) {
+            return EXIT_USAGE;
+        }
         cfg.eeprom = file_nvm_hal(&inv.nvm);
     }
     if (movidrive_init(&inv.md, &cfg, err, sizeof err) != 0) {
         (void)fprintf(stderr, "dfp-sim inverter: %s (factory settings in use)\n", err);
     }
+    return 0;
 }
 
 /* The SBus side on the interface, in the runner. Returns 0, or 1 after reporting. */
@@ -290,7 +297,9 @@ int cmd_inverter(int argc, char **argv)
         return rc;
     }
     (void)setvbuf(stdout, NULL, _IOLBF, 0);
-    drive_init(&o);
+    if (drive_init(&o) != 0) {
+        return EXIT_USAGE;
+    }
     if (sbus_open(&o) != 0) {
         return 1;
     }

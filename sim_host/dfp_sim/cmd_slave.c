@@ -106,6 +106,14 @@ static bool slave_inverter_kind(slave_opts_t *o)
         o->kind = CARD_INVERTER_NONE;
     } else if (strncmp(o->inverter, "can:", 4) == 0) {
         o->kind = CARD_INVERTER_LINK;
+        /* Checked with the command line (exit 2), not first when the interface is opened. */
+        char ifname[32];
+        uint8_t sbus = 0;
+        char err[300];
+        if (inverter_can_parse(o->inverter, ifname, sizeof ifname, &sbus, err, sizeof err) != 0) {
+            cli_error("slave: %s", err);
+            return false;
+        }
     } else {
         cli_error("slave: --inverter '%s': use sim (emulated MOVIDRIVE), none (PI echoes PO) or "
                   "can:IFACE[:ADDR] (a MOVIDRIVE on SBus)", o->inverter);
@@ -156,24 +164,54 @@ static const char *per_card_path(const char *dir, const char *stem, uint8_t addr
     return buf;
 }
 
-/* Every file --eeprom/--card-nvm stands for must be a regular file or not exist yet: opening a
- * FIFO would block before the card starts, and a write would rename a file over a device. */
-static bool slave_files_usable(const slave_opts_t *o)
+/* Every file the command line writes: --capture, an LCM log (--lcm file://...?mode=w), and the
+ * EEPROM and NVM files --eeprom/--card-nvm stand for, one of each per card of a line. n says how
+ * many of files[] are set; the EEPROM and NVM files come last, from files[2]. */
+typedef struct slave_files {
+    cli_file_t files[2u + 2u * DP_MASTER_MAX_SLAVES];
+    size_t n;
+    char paths[2u * DP_MASTER_MAX_SLAVES][512];
+    char lcm_log[512];
+} slave_files_t;
+
+static void slave_file_list(const slave_opts_t *o, slave_files_t *l)
 {
+    l->files[0] = (cli_file_t){"--capture", o->capture.path};
+    l->files[1] = (cli_file_t){"--lcm", cli_lcm_log_written(o->lcm_url, l->lcm_log,
+                                                            sizeof l->lcm_log)};
+    l->n = 2u;
     const char *given[2] = {o->eeprom, o->card_nvm};
     for (unsigned k = 0; k < 2u; k++) {
         for (size_t i = 0; given[k] != NULL && i < o->num_cards; i++) {
-            char buf[512];
-            const char *path = o->num_cards > 1u
-                                   ? per_card_path(given[k], k == 0u ? "drive" : "card",
-                                                   o->addresses[i], buf, sizeof buf)
-                                   : given[k];
-            char why[600];
-            if (file_nvm_check_path(path, why, sizeof why) != 0) {
-                cli_error("slave: %s %s: refused (give a regular file, or a path where one can "
-                          "be created)", k == 0u ? "--eeprom" : "--card-nvm", why);
-                return false;
-            }
+            char *buf = l->paths[l->n - 2u];
+            l->files[l->n++] = (cli_file_t){
+                k == 0u ? "--eeprom" : "--card-nvm",
+                o->num_cards > 1u ? per_card_path(given[k], k == 0u ? "drive" : "card",
+                                                  o->addresses[i], buf, sizeof l->paths[0])
+                                  : given[k]};
+        }
+    }
+}
+
+/* No two of the files may be one (the capture, opened first, would truncate the EEPROM before
+ * it is read), and every --eeprom/--card-nvm file must be a regular file or not exist yet in a
+ * directory that does: opening a FIFO would block before the card starts, and a write would
+ * rename a file over a device. */
+static bool slave_files_usable(const slave_opts_t *o)
+{
+    static slave_files_t l;
+    slave_file_list(o, &l);
+    if (!cli_files_distinct("slave", l.files, l.n)) {
+        return false;
+    }
+    for (size_t i = 2u; i < l.n; i++) {
+        char why[600];
+        int rc = file_nvm_check_path(l.files[i].path, why, sizeof why);
+        if (rc != 0) {
+            cli_error("slave: %s %s: refused%s", l.files[i].option, why,
+                      rc == FILE_NVM_NOT_FILE ? " (give a regular file, or a path where one "
+                                                "can be created)" : "");
+            return false;
         }
     }
     return true;
@@ -254,8 +292,24 @@ static void log_nvm_note(rig_log_t *log, const char *src, const char *note)
     }
 }
 
-/* Every card of the line on the medium, each with its drive. False after reporting. */
-static bool slave_add_cards(session_t *s, const slave_opts_t *o, ml_link_t external)
+/* Another process took a file between the check of the command line and the card's open (the
+ * check would have refused it): reported as that check does, and the run ends. */
+static bool nvm_in_use(const card_station_t *cs)
+{
+    const file_nvm_t *f[2] = {&cs->nvm, &cs->card_nvm};
+    for (unsigned k = 0; k < 2u; k++) {
+        if (f[k]->loaded == FILE_NVM_IMAGE_IN_USE) {
+            cli_error("slave: %s %s: in use by another process: refused",
+                      k == 0u ? "--eeprom" : "--card-nvm", f[k]->path);
+            return true;
+        }
+    }
+    return false;
+}
+
+/* Every card of the line on the medium, each with its drive: 0, or 1 (EXIT_USAGE: a file in
+ * use) after reporting. */
+static int slave_add_cards(session_t *s, const slave_opts_t *o, ml_link_t external)
 {
     bool line = o->num_cards > 1u;
     s->in.log.name_cards = line;
@@ -274,7 +328,10 @@ static bool slave_add_cards(session_t *s, const slave_opts_t *o, ml_link_t exter
         rig_card_t *rc = rig_add_card(&s->rig, &co, tty_now_us());
         if (rc == NULL) {
             cli_error("slave: cannot add card %u", a);
-            return false;
+            return 1;
+        }
+        if (nvm_in_use(&rc->cs)) {
+            return EXIT_USAGE;
         }
         if (rc->cs.nvm_note[0] != '\0') { /* in full: rc->nvm_note may be cut */
             char src[16] = "card";
@@ -288,7 +345,7 @@ static bool slave_add_cards(session_t *s, const slave_opts_t *o, ml_link_t exter
                     "address %u is above 125: the card stays off the bus", a);
         }
     }
-    return true;
+    return 0;
 }
 
 static void print_start_line(const session_t *s, const slave_opts_t *o, const pty_link_t *pty)
@@ -367,9 +424,10 @@ static int slave_session(const slave_opts_t *o, const pty_link_t *pty)
         external = inverter_can_link(&can_link);
     }
     print_start_line(&s, o, pty);
-    rc = slave_add_cards(&s, o, external)
-             ? instrument_start_http(&s.in, &s.rig, &o->io, "slave", false)
-             : 1;
+    rc = slave_add_cards(&s, o, external);
+    if (rc == 0) {
+        rc = instrument_start_http(&s.in, &s.rig, &o->io, "slave", false);
+    }
     if (rc == 0) {
         rc = slave_run(&s, o);
         log_stop(&s, o);

@@ -73,7 +73,8 @@ static const help_cmd_t commands[] = {
      "none (PI words echo PO words), or a MOVIDRIVE on SBus through SocketCAN;\n"
      "--card-nvm keeps the card's own data (I&M1..I&M4) in FILE;\n"
      "several addresses (4-9, 3,5,7) put a line of cards, each with its own drive, on\n"
-     "the one port: --eeprom and --card-nvm then name directories (driveN.ee, cardN.nvm)",
+     "the one port: --eeprom and --card-nvm then name directories (driveN.ee, cardN.nvm);\n"
+     "a file is used by one process at a time (a lock on FILE.lock)",
      NOTE_RATE | NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG | NOTE_LCM},
     {"master",
      "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] --address N|N-M,... --config HEX\n"
@@ -188,11 +189,14 @@ static const help_item_t exit_codes[] = {
           "help and --version"},
     {"1", "failure at run time: a negative or missing answer (param, master, demo), a refused\n"
           "configuration (check-cfg), a difference or a damaged capture (replay --check,\n"
-          "convert), a device or an output file that cannot be opened or written"},
+          "convert), a device or an output file that cannot be opened or written, results\n"
+          "that could not be written to standard output"},
     {"2", "bad command line: unknown command or option, bad or missing value, unknown PARAM;\n"
           "an input file that cannot be read or is not a capture (convert, replay), a\n"
-          "--eeprom or --card-nvm path that is no regular file, a --pty path that is no\n"
-          "symbolic link; a --http port that is taken"},
+          "--eeprom or --card-nvm path that is no regular file or in no writable directory,\n"
+          "two files of the command line that are one (--capture and --eeprom, FILE and\n"
+          "--report ...), a --pty path that is no symbolic link; an --eeprom or --card-nvm\n"
+          "file in use by another process, a --http port that is taken"},
 };
 
 static const help_item_t environment[] = {

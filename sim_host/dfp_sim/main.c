@@ -1,4 +1,5 @@
 /* dfp-sim: the DFP21B PROFIBUS-DP card, simulated on Linux. */
+#include <errno.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
@@ -114,7 +115,20 @@ static int program_option(int argc, char **argv)
     return 0;
 }
 
-int main(int argc, char **argv)
+/* The results on stdout are what a command is run for (replay --check, convert, param ...):
+ * output lost to a full disk or a closed file is a failure, not a success. */
+static int output_written(int rc)
+{
+    errno = 0;
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        cli_error("standard output: write error%s%s: the results are incomplete",
+                  errno != 0 ? ": " : "", errno != 0 ? strerror(errno) : "");
+        return rc != 0 ? rc : 1;
+    }
+    return rc;
+}
+
+static int run(int argc, char **argv)
 {
     if (argc < 2) {
         help_print_all(stderr);
@@ -135,4 +149,9 @@ int main(int argc, char **argv)
     }
     cli_error("unknown command '%s' (commands: %s; see --help)", cmd, help_command_names());
     return EXIT_USAGE;
+}
+
+int main(int argc, char **argv)
+{
+    return output_written(run(argc, argv));
 }

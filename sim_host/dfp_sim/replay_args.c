@@ -179,6 +179,22 @@ static int parse_flags(int argc, char **argv, replay_args_t *a, bool *check_only
     return 0;
 }
 
+/* The capture, the report files and an LCM log --lcm writes: no two may be one file (a report
+ * written over the capture would destroy what may be the only copy of a field recording). */
+static bool files_distinct(const replay_args_t *a)
+{
+    cli_file_t files[2u + REPLAY_MAX_REPORTS];
+    char lcm_log[512];
+    size_t n = 0;
+    files[n++] = (cli_file_t){"FILE", a->file};
+    files[n++] = (cli_file_t){"--lcm", cli_lcm_log_written(a->lcm_url, lcm_log, sizeof lcm_log)};
+    for (unsigned k = 0; k < a->n_reports; k++) {
+        files[n++] = (cli_file_t){a->reports[k].junit ? "--report junit" : "--report json",
+                                  a->reports[k].path};
+    }
+    return cli_files_distinct("replay", files, n);
+}
+
 static int check_args(replay_args_t *a, bool check_only)
 {
     if (a->file == NULL) {
@@ -189,6 +205,9 @@ static int check_args(replay_args_t *a, bool check_only)
     if (check_only && !a->check) {
         cli_error("replay: --report, --ignore and --max-mismatches belong to the check: add "
                   "--check");
+        return EXIT_USAGE;
+    }
+    if (!files_distinct(a)) {
         return EXIT_USAGE;
     }
     if (a->inverter != CARD_INVERTER_SIM && a->given.have_delay) {

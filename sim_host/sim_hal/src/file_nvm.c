@@ -6,7 +6,9 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -42,17 +44,108 @@ static const char *file_kind(mode_t mode)
     return "something else";
 }
 
-int file_nvm_check_path(const char *path, char *err, size_t errlen)
+/* -1 with err when something other than a regular file is at path; 0 for a file or nothing. */
+static int check_kind(const char *path, char *err, size_t errlen)
 {
     struct stat st;
     /* A stat error other than "nothing there" is left to the open, which reports it. */
-    if (path == NULL || stat(path, &st) != 0 || S_ISREG(st.st_mode)) {
+    if (stat(path, &st) != 0 || S_ISREG(st.st_mode)) {
         return 0;
     }
-    if (err != NULL && errlen > 0u) {
-        snprintf(err, errlen, "%s: %s, not a regular file", path, file_kind(st.st_mode));
-    }
+    snprintf(err, errlen, "%s: %s, not a regular file", path, file_kind(st.st_mode));
     return -1;
+}
+
+/* The directory of path ("." for a bare name) into dir. */
+static void dir_of(const char *path, char *dir, size_t n)
+{
+    const char *slash = strrchr(path, '/');
+    if (slash == NULL) {
+        snprintf(dir, n, ".");
+    } else {
+        snprintf(dir, n, "%.*s", slash == path ? 1 : (int)(slash - path), path);
+    }
+}
+
+/* Every write creates PATH.tmp and renames it in path's directory: without one that can be
+ * written there, each non-volatile write would fail long after the start. */
+static int check_dir(const char *path, char *err, size_t errlen)
+{
+    char dir[FILE_NVM_PATH_MAX + 8];
+    dir_of(path, dir, sizeof dir);
+    struct stat st;
+    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        snprintf(err, errlen, "%s: the directory %s does not exist", path, dir);
+        return -1;
+    }
+    if (access(dir, W_OK | X_OK) != 0) {
+        snprintf(err, errlen, "%s: the directory %s is not writable (%s)", path, dir,
+                 strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
+/* The pid the holder of the lock on fd wrote into it, or 0. */
+static long lock_holder(int fd)
+{
+    char buf[24];
+    ssize_t n = pread(fd, buf, sizeof buf - 1u, 0);
+    if (n <= 0) {
+        return 0;
+    }
+    buf[n] = '\0';
+    char *end = NULL;
+    long pid = strtol(buf, &end, 10);
+    return end != buf && pid > 0 ? pid : 0;
+}
+
+static void in_use_text(const char *path, int fd, char *err, size_t errlen)
+{
+    long pid = lock_holder(fd);
+    char who[40] = "";
+    if (pid > 0) {
+        snprintf(who, sizeof who, "pid %ld, ", pid);
+    }
+    snprintf(err, errlen, "%s: in use by another process (%slock %s.lock)", path, who, path);
+}
+
+/* Whether another process holds path's lock, without creating the lock file. */
+static int check_lock(const char *path, char *err, size_t errlen)
+{
+    char lock[FILE_NVM_PATH_MAX + 8];
+    snprintf(lock, sizeof lock, "%s.lock", path);
+    int fd = open(lock, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+    if (fd < 0) {
+        return 0; /* no lock file: nobody has opened path yet */
+    }
+    /* Shared: two processes checking at once do not see each other as the holder. */
+    int rc = 0;
+    if (flock(fd, LOCK_SH | LOCK_NB) != 0) {
+        in_use_text(path, fd, err, errlen);
+        rc = -1;
+    }
+    close(fd); /* also gives up the shared lock */
+    return rc;
+}
+
+int file_nvm_check_path(const char *path, char *err, size_t errlen)
+{
+    char dummy[1];
+    if (err == NULL || errlen == 0u) {
+        err = dummy;
+        errlen = sizeof dummy;
+    }
+    if (path == NULL) {
+        return 0;
+    }
+    if (check_kind(path, err, errlen) != 0) {
+        return FILE_NVM_NOT_FILE;
+    }
+    if (check_dir(path, err, errlen) != 0 || check_lock(path, err, errlen) != 0) {
+        return FILE_NVM_UNUSABLE;
+    }
+    return 0;
 }
 
 enum {
@@ -65,7 +158,7 @@ enum {
 /* The open cannot block: stat first, O_NONBLOCK for a FIFO put there after the stat. */
 static int open_regular(const char *path, char *err, size_t errlen)
 {
-    if (file_nvm_check_path(path, err, errlen) != 0) {
+    if (check_kind(path, err, errlen) != 0) {
         return LOAD_NOT_FILE;
     }
     int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
@@ -194,8 +287,77 @@ static int open_previous(file_nvm_t *f, int rc, const char *why, char *err, size
     return -1;
 }
 
+/* The lock each open file_nvm_t holds, by the struct's address rather than in it: a struct opened
+ * again gives its old lock up first (its fd would hold the lock, and the new open would find the
+ * file in use by itself), and a struct that was never opened holds no fd to close. Opens happen
+ * as a program starts, from one thread. */
+#define FILE_NVM_MAX_LOCKS 128u
+static struct nvm_lock {
+    const file_nvm_t *owner;
+    int fd;
+} locks[FILE_NVM_MAX_LOCKS];
+
+static struct nvm_lock *lock_slot(const file_nvm_t *owner)
+{
+    for (size_t i = 0; i < FILE_NVM_MAX_LOCKS; i++) {
+        if (locks[i].owner == owner) {
+            return &locks[i];
+        }
+    }
+    return NULL;
+}
+
+void file_nvm_close(file_nvm_t *f)
+{
+    struct nvm_lock *l = lock_slot(f);
+    if (f != NULL && l != NULL) {
+        close(l->fd);
+        l->owner = NULL;
+    }
+}
+
+/* PATH.lock, flock'ed for the life of f: each process keeps its own copy of the image and every
+ * write replaces the whole file, so a second user would undo the first one's acknowledged
+ * writes. PATH itself cannot carry the lock, since every write renames a new file over it.
+ * 0: f holds the lock; -1 with err: another process does. */
+static int take_lock(file_nvm_t *f, char *err, size_t errlen)
+{
+    char lock[FILE_NVM_PATH_MAX + 8];
+    snprintf(lock, sizeof lock, "%s.lock", f->path);
+    int fd = open(lock, O_RDWR | O_CREAT | O_CLOEXEC | O_NONBLOCK, 0644);
+    bool writable = fd >= 0;
+    if (fd < 0) {
+        fd = open(lock, O_RDONLY | O_CLOEXEC | O_NONBLOCK); /* somebody else's lock file */
+    }
+    if (fd < 0) {
+        /* Where no lock file can be made, no PATH.tmp can either: every write fails, and two
+         * users have no writes to lose. */
+        return 0;
+    }
+    struct nvm_lock *l = lock_slot(NULL);
+    if (flock(fd, LOCK_EX | LOCK_NB) != 0 || l == NULL) {
+        if (l == NULL) {
+            snprintf(err, errlen, "%s: more than %u EEPROM files open at once", f->path,
+                     (unsigned)FILE_NVM_MAX_LOCKS);
+        } else {
+            in_use_text(f->path, fd, err, errlen);
+        }
+        close(fd);
+        return -1;
+    }
+    *l = (struct nvm_lock){.owner = f, .fd = fd};
+    if (writable) { /* the pid only serves the message of the next one who tries */
+        char pid[24];
+        int n = snprintf(pid, sizeof pid, "%ld\n", (long)getpid());
+        ssize_t w = ftruncate(fd, 0) == 0 ? pwrite(fd, pid, (size_t)n, 0) : -1;
+        (void)w;
+    }
+    return 0;
+}
+
 int file_nvm_open(file_nvm_t *f, const char *path, size_t size, char *err, size_t errlen)
 {
+    file_nvm_close(f); /* opened again: the old lock goes with the old image */
     char dummy[1];
     if (err == NULL || errlen == 0) {
         err = dummy;
@@ -219,6 +381,11 @@ int file_nvm_open(file_nvm_t *f, const char *path, size_t size, char *err, size_
 
     char why[FILE_NVM_PATH_MAX + 160];
     why[0] = '\0';
+    /* Locked before it is read, so the image read is the one the lock holder left. */
+    if (check_kind(path, why, sizeof why) == 0 && take_lock(f, err, errlen) != 0) {
+        f->loaded = FILE_NVM_IMAGE_IN_USE;
+        return -1;
+    }
     int rc = load_image(f, path, why, sizeof why);
     if (rc == LOAD_OK) {
         f->readable = true;
@@ -315,7 +482,8 @@ static int write_tmp(const char *tmp, const uint8_t *img, size_t n, bool sync)
 static int nvm_write(void *ctx, size_t offset, const uint8_t *data, size_t len)
 {
     file_nvm_t *f = ctx;
-    if (f->loaded == FILE_NVM_IMAGE_REFUSED || offset > f->size || len > f->size - offset) {
+    if (f->loaded == FILE_NVM_IMAGE_REFUSED || f->loaded == FILE_NVM_IMAGE_IN_USE ||
+        offset > f->size || len > f->size - offset) {
         return -1;
     }
     uint8_t *img = f->image;

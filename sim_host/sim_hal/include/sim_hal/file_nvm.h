@@ -9,7 +9,10 @@
  * (truncated, overwritten), the previous generation in PATH.bak is used and the open says so.
  * PATH must be a regular file or not exist yet: anything else (a FIFO, a directory, a device)
  * is refused before it is opened, since opening a FIFO blocks and renaming over a device
- * would replace it. */
+ * would replace it.
+ * One process at a time: the open takes an exclusive flock on PATH.lock (created beside PATH
+ * and left there; it holds the holder's pid) until file_nvm_close or the end of the process,
+ * and a second open of PATH, from another process or another file_nvm_t, is refused. */
 #ifndef SIM_HAL_FILE_NVM_H
 #define SIM_HAL_FILE_NVM_H
 
@@ -32,6 +35,7 @@ typedef enum file_nvm_image {
     FILE_NVM_IMAGE_MAIN,     /* PATH */
     FILE_NVM_IMAGE_BACKUP,   /* PATH.bak, the previous generation: PATH was damaged or missing */
     FILE_NVM_IMAGE_REFUSED,  /* PATH is not a regular file: never read nor written */
+    FILE_NVM_IMAGE_IN_USE,   /* another process holds PATH.lock: never read nor written */
 } file_nvm_image_t;
 
 typedef struct file_nvm {
@@ -57,13 +61,24 @@ typedef struct file_nvm {
  * -1  no usable image: "PATH: <reason>; PATH.bak: <reason>: no usable image" (reasons: corrupt,
  *     short, garbage, unreadable, "no such file"); reads fail until the next write, which starts
  *     from a blank image. Or PATH is not a regular file: "PATH: a FIFO, not a regular file:
- *     refused, nothing is read from or written to it", and every write fails. Or bad arguments.
+ *     refused, nothing is read from or written to it", and every write fails. Or PATH is in
+ *     use: "PATH: in use by another process (pid N, lock PATH.lock)", and every write fails.
+ *     Or bad arguments. Opening f again first closes it (file_nvm_close).
  * No reason contains "; ", so callers may split err there. A shorter or longer image from
  * another size is accepted: cut or padded with 0xFF. */
 int file_nvm_open(file_nvm_t *f, const char *path, size_t size, char *err, size_t errlen);
+/* Gives up f's lock on PATH.lock (the image stays in f); nothing when f holds none. */
+void file_nvm_close(file_nvm_t *f);
+/* file_nvm_check_path: something other than a regular file is at PATH. */
+#define FILE_NVM_NOT_FILE (-1)
+/* file_nvm_check_path: PATH is in use, or its directory is missing or not writable. */
+#define FILE_NVM_UNUSABLE (-2)
 /* Whether path can hold an image without opening it (a FIFO would block the open): 0 when it is
- * a regular file or nothing is there (a write creates it), else -1 with
- * "PATH: a FIFO, not a regular file" (a directory, a character device ...) in err. */
+ * a regular file or nothing is there (a write creates it) in a writable directory, and no other
+ * process holds it. Else FILE_NVM_NOT_FILE with "PATH: a FIFO, not a regular file" (a directory,
+ * a character device ...) in err, or FILE_NVM_UNUSABLE with "PATH: the directory DIR does not
+ * exist", "PATH: the directory DIR is not writable (REASON)" or "PATH: in use by another
+ * process (pid N, lock PATH.lock)". Checks without taking the lock: file_nvm_open takes it. */
 int file_nvm_check_path(const char *path, char *err, size_t errlen);
 hal_nvm_t file_nvm_hal(file_nvm_t *f);
 /* CRC-32 (IEEE 802.3, reflected, as zlib), exposed for tests that build images. */
