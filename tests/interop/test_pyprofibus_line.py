@@ -48,7 +48,8 @@ Asserted:
     when stopped (every "Data_Exch ->" followed by a new "-> Data_Exch"), and exited 0 on
     SIGTERM;
   - the EEPROM directory holds one image per address afterwards, drive4.ee, drive5.ee and
-    drive6.ee (with file_nvm's previous generations drive<N>.ee.bak and nothing else), each a
+    drive6.ee (with file_nvm's previous generations drive<N>.ee.bak and its lock files
+    drive<N>.ee.lock, nothing else), each a
     file_nvm image ("DFPE") of the same generation (each drive got the same non-volatile
     writes).
 
@@ -467,13 +468,15 @@ def nvm_generation(path):
 
 
 def check_eeprom(c, ee_dir):
-    """drive<a>.ee per address (file_nvm keeps the previous generation as drive<a>.ee.bak)."""
+    """drive<a>.ee per address (file_nvm keeps the previous generation as drive<a>.ee.bak and
+    its lock as drive<a>.ee.lock)."""
     try:
         names = sorted(os.listdir(ee_dir))
     except OSError as e:
         names = ["<%s>" % e]
     want = ["drive%d.ee" % a for a in ADDRS]
-    extra = [n for n in names if n not in want and n not in [w + ".bak" for w in want]]
+    extra = [n for n in names
+             if n not in want and n not in [w + s for w in want for s in (".bak", ".lock")]]
     c.check(all(w in names for w in want) and not extra,
             "EEPROM directory holds one image per address: %s (%s)"
             % (", ".join(want), ", ".join(names)),
