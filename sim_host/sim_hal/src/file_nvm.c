@@ -287,32 +287,18 @@ static int open_previous(file_nvm_t *f, int rc, const char *why, char *err, size
     return -1;
 }
 
-/* The lock each open file_nvm_t holds, by the struct's address rather than in it: a struct opened
- * again gives its old lock up first (its fd would hold the lock, and the new open would find the
- * file in use by itself), and a struct that was never opened holds no fd to close. Opens happen
- * as a program starts, from one thread. */
-#define FILE_NVM_MAX_LOCKS 128u
-static struct nvm_lock {
-    const file_nvm_t *owner;
-    int fd;
-} locks[FILE_NVM_MAX_LOCKS];
-
-static struct nvm_lock *lock_slot(const file_nvm_t *owner)
+/* Marks f's own lock: its address mixed with a constant, which neither a blank or
+ * uninitialised struct nor a copy of an open one is likely to carry. */
+static uintptr_t file_nvm_lock_tag(const file_nvm_t *f)
 {
-    for (size_t i = 0; i < FILE_NVM_MAX_LOCKS; i++) {
-        if (locks[i].owner == owner) {
-            return &locks[i];
-        }
-    }
-    return NULL;
+    return (uintptr_t)f ^ (uintptr_t)0x4C4F434Bu;
 }
 
 void file_nvm_close(file_nvm_t *f)
 {
-    struct nvm_lock *l = lock_slot(f);
-    if (f != NULL && l != NULL) {
-        close(l->fd);
-        l->owner = NULL;
+    if (f != NULL && f->lock_tag == file_nvm_lock_tag(f)) {
+        close(f->lock_fd);
+        f->lock_tag = 0u;
     }
 }
 
@@ -334,18 +320,13 @@ static int take_lock(file_nvm_t *f, char *err, size_t errlen)
          * users have no writes to lose. */
         return 0;
     }
-    struct nvm_lock *l = lock_slot(NULL);
-    if (flock(fd, LOCK_EX | LOCK_NB) != 0 || l == NULL) {
-        if (l == NULL) {
-            snprintf(err, errlen, "%s: more than %u EEPROM files open at once", f->path,
-                     (unsigned)FILE_NVM_MAX_LOCKS);
-        } else {
-            in_use_text(f->path, fd, err, errlen);
-        }
+    if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+        in_use_text(f->path, fd, err, errlen);
         close(fd);
         return -1;
     }
-    *l = (struct nvm_lock){.owner = f, .fd = fd};
+    f->lock_fd = fd;
+    f->lock_tag = file_nvm_lock_tag(f);
     if (writable) { /* the pid only serves the message of the next one who tries */
         char pid[24];
         int n = snprintf(pid, sizeof pid, "%ld\n", (long)getpid());

@@ -47,6 +47,10 @@ typedef struct file_nvm {
     bool sync;       /* fsync file and directory on every write (default true) */
     uint32_t seq;    /* sequence number of the current image */
     uint32_t writes;
+    /* The flock'ed PATH.lock; valid only while lock_tag is file_nvm_lock_tag(f), so that a struct
+     * never opened (whatever its bytes) or a copy of an open one owns no descriptor. */
+    int lock_fd;
+    uintptr_t lock_tag;
     uint8_t data[FILE_NVM_MAX_SIZE];
     /* Scratch for a whole file image being read or written: header + data, and one byte more
      * so a too-long file is noticed. Here rather than shared, so images never meet. */
