@@ -1,7 +1,7 @@
 /* rig_ctl's command slots: what a client that stops waiting leaves behind. A line of two cards
  * (addresses 4 and 5, emulated drives) on the in-memory bus; the bus loop is either absent (a
  * stalled loop: a replay waiting for input, a stopped process) or a thread that calls
- * rig_ctl_service as the real loop does. */
+ * rig_ctl_service as the real loop does. Also: a command to an address two cards share. */
 #include <pthread.h>
 #include <stdatomic.h>
 #include <string.h>
@@ -130,9 +130,34 @@ static void test_running_timeout_may_still_happen(void)
     teardown();
 }
 
+/* Card 4 set to address 5 and power-cycled: two cards answer to 5. A command to 5 reaches
+ * neither (409), since either might be the one meant; one to a unique address still runs. */
+static void test_ambiguous_address_is_refused(void)
+{
+    setup();
+    rig_cmd_t dip = {.type = RIG_CMD_DIP, .card = 4, .value = 5};
+    submit_with_loop(&dip);
+    rig_cmd_t cycle = {.type = RIG_CMD_POWER_CYCLE, .card = 4};
+    submit_with_loop(&cycle);
+    CHECK_EQ(cycle.status, 200);
+    CHECK_EQ(rig.cards[0].cs.card.address, 5);
+    rig_cmd_t fault = {.type = RIG_CMD_FAULT, .card = 5, .value = 11};
+    submit_with_loop(&fault);
+    CHECK_EQ(fault.status, 409);
+    CHECK_STR(fault.error, "2 cards answer to address 5 (DIP switches); the API cannot tell "
+                           "which one is meant");
+    CHECK_EQ(rig.cards[0].cs.md.fault, 0);
+    CHECK_EQ(rig.cards[1].cs.md.fault, 0);
+    rig_cmd_t read = {.type = RIG_CMD_PARAM_READ, .card = 5, .index = 8470};
+    submit_with_loop(&read);
+    CHECK_EQ(read.status, 409);
+    teardown();
+}
+
 int main(void)
 {
     RUN_TEST(test_queued_timeout_is_withdrawn);
     RUN_TEST(test_running_timeout_may_still_happen);
+    RUN_TEST(test_ambiguous_address_is_refused);
     return check_report();
 }

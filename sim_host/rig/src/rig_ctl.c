@@ -437,6 +437,17 @@ static void run_master_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
     }
 }
 
+/* The HTTP routes refuse an ambiguous address from the snapshot, which may be a publish
+ * behind a power cycle; the loop's own count is the one that decides. */
+static unsigned cards_at(const rig_t *r, uint8_t address)
+{
+    unsigned n = 0;
+    for (unsigned i = 0; i < r->num_cards; i++) {
+        n += r->cards[i].cs.card.address == address ? 1u : 0u;
+    }
+    return n;
+}
+
 static void run_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
 {
     rig_t *r = c->rig;
@@ -448,6 +459,12 @@ static void run_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
     rig_card_t *rc = rig_card_by_address(r, cmd->card);
     if (rc == NULL) {
         rig_cmd_fail(cmd, 404, "no card with that address");
+        return;
+    }
+    unsigned same = cards_at(r, cmd->card);
+    if (same > 1u) {
+        cmd->status = 409;
+        (void)snprintf(cmd->error, sizeof cmd->error, RIG_CTL_AMBIGUOUS_FMT, same, cmd->card);
         return;
     }
     bool needs_drive = cmd->type == RIG_CMD_INPUTS || cmd->type == RIG_CMD_FAULT;

@@ -27,6 +27,11 @@
 #define RIG_CTL_EVENTS 4096u
 #define RIG_CTL_CMDS 16u
 #define RIG_CTL_TEXT 240u
+/* The refusal of a card command (409) when more than one card of the line answers to its
+ * address (DIP switches changed, then a power cycle): either card might be the one meant.
+ * Arguments: the number of cards, the address. The HTTP routes answer reads with it too. */
+#define RIG_CTL_AMBIGUOUS_FMT "%u cards answer to address %u (DIP switches); the API cannot " \
+                              "tell which one is meant"
 
 typedef enum rig_log_level {
     RIG_LOG_ERROR = 0,
