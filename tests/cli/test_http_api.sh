@@ -134,6 +134,21 @@ for body in 'not json' '{"DI99":true}' '{"DI00":"yes"}' '[]' ''; do
   expect_in "inputs '$body' refused" "400" "$code"
   expect_in "with an error message" '"error":' "$(cat "$tmp/body")"
 done
+# Exactly one JSON object, each field once, no NUL in a text; whitespace after it is fine. Each
+# refused body would switch DI00 off if it were taken (the check below sees the speed).
+expect_in "whitespace after the object" '200 {"ok":true}' "$(post "$ps" /api/v1/cards/5/inputs $'{"DI00":true} \r\n\t') $(cat "$tmp/body")"
+after='400 {"error":"the body must be one JSON object with nothing after it (more follows at octet'
+expect_in "text after the object" "$after 15)\"}" "$(post "$ps" /api/v1/cards/5/inputs '{"DI00":false} this is not JSON') $(cat "$tmp/body")"
+expect_in "two objects" "$after 14)\"}" "$(post "$ps" /api/v1/cards/5/inputs '{"DI00":false}{"DI00":true}') $(cat "$tmp/body")"
+expect_in "a field twice" '400 {"error":"field '"'"'DI00'"'"' given twice"}' \
+  "$(post "$ps" /api/v1/cards/5/inputs '{"DI00":false,"DI00":"nonsense"}') $(cat "$tmp/body")"
+expect_in "a NUL in a key" '400 {"error":"a text in the body holds a NUL character (U+0000)"}' \
+  "$(post "$ps" /api/v1/cards/5/inputs '{"DI00\u0000junk":false}') $(cat "$tmp/body")"
+notidx='400 {"error":"'"'"'param'"'"' must be an index 0..65535 (an integer such as 8461), \"P100\" or a name"}'
+expect_in "a fractional index" "$notidx" "$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":8461.9}') $(cat "$tmp/body")"
+expect_in "an index out of range" "$notidx" "$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":1e20}') $(cat "$tmp/body")"
+expect_in "a fault number out of range" '400 {"error":"'"'"'fault'"'"' must be an integer 1..255"}' \
+  "$(post "$ps" /api/v1/cards/5/fault '{"fault":1e20}') $(cat "$tmp/body")"
 code=$(post "$ps" /api/v1/cards/5/fault '{"fault":300}')
 expect_in "fault out of range" "400" "$code"
 code=$(post "$ps" /api/v1/cards/99/cable '{"connected":false}')
