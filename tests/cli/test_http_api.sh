@@ -173,6 +173,61 @@ done
 expect_in "10 streams carried state events" "10" "$n_ok"
 expect_in "a stream carried the action's log line" 'DI00 /CONTROLLER INHIBIT high' "$(cat "$tmp/sse1")"
 
+# The connection limit (64) is not a way to hang the API: connections that never send a request
+# are closed after 5 s, event streams are capped at 32 and the next one is refused with 503;
+# a stream's place comes back when its client goes.
+timeout 60 python3 - "$ps" >"$tmp/limits" <<'PY'
+import http.client, socket, sys, time
+port = int(sys.argv[1])
+def state(timeout):
+    t = time.time()
+    try:
+        c = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout)
+        c.request("GET", "/api/v1/state"); r = c.getresponse(); r.read(); c.close()
+        return r.status, time.time() - t
+    except OSError:
+        return "no answer", time.time() - t
+def stream():
+    s = socket.create_connection(("127.0.0.1", port), timeout=5)
+    s.sendall(b"GET /api/v1/events HTTP/1.1\r\nHost: x\r\n\r\n")
+    return s
+def recv_all(s, n=None):
+    data = b""
+    try:
+        while n is None or len(data) < n:
+            chunk = s.recv(4096 if n is None else n - len(data))
+            if not chunk:
+                break
+            data += chunk
+    except OSError:
+        pass
+    return data
+idle = [socket.create_connection(("127.0.0.1", port), timeout=5) for _ in range(64)]
+st, dt = state(15)
+print(f"64 idle: state {st} within 10 s {dt < 10}")
+for s in idle:
+    s.close()
+streams = [stream() for _ in range(32)]
+print("streams open:", sum(recv_all(s, 12) == b"HTTP/1.1 200" for s in streams))
+head, _, body = recv_all(stream()).partition(b"\r\n\r\n")
+print("33rd stream:", head.split(b"\r\n")[0].decode(), body.decode())
+st, dt = state(5)
+print(f"32 streams: state {st} within 2 s {dt < 2}")
+for s in streams:
+    s.close()
+for _ in range(50):
+    s = stream(); first = recv_all(s, 12); s.close()
+    if first == b"HTTP/1.1 200":
+        break
+    time.sleep(0.1)
+print("a stream after they closed:", first.decode())
+PY
+expect_in "64 idle connections do not hang the API" "64 idle: state 200 within 10 s True" "$(cat "$tmp/limits")"
+expect_in "32 event streams open" "streams open: 32" "$(cat "$tmp/limits")"
+expect_in "the 33rd refused" '33rd stream: HTTP/1.1 503 Service Unavailable {"error":"too many event streams (at most 32); close one and try again"}' "$(cat "$tmp/limits")"
+expect_in "requests still answered beside 32 streams" "32 streams: state 200 within 2 s True" "$(cat "$tmp/limits")"
+expect_in "a stream again once they closed" "a stream after they closed: HTTP/1.1 200" "$(cat "$tmp/limits")"
+
 # A taken port: one line, exit 2.
 expect_exit 2 "taken port" -- timeout 10 "$sim" slave --port "$tmp/a" --address 9 --http "$ps"
 expect_in "says which" "cannot listen on 127.0.0.1:$ps" "$out"
