@@ -44,7 +44,7 @@ static unsigned free_slots(void)
     return n;
 }
 
-/* ---- the bus loop as a thread ---------------------------------------------------------------- */
+/* ---- the bus loop as a thread -------------------------------------------------------------- */
 
 static atomic_bool loop_stop;
 
@@ -71,7 +71,7 @@ static void submit_with_loop(rig_cmd_t *cmd)
     pthread_join(t, NULL);
 }
 
-/* ---- tests ------------------------------------------------------------------------------------ */
+/* ---- tests --------------------------------------------------------------------------------- */
 
 /* More timed-out commands than there are slots, none of them taken up: each is withdrawn (504
  * saying so), no slot stays taken, and none is carried out later when the loop runs again. */
