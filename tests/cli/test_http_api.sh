@@ -134,6 +134,21 @@ for body in 'not json' '{"DI99":true}' '{"DI00":"yes"}' '[]' ''; do
   expect_in "inputs '$body' refused" "400" "$code"
   expect_in "with an error message" '"error":' "$(cat "$tmp/body")"
 done
+# Exactly one JSON object, each field once, no NUL in a text; whitespace after it is fine. Each
+# refused body would switch DI00 off if it were taken (the check below sees the speed).
+expect_in "whitespace after the object" '200 {"ok":true}' "$(post "$ps" /api/v1/cards/5/inputs $'{"DI00":true} \r\n\t') $(cat "$tmp/body")"
+after='400 {"error":"the body must be one JSON object with nothing after it (more follows at octet'
+expect_in "text after the object" "$after 15)\"}" "$(post "$ps" /api/v1/cards/5/inputs '{"DI00":false} this is not JSON') $(cat "$tmp/body")"
+expect_in "two objects" "$after 14)\"}" "$(post "$ps" /api/v1/cards/5/inputs '{"DI00":false}{"DI00":true}') $(cat "$tmp/body")"
+expect_in "a field twice" '400 {"error":"field '"'"'DI00'"'"' given twice"}' \
+  "$(post "$ps" /api/v1/cards/5/inputs '{"DI00":false,"DI00":"nonsense"}') $(cat "$tmp/body")"
+expect_in "a NUL in a key" '400 {"error":"a text in the body holds a NUL character (U+0000)"}' \
+  "$(post "$ps" /api/v1/cards/5/inputs '{"DI00\u0000junk":false}') $(cat "$tmp/body")"
+notidx='400 {"error":"'"'"'param'"'"' must be an index 0..65535 (an integer such as 8461), \"P100\" or a name"}'
+expect_in "a fractional index" "$notidx" "$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":8461.9}') $(cat "$tmp/body")"
+expect_in "an index out of range" "$notidx" "$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":1e20}') $(cat "$tmp/body")"
+expect_in "a fault number out of range" '400 {"error":"'"'"'fault'"'"' must be an integer 1..255"}' \
+  "$(post "$ps" /api/v1/cards/5/fault '{"fault":1e20}') $(cat "$tmp/body")"
 code=$(post "$ps" /api/v1/cards/5/fault '{"fault":300}')
 expect_in "fault out of range" "400" "$code"
 code=$(post "$ps" /api/v1/cards/99/cable '{"connected":false}')
@@ -158,6 +173,61 @@ done
 expect_in "10 streams carried state events" "10" "$n_ok"
 expect_in "a stream carried the action's log line" 'DI00 /CONTROLLER INHIBIT high' "$(cat "$tmp/sse1")"
 
+# The connection limit (64) is not a way to hang the API: connections that never send a request
+# are closed after 5 s, event streams are capped at 32 and the next one is refused with 503;
+# a stream's place comes back when its client goes.
+timeout 60 python3 - "$ps" >"$tmp/limits" <<'PY'
+import http.client, socket, sys, time
+port = int(sys.argv[1])
+def state(timeout):
+    t = time.time()
+    try:
+        c = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout)
+        c.request("GET", "/api/v1/state"); r = c.getresponse(); r.read(); c.close()
+        return r.status, time.time() - t
+    except OSError:
+        return "no answer", time.time() - t
+def stream():
+    s = socket.create_connection(("127.0.0.1", port), timeout=5)
+    s.sendall(b"GET /api/v1/events HTTP/1.1\r\nHost: x\r\n\r\n")
+    return s
+def recv_all(s, n=None):
+    data = b""
+    try:
+        while n is None or len(data) < n:
+            chunk = s.recv(4096 if n is None else n - len(data))
+            if not chunk:
+                break
+            data += chunk
+    except OSError:
+        pass
+    return data
+idle = [socket.create_connection(("127.0.0.1", port), timeout=5) for _ in range(64)]
+st, dt = state(15)
+print(f"64 idle: state {st} within 10 s {dt < 10}")
+for s in idle:
+    s.close()
+streams = [stream() for _ in range(32)]
+print("streams open:", sum(recv_all(s, 12) == b"HTTP/1.1 200" for s in streams))
+head, _, body = recv_all(stream()).partition(b"\r\n\r\n")
+print("33rd stream:", head.split(b"\r\n")[0].decode(), body.decode())
+st, dt = state(5)
+print(f"32 streams: state {st} within 2 s {dt < 2}")
+for s in streams:
+    s.close()
+for _ in range(50):
+    s = stream(); first = recv_all(s, 12); s.close()
+    if first == b"HTTP/1.1 200":
+        break
+    time.sleep(0.1)
+print("a stream after they closed:", first.decode())
+PY
+expect_in "64 idle connections do not hang the API" "64 idle: state 200 within 10 s True" "$(cat "$tmp/limits")"
+expect_in "32 event streams open" "streams open: 32" "$(cat "$tmp/limits")"
+expect_in "the 33rd refused" '33rd stream: HTTP/1.1 503 Service Unavailable {"error":"too many event streams (at most 32); close one and try again"}' "$(cat "$tmp/limits")"
+expect_in "requests still answered beside 32 streams" "32 streams: state 200 within 2 s True" "$(cat "$tmp/limits")"
+expect_in "a stream again once they closed" "a stream after they closed: HTTP/1.1 200" "$(cat "$tmp/limits")"
+
 # A taken port: one line, exit 2.
 expect_exit 2 "taken port" -- timeout 10 "$sim" slave --port "$tmp/a" --address 9 --http "$ps"
 expect_in "says which" "cannot listen on 127.0.0.1:$ps" "$out"
@@ -175,6 +245,23 @@ done
 post "$pm" /api/v1/master/run '{"running":false}' >/dev/null
 stopped() { get "$ps" /api/v1/cards/5 | json 'd["dp"]["state"] == "Wait_Prm"'; }
 wait_for 5 "master STOP: watchdog expiry" stopped
+
+# Card 7 (card 4 before) set to 5 and power-cycled: two cards answer to 5. Every /cards/5 route,
+# read or action, answers 409 with the same text; card 6 is still reached.
+post "$ps" /api/v1/cards/7/dip '{"address":5}' >/dev/null
+post "$ps" /api/v1/cards/7/power-cycle '{}' >/dev/null
+twice5() { get "$ps" /api/v1/state | json '[c["address"] for c in d["cards"]] == [5, 5, 6]'; }
+wait_for 5 "two cards at address 5" twice5
+status() { curl -s --max-time 10 -o "$tmp/body" -w '%{http_code}' "http://127.0.0.1:$1$2"; }
+dup='409 {"error":"2 cards answer to address 5 (DIP switches); the API cannot tell which one is meant"}'
+expect_in "GET a shared address" "$dup" "$(status "$ps" /api/v1/cards/5) $(cat "$tmp/body")"
+expect_in "GET a parameter at it" "$dup" "$(status "$ps" /api/v1/cards/5/params/P130) $(cat "$tmp/body")"
+expect_in "PUT a parameter at it" "$dup" "$(post "$ps" /api/v1/cards/5/params/P130 '{"value":1234}' PUT) $(cat "$tmp/body")"
+expect_in "an action at it" "$dup" "$(post "$ps" /api/v1/cards/5/inputs '{"DI00":false}') $(cat "$tmp/body")"
+expect_in "a bad body at it is still 409" "$dup" "$(post "$ps" /api/v1/cards/5/fault '{"fault":0}') $(cat "$tmp/body")"
+expect_in "neither drive written (card 5 kept its 1000 ms)" "[2000, 1000]" \
+  "$(get "$ps" /api/v1/state | json '[c["drive"]["ramp_up_ms"] for c in d["cards"] if c["address"] == 5]')"
+expect_in "card 6 still reached" "200" "$(status "$ps" /api/v1/cards/6)"
 
 kill -INT "$master"; wait "$master"; rc=$?
 if [ "$rc" = 0 ]; then ok; else bad "master --cycles 0 exit $rc on SIGINT"; fi

@@ -136,8 +136,15 @@ enum MHD_Result http_master_run(http_server_t *srv, struct MHD_Connection *conn,
 static const movidrive_param_info_t *param_named(const cJSON *param, char *err, size_t n)
 {
     if (param != NULL && cJSON_IsNumber(param)) {
+        /* Not valueint: cJSON truncates 8461.9 to 8461 and saturates 1e20 at INT_MAX. */
+        double d = cJSON_GetNumberValue(param);
+        if (!(d >= 0.0 && d <= 65535.0) || d != (double)(long)d) {
+            (void)snprintf(err, n, "'param' must be an index 0..65535 (an integer such as 8461), "
+                                   "\"P100\" or a name");
+            return NULL;
+        }
         char num[24];
-        (void)snprintf(num, sizeof num, "%d", param->valueint);
+        (void)snprintf(num, sizeof num, "%ld", (long)d);
         return movidrive_param_find(num, err, n);
     }
     if (param != NULL && cJSON_IsString(param)) {
@@ -237,7 +244,7 @@ static bool po_words(const cJSON *po, rig_cmd_t *cmd, char *err, size_t n)
     for (int i = 0; i < count; i++) {
         const cJSON *w = cJSON_GetArrayItem(po, i);
         double d = cJSON_GetNumberValue(w);
-        if (!cJSON_IsNumber(w) || d != (double)(long)d || d < -32768.0 || d > 65535.0) {
+        if (!cJSON_IsNumber(w) || !(d >= -32768.0 && d <= 65535.0) || d != (double)(long)d) {
             (void)snprintf(err, n, "'po'[%d] must be a word 0..65535 (or -32768..-1)", i);
             return false;
         }

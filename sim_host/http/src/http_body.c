@@ -3,7 +3,51 @@
 
 #include "http_internal.h"
 
-/* Parses the body as a JSON object whose keys are all in `allowed`; NULL with a message sent. */
+/* true when a JSON text holds the escape \u0000. cJSON decodes it into its C strings, which
+ * then end there: "DI00\u0000junk" would be taken as the key DI00. The body parsed, so every
+ * backslash is inside a string, and a "u0000" is an escape when an odd run of backslashes comes
+ * right before it ("\\u0000" is a backslash, then the text u0000). */
+static bool has_nul_escape(const char *body, size_t len)
+{
+    for (size_t i = 1; i + 5u <= len; i++) {
+        if (memcmp(body + i, "u0000", 5) != 0) {
+            continue;
+        }
+        size_t run = 0;
+        while (run < i && body[i - 1u - run] == '\\') {
+            run++;
+        }
+        if (run % 2u == 1u) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/* The first problem with the fields of o, or NULL: a key not in allowed, or one given twice
+ * (cJSON keeps both and lookups take the first, so the second would be silently ignored). */
+static const char *field_problem(const cJSON *o, const char *const *allowed, const char **key)
+{
+    for (const cJSON *f = o->child; f != NULL; f = f->next) {
+        bool ok = false;
+        for (const char *const *a = allowed; *a != NULL; a++) {
+            ok = ok || strcmp(*a, f->string) == 0;
+        }
+        *key = f->string;
+        if (!ok) {
+            return "unknown field '%s'";
+        }
+        for (const cJSON *g = f->next; g != NULL; g = g->next) {
+            if (strcmp(f->string, g->string) == 0) {
+                return "field '%s' given twice";
+            }
+        }
+    }
+    return NULL;
+}
+
+/* Parses the body as exactly one JSON object whose keys are all in `allowed`, each once; NULL
+ * with a message sent. */
 cJSON *http_parse_body(struct MHD_Connection *conn, const request_t *req,
                        const char *const *allowed, enum MHD_Result *rc)
 {
@@ -19,20 +63,23 @@ cJSON *http_parse_body(struct MHD_Connection *conn, const request_t *req,
                          req->len == 0u ? " (it is empty)" : "");
         return NULL;
     }
-    for (const cJSON *f = o->child; f != NULL; f = f->next) {
-        bool ok = false;
-        for (const char *const *a = allowed; *a != NULL; a++) {
-            if (strcmp(*a, f->string) == 0) {
-                ok = true;
-            }
-        }
-        if (!ok) {
-            *rc = http_send_error(conn, 400, "unknown field '%s'", f->string);
-            cJSON_Delete(o);
-            return NULL;
-        }
+    /* Two bodies run together by a client's framing bug must not pass as the first one. A NUL
+     * octet stops strspn, so one in the body counts as something after the object. */
+    size_t after = (size_t)(end - req->body) + strspn(end, " \t\r\n");
+    const char *key = NULL;
+    const char *problem = field_problem(o, allowed, &key);
+    if (after != req->len) {
+        *rc = http_send_error(conn, 400, "the body must be one JSON object with nothing after "
+                              "it (more follows at octet %zu)", after);
+    } else if (has_nul_escape(req->body, req->len)) {
+        *rc = http_send_error(conn, 400, "a text in the body holds a NUL character (U+0000)");
+    } else if (problem != NULL) {
+        *rc = http_send_error(conn, 400, problem, key);
+    } else {
+        return o;
     }
-    return o;
+    cJSON_Delete(o);
+    return NULL;
 }
 
 bool http_get_bool(const cJSON *o, const char *key, bool required, bool *out, char *err,
@@ -64,7 +111,8 @@ bool http_get_int(const cJSON *o, const char *key, bool required, long lo, long 
         return !required;
     }
     double d = cJSON_GetNumberValue(v);
-    if (!cJSON_IsNumber(v) || d != (double)(long)d || d < (double)lo || d > (double)hi) {
+    /* The range first: converting a double outside long's range (1e20) is undefined. */
+    if (!cJSON_IsNumber(v) || !(d >= (double)lo && d <= (double)hi) || d != (double)(long)d) {
         snprintf(err, n, "'%s' must be an integer %ld..%ld", key, lo, hi);
         return false;
     }
@@ -83,7 +131,7 @@ bool http_get_value(const cJSON *o, const movidrive_param_info_t *p, int32_t *ra
     }
     if (cJSON_IsNumber(v)) {
         double d = cJSON_GetNumberValue(v);
-        if (d != (double)(long long)d || d < -2147483648.0 || d > 4294967295.0) {
+        if (!(d >= -2147483648.0 && d <= 4294967295.0) || d != (double)(long long)d) {
             snprintf(err, n, "'value' must be an integer that fits 32 bits");
             return false;
         }

@@ -7,6 +7,7 @@
 
 #include <cjson/cJSON.h>
 #include <microhttpd.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -18,10 +19,20 @@
 #define BODY_MAX 16384u
 #define ACTION_TIMEOUT_MS 2000u
 #define SERVICE_TIMEOUT_MS 7000u
+/* One thread per connection, so the limit is the server's size. Past it new connections wait
+ * unanswered in the listen backlog, so whatever holds a connection for long is bounded below
+ * it: event streams (held for ever) by MAX_STREAMS, a connection that sends no request by
+ * IDLE_TIMEOUT_S, one between two requests by KEEPALIVE_TIMEOUT_S. docs/api.md gives them. */
+#define MAX_CONNECTIONS 64u
+#define MAX_STREAMS 32u
+#define IDLE_TIMEOUT_S 5u
+#define KEEPALIVE_TIMEOUT_S 30u
+_Static_assert(MAX_STREAMS < MAX_CONNECTIONS, "event streams must leave connections for requests");
 
 struct http_server {
     struct MHD_Daemon *daemon;
     rig_ctl_t *ctl;
+    atomic_uint streams; /* event streams open now */
     int listen_fd;
     uint16_t port;
     volatile int stopping;

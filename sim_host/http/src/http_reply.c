@@ -16,6 +16,11 @@ enum MHD_Result http_send_text(struct MHD_Connection *conn, unsigned status, con
     }
     MHD_add_response_header(r, "Content-Type", type);
     MHD_add_response_header(r, "Cache-Control", "no-store");
+    if (status == 503u) {
+        /* Busy: a client told to come back later should not keep a connection slot meanwhile
+         * (a refused event stream's client would otherwise hold one it cannot use). */
+        MHD_add_response_header(r, "Connection", "close");
+    }
     enum MHD_Result rc = MHD_queue_response(conn, status, r);
     MHD_destroy_response(r);
     return rc;

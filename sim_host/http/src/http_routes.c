@@ -36,15 +36,16 @@ static bool parse_address(const char *text, size_t len, uint8_t *out)
     return true;
 }
 
-static bool card_exists(http_server_t *srv, uint8_t address)
+/* How many cards answer to address now (two after a DIP change and a power cycle). */
+static unsigned cards_at(http_server_t *srv, uint8_t address)
 {
     rig_snapshot_t *s = http_snapshot(srv->ctl);
-    bool found = false;
+    unsigned n = 0;
     for (unsigned i = 0; s != NULL && i < s->num_cards; i++) {
-        found = found || s->cards[i].address == address;
+        n += s->cards[i].address == address ? 1u : 0u;
     }
     free(s);
-    return found;
+    return n;
 }
 
 static enum MHD_Result serve_card(http_server_t *srv, struct MHD_Connection *conn,
@@ -74,8 +75,14 @@ static enum MHD_Result route_card(http_server_t *srv, struct MHD_Connection *con
         return http_send_error(conn, 404, "'%.*s' is not a card address (0..127)", (int)alen,
                                rest);
     }
-    if (!card_exists(srv, address)) {
+    unsigned same = cards_at(srv, address);
+    if (same == 0u) {
         return http_send_error(conn, 404, "no card with address %u", address);
+    }
+    if (same > 1u) {
+        /* Refused for reads too: showing one card while an action reaches the other would
+         * make the API contradict itself. */
+        return http_send_error(conn, 409, RIG_CTL_AMBIGUOUS_FMT, same, address);
     }
     if (slash == NULL || slash[1] == '\0') {
         if (strcmp(method, "GET") != 0) {

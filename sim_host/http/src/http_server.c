@@ -11,8 +11,6 @@
 
 #include "http_internal.h"
 
-#define MAX_CONNECTIONS 64u
-
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const char *url,
                                   const char *method, const char *version,
                                   const char *upload_data, size_t *upload_size, void **con_cls)
@@ -26,6 +24,10 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
             return MHD_NO;
         }
         *con_cls = req;
+        /* It sent a request: from now on it may idle between requests (keep-alive) longer
+         * than a connection that never sends one. */
+        (void)MHD_set_connection_option(conn, MHD_CONNECTION_OPTION_TIMEOUT,
+                                        (unsigned)KEEPALIVE_TIMEOUT_S);
         return MHD_YES;
     }
     if (*upload_size != 0u) {
@@ -150,6 +152,7 @@ http_server_t *http_server_start(rig_ctl_t *ctl, const char *listen_text, char *
         return NULL;
     }
     s->ctl = ctl;
+    atomic_init(&s->streams, 0u);
     s->listen_fd = open_listener(host, port, err, errlen, &s->port);
     if (s->listen_fd < 0) {
         free(s);
@@ -159,7 +162,7 @@ http_server_t *http_server_start(rig_ctl_t *ctl, const char *listen_text, char *
         MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_THREAD_PER_CONNECTION | MHD_USE_ERROR_LOG, 0,
         NULL, NULL, on_request, s, MHD_OPTION_LISTEN_SOCKET, s->listen_fd,
         MHD_OPTION_CONNECTION_LIMIT, (unsigned)MAX_CONNECTIONS, MHD_OPTION_CONNECTION_TIMEOUT,
-        (unsigned)60, MHD_OPTION_NOTIFY_COMPLETED, on_completed, NULL, MHD_OPTION_END);
+        (unsigned)IDLE_TIMEOUT_S, MHD_OPTION_NOTIFY_COMPLETED, on_completed, NULL, MHD_OPTION_END);
     if (s->daemon == NULL) {
         snprintf(err, errlen, "--http: the HTTP server did not start on %s:%u", host, s->port);
         close(s->listen_fd);

@@ -140,14 +140,23 @@ static ssize_t stream_read(void *cls, uint64_t pos, char *buf, size_t max)
 static void stream_free(void *cls)
 {
     stream_t *st = cls;
+    atomic_fetch_sub(&st->srv->streams, 1u);
     free(st->pending);
     free(st);
 }
 
 enum MHD_Result http_serve_events(http_server_t *srv, struct MHD_Connection *conn)
 {
+    /* Counted from here; stream_free gives the place back, also for a stream that never
+     * started. */
+    if (atomic_fetch_add(&srv->streams, 1u) >= MAX_STREAMS) {
+        atomic_fetch_sub(&srv->streams, 1u);
+        return http_send_error(conn, 503, "too many event streams (at most %u); close one and "
+                               "try again", MAX_STREAMS);
+    }
     stream_t *st = calloc(1, sizeof *st);
     if (st == NULL) {
+        atomic_fetch_sub(&srv->streams, 1u);
         return MHD_NO;
     }
     st->srv = srv;

@@ -270,6 +270,24 @@ void rig_ctl_snapshot(rig_ctl_t *c, rig_snapshot_t *out)
 
 /* ---- commands ------------------------------------------------------------------------------ */
 
+/* The client stops waiting (under the lock). A command the loop has not taken up is withdrawn,
+ * so it is never carried out and its slot is free at once: marking it abandoned would leave it
+ * for good, since the loop runs only queued commands and frees only the abandoned ones it ran.
+ * One already running cannot be called back; the loop frees it when it ends. */
+static void give_up(rig_ctl_t *c, int k, rig_cmd_t *cmd, unsigned timeout_ms)
+{
+    cmd->status = 504;
+    if (c->slot[k] == RIG_SLOT_QUEUED) {
+        c->slot[k] = RIG_SLOT_FREE;
+        snprintf(cmd->error, sizeof cmd->error, "the simulation did not take the action up "
+                 "within %u ms; it was withdrawn and not carried out", timeout_ms);
+        return;
+    }
+    c->slot[k] = RIG_SLOT_ABANDONED;
+    snprintf(cmd->error, sizeof cmd->error, "no answer within %u ms; the action may still be "
+             "carried out", timeout_ms);
+}
+
 bool rig_ctl_submit(rig_ctl_t *c, rig_cmd_t *cmd, unsigned timeout_ms)
 {
     pthread_mutex_lock(&c->lock);
@@ -308,10 +326,7 @@ bool rig_ctl_submit(rig_ctl_t *c, rig_cmd_t *cmd, unsigned timeout_ms)
         }
     }
     if (!done) {
-        c->slot[k] = RIG_SLOT_ABANDONED;
-        cmd->status = 504;
-        snprintf(cmd->error, sizeof cmd->error, "the simulation did not carry the action out "
-                                                "within %u ms", timeout_ms);
+        give_up(c, k, cmd, timeout_ms);
     }
     pthread_mutex_unlock(&c->lock);
     return done;
@@ -422,6 +437,17 @@ static void run_master_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
     }
 }
 
+/* The HTTP routes refuse an ambiguous address from the snapshot, which may be a publish
+ * behind a power cycle; the loop's own count is the one that decides. */
+static unsigned cards_at(const rig_t *r, uint8_t address)
+{
+    unsigned n = 0;
+    for (unsigned i = 0; i < r->num_cards; i++) {
+        n += r->cards[i].cs.card.address == address ? 1u : 0u;
+    }
+    return n;
+}
+
 static void run_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
 {
     rig_t *r = c->rig;
@@ -433,6 +459,12 @@ static void run_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
     rig_card_t *rc = rig_card_by_address(r, cmd->card);
     if (rc == NULL) {
         rig_cmd_fail(cmd, 404, "no card with that address");
+        return;
+    }
+    unsigned same = cards_at(r, cmd->card);
+    if (same > 1u) {
+        cmd->status = 409;
+        (void)snprintf(cmd->error, sizeof cmd->error, RIG_CTL_AMBIGUOUS_FMT, same, cmd->card);
         return;
     }
     bool needs_drive = cmd->type == RIG_CMD_INPUTS || cmd->type == RIG_CMD_FAULT;

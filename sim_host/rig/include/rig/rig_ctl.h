@@ -6,7 +6,9 @@
  *   a client that falls behind loses the oldest and is told how many, the loop never waits;
  * - actions are queued as commands; the loop carries them out between two bus events
  *   (rig_ctl_service) and a client waits for the result with a timeout. A command whose client
- *   gave up is still carried out and then freed, so the rig sees exactly what was asked.
+ *   gave up before the loop took it up is withdrawn and never carried out (the client is told
+ *   so); one the loop had already started is carried out to its end and then freed. Either way
+ *   the rig sees exactly what the clients were told, and no slot stays taken.
  * A slow or stuck client can therefore never delay the bus: the loop only ever holds the mutex
  * for a copy. */
 #ifndef RIG_RIG_CTL_H
@@ -25,6 +27,11 @@
 #define RIG_CTL_EVENTS 4096u
 #define RIG_CTL_CMDS 16u
 #define RIG_CTL_TEXT 240u
+/* The refusal of a card command (409) when more than one card of the line answers to its
+ * address (DIP switches changed, then a power cycle): either card might be the one meant.
+ * Arguments: the number of cards, the address. The HTTP routes answer reads with it too. */
+#define RIG_CTL_AMBIGUOUS_FMT "%u cards answer to address %u (DIP switches); the API cannot " \
+                              "tell which one is meant"
 
 typedef enum rig_log_level {
     RIG_LOG_ERROR = 0,
@@ -168,7 +175,7 @@ typedef enum rig_slot_state {
     RIG_SLOT_QUEUED,
     RIG_SLOT_RUNNING,  /* a master parameter service over the bus */
     RIG_SLOT_DONE,
-    RIG_SLOT_ABANDONED, /* the client gave up; freed when done */
+    RIG_SLOT_ABANDONED, /* the client gave up while it ran; freed when done */
 } rig_slot_state_t;
 
 typedef struct rig_ctl {
@@ -220,7 +227,8 @@ int rig_ctl_attach(rig_ctl_t *c);
 /* Client side. Copies the snapshot. */
 void rig_ctl_snapshot(rig_ctl_t *c, rig_snapshot_t *out);
 /* Queues cmd and waits up to timeout_ms for the loop to carry it out; cmd gets the result.
- * Returns false on timeout (cmd->status = 504) or a full queue (503). */
+ * Returns false on timeout (cmd->status = 504; the text says whether the command was withdrawn
+ * unrun or may still be carried out) or a full queue (503). */
 bool rig_ctl_submit(rig_ctl_t *c, rig_cmd_t *cmd, unsigned timeout_ms);
 /* Copies events with seq >= since into out (at most max, oldest first). Returns how many;
  * *lost = how many with seq >= since are no longer held. */

@@ -1,0 +1,163 @@
+/* rig_ctl's command slots: what a client that stops waiting leaves behind. A line of two cards
+ * (addresses 4 and 5, emulated drives) on the in-memory bus; the bus loop is either absent (a
+ * stalled loop: a replay waiting for input, a stopped process) or a thread that calls
+ * rig_ctl_service as the real loop does. Also: a command to an address two cards share. */
+#include <pthread.h>
+#include <stdatomic.h>
+#include <string.h>
+#include <time.h>
+
+#include "check.h"
+#include "rig/rig.h"
+#include "rig/rig_ctl.h"
+
+static rig_t rig;
+static rig_ctl_t ctl;
+
+static void setup(void)
+{
+    rig_cfg_t rc = {.medium = RIG_MEDIUM_MEMBUS, .baud = 1500000u};
+    rig_init(&rig, &rc);
+    char err[128];
+    CHECK_EQ(rig_open(&rig, err, sizeof err), 0);
+    for (uint8_t a = 4; a <= 5; a++) {
+        card_options_t co = {.address = a, .inverter = CARD_INVERTER_SIM};
+        CHECK(rig_add_card(&rig, &co, membus_now_us(&rig.bus)) != NULL);
+    }
+    CHECK_EQ(rig_ctl_init(&ctl, &rig, "slave", false), 0);
+}
+
+static void teardown(void)
+{
+    rig_ctl_destroy(&ctl);
+    rig_close(&rig);
+}
+
+static unsigned free_slots(void)
+{
+    unsigned n = 0;
+    pthread_mutex_lock(&ctl.lock);
+    for (unsigned i = 0; i < RIG_CTL_CMDS; i++) {
+        n += ctl.slot[i] == RIG_SLOT_FREE ? 1u : 0u;
+    }
+    pthread_mutex_unlock(&ctl.lock);
+    return n;
+}
+
+/* ---- the bus loop as a thread -------------------------------------------------------------- */
+
+static atomic_bool loop_stop;
+
+static void *loop_main(void *arg)
+{
+    (void)arg;
+    const struct timespec ms = {0, 1000000L};
+    while (!atomic_load(&loop_stop)) {
+        rig_ctl_service(&ctl, 1000000000u);
+        nanosleep(&ms, NULL);
+    }
+    return NULL;
+}
+
+/* Runs cmd with the loop turning; the loop is stopped again before it returns, so the caller
+ * may look at the rig. */
+static void submit_with_loop(rig_cmd_t *cmd)
+{
+    pthread_t t;
+    atomic_store(&loop_stop, false);
+    CHECK_EQ(pthread_create(&t, NULL, loop_main, NULL), 0);
+    (void)rig_ctl_submit(&ctl, cmd, 2000u);
+    atomic_store(&loop_stop, true);
+    pthread_join(t, NULL);
+}
+
+/* ---- tests --------------------------------------------------------------------------------- */
+
+/* More timed-out commands than there are slots, none of them taken up: each is withdrawn (504
+ * saying so), no slot stays taken, and none is carried out later when the loop runs again. */
+static void test_queued_timeout_is_withdrawn(void)
+{
+    setup();
+    for (unsigned i = 0; i < RIG_CTL_CMDS + 4u; i++) {
+        rig_cmd_t cmd = {.type = RIG_CMD_FAULT, .card = 4, .value = 11};
+        CHECK(!rig_ctl_submit(&ctl, &cmd, 5u));
+        CHECK_EQ(cmd.status, 504);
+        CHECK_STR(cmd.error, "the simulation did not take the action up within 5 ms; it was "
+                             "withdrawn and not carried out");
+    }
+    CHECK_EQ(free_slots(), RIG_CTL_CMDS);
+    rig_ctl_service(&ctl, 0u);
+    CHECK_EQ(rig.cards[0].cs.md.fault, 0);
+    rig_cmd_t cmd = {.type = RIG_CMD_FAULT, .card = 4, .value = 14};
+    submit_with_loop(&cmd);
+    CHECK_EQ(cmd.status, 200);
+    CHECK_EQ(rig.cards[0].cs.md.fault, 14);
+    CHECK_EQ(free_slots(), RIG_CTL_CMDS);
+    teardown();
+}
+
+/* The loop's side of a command it has taken up and not finished (a master parameter service):
+ * the slot RUNNING, as rig_ctl_service leaves it. */
+static void *take_up_first(void *arg)
+{
+    (void)arg;
+    const struct timespec ms = {0, 1000000L};
+    for (bool taken = false; !taken; nanosleep(&ms, NULL)) {
+        pthread_mutex_lock(&ctl.lock);
+        if (ctl.slot[0] == RIG_SLOT_QUEUED) {
+            ctl.slot[0] = RIG_SLOT_RUNNING;
+            taken = true;
+        }
+        pthread_mutex_unlock(&ctl.lock);
+    }
+    return NULL;
+}
+
+/* A command the loop is running when its client gives up cannot be called back: the slot is
+ * left to the loop (ABANDONED, freed when it ends) and the 504 says it may still happen. */
+static void test_running_timeout_may_still_happen(void)
+{
+    setup();
+    pthread_t t;
+    CHECK_EQ(pthread_create(&t, NULL, take_up_first, NULL), 0);
+    rig_cmd_t cmd = {.type = RIG_CMD_MASTER_PARAM, .card = 4, .index = 8461};
+    CHECK(!rig_ctl_submit(&ctl, &cmd, 50u));
+    pthread_join(t, NULL);
+    CHECK_EQ(cmd.status, 504);
+    CHECK_STR(cmd.error, "no answer within 50 ms; the action may still be carried out");
+    CHECK_EQ(ctl.slot[0], RIG_SLOT_ABANDONED);
+    CHECK_EQ(free_slots(), RIG_CTL_CMDS - 1u);
+    teardown();
+}
+
+/* Card 4 set to address 5 and power-cycled: two cards answer to 5. A command to 5 reaches
+ * neither (409), since either might be the one meant; one to a unique address still runs. */
+static void test_ambiguous_address_is_refused(void)
+{
+    setup();
+    rig_cmd_t dip = {.type = RIG_CMD_DIP, .card = 4, .value = 5};
+    submit_with_loop(&dip);
+    rig_cmd_t cycle = {.type = RIG_CMD_POWER_CYCLE, .card = 4};
+    submit_with_loop(&cycle);
+    CHECK_EQ(cycle.status, 200);
+    CHECK_EQ(rig.cards[0].cs.card.address, 5);
+    rig_cmd_t fault = {.type = RIG_CMD_FAULT, .card = 5, .value = 11};
+    submit_with_loop(&fault);
+    CHECK_EQ(fault.status, 409);
+    CHECK_STR(fault.error, "2 cards answer to address 5 (DIP switches); the API cannot tell "
+                           "which one is meant");
+    CHECK_EQ(rig.cards[0].cs.md.fault, 0);
+    CHECK_EQ(rig.cards[1].cs.md.fault, 0);
+    rig_cmd_t read = {.type = RIG_CMD_PARAM_READ, .card = 5, .index = 8470};
+    submit_with_loop(&read);
+    CHECK_EQ(read.status, 409);
+    teardown();
+}
+
+int main(void)
+{
+    RUN_TEST(test_queued_timeout_is_withdrawn);
+    RUN_TEST(test_running_timeout_may_still_happen);
+    RUN_TEST(test_ambiguous_address_is_refused);
+    return check_report();
+}
