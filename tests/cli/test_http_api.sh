@@ -246,22 +246,20 @@ post "$pm" /api/v1/master/run '{"running":false}' >/dev/null
 stopped() { get "$ps" /api/v1/cards/5 | json 'd["dp"]["state"] == "Wait_Prm"'; }
 wait_for 5 "master STOP: watchdog expiry" stopped
 
-# Card 7 (card 4 before) set to 5 and power-cycled: two cards answer to 5. Every /cards/5 route,
-# read or action, answers 409 with the same text; card 6 is still reached.
-post "$ps" /api/v1/cards/7/dip '{"address":5}' >/dev/null
-post "$ps" /api/v1/cards/7/power-cycle '{}' >/dev/null
-twice5() { get "$ps" /api/v1/state | json '[c["address"] for c in d["cards"]] == [5, 5, 6]'; }
-wait_for 5 "two cards at address 5" twice5
+# Card 7 (card 4 before) set to 5, which card 2 answers to: refused (409), so the line never has
+# two cards at one address that no /cards/N route could tell apart; nor to 9 once card 2's
+# switches say 9 for its next power-up. Every card is still reached.
 status() { curl -s --max-time 10 -o "$tmp/body" -w '%{http_code}' "http://127.0.0.1:$1$2"; }
-dup='409 {"error":"2 cards answer to address 5 (DIP switches); the API cannot tell which one is meant"}'
-expect_in "GET a shared address" "$dup" "$(status "$ps" /api/v1/cards/5) $(cat "$tmp/body")"
-expect_in "GET a parameter at it" "$dup" "$(status "$ps" /api/v1/cards/5/params/P130) $(cat "$tmp/body")"
-expect_in "PUT a parameter at it" "$dup" "$(post "$ps" /api/v1/cards/5/params/P130 '{"value":1234}' PUT) $(cat "$tmp/body")"
-expect_in "an action at it" "$dup" "$(post "$ps" /api/v1/cards/5/inputs '{"DI00":false}') $(cat "$tmp/body")"
-expect_in "a bad body at it is still 409" "$dup" "$(post "$ps" /api/v1/cards/5/fault '{"fault":0}') $(cat "$tmp/body")"
-expect_in "neither drive written (card 5 kept its 1000 ms)" "[2000, 1000]" \
-  "$(get "$ps" /api/v1/state | json '[c["drive"]["ramp_up_ms"] for c in d["cards"] if c["address"] == 5]')"
-expect_in "card 6 still reached" "200" "$(status "$ps" /api/v1/cards/6)"
+expect_in "DIP to an address in use" \
+  '409 {"error":"card 2 of the line answers to address 5: two cards must not share an address"}' \
+  "$(post "$ps" /api/v1/cards/7/dip '{"address":5}') $(cat "$tmp/body")"
+expect_in "DIP 9 for card 5" "200" "$(post "$ps" /api/v1/cards/5/dip '{"address":9}')"
+expect_in "DIP to an address pending for another card" \
+  '409 {"error":"card 2 of the line answers to address 9 after its power cycle: two cards must not share an address"}' \
+  "$(post "$ps" /api/v1/cards/7/dip '{"address":9}') $(cat "$tmp/body")"
+expect_in "the switches of card 7 unchanged" '"dip":{"address":7,"next_address":7}' \
+  "$(get "$ps" /api/v1/cards/7)"
+for a in 5 6 7; do expect_in "card $a still reached" "200" "$(status "$ps" /api/v1/cards/$a)"; done
 
 kill -INT "$master"; wait "$master"; rc=$?
 if [ "$rc" = 0 ]; then ok; else bad "master --cycles 0 exit $rc on SIGINT"; fi

@@ -130,13 +130,37 @@ static void test_running_timeout_may_still_happen(void)
     teardown();
 }
 
-/* Card 4 set to address 5 and power-cycled: two cards answer to 5. A command to 5 reaches
- * neither (409), since either might be the one meant; one to a unique address still runs. */
-static void test_ambiguous_address_is_refused(void)
+/* A DIP address another card answers to, now or after its power cycle, is refused: the line
+ * never gets two cards at one address through the API. */
+static void test_dip_to_a_used_address_is_refused(void)
 {
     setup();
     rig_cmd_t dip = {.type = RIG_CMD_DIP, .card = 4, .value = 5};
     submit_with_loop(&dip);
+    CHECK_EQ(dip.status, 409);
+    CHECK_STR(dip.error, "card 2 of the line answers to address 5: two cards must not share an "
+                         "address");
+    CHECK_EQ(rig.cards[0].next_address, 4);
+    rig_cmd_t nine = {.type = RIG_CMD_DIP, .card = 5, .value = 9};
+    submit_with_loop(&nine);
+    CHECK_EQ(nine.status, 200);
+    rig_cmd_t also_nine = {.type = RIG_CMD_DIP, .card = 4, .value = 9};
+    submit_with_loop(&also_nine);
+    CHECK_EQ(also_nine.status, 409);
+    CHECK_STR(also_nine.error, "card 2 of the line answers to address 9 after its power cycle: "
+                               "two cards must not share an address");
+    rig_cmd_t own = {.type = RIG_CMD_DIP, .card = 4, .value = 4};
+    submit_with_loop(&own);
+    CHECK_EQ(own.status, 200);
+    teardown();
+}
+
+/* Two cards at address 5 all the same (switches set outside the API): a command to 5 reaches
+ * neither (409), since either might be the one meant. */
+static void test_ambiguous_address_is_refused(void)
+{
+    setup();
+    rig_card_set_dip(&rig.cards[0], 5);
     rig_cmd_t cycle = {.type = RIG_CMD_POWER_CYCLE, .card = 4};
     submit_with_loop(&cycle);
     CHECK_EQ(cycle.status, 200);
@@ -158,6 +182,7 @@ int main(void)
 {
     RUN_TEST(test_queued_timeout_is_withdrawn);
     RUN_TEST(test_running_timeout_may_still_happen);
+    RUN_TEST(test_dip_to_a_used_address_is_refused);
     RUN_TEST(test_ambiguous_address_is_refused);
     return check_report();
 }

@@ -448,6 +448,26 @@ static unsigned cards_at(const rig_t *r, uint8_t address)
     return n;
 }
 
+/* A DIP address another card of the line answers to now or after its power cycle is refused:
+ * once two cards shared an address, no /cards/N route could tell them apart again (409), so
+ * the line could not be put right without a restart. */
+static bool dip_address_free(rig_t *r, const rig_card_t *rc, rig_cmd_t *cmd)
+{
+    for (unsigned i = 0; i < r->num_cards; i++) {
+        const rig_card_t *o = &r->cards[i];
+        if (o != rc && (o->cs.card.address == cmd->value || o->next_address == cmd->value)) {
+            (void)snprintf(cmd->error, sizeof cmd->error,
+                           "card %u of the line answers to address %ld%s: two cards must not "
+                           "share an address",
+                           i + 1u, (long)cmd->value,
+                           o->cs.card.address == cmd->value ? "" : " after its power cycle");
+            cmd->status = 409;
+            return false;
+        }
+    }
+    return true;
+}
+
 static void run_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
 {
     rig_t *r = c->rig;
@@ -486,7 +506,9 @@ static void run_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
         rig_card_power_cycle(rc, rig_now_us(r));
         break;
     case RIG_CMD_DIP:
-        rig_card_set_dip(rc, (uint8_t)cmd->value);
+        if (dip_address_free(r, rc, cmd)) {
+            rig_card_set_dip(rc, (uint8_t)cmd->value);
+        }
         break;
     case RIG_CMD_PARAM_READ:
     case RIG_CMD_PARAM_WRITE:
