@@ -1040,9 +1040,9 @@ static void test_leds_dip(void)
 }
 
 /* ---- interrupt priorities ------------------------------------------------------------------- */
-/* USART1 stamps each character with TIM2 in its handler, and strict timing tolerates only
- * 1 - frac(character time) of extra latency (167 ns at 6 Mbit/s): nothing but the fault
- * handlers may preempt it, SysTick (~0.6-0.9 µs) included. SysTick stays above the core's
+/* USART1 stamps each character with TIM2 in its handler, and strict timing tolerates 1 to 2 µs
+ * of extra latency (docs/porting.md): nothing but the fault handlers may preempt it, SysTick
+ * (~0.6-0.9 µs) included. SysTick stays above the core's
  * BASEPRI (deadlines and LEDs during main-loop sections); PendSV and CAN are below it. */
 static void test_irq_priorities(void)
 {

@@ -42,8 +42,9 @@ typedef struct fdl_gap {
  * timing allows the tolerance on top of the character time rounded up to whole µs: stamps are
  * whole µs, so back-to-back characters are stamped ceil(character time) apart at a sub-µs phase
  * where the first stamp is late, and the tolerance is then all an interrupt's latency may add
- * (at least 1 µs at every rate; with the character time rounded down it was 1 - frac, 83 ns at
- * 19.2 kbit/s). A per-character fast path compares against it without computing idle_ns. */
+ * (at least 1 µs at every rate; rounded down, the character time would leave 1 - frac of it,
+ * 83 ns at 19.2 kbit/s). A per-character fast path compares against it without computing
+ * idle_ns. */
 static inline uint32_t fdl_gap_pause_us(bool strict, uint32_t char_ns, uint32_t relaxed_gap_us)
 {
     return strict ? (char_ns + 999u) / 1000u + FDL_RX_GAP_TOLERANCE_NS / 1000u : relaxed_gap_us;

@@ -12,8 +12,8 @@
  *      recorded as itself instead of escalating to HardFault
  *   1  USART1: characters into the driver's collector, transmit steps. Never masked, so no
  *      character is lost and no reply stalls mid-frame; and nothing preempts it, because each
- *      character is stamped with TIM2 in its handler and strict timing leaves only
- *      1 - frac(character time) of stamp jitter (167 ns at 6 Mbit/s, docs/porting.md)
+ *      character is stamped with TIM2 in its handler and strict timing leaves 1 to 2 µs of
+ *      stamp jitter (docs/porting.md), most of which a SysTick handler would take
  *   2  SysTick: deadline flag and LED patterns; a few µs late is harmless (time is TIM2)
  *   3  PendSV: the core's receive-to-reply path (the queue into dfp21b_rx_telegram)
  *   4  CAN1 RX0
