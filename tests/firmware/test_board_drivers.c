@@ -34,6 +34,8 @@ _Static_assert(offsetof(gpio_regs_t, BSRR) == 0x18, "GPIO BSRR");
 _Static_assert(offsetof(gpio_regs_t, AFR) == 0x20, "GPIO AFR");
 _Static_assert(offsetof(rcc_regs_t, AHB1ENR) == 0x30, "RCC AHB1ENR");
 _Static_assert(offsetof(rcc_regs_t, APB2ENR) == 0x44, "RCC APB2ENR");
+_Static_assert(offsetof(rcc_regs_t, CSR) == 0x74, "RCC CSR");
+_Static_assert(offsetof(iwdg_regs_t, SR) == 0x0C, "IWDG SR");
 _Static_assert(offsetof(can_regs_t, BTR) == 0x1C, "CAN BTR");
 _Static_assert(offsetof(can_regs_t, TX) == 0x180, "CAN TX mailboxes");
 _Static_assert(offsetof(can_regs_t, RX) == 0x1B0, "CAN RX FIFOs");
@@ -1068,6 +1070,34 @@ static void test_irq_priorities(void)
     CHECK(((usart1 | systick | pendsv | can) & 0x0Fu) == 0u); /* only the 4 implemented bits */
 }
 
+/* ---- independent watchdog ------------------------------------------------------------------- */
+/* Started with /32 (1 ms a count at the LSI's typical 32 kHz) and the timeout's count, then
+ * reloaded: the key register's last word is the reload key, and nothing was left unlocked. */
+static void test_iwdg(void)
+{
+    iwdg_regs_t w = {0};
+    board_iwdg_start(&w, BOARD_IWDG_TIMEOUT_MS);
+    CHECK_EQ(w.PR, IWDG_PR_DIV32);
+    CHECK_EQ(w.RLR, 100u);
+    CHECK_EQ(w.KR, IWDG_KEY_RELOAD);
+    w.KR = 0u;
+    board_iwdg_refresh(&w);
+    CHECK_EQ(w.KR, IWDG_KEY_RELOAD);
+    CHECK_EQ(board_iwdg_reload(0u), 1u);       /* the shortest the counter can do */
+    CHECK_EQ(board_iwdg_reload(5000u), 0xFFFu); /* the longest: 4.1 s at 32 kHz */
+    CHECK_EQ(board_iwdg_reload(250u), 250u);
+    /* The reload at the LSI's extremes (17..47 kHz): still well above a main-loop pass. */
+    uint32_t fastest_ms = board_iwdg_reload(BOARD_IWDG_TIMEOUT_MS) * 32u * 1000u / 47000u;
+    CHECK(fastest_ms >= 60u);
+    /* The reset cause: read, and the flags cleared for the next start. */
+    rcc_regs_t rcc = {0};
+    rcc.CSR = RCC_CSR_IWDGRSTF | (1u << 26); /* and PINRSTF */
+    CHECK(board_reset_by_iwdg(&rcc));
+    CHECK((rcc.CSR & RCC_CSR_RMVF) != 0u);
+    rcc.CSR = 1u << 26;
+    CHECK(!board_reset_by_iwdg(&rcc));
+}
+
 /* ---- clock and fault record ----------------------------------------------------------------- */
 /* What the silicon makes of CFGR (RM0090 §7.3.3 for the codes, §7.2 for the timers): SYSCLK from
  * SW, HCLK through HPRE, PCLK1/2 through PPRE1/2, and APB1's timers at 2 x PCLK1 when APB1 is
@@ -1217,6 +1247,7 @@ int main(void)
     RUN_TEST(test_timebase);
     RUN_TEST(test_leds_dip);
     RUN_TEST(test_irq_priorities);
+    RUN_TEST(test_iwdg);
     RUN_TEST(test_clock);
     RUN_TEST(test_fault_record);
     return check_report();

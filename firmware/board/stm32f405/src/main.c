@@ -427,16 +427,25 @@ int main(void)
 {
     board_init();
     bool had_fault = take_previous_fault();
+    if (board_reset_by_iwdg(RCC)) {
+        had_fault = true; /* the main loop hung: shown like a fault */
+#ifdef BOARD_SEMIHOSTING
+        semihost_write0("previous reset by the independent watchdog\n");
+#endif
+    }
     leds.fault_pattern = had_fault; /* BUS FAULT at 4 Hz until the card is in Data_Exch (below) */
 #ifdef DFP_BOARD_FAULT_TEST
     fault_test_step(leds.fault_pattern);
 #endif
+    DBGMCU_APB1_FZ |= DBGMCU_APB1_FZ_IWDG_STOP; /* a debugger's halt is no hang */
+    board_iwdg_start(IWDG, BOARD_IWDG_TIMEOUT_MS);
     start_card(start_inverter_link());
 #ifdef DFP_BOARD_EXIT_SILENCE_MS
     silence_watch_t silence = {.last_telegrams = 0, .last_activity = now_us()};
 #endif
 
     for (;;) {
+        board_iwdg_refresh(IWDG);
         poll_request = false;
         hal_time_us_t now = now_us();
         /* The core's work, in sections that hold the USART's deferred work (PendSV) off; the

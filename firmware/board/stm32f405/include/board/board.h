@@ -67,6 +67,23 @@ static inline uint32_t board_tim2_hz(const board_clocks_t *c)
 }
 
 board_clocks_t board_clock_init(rcc_regs_t *rcc, flash_regs_t *flash);
+
+/* The independent watchdog: started before the card, reloaded by every pass of the main loop
+ * (which passes at least once a millisecond: SysTick wakes it), so a main loop that hangs, in a
+ * core section or anywhere else, resets the card instead of leaving it answering on the bus with
+ * stale data or dead. Its clock is the LSI, 17..47 kHz (RM0090 datasheet, 32 kHz typical): the
+ * timeout is set for the typical clock and lies between 0.68 and 1.88 times it. */
+#define BOARD_IWDG_TIMEOUT_MS 100u
+#define BOARD_IWDG_LSI_HZ 32000u
+/* RLR for timeout_ms at /32 (1 ms a count at 32 kHz), within 1..0xFFF. */
+uint32_t board_iwdg_reload(uint32_t timeout_ms);
+void board_iwdg_start(iwdg_regs_t *iwdg, uint32_t timeout_ms);
+static inline void board_iwdg_refresh(iwdg_regs_t *iwdg)
+{
+    iwdg->KR = IWDG_KEY_RELOAD;
+}
+/* Whether the last reset came from the watchdog; clears the reset flags for the next start. */
+bool board_reset_by_iwdg(rcc_regs_t *rcc);
 const char *board_clock_source_name(board_clock_source_t s);
 
 /* Fault record: survives a reset (.noinit RAM), readable with a debugger (`p board_fault`) or

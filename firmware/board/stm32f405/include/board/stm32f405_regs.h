@@ -85,6 +85,16 @@ typedef struct rcc_regs {
     REG RSV2;       /* 0x3C */
     REG APB1ENR;    /* 0x40 */
     REG APB2ENR;    /* 0x44 */
+    REG RSV3[2];    /* 0x48 */
+    REG AHB1LPENR;  /* 0x50 */
+    REG AHB2LPENR;  /* 0x54 */
+    REG AHB3LPENR;  /* 0x58 */
+    REG RSV4;       /* 0x5C */
+    REG APB1LPENR;  /* 0x60 */
+    REG APB2LPENR;  /* 0x64 */
+    REG RSV5[2];    /* 0x68 */
+    REG BDCR;       /* 0x70 */
+    REG CSR;        /* 0x74 */
 } rcc_regs_t;
 
 #define RCC_CR_HSION (1u << 0)
@@ -110,6 +120,21 @@ typedef struct rcc_regs {
 #define RCC_AHB1ENR_GPIOC (1u << 2)
 #define RCC_APB1ENR_CAN1 (1u << 25)
 #define RCC_APB2ENR_USART1 (1u << 4)
+#define RCC_CSR_RMVF (1u << 24)    /* write 1: clear the reset flags */
+#define RCC_CSR_IWDGRSTF (1u << 29) /* the last reset came from the independent watchdog */
+
+/* ---- IWDG, the independent watchdog (RM0090 §21; at /32 a count is 1 ms at 32 kHz) --------- */
+typedef struct iwdg_regs {
+    REG KR;  /* 0x00 key */
+    REG PR;  /* 0x04 prescaler: 0 /4, 1 /8, 2 /16, 3 /32, 4 /64, 5 /128, 6 /256 */
+    REG RLR; /* 0x08 reload, 12 bits */
+    REG SR;  /* 0x0C PVU, RVU: an update of PR or RLR still on its way to the LSI domain */
+} iwdg_regs_t;
+#define IWDG_KEY_START 0xCCCCu  /* starts the counter (and forces the LSI on); nothing stops it */
+#define IWDG_KEY_ACCESS 0x5555u /* opens PR and RLR for writing */
+#define IWDG_KEY_RELOAD 0xAAAAu /* counter back to RLR */
+#define IWDG_PR_DIV32 3u
+#define IWDG_RLR_MAX 0xFFFu
 
 typedef struct flash_regs {
     REG ACR; /* 0x00 */
@@ -200,6 +225,10 @@ typedef struct systick_regs {
 #define FLASH_IF ((flash_regs_t *)0x40023C00u)
 #define CAN1 ((can_regs_t *)0x40006400u)
 #define TIM2 ((tim_regs_t *)0x40000000u)
+#define IWDG ((iwdg_regs_t *)0x40003000u)
+/* DBGMCU_APB1_FZ (RM0090 §38.16.2): DBG_IWDG_STOP holds the watchdog while a debugger halts. */
+#define DBGMCU_APB1_FZ (*(volatile uint32_t *)0xE0042008u)
+#define DBGMCU_APB1_FZ_IWDG_STOP (1u << 12)
 #define SYSTICK ((systick_regs_t *)0xE000E010u)
 #define SCB_ICSR (*(volatile uint32_t *)0xE000ED04u)
 #define SCB_VTOR (*(volatile uint32_t *)0xE000ED08u)
