@@ -1446,7 +1446,8 @@ static void test_im_persistence(void)
         im_call_write(__LINE__, 3, 0, SSAP_C2, (uint16_t)(65001 + i), rec[i]);
     }
     CHECK_EQ(R.cs.card_nvm.writes, 4);
-    /* Power cycle: a new card from the same file. */
+    /* Power cycle: a new card from the same file (the old one's end gives up its lock). */
+    card_station_close(&R.cs);
     memset(&R.cs, 0, sizeof R.cs);
     line_wait_us(&R.l, 100000);
     station_init(&o);
@@ -1458,6 +1459,7 @@ static void test_im_persistence(void)
         im_call_read(__LINE__, 3, 0, SSAP_C2, (uint16_t)(65001 + i), rec[i]);
     }
     /* Without the file, a new card has blank records. */
+    card_station_close(&R.cs);
     memset(&R.cs, 0, sizeof R.cs);
     opts_t none = {0};
     station_init(&none);

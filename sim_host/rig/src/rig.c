@@ -303,6 +303,9 @@ void rig_close(rig_t *r)
     } else if (r->cfg.medium == RIG_MEDIUM_LCM) {
         dfp_lcm_segment_close(&r->segment);
     }
+    for (unsigned i = 0; i < r->num_cards; i++) {
+        card_station_close(&r->cards[i].cs);
+    }
 }
 
 static hal_uart_t medium_uart(rig_t *r)

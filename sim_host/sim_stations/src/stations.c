@@ -177,6 +177,12 @@ static hal_nvm_t open_card_nvm(card_station_t *c, const char *path, char *err, s
     return file_nvm_hal(&c->card_nvm);
 }
 
+void card_station_close(card_station_t *c)
+{
+    file_nvm_close(&c->nvm);
+    file_nvm_close(&c->card_nvm);
+}
+
 int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t uart,
                       hal_time_us_t now, char *err, size_t errlen)
 {

@@ -73,6 +73,9 @@ sim_station_t card_station(card_station_t *c);
  * keeps it whole. */
 int card_station_init(card_station_t *c, const card_options_t *opt, hal_uart_t uart,
                       hal_time_us_t now, char *err, size_t errlen);
+/* The card's end: gives up the locks on its EEPROM and NVM files (file_nvm_close), as the end
+ * of the process would, so another card (or the same one, initialised anew) may open them. */
+void card_station_close(card_station_t *c);
 /* For links that deliver inverter answers (SBus): forwards to the card. */
 void card_station_param_response(void *card_station, uint8_t channel,
                                  const uint8_t rsp[ML_TELEGRAM_LEN]);
