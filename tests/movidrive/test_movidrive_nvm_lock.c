@@ -51,7 +51,7 @@ static void test_second_process_refused(void)
 {
     snprintf(path, sizeof path, "%s/lock.ee", dir);
     char e[1000];
-    char want[1000];
+    char want[2 * sizeof path + 64]; /* the path twice and the text around it */
     CHECK_EQ(file_nvm_open(&nvm, path, 64, e, sizeof e), 0);
     hal_nvm_t h = file_nvm_hal(&nvm);
     const uint8_t seven[1] = {7};
@@ -86,7 +86,7 @@ static void test_second_process_refused(void)
 static void test_directories(void)
 {
     char e[1000];
-    char want[1000];
+    char want[sizeof path + sizeof dir + 64];
     snprintf(path, sizeof path, "%s/nodir/x.ee", dir);
     CHECK_EQ(file_nvm_check_path(path, e, sizeof e), FILE_NVM_UNUSABLE);
     snprintf(want, sizeof want, "%s: the directory %s/nodir does not exist", path, dir);
