@@ -47,7 +47,8 @@ typedef struct fdl_gap {
  * idle_ns. */
 static inline uint32_t fdl_gap_pause_us(bool strict, uint32_t char_ns, uint32_t relaxed_gap_us)
 {
-    return strict ? (char_ns + 999u) / 1000u + FDL_RX_GAP_TOLERANCE_NS / 1000u : relaxed_gap_us;
+    uint32_t char_us_up = char_ns / 1000u + (char_ns % 1000u != 0u ? 1u : 0u);
+    return strict ? char_us_up + FDL_RX_GAP_TOLERANCE_NS / 1000u : relaxed_gap_us;
 }
 
 /* dt_us: hal_time_diff(this timestamp, the previous one); pause_us from fdl_gap_pause_us(). */
