@@ -74,6 +74,7 @@ static int transmit_request(sbus_card_link_t *l, uint8_t sc, uint8_t channel,
     sbus_outstanding_t *o = &l->out[sc - 1u];
     o->busy = true;
     o->armed = false;
+    o->given_up = false;
     o->channel = channel;
     memcpy(o->req, req, ML_TELEGRAM_LEN);
     l->requests_sent++;
@@ -135,8 +136,14 @@ static int card_param_request(void *ctx, uint8_t channel, const uint8_t req[ML_T
 static void card_param_cancel(void *ctx, uint8_t channel)
 {
     sbus_card_link_t *l = ctx;
-    if (channel < ML_MAX_CHANNELS) {
-        l->queue[channel].waiting = false;
+    if (channel >= ML_MAX_CHANNELS) {
+        return;
+    }
+    l->queue[channel].waiting = false;
+    for (uint8_t i = 0; i < 2u; i++) {
+        if (l->out[i].busy && l->out[i].channel == channel) {
+            l->out[i].given_up = true;
+        }
     }
 }
 
@@ -211,11 +218,16 @@ static void card_response(sbus_card_link_t *l, uint8_t sc, const hal_can_frame_t
         return;
     }
     uint8_t channel = o->channel;
+    bool given_up = o->given_up;
     uint8_t rsp[ML_TELEGRAM_LEN];
     memcpy(rsp, f->data, sizeof rsp);
     o->busy = false;
     l->responses++;
     send_next(l, sc); /* whoever waited goes first */
+    if (given_up) {
+        l->stale_responses++;
+        return;
+    }
     if (l->cfg.param_response != NULL) {
         l->cfg.param_response(l->cfg.card, channel, rsp);
     }

@@ -789,17 +789,50 @@ static void test_late_answer_goes_to_its_own_channel(void)
     CHECK_BYTES(d1.rsp, 8, 0xB3, 0x00, 0x21, 0x45, 0x06, 0x02, 0x00, 0x00);
     CHECK_EQ(ml_client_request(&P.client, 0, read_p302, on_done, &d0, 210000u), 0);
     CHECK_EQ(P.wire.n, 1); /* still held for the late answer */
-    /* The late answer to the write: dropped by the client's quarantine, not taken as the read's. */
+    /* The late answer to the write: the link drops it (the client gave the write up), not taken
+     * as the read's. */
     p_inverter_answers(p302_5, 250000u);
     CHECK_EQ(d0.calls, 0);
     CHECK_EQ(d1.calls, 1);
-    CHECK_EQ(P.client.stale_responses, 1);
+    CHECK_EQ(P.link.stale_responses, 1);
     CHECK_EQ(P.wire.n, 2);
     CHECK_BYTES(P.wire.f[1].data, 8, 0x31, 0x00, 0x21, 0x45, 0x00, 0x00, 0x00, 0x00);
     const uint8_t value[8] = {0x31, 0x00, 0x21, 0x45, 0x00, 0x00, 0x00, 0x05};
     p_inverter_answers(value, 260000u);
     CHECK_EQ(d0.calls, 1);
     CHECK_BYTES(d0.rsp, 8, 0x31, 0x00, 0x21, 0x45, 0x00, 0x00, 0x00, 0x05);
+}
+
+/* A request sent late (it waited behind another) is given up by the client at 200 ms after it
+ * asked; the client's quarantine ends before the link's hold does, and the master's repetition
+ * waits in the link. The first request's late answer must not complete the repetition, which
+ * then goes out and gets its own answer. */
+static void test_late_answer_never_completes_the_repetition(void)
+{
+    p_setup();
+    done_rec_t dx = {0};
+    done_rec_t da = {0};
+    done_rec_t db = {0};
+    const uint8_t read_fw_[8] = {0x31, 0x00, 0x20, 0x6C, 0x00, 0x00, 0x00, 0x00};
+    const uint8_t h0_5[8] = {0x33, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x00, 0x05};
+    CHECK_EQ(ml_client_request(&P.client, 0, read_fw_, on_done, &dx, 0), 0);
+    p_run(0, 10000u);
+    CHECK_EQ(ml_client_request(&P.client, 1, h0_5, on_done, &da, 10000u), 0); /* waits */
+    p_run(10000u, 50000u);
+    const uint8_t fw[8] = {0x31, 0x00, 0x20, 0x6C, 0x31, 0x1C, 0x72, 0x89};
+    p_inverter_answers(fw, 50000u); /* the write goes out at 50 ms */
+    CHECK_EQ(P.wire.n, 2);
+    p_run(50000u, 415000u); /* 6/2 at 210 ms, quarantine over at 410 ms, link holds to 450 */
+    CHECK_BYTES(da.rsp, 8, 0xB3, 0x00, 0x2A, 0xF8, 0x06, 0x02, 0x00, 0x00);
+    CHECK_EQ(ml_client_request(&P.client, 1, h0_5, on_done, &db, 415000u), 0); /* repeated */
+    CHECK_EQ(P.wire.n, 2);
+    const uint8_t done_ok[8] = {0x33, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x00, 0x05};
+    p_inverter_answers(done_ok, 420000u); /* the first write's late answer */
+    CHECK_EQ(db.calls, 0);
+    CHECK_EQ(P.wire.n, 3); /* the repetition went out */
+    p_inverter_answers(done_ok, 425000u);
+    CHECK_EQ(db.calls, 1);
+    CHECK_BYTES(db.rsp, 8, 0x33, 0x00, 0x2A, 0xF8, 0x00, 0x00, 0x00, 0x05);
 }
 
 static void test_request_given_up_unsent_never_goes_out(void)
@@ -840,5 +873,6 @@ int main(void)
     RUN_TEST(test_link_holds_channel_while_client_waits);
     RUN_TEST(test_late_answer_goes_to_its_own_channel);
     RUN_TEST(test_request_given_up_unsent_never_goes_out);
+    RUN_TEST(test_late_answer_never_completes_the_repetition);
     return check_report();
 }

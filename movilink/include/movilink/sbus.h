@@ -22,7 +22,8 @@
  *     requests for the other card channels wait in the link (in arrival order) until the
  *     response arrives or SBUS_PARAM_TIMEOUT_US passes without one, and then go out.
  *   - param_cancel(channel): the client gave up; a request of that channel still waiting is
- *     dropped unsent.
+ *     dropped unsent, and the late answer of one already sent only frees the SBus channel: the
+ *     client may have sent the channel's next request by then, which must get its own answer.
  *   - process_outputs: one PO frame per call (PO1..PO3).
  *   - fieldbus_status: nothing on the wire; SBus has no telegram for it. When the DP watchdog
  *     expires (status.timeout), the card stops sending PO frames until the timeout clears, so
@@ -125,6 +126,7 @@ typedef struct sbus_card_link_cfg {
 typedef struct sbus_outstanding {
     bool busy;
     bool armed;            /* deadline set (at the first poll after sending) */
+    bool given_up;         /* the client cancelled it: its late answer is nobody's */
     uint8_t channel;       /* card channel */
     uint8_t req[ML_TELEGRAM_LEN];
     hal_time_us_t deadline;
