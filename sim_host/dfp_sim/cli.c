@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "hal/hal_uart.h"
 
@@ -33,6 +34,32 @@ static const char *split_dir(const char *path, char *buf, size_t n)
     return slash + 1;
 }
 
+/* Where a path that does not exist yet will be created: a dangling symbolic link (a chain of at
+ * most 8) creates its target, relative to the link's own directory. */
+static void creation_path(const char *path, char *out, size_t n)
+{
+    (void)snprintf(out, n, "%s", path);
+    for (int hops = 0; hops < 8; hops++) {
+        struct stat st;
+        char target[4096];
+        if (lstat(out, &st) != 0 || !S_ISLNK(st.st_mode)) {
+            return;
+        }
+        ssize_t len = readlink(out, target, sizeof target - 1u);
+        if (len <= 0) {
+            return;
+        }
+        target[len] = '\0';
+        char dir[4096];
+        (void)split_dir(out, dir, sizeof dir);
+        if (target[0] == '/') {
+            (void)snprintf(out, n, "%s", target);
+        } else {
+            (void)snprintf(out, n, "%s/%s", dir, target);
+        }
+    }
+}
+
 bool cli_same_file(const char *a, const char *b)
 {
     if (strcmp(a, b) == 0) {
@@ -45,11 +72,16 @@ bool cli_same_file(const char *a, const char *b)
     if (a_exists || b_exists) {
         return a_exists && b_exists && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
     }
-    /* Neither is there yet: whichever is created first is the other one as well. */
+    /* Neither is there yet: whichever is created first is the other one as well, also through
+     * a link that points at where the other will be. */
+    char ca[4096];
+    char cb[4096];
+    creation_path(a, ca, sizeof ca);
+    creation_path(b, cb, sizeof cb);
     char da[4096];
     char db[4096];
-    const char *na = split_dir(a, da, sizeof da);
-    const char *nb = split_dir(b, db, sizeof db);
+    const char *na = split_dir(ca, da, sizeof da);
+    const char *nb = split_dir(cb, db, sizeof db);
     return strcmp(na, nb) == 0 && stat(da, &sa) == 0 && stat(db, &sb) == 0 &&
            sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }

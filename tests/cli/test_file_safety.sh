@@ -59,6 +59,12 @@ expect_exit 2 "--eeprom = --card-nvm, neither there yet" -- \
   "$sim" slave --pty p1 --eeprom new.ee --card-nvm ./new.ee --duration 1
 expect_in "neither there yet" "--eeprom and --card-nvm are the same file (new.ee, ./new.ee)" "$out"
 [ ! -e new.ee ] && [ ! -e p1 ] && ok || bad "something was created: $(ls)"
+# A capture through a link that points where the EEPROM file will be made (a dangling link).
+mkdir sub && ln -s ../later.ee sub/cap.pcap
+expect_exit 2 "--capture through a dangling link to the --eeprom file" -- \
+  "$sim" slave --pty p1 --eeprom later.ee --capture sub/cap.pcap --duration 1
+expect_in "dangling link" "--capture and --eeprom are the same file (sub/cap.pcap, later.ee)" "$out"
+[ ! -e later.ee ] && ok || bad "later.ee was created"
 expect_exit 2 "--capture as an LCM log" -- \
   "$sim" slave --pty p1 --eeprom drive.ee --lcm "file://$tmp/drive.ee?mode=w" --duration 1
 expect_in "LCM log" "--lcm and --eeprom are the same file ($tmp/drive.ee, drive.ee)" "$out"
