@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "hal/hal_uart.h"
+#include "sim_hal/path.h"
 
 void cli_error(const char *fmt, ...)
 {
@@ -20,18 +21,6 @@ void cli_error(const char *fmt, ...)
     vfprintf(stderr, fmt, ap);
     fputc('\n', stderr);
     va_end(ap);
-}
-
-/* The directory part of path ("." for a bare name) into buf; the name after it. */
-static const char *split_dir(const char *path, char *buf, size_t n)
-{
-    const char *slash = strrchr(path, '/');
-    if (slash == NULL) {
-        (void)snprintf(buf, n, ".");
-        return path;
-    }
-    (void)snprintf(buf, n, "%.*s", slash == path ? 1 : (int)(slash - path), path);
-    return slash + 1;
 }
 
 /* Where a path that does not exist yet will be created: a dangling symbolic link (a chain of at
@@ -51,7 +40,7 @@ static void creation_path(const char *path, char *out, size_t n)
         }
         target[len] = '\0';
         char dir[4096];
-        (void)split_dir(out, dir, sizeof dir);
+        (void)sim_path_split(out, dir, sizeof dir);
         if (target[0] == '/') {
             (void)snprintf(out, n, "%s", target);
         } else {
@@ -80,8 +69,8 @@ bool cli_same_file(const char *a, const char *b)
     creation_path(b, cb, sizeof cb);
     char da[4096];
     char db[4096];
-    const char *na = split_dir(ca, da, sizeof da);
-    const char *nb = split_dir(cb, db, sizeof db);
+    const char *na = sim_path_split(ca, da, sizeof da);
+    const char *nb = sim_path_split(cb, db, sizeof db);
     return strcmp(na, nb) == 0 && stat(da, &sa) == 0 && stat(db, &sb) == 0 &&
            sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }

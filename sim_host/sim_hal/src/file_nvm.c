@@ -2,6 +2,7 @@
 
 #include "sim_hal/file_nvm.h"
 #include "hal/hal_byte_order.h"
+#include "sim_hal/path.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -56,23 +57,12 @@ static int check_kind(const char *path, char *err, size_t errlen)
     return -1;
 }
 
-/* The directory of path ("." for a bare name) into dir. */
-static void dir_of(const char *path, char *dir, size_t n)
-{
-    const char *slash = strrchr(path, '/');
-    if (slash == NULL) {
-        snprintf(dir, n, ".");
-    } else {
-        snprintf(dir, n, "%.*s", slash == path ? 1 : (int)(slash - path), path);
-    }
-}
-
 /* Every write creates PATH.tmp and renames it in path's directory: without one that can be
  * written there, each non-volatile write would fail long after the start. */
 static int check_dir(const char *path, char *err, size_t errlen)
 {
     char dir[FILE_NVM_PATH_MAX + 8];
-    dir_of(path, dir, sizeof dir);
+    (void)sim_path_split(path, dir, sizeof dir);
     struct stat st;
     if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
         snprintf(err, errlen, "%s: the directory %s does not exist", path, dir);
@@ -418,14 +408,7 @@ static int write_all(int fd, const uint8_t *p, size_t n)
 static int sync_dir(const char *path)
 {
     char dir[FILE_NVM_PATH_MAX];
-    const char *slash = strrchr(path, '/');
-    if (slash == NULL) {
-        snprintf(dir, sizeof dir, ".");
-    } else if (slash == path) {
-        snprintf(dir, sizeof dir, "/");
-    } else {
-        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
-    }
+    (void)sim_path_split(path, dir, sizeof dir);
     int fd = open(dir, O_RDONLY | O_CLOEXEC);
     if (fd < 0) {
         return -1;
