@@ -87,6 +87,19 @@ bool cli_files_distinct(const char *cmd, const cli_file_t *files, size_t n)
             }
         }
     }
+    return cli_no_links(cmd, files, n);
+}
+
+bool cli_no_links(const char *cmd, const cli_file_t *files, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        struct stat st;
+        if (files[i].path != NULL && !files[i].input && lstat(files[i].path, &st) == 0 &&
+            S_ISLNK(st.st_mode)) {
+            cli_error("%s: %s %s is " SIM_LINK_REFUSED, cmd, files[i].option, files[i].path);
+            return false;
+        }
+    }
     return true;
 }
 
