@@ -183,6 +183,10 @@ for cap in c.pcap c.pcapng c.txt; do
     "$sim" record --capture "plant/$cap" --cycles 5
   planted "$cap" "dfp-sim: convert: OUT plant/$cap $refused" "$sim" convert bus.pcap "plant/$cap"
 done
+planted e.ee "dfp-sim: slave: --eeprom plant/e.ee $refused" \
+  "$sim" slave --pty plant/p1 --eeprom plant/e.ee --duration 1
+planted e.ee "dfp-sim: inverter: --eeprom plant/e.ee: plant/e.ee $linked" \
+  timeout 10 "$sim" inverter --can vcan0 --eeprom plant/e.ee
 planted m.pcap "dfp-sim: master: --capture plant/m.pcap $refused" \
   "$sim" master --port plant/none --address 4 --config F3F2 --capture plant/m.pcap
 planted d.pcap "dfp-sim: demo: --capture plant/d.pcap $refused" \

@@ -102,7 +102,8 @@ static void in_use_text(const char *path, int fd, char *err, size_t errlen)
 
 /* -1 with "PATH: PATH.SUFFIX is a symbolic link ..." when one is at PATH.SUFFIX. We make
  * PATH.lock and PATH.tmp as files: a link there was put by someone else, and following it would
- * make us write its target. */
+ * make us write its target. PATH itself is only renamed over, but a link there would be read
+ * and then silently replaced: refused as well (SUFFIX ""). */
 static int check_no_link(const char *path, const char *suffix, char *err, size_t errlen)
 {
     char name[FILE_NVM_PATH_MAX + 8];
@@ -150,7 +151,8 @@ int file_nvm_check_path(const char *path, char *err, size_t errlen)
     if (check_kind(path, err, errlen) != 0) {
         return FILE_NVM_NOT_FILE;
     }
-    if (check_dir(path, err, errlen) != 0 || check_no_link(path, ".lock", err, errlen) != 0 ||
+    if (check_dir(path, err, errlen) != 0 || check_no_link(path, "", err, errlen) != 0 ||
+        check_no_link(path, ".lock", err, errlen) != 0 ||
         check_no_link(path, ".tmp", err, errlen) != 0 || check_lock(path, err, errlen) != 0) {
         return FILE_NVM_UNUSABLE;
     }

@@ -89,9 +89,9 @@ void file_nvm_close(file_nvm_t *f);
  * process holds it. Else FILE_NVM_NOT_FILE with "PATH: a FIFO, not a regular file" (a directory,
  * a character device ...) in err, or FILE_NVM_UNUSABLE with "PATH: the directory DIR does not
  * exist", "PATH: the directory DIR is not writable (REASON)", "PATH: PATH.lock is a symbolic
- * link (dfp-sim writes no file through a link)" (the same for PATH.tmp) or "PATH: in use by
- * another process (pid N, lock PATH.lock)". Checks without taking the lock: file_nvm_open
- * takes it. */
+ * link (dfp-sim writes no file through a link)" (the same for PATH.tmp and PATH itself) or
+ * "PATH: in use by another process (pid N, lock PATH.lock)". Checks without taking the lock:
+ * file_nvm_open takes it. */
 int file_nvm_check_path(const char *path, char *err, size_t errlen);
 hal_nvm_t file_nvm_hal(file_nvm_t *f);
 /* CRC-32 (IEEE 802.3, reflected, as zlib), exposed for tests that build images. */
