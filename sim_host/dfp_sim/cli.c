@@ -11,16 +11,20 @@
 #include <unistd.h>
 
 #include "hal/hal_uart.h"
+#include "sim_hal/error_text.h"
 #include "sim_hal/path.h"
 
 void cli_error(const char *fmt, ...)
 {
+    /* Errors quote LCM channel names and texts of captures: the terminal gets them escaped. */
+    char text[2048];
+    char shown[4u * sizeof text];
     va_list ap;
     va_start(ap, fmt);
-    fputs("dfp-sim: ", stderr);
-    vfprintf(stderr, fmt, ap);
-    fputc('\n', stderr);
+    (void)vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
+    sim_text_visible(text, shown, sizeof shown);
+    fprintf(stderr, "dfp-sim: %s\n", shown);
 }
 
 /* Where a path that does not exist yet will be created: a dangling symbolic link (a chain of at

@@ -13,7 +13,9 @@
 #   PATH.lock / PATH.tmp beside --eeprom and --card-nvm, --capture (pcap, pcapng, text), an LCM
 #   log, replay --report json/junit, record's capture, convert's OUT: refused at the command
 #   line (exit 2, one line), the link's target keeps its bytes; a PATH.tmp link planted while the
-#   card runs is replaced, not written through, and the write still lands in PATH.
+#   card runs is replaced, not written through, and the write still lands in PATH;
+# - text from a file reaches the terminal with its control characters escaped: an LCM log whose
+#   channel name holds a screen clear, an OSC 52 clipboard write and a CR is named \x1b... .
 sim=$1
 . "$(dirname "$0")/lib.sh"
 with_tmp
@@ -210,5 +212,22 @@ spared "run.ee.tmp planted while running"
 start_slave pe plant/run.ee || exit 1
 [ "$(p130)" = 3333 ] && ok || bad "P130 = 3333 did not reach run.ee: $(p130)"
 stop_slave "the restart on run.ee"
+
+# F10: an LCM log's channel names are the file's text: shown escaped in the error that lists them.
+"$sim" replay bus.pcap --lcm "file://$tmp/t.lcm?mode=w" >/dev/null 2>&1 || bad "no LCM log made"
+python3 - "$tmp/t.lcm" "$tmp/evil.lcm" <<'PY'
+import struct, sys
+d, out, o = open(sys.argv[1], "rb").read(), b"", 0
+evil = b"EVIL\x1b[2J\x1b]52;c;ZXZpbA==\x07\r\xc2\x9b"
+while o < len(d):   # every event moved to the channel EVIL...: sync, number, time, lengths
+    sync, num, ts, cl, dl = struct.unpack_from(">IQQII", d, o)
+    out += struct.pack(">IQQII", sync, num, ts, len(evil), dl) + evil + d[o + 28 + cl:o + 28 + cl + dl]
+    o += 28 + cl + dl
+open(sys.argv[2], "wb").write(out)
+PY
+expect_exit 2 "an LCM log with control characters in its channel name" -- \
+  "$sim" replay "$tmp/evil.lcm" --channel NOPE
+[ "$out" = "dfp-sim: $tmp/evil.lcm: no telegram_t on LCM channel 'NOPE' (channels with telegrams: EVIL\\x1b[2J\\x1b]52;c;ZXZpbA==\\x07\\x0d\\x9b)" ] &&
+  ok || bad "escaped channel names: $(printf %q "$out")"
 
 finish
