@@ -13,6 +13,7 @@ import signal
 import struct
 import sys
 import time
+import unicodedata
 
 from . import fdl_text, lcm_types
 
@@ -91,6 +92,31 @@ def parse_args(argv):
 
 
 # ---- text ----------------------------------------------------------------------------------
+
+# Unicode categories shown escaped besides C0, DEL and C1 (which are Cc): format characters
+# (bidirectional overrides that reorder what follows, zero-width ones), line and paragraph
+# separators, and lone surrogates.
+_ESCAPED_CATEGORIES = frozenset(("Cc", "Cf", "Zl", "Zp", "Cs"))
+
+
+def _escape_char(c):
+    o = ord(c)
+    if o < 0x20 or 0x7F <= o <= 0x9F:
+        return "\\x%02x" % o
+    if o > 0x9F and unicodedata.category(c) in _ESCAPED_CATEGORIES:
+        return "\\u{%04x}" % o
+    return c
+
+
+def visible(text):
+    """text with every control character shown as \\xNN or \\u{NNNN}. Strings from the wire
+    (channel names, card states, parameter texts) reach the terminal only through this: a
+    sender could otherwise clear the screen, fake lines (CR, LF) or, with OSC 52, write the
+    clipboard."""
+    if text.isprintable():
+        return text
+    return "".join(_escape_char(c) for c in text)
+
 
 def time_text(utime):
     """Local clock time of a message's utime (µs since the epoch), to the millisecond."""
@@ -282,7 +308,7 @@ class Viewer:
         self._dirty = False
         self._drawn_at = time.monotonic()
         width = shutil.get_terminal_size((100, 24)).columns
-        self.out.write("\r\x1b[K" + self.status_text()[:max(width - 1, 10)])
+        self.out.write("\r\x1b[K" + visible(self.status_text())[:max(width - 1, 10)])
         self.out.flush()
         self._status_shown = True
 
@@ -292,8 +318,9 @@ class Viewer:
             self._status_shown = False
 
     def emit(self, line):
+        """Every line but the status line and the summary is written here, escaped once."""
         self.clear_status()
-        self.out.write(line + "\n")
+        self.out.write(visible(line) + "\n")
         if self.status_line:
             self.redraw()
         else:
@@ -314,7 +341,7 @@ class Viewer:
     def print_summary(self, seconds):
         self.clear_status()
         for line in self.summary_lines(seconds):
-            self.out.write(line + "\n")
+            self.out.write(visible(line) + "\n")
         if self.status_line:
             self.redraw()
         self.out.flush()

@@ -113,3 +113,54 @@ def test_viewer_lines_through_the_generated_types():
     assert v.counts == {"telegram": 1, "state": 0, "param": 0, "undecodable": 1, "other": 1}
     assert v.summary_lines(1.0)[1] == "station 4: no card state; 1 telegrams, " \
                                       "Data_Exchange sent 0, errors 1"
+
+
+def test_control_characters_from_the_wire_are_shown_escaped():
+    # A sender on the LCM group chooses every string the viewer prints: a screen clear, an OSC
+    # 52 clipboard write, a carriage return over the line and a faked line of its own.
+    pytest.importorskip("lcm")
+    from dfpsim import lcm_types
+    types = lcm_types.load()
+    out = io.StringIO()
+    v = Viewer(types, out)
+    ps = types["param_service_t"]()
+    ps.utime, ps.address, ps.index, ps.subindex, ps.value, ps.ok = 0, 4, 8300, 0, 0, False
+    ps.path = "c1-ds47\x1b]52;c;ZXZpbA==\x07"
+    ps.service = "read\rwrite"
+    ps.result_text = "\x1b[2Jclass 8\n00:00:00.000 FAKE       4 param ok\u202e\x9b"
+    v.on_message("DFP_PARAM\x1b[31m", ps.encode())
+    st = types["card_state_t"]()
+    st.utime, st.address = 0, 5
+    st.dp_state, st.led_run, st.led_bus_fault = "Data_Exch\x1b[H", "on\x7f", "off"
+    st.p090_pd_config, st.p091_fieldbus_type = "3PD\x08\x08\x08", "PROFIBUS DP"
+    v.on_message("DFP_CARD_STATE", st.encode())
+    v.on_message("OTHER\x1b[2J", b"\x01" * 16)               # another type: named in the summary
+    v.print_summary(1.0)
+    text = out.getvalue()
+    for c in ("\x1b", "\x07", "\r", "\x08", "\x7f", "\x9b", "\u202e"):
+        assert c not in text
+    lines = text.split("\n")
+    assert lines[0].split(None, 1)[1] == (
+        "DFP_PARAM\\x1b[31m   4 param c1-ds47\\x1b]52;c;ZXZpbA==\\x07 read\\x0dwrite "
+        "index 8300.0 value 0 refused: \\x1b[2Jclass 8\\x0a00:00:00.000 FAKE       4 param ok"
+        "\\u{202e}\\x9b")
+    assert lines[1].split(None, 1)[1].startswith(
+        "DFP_CARD_STATE   5 state Data_Exch\\x1b[H, searching, RUN on\\x7f, BUS FAULT off, "
+        "P090 3PD\\x08\\x08\\x08, ")
+    assert lines[2].startswith("summary: 2 messages") and \
+        lines[2].endswith("1 of other types (OTHER\\x1b[2J)")
+    assert lines[3].startswith("station 5: Data_Exch\\x1b[H, searching, RUN on\\x7f")
+    assert lines[4:] == [""]
+
+
+def test_the_status_line_shows_wire_text_escaped():
+    pytest.importorskip("lcm")
+    from dfpsim import lcm_types
+    types = lcm_types.load()
+    out = io.StringIO()
+    v = Viewer(types, out, status_line=True)
+    st = types["card_state_t"]()
+    st.address, st.dp_state, st.led_run, st.led_bus_fault = 6, "\x1b[2J", "on", "\r"
+    v.on_message("DFP_CARD_STATE", st.encode())
+    # The viewer's own "\r\x1b[K" clears the line; what follows it is the station's text.
+    assert out.getvalue() == "\r\x1b[K6: \\x1b[2J searching RUN on BF \\x0d DX 0 err 0"

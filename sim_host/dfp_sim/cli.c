@@ -11,16 +11,20 @@
 #include <unistd.h>
 
 #include "hal/hal_uart.h"
+#include "sim_hal/error_text.h"
 #include "sim_hal/path.h"
 
 void cli_error(const char *fmt, ...)
 {
+    /* Errors quote LCM channel names and texts of captures: the terminal gets them escaped. */
+    char text[2048];
+    char shown[4u * sizeof text];
     va_list ap;
     va_start(ap, fmt);
-    fputs("dfp-sim: ", stderr);
-    vfprintf(stderr, fmt, ap);
-    fputc('\n', stderr);
+    (void)vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
+    sim_text_visible(text, shown, sizeof shown);
+    fprintf(stderr, "dfp-sim: %s\n", shown);
 }
 
 /* Where a path that does not exist yet will be created: a dangling symbolic link (a chain of at
@@ -85,6 +89,19 @@ bool cli_files_distinct(const char *cmd, const cli_file_t *files, size_t n)
                           files[k].option, files[i].path, files[k].path);
                 return false;
             }
+        }
+    }
+    return cli_no_links(cmd, files, n);
+}
+
+bool cli_no_links(const char *cmd, const cli_file_t *files, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        struct stat st;
+        if (files[i].path != NULL && !files[i].input && lstat(files[i].path, &st) == 0 &&
+            S_ISLNK(st.st_mode)) {
+            cli_error("%s: %s %s is " SIM_LINK_REFUSED, cmd, files[i].option, files[i].path);
+            return false;
         }
     }
     return true;

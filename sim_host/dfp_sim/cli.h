@@ -22,10 +22,12 @@ const char *cli_value(int argc, char **argv, int *i);
 void cli_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
 /* A file the command line names, with the option or operand that names it ("--capture",
- * "IN"); path NULL: not given. */
+ * "IN"); path NULL: not given. input: only read (a link there is followed); every other file is
+ * written. */
 typedef struct cli_file {
     const char *option;
     const char *path;
+    bool input;
 } cli_file_t;
 /* Whether a and b are one file: the same name, the same device and inode when both exist, or,
  * when neither exists yet, the same name in the same directory ("new.ee", "./new.ee"). */
@@ -34,6 +36,10 @@ bool cli_same_file(const char *a, const char *b);
  * files[0..n) are one file. For every command that writes a file the user names: opening it
  * would truncate another file of the same command line (an input, an EEPROM) before it is read. */
 bool cli_files_distinct(const char *cmd, const cli_file_t *files, size_t n);
+/* False after reporting "CMD: OPTION PATH is a symbolic link: refused ..." when a file of
+ * files[0..n) that is written is a symbolic link (the files are opened without following one:
+ * sim_fopen_write). cli_files_distinct checks this as well, after the same-file check. */
+bool cli_no_links(const char *cmd, const cli_file_t *files, size_t n);
 /* The log an LCM URL writes ("file://OUT.lcm?mode=w" or mode=a) into buf, else NULL. */
 const char *cli_lcm_log_written(const char *url, char *buf, size_t n);
 

@@ -114,7 +114,7 @@ static int convert_parse(convert_opts_t *o, int argc, char **argv)
         cli_error("convert needs an input and an output file: dfp-sim convert IN OUT");
         return EXIT_USAGE;
     }
-    const cli_file_t files[] = {{"IN", o->in}, {"OUT", o->out}};
+    const cli_file_t files[] = {{"IN", o->in, .input = true}, {"OUT", o->out, false}};
     return cli_files_distinct("convert", files, 2u) ? 0 : EXIT_USAGE;
 }
 

@@ -279,9 +279,10 @@ static int demo_parse(demo_opts_t *o, int argc, char **argv)
         }
     }
     char lcm_log[512];
-    const cli_file_t files[] = {{"--capture", o->capture.path},
+    const cli_file_t files[] = {{"--capture", o->capture.path, false},
                                 {"--lcm", cli_lcm_log_written(o->lcm_url, lcm_log,
-                                                              sizeof lcm_log)}};
+                                                              sizeof lcm_log),
+                                 false}};
     return cli_files_distinct("demo", files, 2u) ? 0 : EXIT_USAGE;
 }
 

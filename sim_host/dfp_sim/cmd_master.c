@@ -140,7 +140,8 @@ static int master_parse(master_opts_t *o, int argc, char **argv)
                   "required");
         return EXIT_USAGE;
     }
-    if (!medium_check(&o->med, "master") ||
+    const cli_file_t capture = {"--capture", o->capture.path, false};
+    if (!medium_check(&o->med, "master") || !cli_no_links("master", &capture, 1u) ||
         !cli_address_list(o->addresses, o->slave_addr, DP_MASTER_MAX_SLAVES, &o->num_slaves)) {
         return EXIT_USAGE;
     }

@@ -496,7 +496,10 @@ static int param_parse(param_opts_t *o, int argc, char **argv)
                   "of --port)");
         return EXIT_USAGE;
     }
-    if (!medium_check(&o->med, "param")) return EXIT_USAGE;
+    const cli_file_t capture = {"--capture", o->capture.path, false};
+    if (!medium_check(&o->med, "param") || !cli_no_links("param", &capture, 1u)) {
+        return EXIT_USAGE;
+    }
     if (o->npos == 0) {
         cli_error("param: say what to do: read INDEX [INDEX ...], write INDEX VALUE or im0");
         return EXIT_USAGE;

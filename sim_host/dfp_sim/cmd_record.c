@@ -101,7 +101,8 @@ static int parse_record_args(int argc, char **argv, gen_options_t *o, uint32_t *
                   "be 114 or lower");
         return EXIT_USAGE;
     }
-    return 0;
+    const cli_file_t out = {"--capture", o->path, false};
+    return cli_no_links("record", &out, 1u) ? 0 : EXIT_USAGE;
 }
 
 int cmd_record(int argc, char **argv)

@@ -1,6 +1,5 @@
 /* dfp-sim replay: a bus capture played against the emulated card, optionally checking every
  * reply (docs/replay.md). The command line is replay_args.c's. */
-#include <errno.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -16,6 +15,7 @@
 #include "replay/replay.h"
 #include "replay_args.h"
 #include "report.h"
+#include "sim_hal/path.h"
 
 /* ---- replay -------------------------------------------------------------------------------- */
 
@@ -229,10 +229,11 @@ static int write_report_files(const replay_args_t *a, const replay_report_info_t
     int status = 0;
     for (unsigned i = 0; i < a->n_reports; i++) {
         const replay_report_file_t *rf = &a->reports[i];
-        FILE *f = fopen(rf->path, "w");
+        char why[160];
+        FILE *f = sim_fopen_write(rf->path, why, sizeof why);
         if (f == NULL) {
             cli_error("replay: --report %s: cannot write %s: %s", rf->junit ? "junit" : "json",
-                      rf->path, strerror(errno));
+                      rf->path, why);
             status = 1;
             continue;
         }

@@ -176,9 +176,10 @@ typedef struct slave_files {
 
 static void slave_file_list(const slave_opts_t *o, slave_files_t *l)
 {
-    l->files[0] = (cli_file_t){"--capture", o->capture.path};
+    l->files[0] = (cli_file_t){"--capture", o->capture.path, false};
     l->files[1] = (cli_file_t){"--lcm", cli_lcm_log_written(o->lcm_url, l->lcm_log,
-                                                            sizeof l->lcm_log)};
+                                                            sizeof l->lcm_log),
+                               false};
     l->n = 2u;
     const char *given[2] = {o->eeprom, o->card_nvm};
     for (unsigned k = 0; k < 2u; k++) {
@@ -188,7 +189,8 @@ static void slave_file_list(const slave_opts_t *o, slave_files_t *l)
                 k == 0u ? "--eeprom" : "--card-nvm",
                 o->num_cards > 1u ? per_card_path(given[k], k == 0u ? "drive" : "card",
                                                   o->addresses[i], buf, sizeof l->paths[0])
-                                  : given[k]};
+                                  : given[k],
+                false};
         }
     }
 }

@@ -186,11 +186,12 @@ static bool files_distinct(const replay_args_t *a)
     cli_file_t files[2u + REPLAY_MAX_REPORTS];
     char lcm_log[512];
     size_t n = 0;
-    files[n++] = (cli_file_t){"FILE", a->file};
-    files[n++] = (cli_file_t){"--lcm", cli_lcm_log_written(a->lcm_url, lcm_log, sizeof lcm_log)};
+    files[n++] = (cli_file_t){"FILE", a->file, .input = true};
+    files[n++] = (cli_file_t){"--lcm", cli_lcm_log_written(a->lcm_url, lcm_log, sizeof lcm_log),
+                              false};
     for (unsigned k = 0; k < a->n_reports; k++) {
         files[n++] = (cli_file_t){a->reports[k].junit ? "--report junit" : "--report json",
-                                  a->reports[k].path};
+                                  a->reports[k].path, false};
     }
     return cli_files_distinct("replay", files, n);
 }

@@ -1,8 +1,11 @@
 /* Capture files through the reader and writer of capture.h: what dfp-sim writes reads back
  * exactly (time to the written resolution, octets, baud, positions), files of other tools
  * (big-endian pcap) read, and damaged files end with an error that names the position. */
+#define _POSIX_C_SOURCE 200809L // NOLINT(bugprone-reserved-identifier,cert-dcl37-c,cert-dcl51-cpp): feature-test macro
+
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "capture/capture.h"
 #include "check.h"
@@ -379,6 +382,35 @@ static void test_writer_refusals(void)
     CHECK(strstr(err, "/nonexistent-dir/x.pcap") != NULL);
 }
 
+/* A symbolic link at the name (put there by another user in a shared directory, after the
+ * command line was checked) is refused by every writer; its target keeps its bytes. */
+static void test_writer_refuses_a_link(void)
+{
+    char victim[600];
+    path_of(victim, sizeof victim, "victim.txt");
+    static const uint8_t secret[] = "the victim's bytes\n";
+    write_file(victim, secret, sizeof secret - 1u);
+    static const char *const names[] = {"planted.pcap", "planted.pcapng", "planted.txt"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        char p[600];
+        path_of(p, sizeof p, names[i]);
+        (void)unlink(p);
+        CHECK_EQ(symlink(victim, p), 0);
+        cap_writer_t w;
+        char err[700] = "";
+        cap_writer_options_t opt = {.format = CAP_FORMAT_AUTO};
+        CHECK_EQ(cap_writer_open(&w, p, &opt, 0, err, sizeof err), -1);
+        char want[800];
+        snprintf(want, sizeof want, "cannot write capture file %s: a symbolic link: refused "
+                 "(dfp-sim writes no file through a link)", p);
+        CHECK_STR(err, want);
+        (void)unlink(p);
+    }
+    uint8_t got[64];
+    CHECK_EQ(read_file(victim, got, sizeof got), sizeof secret - 1u);
+    CHECK(memcmp(got, secret, sizeof secret - 1u) == 0);
+}
+
 static void test_text_round_trip_and_bad_lines(void)
 {
     char p[600];
@@ -463,6 +495,7 @@ int main(int argc, char **argv)
     RUN_TEST(test_long_record_is_cut_and_marked);
     RUN_TEST(test_pcap_records_across_chunks);
     RUN_TEST(test_writer_refusals);
+    RUN_TEST(test_writer_refuses_a_link);
     RUN_TEST(test_text_round_trip_and_bad_lines);
     RUN_TEST(test_format_names);
     return check_report();

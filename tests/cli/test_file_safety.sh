@@ -8,7 +8,14 @@
 # - a second process on an EEPROM file is refused (exit 2, naming the file, the holder's pid and
 #   the lock) and the first one's acknowledged write survives; after it ends the file is free;
 # - --inverter can: with a bad value and --eeprom in a missing directory: exit 2, not 1 or 0;
-# - replay --check with its output lost (stdout /dev/full): exit 1 and a message on stderr.
+# - replay --check with its output lost (stdout /dev/full): exit 1 and a message on stderr;
+# - a symbolic link planted (by another user of a shared directory) where dfp-sim writes a file:
+#   PATH.lock / PATH.tmp beside --eeprom and --card-nvm, --capture (pcap, pcapng, text), an LCM
+#   log, replay --report json/junit, record's capture, convert's OUT: refused at the command
+#   line (exit 2, one line), the link's target keeps its bytes; a PATH.tmp link planted while the
+#   card runs is replaced, not written through, and the write still lands in PATH;
+# - text from a file reaches the terminal with its control characters escaped: an LCM log whose
+#   channel name holds a screen clear, an OSC 52 clipboard write and a CR is named \x1b... .
 sim=$1
 . "$(dirname "$0")/lib.sh"
 with_tmp
@@ -133,5 +140,94 @@ expect_exit 2 "inverter --eeprom in a missing directory" -- \
 expect_in "output lost" "dfp-sim: standard output: write error" "$(cat err.txt)"
 "$sim" check-cfg F3F2 >/dev/full 2>/dev/null; rc=$?
 [ "$rc" = 1 ] && ok || bad "check-cfg >/dev/full: exit $rc"
+
+# F9: symbolic links planted where dfp-sim writes: refused, their target untouched.
+mkdir -p plant vdir && printf 'the victim file\n' >vdir/victim
+victim=$(md5sum <vdir/victim)
+spared() { [ "$(md5sum <vdir/victim)" = "$victim" ] && ok || bad "$1: the victim was written"; }
+linked="is a symbolic link (dfp-sim writes no file through a link): refused"
+for side in lock tmp; do
+  ln -s ../vdir/victim "plant/drive.ee.$side"
+  expect_exit 2 "a link at drive.ee.$side" -- \
+    "$sim" slave --pty plant/p1 --eeprom plant/drive.ee --duration 1
+  [ "$out" = "dfp-sim: slave: --eeprom plant/drive.ee: plant/drive.ee.$side $linked" ] &&
+    ok || bad "drive.ee.$side message: $out"
+  spared "drive.ee.$side"
+  ln -s ../vdir/victim "plant/card.nvm.$side"
+  expect_exit 2 "a link at card.nvm.$side" -- \
+    "$sim" slave --pty plant/p1 --card-nvm plant/card.nvm --duration 1
+  [ "$out" = "dfp-sim: slave: --card-nvm plant/card.nvm: plant/card.nvm.$side $linked" ] &&
+    ok || bad "card.nvm.$side message: $out"
+  spared "card.nvm.$side"
+  expect_exit 2 "inverter, a link at drive.ee.$side" -- \
+    timeout 10 "$sim" inverter --can vcan0 --eeprom plant/drive.ee
+  [ "$out" = "dfp-sim: inverter: --eeprom plant/drive.ee: plant/drive.ee.$side $linked" ] &&
+    ok || bad "inverter drive.ee.$side message: $out"
+  spared "inverter drive.ee.$side"
+  rm "plant/drive.ee.$side" "plant/card.nvm.$side"
+  [ ! -e plant/drive.ee ] && [ ! -e plant/card.nvm ] && [ ! -e plant/p1 ] && ok ||
+    bad "a refused run created files: $(ls plant)"
+done
+refused="is a symbolic link: refused (dfp-sim writes no file through a link)"
+# planted NAME EXPECTED-LINE COMMAND...: a link at plant/NAME, exit 2, that line, no write.
+planted() {
+  local name=$1 line=$2; shift 2
+  ln -s ../vdir/victim "plant/$name"
+  expect_exit 2 "a link at $name: $*" -- "$@"
+  [ "$out" = "$line" ] && ok || bad "a link at $name: $out"
+  spared "$name: $*"
+  rm "plant/$name"
+}
+for cap in c.pcap c.pcapng c.txt; do
+  planted "$cap" "dfp-sim: slave: --capture plant/$cap $refused" \
+    "$sim" slave --pty plant/p1 --capture "plant/$cap" --duration 1
+  planted "$cap" "dfp-sim: record: --capture plant/$cap $refused" \
+    "$sim" record --capture "plant/$cap" --cycles 5
+  planted "$cap" "dfp-sim: convert: OUT plant/$cap $refused" "$sim" convert bus.pcap "plant/$cap"
+done
+planted e.ee "dfp-sim: slave: --eeprom plant/e.ee $refused" \
+  "$sim" slave --pty plant/p1 --eeprom plant/e.ee --duration 1
+planted e.ee "dfp-sim: inverter: --eeprom plant/e.ee: plant/e.ee $linked" \
+  timeout 10 "$sim" inverter --can vcan0 --eeprom plant/e.ee
+planted m.pcap "dfp-sim: master: --capture plant/m.pcap $refused" \
+  "$sim" master --port plant/none --address 4 --config F3F2 --capture plant/m.pcap
+planted d.pcap "dfp-sim: demo: --capture plant/d.pcap $refused" \
+  "$sim" demo --capture plant/d.pcap
+planted r.json "dfp-sim: replay: --report json plant/r.json $refused" \
+  "$sim" replay bus.pcap --check --report json plant/r.json
+planted r.xml "dfp-sim: replay: --report junit plant/r.xml $refused" \
+  "$sim" replay bus.pcap --check --report junit plant/r.xml
+planted l.lcm "dfp-sim: slave: --lcm plant/l.lcm $refused" \
+  "$sim" slave --pty plant/p1 --lcm "file://plant/l.lcm?mode=w" --duration 1
+planted l.lcm "dfp-sim: replay: --lcm plant/l.lcm $refused" \
+  "$sim" replay bus.pcap --lcm "file://plant/l.lcm?mode=w"
+# A link planted at PATH.tmp while the card runs: the next write replaces it with its own file.
+start_slave pd plant/run.ee || exit 1
+ln -s ../vdir/victim plant/run.ee.tmp
+api -X PUT -d '{"value": 3333}' "http://127.0.0.1:$port/api/v1/cards/4/params/P130" >/dev/null
+[ "$(p130)" = 3333 ] && ok || bad "P130 not written past the planted run.ee.tmp: $(p130)"
+stop_slave "the slave with a planted run.ee.tmp"
+spared "run.ee.tmp planted while running"
+[ ! -L plant/run.ee.tmp ] && ok || bad "the planted run.ee.tmp is still there"
+start_slave pe plant/run.ee || exit 1
+[ "$(p130)" = 3333 ] && ok || bad "P130 = 3333 did not reach run.ee: $(p130)"
+stop_slave "the restart on run.ee"
+
+# F10: an LCM log's channel names are the file's text: shown escaped in the error that lists them.
+"$sim" replay bus.pcap --lcm "file://$tmp/t.lcm?mode=w" >/dev/null 2>&1 || bad "no LCM log made"
+python3 - "$tmp/t.lcm" "$tmp/evil.lcm" <<'PY'
+import struct, sys
+d, out, o = open(sys.argv[1], "rb").read(), b"", 0
+evil = b"EVIL\x1b[2J\x1b]52;c;ZXZpbA==\x07\r\xc2\x9b"
+while o < len(d):   # every event moved to the channel EVIL...: sync, number, time, lengths
+    sync, num, ts, cl, dl = struct.unpack_from(">IQQII", d, o)
+    out += struct.pack(">IQQII", sync, num, ts, len(evil), dl) + evil + d[o + 28 + cl:o + 28 + cl + dl]
+    o += 28 + cl + dl
+open(sys.argv[2], "wb").write(out)
+PY
+expect_exit 2 "an LCM log with control characters in its channel name" -- \
+  "$sim" replay "$tmp/evil.lcm" --channel NOPE
+[ "$out" = "dfp-sim: $tmp/evil.lcm: no telegram_t on LCM channel 'NOPE' (channels with telegrams: EVIL\\x1b[2J\\x1b]52;c;ZXZpbA==\\x07\\x0d\\x9b)" ] &&
+  ok || bad "escaped channel names: $(printf %q "$out")"
 
 finish

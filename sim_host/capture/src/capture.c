@@ -17,6 +17,7 @@
 #include "cap_lcm.h"
 #include "cap_pcap.h"
 #include "hal/hal_uart.h"
+#include "sim_hal/path.h"
 
 #define PCAPNG_SHB 0x0A0D0D0Au
 #define PCAPNG_IDB 0x00000001u
@@ -508,9 +509,10 @@ int cap_writer_open(cap_writer_t *w, const char *path, const cap_writer_options_
         w->f = pw.f;
         return 0;
     }
-    w->f = fopen(path, "wb");
+    char why[160];
+    w->f = sim_fopen_write(path, why, sizeof why);
     if (w->f == NULL) {
-        snprintf(err, errlen, "cannot write capture file %s: %s", path, strerror(errno));
+        snprintf(err, errlen, "cannot write capture file %s: %s", path, why);
         return -1;
     }
     if (w->opt.format == CAP_FORMAT_PCAPNG && !write_pcapng_head(w)) {

@@ -1,4 +1,5 @@
 #include "capture/pcap_writer.h"
+#include "sim_hal/path.h"
 
 #include <errno.h>
 #include <string.h>
@@ -17,9 +18,10 @@ int pcap_writer_open(pcap_writer_t *w, const char *path, uint32_t linktype, bool
                      uint64_t base_ns, char *err, size_t errlen)
 {
     memset(w, 0, sizeof *w);
-    w->f = fopen(path, "wb");
+    char why[160];
+    w->f = sim_fopen_write(path, why, sizeof why);
     if (w->f == NULL) {
-        snprintf(err, errlen, "cannot write capture file %s: %s", path, strerror(errno));
+        snprintf(err, errlen, "cannot write capture file %s: %s", path, why);
         return -1;
     }
     snprintf(w->path, sizeof w->path, "%s", path);

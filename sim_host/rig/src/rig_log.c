@@ -5,6 +5,7 @@
 
 #include "dp_slave/dp_wire.h"
 #include "movidrive/movidrive_names.h"
+#include "sim_hal/error_text.h"
 #include "sim_hal/sim_board.h"
 
 static const char *const level_names[] = {"error", "warn", "info", "debug"};
@@ -50,6 +51,9 @@ void rig_vlog(rig_log_t *l, rig_log_level_t level, const char *source, const cha
     if (!print || l->out == NULL) {
         return;
     }
+    /* Texts carry strings from the wire and from files: the terminal gets them escaped. */
+    char shown[4u * RIG_CTL_TEXT];
+    sim_text_visible(text, shown, sizeof shown);
     if (l->time == RIG_LOG_TIME_WALL) {
         struct timespec ts;
         clock_gettime(CLOCK_REALTIME, &ts);
@@ -59,9 +63,9 @@ void rig_vlog(rig_log_t *l, rig_log_level_t level, const char *source, const cha
         if (strftime(stamp, sizeof stamp, "%H:%M:%S", &tm) == 0u) {
             stamp[0] = '\0';
         }
-        fprintf(l->out, "%s.%03ld  %-7s  %s\n", stamp, ts.tv_nsec / 1000000L, source, text);
+        fprintf(l->out, "%s.%03ld  %-7s  %s\n", stamp, ts.tv_nsec / 1000000L, source, shown);
     } else {
-        fprintf(l->out, "%10.3f ms  %-7s  %s\n", (double)ns / 1e6, source, text);
+        fprintf(l->out, "%10.3f ms  %-7s  %s\n", (double)ns / 1e6, source, shown);
     }
     fflush(l->out);
 }

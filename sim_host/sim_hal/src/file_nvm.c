@@ -100,14 +100,33 @@ static void in_use_text(const char *path, int fd, char *err, size_t errlen)
     snprintf(err, errlen, "%s: in use by another process (%slock %s.lock)", path, who, path);
 }
 
+/* -1 with "PATH: PATH.SUFFIX is a symbolic link ..." when one is at PATH.SUFFIX. We make
+ * PATH.lock and PATH.tmp as files: a link there was put by someone else, and following it would
+ * make us write its target. PATH itself is only renamed over, but a link there would be read
+ * and then silently replaced: refused as well (SUFFIX ""). */
+static int check_no_link(const char *path, const char *suffix, char *err, size_t errlen)
+{
+    char name[FILE_NVM_PATH_MAX + 8];
+    snprintf(name, sizeof name, "%s%s", path, suffix);
+    struct stat st;
+    if (lstat(name, &st) == 0 && S_ISLNK(st.st_mode)) {
+        /* The caller adds ": refused" (file_nvm_check_path) or says the file is not used. */
+        snprintf(err, errlen, "%s: %s is a symbolic link (dfp-sim writes no file through a link)",
+                 path, name);
+        return -1;
+    }
+    return 0;
+}
+
 /* Whether another process holds path's lock, without creating the lock file. */
 static int check_lock(const char *path, char *err, size_t errlen)
 {
     char lock[FILE_NVM_PATH_MAX + 8];
     snprintf(lock, sizeof lock, "%s.lock", path);
-    int fd = open(lock, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+    int fd = open(lock, O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOFOLLOW);
     if (fd < 0) {
-        return 0; /* no lock file: nobody has opened path yet */
+        /* No lock file: nobody has opened path yet. A link there: check_no_link said so. */
+        return 0;
     }
     /* Shared: two processes checking at once do not see each other as the holder. */
     int rc = 0;
@@ -132,7 +151,9 @@ int file_nvm_check_path(const char *path, char *err, size_t errlen)
     if (check_kind(path, err, errlen) != 0) {
         return FILE_NVM_NOT_FILE;
     }
-    if (check_dir(path, err, errlen) != 0 || check_lock(path, err, errlen) != 0) {
+    if (check_dir(path, err, errlen) != 0 || check_no_link(path, "", err, errlen) != 0 ||
+        check_no_link(path, ".lock", err, errlen) != 0 ||
+        check_no_link(path, ".tmp", err, errlen) != 0 || check_lock(path, err, errlen) != 0) {
         return FILE_NVM_UNUSABLE;
     }
     return 0;
@@ -295,15 +316,19 @@ void file_nvm_close(file_nvm_t *f)
 /* PATH.lock, flock'ed for the life of f: each process keeps its own copy of the image and every
  * write replaces the whole file, so a second user would undo the first one's acknowledged
  * writes. PATH itself cannot carry the lock, since every write renames a new file over it.
- * 0: f holds the lock; -1 with err: another process does. */
+ * 0: f holds the lock; -1 with err: another process does; -2 with err: a link is there. */
 static int take_lock(file_nvm_t *f, char *err, size_t errlen)
 {
     char lock[FILE_NVM_PATH_MAX + 8];
     snprintf(lock, sizeof lock, "%s.lock", f->path);
-    int fd = open(lock, O_RDWR | O_CREAT | O_CLOEXEC | O_NONBLOCK, 0644);
+    /* 0644: another user's dfp-sim must be able to open it to see it is held. */
+    int fd = open(lock, O_RDWR | O_CREAT | O_CLOEXEC | O_NONBLOCK | O_NOFOLLOW, 0644);
     bool writable = fd >= 0;
-    if (fd < 0) {
-        fd = open(lock, O_RDONLY | O_CLOEXEC | O_NONBLOCK); /* somebody else's lock file */
+    if (fd < 0 && errno != ELOOP) {
+        fd = open(lock, O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOFOLLOW); /* another user's */
+    }
+    if (fd < 0 && check_no_link(f->path, ".lock", err, errlen) != 0) {
+        return -2;
     }
     if (fd < 0) {
         /* Where no lock file can be made, no PATH.tmp can either: every write fails, and two
@@ -353,8 +378,15 @@ int file_nvm_open(file_nvm_t *f, const char *path, size_t size, char *err, size_
     char why[FILE_NVM_PATH_MAX + 160];
     why[0] = '\0';
     /* Locked before it is read, so the image read is the one the lock holder left. */
-    if (check_kind(path, why, sizeof why) == 0 && take_lock(f, err, errlen) != 0) {
+    int locked = check_kind(path, why, sizeof why) == 0 ? take_lock(f, why, sizeof why) : 0;
+    if (locked == -1) {
         f->loaded = FILE_NVM_IMAGE_IN_USE;
+        snprintf(err, errlen, "%s", why);
+        return -1;
+    }
+    if (locked == -2) {
+        f->loaded = FILE_NVM_IMAGE_REFUSED;
+        snprintf(err, errlen, "%s: refused, nothing is read from or written to it", why);
         return -1;
     }
     int rc = load_image(f, path, why, sizeof why);
@@ -418,17 +450,27 @@ static int sync_dir(const char *path)
     return rc;
 }
 
+/* tmp created anew with O_EXCL, so nothing is ever written through a link. A file left there by
+ * a crash, or a link someone put there, is unlinked first (which removes a link, not its
+ * target); anything else there (a FIFO, a directory) is left alone and the write fails.
+ * 0644, the image's mode, since tmp becomes the image. */
+static int create_tmp(const char *tmp)
+{
+    const int flags = O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK;
+    int fd = open(tmp, flags, 0644);
+    struct stat st;
+    if (fd < 0 && errno == EEXIST && lstat(tmp, &st) == 0 &&
+        (S_ISREG(st.st_mode) || S_ISLNK(st.st_mode)) && unlink(tmp) == 0) {
+        fd = open(tmp, flags, 0644);
+    }
+    return fd;
+}
+
 /* The new image into tmp, on the disk when sync: 0, or -1 with tmp removed. */
 static int write_tmp(const char *tmp, const uint8_t *img, size_t n, bool sync)
 {
-    /* Something other than a file left at PATH.tmp must neither block nor be written into. */
-    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NONBLOCK, 0644);
+    int fd = create_tmp(tmp);
     if (fd < 0) {
-        return -1;
-    }
-    struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        close(fd);
         return -1;
     }
     if (write_all(fd, img, n) != 0 || (sync && fsync(fd) != 0)) {

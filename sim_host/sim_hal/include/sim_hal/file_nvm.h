@@ -12,7 +12,10 @@
  * would replace it.
  * One process at a time: the open takes an exclusive flock on PATH.lock (created beside PATH
  * and left there; it holds the holder's pid) until file_nvm_close or the end of the process,
- * and a second open of PATH, from another process or another file_nvm_t, is refused. */
+ * and a second open of PATH, from another process or another file_nvm_t, is refused.
+ * No symbolic link is followed where a file is written: one at PATH.lock is refused (it was not
+ * made by us, and following it would write its target); PATH.tmp is created with O_EXCL after
+ * unlinking whatever file or link is at that name; PATH is only replaced by rename. */
 #ifndef SIM_HAL_FILE_NVM_H
 #define SIM_HAL_FILE_NVM_H
 
@@ -34,7 +37,8 @@ typedef enum file_nvm_image {
     FILE_NVM_IMAGE_BLANK,    /* neither PATH nor PATH.bak exists: a blank EEPROM (first start) */
     FILE_NVM_IMAGE_MAIN,     /* PATH */
     FILE_NVM_IMAGE_BACKUP,   /* PATH.bak, the previous generation: PATH was damaged or missing */
-    FILE_NVM_IMAGE_REFUSED,  /* PATH is not a regular file: never read nor written */
+    FILE_NVM_IMAGE_REFUSED,  /* PATH is not a regular file, or PATH.lock is a symbolic link:
+                              * never read nor written */
     FILE_NVM_IMAGE_IN_USE,   /* another process holds PATH.lock: never read nor written */
 } file_nvm_image_t;
 
@@ -67,6 +71,9 @@ typedef struct file_nvm {
  *     from a blank image. Or PATH is not a regular file: "PATH: a FIFO, not a regular file:
  *     refused, nothing is read from or written to it", and every write fails. Or PATH is in
  *     use: "PATH: in use by another process (pid N, lock PATH.lock)", and every write fails.
+ *     Or a symbolic link is at PATH.lock: "PATH: PATH.lock is a symbolic link (dfp-sim writes
+ *     no file through a link): refused, nothing is read from or written to it" (f->loaded
+ *     FILE_NVM_IMAGE_REFUSED), and every write fails.
  *     Or bad arguments. Opening f again first closes it (file_nvm_close).
  * No reason contains "; ", so callers may split err there. A shorter or longer image from
  * another size is accepted: cut or padded with 0xFF. */
@@ -81,8 +88,10 @@ void file_nvm_close(file_nvm_t *f);
  * a regular file or nothing is there (a write creates it) in a writable directory, and no other
  * process holds it. Else FILE_NVM_NOT_FILE with "PATH: a FIFO, not a regular file" (a directory,
  * a character device ...) in err, or FILE_NVM_UNUSABLE with "PATH: the directory DIR does not
- * exist", "PATH: the directory DIR is not writable (REASON)" or "PATH: in use by another
- * process (pid N, lock PATH.lock)". Checks without taking the lock: file_nvm_open takes it. */
+ * exist", "PATH: the directory DIR is not writable (REASON)", "PATH: PATH.lock is a symbolic
+ * link (dfp-sim writes no file through a link)" (the same for PATH.tmp and PATH itself) or
+ * "PATH: in use by another process (pid N, lock PATH.lock)". Checks without taking the lock:
+ * file_nvm_open takes it. */
 int file_nvm_check_path(const char *path, char *err, size_t errlen);
 hal_nvm_t file_nvm_hal(file_nvm_t *f);
 /* CRC-32 (IEEE 802.3, reflected, as zlib), exposed for tests that build images. */
