@@ -18,7 +18,10 @@ import sys
 import tempfile
 
 PACKAGE = "dfp_lcm"
-TYPE_NAMES = ("telegram_t", "card_state_t", "param_service_t", "signed_telegram_t")
+TYPE_NAMES = ("telegram_t", "card_state_t", "param_service_t")
+# A keyed segment's messages (dfp-sim --key): loaded when the directory has the type, so that
+# types of an older checkout (--lcm-types) still load.
+OPTIONAL_TYPE_NAMES = ("signed_telegram_t",)
 
 
 class LcmTypesError(Exception):
@@ -91,7 +94,8 @@ def _import_generated(path):
     try:
         importlib.invalidate_caches()
         package = importlib.import_module(PACKAGE)
-        return {t: getattr(package, t) for t in TYPE_NAMES}
+        names = TYPE_NAMES + tuple(t for t in OPTIONAL_TYPE_NAMES if hasattr(package, t))
+        return {t: getattr(package, t) for t in names}
     finally:
         sys.path.remove(path)
 
