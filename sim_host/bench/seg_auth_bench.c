@@ -63,7 +63,8 @@ static void run(size_t frame_len, long n, dfp_seg_auth_t *tx, dfp_seg_auth_t *rx
         int64_t seq = dfp_seg_next_seq(tx, wall_us());
         sl = dfp_seg_sign(tx, "SEG", 7, seq, t, tl, s, sizeof s);
         dfp_seg_msg_t m;
-        bad += dfp_seg_parse(s, sl, &m) != 0 || dfp_seg_verify(rx, "SEG", s, sl, &m, wall_us()) != -1;
+        bad += dfp_seg_parse(s, sl, &m) != 0 ||
+               dfp_seg_verify(rx, "SEG", s, sl, &m, wall_us()) != -1;
         bad += dfp_lcm_telegram_decode_checked(m.telegram, m.tlen, &d, why, sizeof why) != 0;
         dfp_lcm_telegram_t_decode_cleanup(&d);
     }
@@ -95,7 +96,8 @@ int main(int argc, char **argv)
     for (int64_t id = 100; id < 131; id++) {
         rx.senders[rx.num_senders++] = (dfp_seg_sender_t){.id = id, .last_seq = wall_us()};
     }
-    printf("%ld telegrams per size, HMAC-SHA-512-256 (libsodium %s)\n", n, sodium_version_string());
+    printf("%ld telegrams per size, HMAC-SHA-512-256 (libsodium %s)\n", n,
+           sodium_version_string());
     run(1, n, &tx, &rx);
     run(23, n, &tx, &rx);
     run(255, n, &tx, &rx);

@@ -24,8 +24,8 @@ typedef struct medium_opts {
     int fd;
 } medium_opts_t;
 
-/* --port / --bus / --lcm-url / --key. Returns 1 when argv[*i] was one of them, 0 when not, -1 on a
- * usage error (reported). */
+/* --port / --bus / --lcm-url / --key. Returns 1 when argv[*i] was one of them, 0 when not,
+ * -1 on a usage error (reported). */
 int medium_option(medium_opts_t *m, int argc, char **argv, int *i);
 /* At most one of --port and --bus, a valid channel, --lcm-url and --key only with --bus, and
  * the key file read (seg_auth.h's rules); false after reporting. Whether one of them is

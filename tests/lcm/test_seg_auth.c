@@ -287,8 +287,8 @@ static void test_keyed_segment_counts(void)
     CHECK_EQ(nlines, 1);
     dfp_lcm_segment_close(&s);
     CHECK_EQ(nlines, 2);
-    CHECK_STR(lines[1], "segment SEG (keyed): 1 telegrams taken, 7 dropped (unsigned 1, signed 0, "
-                        "bad signature 2, stale 1, replayed 1, senders full 0, malformed 2)");
+    CHECK_STR(lines[1], "segment SEG (keyed): 1 telegrams taken, 7 dropped (unsigned 1, "
+                        "signed 0, bad signature 2, stale 1, replayed 1, senders full 0, malformed 2)");
 }
 
 static uint8_t sent[DFP_SEG_SIGNED_MAX];

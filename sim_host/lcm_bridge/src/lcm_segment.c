@@ -379,7 +379,8 @@ static void log_totals(dfp_lcm_segment_t *s)
     char line[320];
     snprintf(line, sizeof line, "segment %s%s: %llu telegrams taken, %llu dropped (%s)",
              s->channel, s->keyed ? " (keyed)" : "", (unsigned long long)s->frames_received,
-             (unsigned long long)dropped, dfp_seg_drops_text(s->drops.total, true, text, sizeof text));
+             (unsigned long long)dropped,
+             dfp_seg_drops_text(s->drops.total, true, text, sizeof text));
     segment_log(s, line);
 }
 

@@ -34,8 +34,9 @@ static int key_check_file(int fd, const char *path, char *err, size_t errlen)
         return -1;
     }
     if ((st.st_mode & 077u) != 0u) {
-        snprintf(err, errlen, "--key %s: readable by others than its owner (mode %04o): chmod 600 %s",
-                 path, (unsigned)(st.st_mode & 07777u), path);
+        snprintf(err, errlen,
+                 "--key %s: readable by others than its owner (mode %04o): chmod 600 %s", path,
+                 (unsigned)(st.st_mode & 07777u), path);
         return -1;
     }
     return 0;
