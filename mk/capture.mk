@@ -5,3 +5,5 @@
 APT_PACKAGES += libpcap-dev libglib2.0-dev tshark
 # tests/lcm: udpm on loopback in a private network namespace needs ip (unshare is util-linux).
 APT_PACKAGES += iproute2
+# Keyed LCM segments (--key) sign and check telegrams with libsodium (sim_host/lcm_bridge).
+APT_PACKAGES += libsodium-dev

@@ -515,6 +515,12 @@ static int param_parse(param_opts_t *o, int argc, char **argv)
     return param_combination(o) ? 0 : EXIT_USAGE;
 }
 
+/* A keyed segment's drops and totals, among the command's other lines. */
+static void param_segment_log(void *ctx, const char *line)
+{
+    report_line(ctx, "lcm", "%s", line);
+}
+
 /* The medium and the capture. Returns false after reporting (nothing left open). */
 static bool param_open(const param_opts_t *o)
 {
@@ -525,6 +531,7 @@ static bool param_open(const param_opts_t *o)
                     .lcm_channel = m->bus != NULL ? dfp_lcm_segment_channel(m->bus) : NULL,
                     .lcm_url = m->lcm_url,
                     .lcm_station_address = (int16_t)o->own,
+                    .lcm_key = medium_key(m),
                     .baud = o->baud};
     rig_init(&rig, &rc);
     rig_tap_t tap = {.ctx = &rep, .frame = report_tap,
@@ -533,6 +540,9 @@ static bool param_open(const param_opts_t *o)
     if (rig_open(&rig, err, sizeof err) != 0) {
         cli_error("%s", err);
         return false;
+    }
+    if (m->bus != NULL) {
+        dfp_lcm_segment_set_log(&rig.segment, param_segment_log, &rep);
     }
     static uint64_t t0;
     t0 = host_clock_mono_ns();

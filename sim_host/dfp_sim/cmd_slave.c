@@ -253,7 +253,9 @@ static int slave_parse(slave_opts_t *o, int argc, char **argv)
                   "LINK (a PTY pair of the card's own), or --bus lcm:CHANNEL");
         return EXIT_USAGE;
     }
-    if (!medium_check(&o->med, "slave") || !slave_pty_check(o) || !slave_addresses(o) ||
+    if (!medium_check(&o->med, "slave") ||
+        !medium_check_real_drive(&o->med, "slave", o->inverter) || !slave_pty_check(o) ||
+        !slave_addresses(o) ||
         !slave_inverter_kind(o) || (o->num_cards > 1u && !slave_line_of_cards(o)) ||
         !slave_files_usable(o)) {
         return EXIT_USAGE;

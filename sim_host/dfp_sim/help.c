@@ -12,6 +12,7 @@ enum {
     NOTE_HTTP = 1u << 2,
     NOTE_LOG = 1u << 3,
     NOTE_LCM = 1u << 4,
+    NOTE_SEGMENT = 1u << 5,
 };
 
 typedef struct {
@@ -57,8 +58,8 @@ static const help_cmd_t commands[] = {
      "at wall-clock speed and then keeps going, panel and API up, until Ctrl-C",
      NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG | NOTE_LCM},
     {"slave",
-     "--port DEV|--pty LINK|--bus lcm:CHANNEL [--lcm-url URL] [--address N|N-M,...]\n"
-     "[--baud RATE|auto] [--capture FILE] [--duration S]\n"
+     "--port DEV|--pty LINK|--bus lcm:CHANNEL [--lcm-url URL] [--key FILE]\n"
+     "[--address N|N-M,...] [--baud RATE|auto] [--capture FILE] [--duration S]\n"
      "[--inverter sim|none|can:IFACE[:ADDR]] [--eeprom FILE|DIR] [--card-nvm FILE|DIR]\n"
      "[--echo-suppress] [--lcm URL] [--http [ADDR:]PORT] [LOG OPTIONS]",
      "the emulated card on a tty (USB-RS485 adapter) or PTY until SIGINT/SIGTERM;\n"
@@ -67,7 +68,7 @@ static const help_cmd_t commands[] = {
      "master); an old link there is replaced, anything else refused; removed at exit;\n"
      "--bus lcm:CHANNEL puts it on a virtual segment over LCM instead, shared with the\n"
      "stations of other processes or machines (--lcm-url, else $LCM_DEFAULT_URL, else\n"
-     "LCM's default udpm://239.255.76.67:7667?ttl=0);\n"
+     "LCM's default udpm://239.255.76.67:7667?ttl=0; --key: see SEGMENT);\n"
      "--address is the DIP-switch setting (default 4; above 125 the card stays off the bus);\n"
      "--inverter: the emulated MOVIDRIVE (default; --eeprom keeps its parameters in FILE),\n"
      "none (PI words echo PO words), or a MOVIDRIVE on SBus through SocketCAN;\n"
@@ -75,9 +76,10 @@ static const help_cmd_t commands[] = {
      "several addresses (4-9, 3,5,7) put a line of cards, each with its own drive, on\n"
      "the one port: --eeprom and --card-nvm then name directories (driveN.ee, cardN.nvm);\n"
      "a file is used by one process at a time (a lock on FILE.lock)",
-     NOTE_RATE | NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG | NOTE_LCM},
+     NOTE_RATE | NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG | NOTE_LCM | NOTE_SEGMENT},
     {"master",
-     "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] --address N|N-M,... --config HEX\n"
+     "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] [--key FILE] --address N|N-M,...\n"
+     "--config HEX "
      "[--prm HEX] [--cycles N] [--baud RATE] [--ident N] [--watchdog MS]\n"
      "[--master-address N] [--slot-time MS] [--outputs HEX] [--timeout S]\n"
      "[--capture FILE] [--verbose] [--reset-fault] [--http [ADDR:]PORT] [LOG OPTIONS]",
@@ -89,7 +91,7 @@ static const help_cmd_t commands[] = {
      "leaves (after --cycles, or on SIGINT/SIGTERM) with Global_Control Clear_Data and zero\n"
      "outputs for 3 cycles; --reset-fault acknowledges a drive fault at start (control\n"
      "word bit 6 set, then cleared; the drive needs P101 = FIELDBUS)",
-     NOTE_RATE | NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG},
+     NOTE_RATE | NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG | NOTE_SEGMENT},
     {"inverter",
      "--can IFACE [--sbus-address N] [--eeprom FILE] [--duration S] [--channel2]\n"
      "[--quiet]",
@@ -98,12 +100,12 @@ static const help_cmd_t commands[] = {
      "--eeprom keeps non-volatile parameters in FILE across runs",
      0u},
     {"param",
-     "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] --address N\n"
+     "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] [--key FILE] --address N\n"
      "[--via channel|movilink|profidrive|c2] [--baud RATE] [--master-address N]\n"
      "[--timeout S] [--json] [--capture FILE] [--verbose]\n"
      "read PARAM [PARAM ...] | write PARAM VALUE [--volatile] | im0",
      "one parameter service against the card on a tty, or as a master on an LCM segment\n"
-     "(--bus, --lcm-url as for slave). PARAM: an index (8461, 0x210D), a P-number\n"
+     "(--bus, --lcm-url, --key as for slave). PARAM: an index (8461, 0x210D), a P-number\n"
      "(P100), a name or a unique part of one (\"setpoint source\"), or an IPOS variable\n"
      "(H12 = 11012). VALUE: a raw number (3, -5, 0x10), an enumeration text (FIELDBUS) or\n"
      "a value in the parameter's unit (300.5, \"300 rpm\"). Results name the parameter\n"
@@ -121,7 +123,7 @@ static const help_cmd_t commands[] = {
      "1 on a negative one or none within --timeout (default 10 s), 2 on a bad command\n"
      "line or an unknown PARAM; --json: one JSON object per result (p_number, name,\n"
      "value, text ...)",
-     NOTE_RATE | NOTE_CAPTURE},
+     NOTE_RATE | NOTE_CAPTURE | NOTE_SEGMENT},
     {"convert",
      "IN OUT [--format pcap|pcapng|text] [--linktype profibus|user0] [--ns]\n"
      "[--in-format pcap|pcapng|text|lcm] [--channel NAME] [--quiet]",
@@ -179,6 +181,16 @@ static const help_note_t notes[] = {
     {NOTE_LCM, "--lcm URL", " ",
      "publishes the card's telegrams, state and parameter services to LCM (channels\n"
      "DFP_TELEGRAM, DFP_CARD_STATE, DFP_PARAM; sim_host/lcm_bridge/README.md)."},
+    {NOTE_SEGMENT, "SEGMENT", ": ",
+     "who can reach --bus lcm:CHANNEL: every process that can send to the LCM URL's\n"
+     "group and port: this host (ttl=0), or with ttl>0 every machine of the LAN's\n"
+     "multicast domain; a plain segment lets any of them drive the card, so a slave\n"
+     "on one refuses a real drive (inverter can:IFACE). --key FILE (64 hex digits, mode 600; make one with\n"
+     "head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \\n') signs every telegram and\n"
+     "drops unsigned, wrongly signed and replayed ones (counted, logged); every station\n"
+     "of the segment needs the same key, and the machines' clocks must agree within 2 s\n"
+     "(NTP). Telegrams are signed, not encrypted: anyone on the group still reads them;\n"
+     "whoever holds the key is trusted (docs/commissioning.md)."},
 };
 
 static const char exit_lead[] = "the same for every command";

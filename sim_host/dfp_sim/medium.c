@@ -16,13 +16,15 @@ int medium_option(medium_opts_t *m, int argc, char **argv, int *i)
         slot = &m->bus;
     } else if (strcmp(argv[*i], "--lcm-url") == 0) {
         slot = &m->lcm_url;
+    } else if (strcmp(argv[*i], "--key") == 0) {
+        slot = &m->key_file;
     } else {
         return 0;
     }
     return (*slot = cli_value(argc, argv, i)) != NULL ? 1 : -1;
 }
 
-bool medium_check(const medium_opts_t *m, const char *cmd)
+bool medium_check(medium_opts_t *m, const char *cmd)
 {
     if (m->dev != NULL && m->bus != NULL) {
         cli_error("%s: --port and --bus exclude each other", cmd);
@@ -36,7 +38,37 @@ bool medium_check(const medium_opts_t *m, const char *cmd)
         cli_error("%s: --lcm-url belongs to --bus lcm:CHANNEL", cmd);
         return false;
     }
+    if (m->key_file != NULL && m->bus == NULL) {
+        cli_error("%s: --key belongs to --bus lcm:CHANNEL", cmd);
+        return false;
+    }
+    if (m->key_file != NULL) {
+        char err[400];
+        if (dfp_seg_key_load(m->key_file, m->key, err, sizeof err) != 0) {
+            cli_error("%s: %s", cmd, err);
+            return false;
+        }
+        m->keyed = true;
+    }
     return true;
+}
+
+const uint8_t *medium_key(const medium_opts_t *m)
+{
+    return m->keyed ? m->key : NULL;
+}
+
+bool medium_check_real_drive(const medium_opts_t *m, const char *cmd, const char *inverter)
+{
+    if (m->bus == NULL || m->key_file != NULL || inverter == NULL ||
+        strncmp(inverter, "can:", 4) != 0) {
+        return true;
+    }
+    const char *ifname = inverter + 4;
+    int n = (int)strcspn(ifname, ":");
+    cli_error("%s: --bus lcm: without --key lets any process on the LCM group drive the real "
+              "MOVIDRIVE on %.*s; give --key FILE", cmd, n, ifname);
+    return false;
 }
 
 const char *medium_name(const medium_opts_t *m, const char *opened_url, char *buf, size_t n)

@@ -57,6 +57,12 @@ int session_end(session_t *s, int rc)
     return report_close_capture(&s->rep) != 0 ? 1 : rc;
 }
 
+/* A keyed segment's drops and totals, among the command's other lines. */
+static void session_segment_log(void *ctx, const char *line)
+{
+    report_line(ctx, "lcm", "%s", line);
+}
+
 bool session_open(session_t *s, const medium_opts_t *m, int16_t station_address, uint32_t baud,
                   const capture_opts_t *capture, const instrument_opts_t *io, bool echo)
 {
@@ -68,6 +74,7 @@ bool session_open(session_t *s, const medium_opts_t *m, int16_t station_address,
                     .lcm_channel = m->bus != NULL ? dfp_lcm_segment_channel(m->bus) : NULL,
                     .lcm_url = m->lcm_url,
                     .lcm_station_address = station_address,
+                    .lcm_key = medium_key(m),
                     .baud = baud,
                     .echo_suppress = echo};
     rig_init(&s->rig, &rc);
@@ -80,6 +87,9 @@ bool session_open(session_t *s, const medium_opts_t *m, int16_t station_address,
             (void)close(m->fd); /* a port that failed to open leaves it with us */
         }
         return false;
+    }
+    if (m->bus != NULL) {
+        dfp_lcm_segment_set_log(&s->rig.segment, session_segment_log, &s->rep);
     }
     s->rep.now_ns = session_now_ns;
     s->rep.now_ctx = s;

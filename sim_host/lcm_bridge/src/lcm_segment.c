@@ -72,21 +72,102 @@ static void on_telegram(dfp_lcm_segment_t *s, const dfp_lcm_telegram_t *msg)
     }
 }
 
+static void segment_log(dfp_lcm_segment_t *s, const char *line)
+{
+    if (s->log != NULL) {
+        s->log(s->log_ctx, line);
+    } else {
+        fprintf(stderr, "%s\n", line);
+    }
+}
+
+static void log_thunk(void *ctx, const char *line)
+{
+    segment_log(ctx, line);
+}
+
+static int64_t mono_us(void)
+{
+    return (int64_t)(host_clock_mono_ns() / 1000u);
+}
+
+static void drop(dfp_lcm_segment_t *s, dfp_seg_drop_t why, const char *detail)
+{
+    dfp_seg_drops_add(&s->drops, why, s->channel, detail, mono_us(), log_thunk, s);
+}
+
+/* A plain telegram_t, or anything that is no signed_telegram_t. */
+static void on_plain(dfp_lcm_segment_t *s, const uint8_t *buf, size_t len)
+{
+    dfp_lcm_telegram_t msg;
+    char why[96];
+    if (len == 0u || dfp_lcm_telegram_decode_checked(buf, len, &msg, why, sizeof why) != 0) {
+        drop(s, DFP_SEG_DROP_MALFORMED, why);
+        return;
+    }
+    if (s->keyed && msg.source_id != s->source_id) {
+        char detail[96];
+        snprintf(detail, sizeof detail, "station %d, source id %lld", msg.station,
+                 (long long)msg.source_id);
+        drop(s, DFP_SEG_DROP_UNSIGNED, detail);
+    } else if (!s->keyed) {
+        on_telegram(s, &msg);
+    }
+    dfp_lcm_telegram_t_decode_cleanup(&msg);
+}
+
+/* A signed_telegram_t: its tag, window and sequence first, then the telegram inside. */
+static void on_signed(dfp_lcm_segment_t *s, const uint8_t *buf, size_t len)
+{
+    dfp_seg_msg_t m;
+    char detail[96];
+    if (dfp_seg_parse(buf, len, &m) != 0) {
+        drop(s, DFP_SEG_DROP_MALFORMED, "signed_telegram_t of a wrong layout");
+        return;
+    }
+    if (m.sender_id == s->source_id) {
+        s->own_ignored++;
+        return;
+    }
+    snprintf(detail, sizeof detail, "sender id %lld", (long long)m.sender_id);
+    if (!s->keyed) {
+        drop(s, DFP_SEG_DROP_SIGNED, detail);
+        return;
+    }
+    int why = dfp_seg_verify(&s->auth, s->channel, buf, len, &m, dfp_lcm_wall_us());
+    if (why >= 0) {
+        drop(s, (dfp_seg_drop_t)why, detail);
+        return;
+    }
+    dfp_lcm_telegram_t msg;
+    char err[96];
+    if (dfp_lcm_telegram_decode_checked(m.telegram, m.tlen, &msg, err, sizeof err) != 0) {
+        drop(s, DFP_SEG_DROP_MALFORMED, err);
+        return;
+    }
+    if (msg.source_id != m.sender_id) {
+        drop(s, DFP_SEG_DROP_MALFORMED, "signed by another sender than the telegram's");
+    } else {
+        on_telegram(s, &msg);
+    }
+    dfp_lcm_telegram_t_decode_cleanup(&msg);
+}
+
+void dfp_lcm_segment_receive(dfp_lcm_segment_t *s, const uint8_t *buf, size_t len)
+{
+    if (dfp_seg_is_signed(buf, len)) {
+        on_signed(s, buf, len);
+    } else {
+        on_plain(s, buf, len);
+    }
+}
+
 /* Raw, so that a message that is not a well-formed telegram_t (another program on the same
  * channel, garbage) is counted and dropped instead of reaching lcm-gen's trusting decoder. */
 static void on_message(const lcm_recv_buf_t *rbuf, const char *channel, void *user)
 {
     (void)channel;
-    dfp_lcm_segment_t *s = user;
-    dfp_lcm_telegram_t msg;
-    char why[96];
-    if (rbuf->data_size == 0u ||
-        dfp_lcm_telegram_decode_checked(rbuf->data, rbuf->data_size, &msg, why, sizeof why) != 0) {
-        s->malformed++;
-        return;
-    }
-    on_telegram(s, &msg);
-    dfp_lcm_telegram_t_decode_cleanup(&msg);
+    dfp_lcm_segment_receive(user, rbuf->data, rbuf->data_size);
 }
 
 /* LCM's descriptor is readable: hand over what arrived; the runner polls the station next. */
@@ -110,6 +191,7 @@ static void segment_readable(void *ctx, hal_time_us_t now)
 static hal_time_us_t segment_poll(void *ctx, hal_time_us_t now)
 {
     dfp_lcm_segment_t *s = ctx;
+    dfp_seg_drops_flush(&s->drops, s->channel, mono_us(), log_thunk, s);
     if (s->station.poll == NULL) {
         return now + HAL_TIME_NO_DEADLINE_US;
     }
@@ -140,6 +222,24 @@ static void wait_until(hal_time_us_t not_before)
     }
 }
 
+/* A keyed segment sends the telegram inside a signed_telegram_t. */
+static int publish(dfp_lcm_segment_t *s, const dfp_lcm_telegram_t *m)
+{
+    if (!s->keyed) {
+        return dfp_lcm_telegram_t_publish(s->lcm, s->channel, m);
+    }
+    uint8_t plain[DFP_SEG_TELEGRAM_MAX];
+    uint8_t out[DFP_SEG_SIGNED_MAX];
+    int n = dfp_lcm_telegram_t_encode(plain, 0, (int)sizeof plain, m);
+    if (n <= 0) {
+        return -1;
+    }
+    size_t len = dfp_seg_sign(&s->auth, s->channel, s->source_id,
+                              dfp_seg_next_seq(&s->auth, m->utime), plain, (size_t)n, out,
+                              sizeof out);
+    return len == 0u ? -1 : lcm_publish(s->lcm, s->channel, out, (unsigned)len);
+}
+
 static int segment_transmit(void *ctx, const uint8_t *frame, size_t len, hal_time_us_t not_before)
 {
     dfp_lcm_segment_t *s = ctx;
@@ -168,7 +268,7 @@ static int segment_transmit(void *ctx, const uint8_t *frame, size_t len, hal_tim
         .length = (int16_t)len,
         .data = copy,
     };
-    if (dfp_lcm_telegram_t_publish(s->lcm, s->channel, &m) != 0) {
+    if (publish(s, &m) != 0) {
         s->send_failures++;
         if (s->runner != NULL) {
             tty_runner_set_error(s->runner, "LCM %s: sending on %s failed", s->url, s->channel);
@@ -251,6 +351,39 @@ void dfp_lcm_segment_set_tap(dfp_lcm_segment_t *s, sim_frame_tap_t tap, void *ct
     s->tap_ctx = ctx;
 }
 
+int dfp_lcm_segment_set_key(dfp_lcm_segment_t *s, const uint8_t key[DFP_SEG_KEY_BYTES])
+{
+    if (dfp_seg_auth_init(&s->auth, key) != 0) {
+        return -1;
+    }
+    s->keyed = true;
+    return 0;
+}
+
+void dfp_lcm_segment_set_log(dfp_lcm_segment_t *s, dfp_seg_log_fn log, void *ctx)
+{
+    s->log = log;
+    s->log_ctx = ctx;
+}
+
+static void log_totals(dfp_lcm_segment_t *s)
+{
+    uint64_t dropped = 0;
+    for (unsigned i = 0; i < DFP_SEG_DROP_REASONS; i++) {
+        dropped += s->drops.total[i];
+    }
+    if (!s->keyed && dropped == 0u) {
+        return;
+    }
+    char text[200];
+    char line[320];
+    snprintf(line, sizeof line, "segment %s%s: %llu telegrams taken, %llu dropped (%s)",
+             s->channel, s->keyed ? " (keyed)" : "", (unsigned long long)s->frames_received,
+             (unsigned long long)dropped,
+             dfp_seg_drops_text(s->drops.total, true, text, sizeof text));
+    segment_log(s, line);
+}
+
 void dfp_lcm_segment_close(dfp_lcm_segment_t *s)
 {
     if (s->runner != NULL) {
@@ -260,6 +393,8 @@ void dfp_lcm_segment_close(dfp_lcm_segment_t *s)
     }
     s->station_attached = false;
     if (s->lcm != NULL) {
+        log_totals(s);
+        dfp_seg_auth_clear(&s->auth);
         if (s->subscription != NULL) {
             lcm_unsubscribe(s->lcm, s->subscription);
             s->subscription = NULL;

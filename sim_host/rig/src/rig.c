@@ -284,6 +284,11 @@ int rig_open(rig_t *r, char *err, size_t errlen)
                                  r->cfg.lcm_station_address, r->cfg.baud, err, errlen) != 0) {
             return -1;
         }
+        if (r->cfg.lcm_key != NULL && dfp_lcm_segment_set_key(&r->segment, r->cfg.lcm_key) != 0) {
+            snprintf(err, errlen, "LCM segment %s: libsodium cannot start", r->cfg.lcm_channel);
+            dfp_lcm_segment_close(&r->segment);
+            return -1;
+        }
         open_runner(r);
         dfp_lcm_segment_set_tap(&r->segment, tap_frame, r);
         break;

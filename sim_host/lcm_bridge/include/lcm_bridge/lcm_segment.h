@@ -13,7 +13,12 @@
  * The segment joins a tty_runner (sim_hal/tty_port.h) as one extra descriptor (LCM's fileno)
  * and one timer (the station's poll), so the station is driven exactly as on a tty: received
  * characters, then a poll; transmit() blocks until its not_before instant (tty_now_us clock).
- * One station per segment object; a process may open several. */
+ * One station per segment object; a process may open several.
+ *
+ * Keyed (dfp_lcm_segment_set_key, --key FILE): every frame goes out as a signed_telegram_t and
+ * only signed ones with a good tag, in the clock window and not seen before are heard
+ * (seg_auth.h); without a key, signed ones are dropped. Drops are counted per reason and
+ * logged through the log function (the first at once, then a summary at most every second). */
 #ifndef DFP_LCM_BRIDGE_LCM_SEGMENT_H
 #define DFP_LCM_BRIDGE_LCM_SEGMENT_H
 
@@ -22,6 +27,7 @@
 #include <stdint.h>
 
 #include "hal/hal_uart.h"
+#include "lcm_bridge/seg_auth.h"
 #include "sim_hal/sim_station.h"
 #include "sim_hal/tty_port.h"
 
@@ -51,8 +57,14 @@ typedef struct dfp_lcm_segment {
     uint64_t frames_received;    /* from other processes */
     uint64_t frames_other_baud;  /* of those, at a rate other than ours (framing errors) */
     uint64_t own_ignored;        /* our own frames coming back */
-    uint64_t malformed;          /* messages on the channel that are no telegram_t */
     uint64_t send_failures;
+    /* Keyed segments; drops of both kinds (drops.total[why]: a plain segment counts signed
+     * and malformed messages there). */
+    bool keyed;
+    dfp_seg_auth_t auth;
+    dfp_seg_drops_t drops;
+    dfp_seg_log_fn log; /* NULL: standard error */
+    void *log_ctx;
 } dfp_lcm_segment_t;
 
 /* Opens url ("" or NULL: $LCM_DEFAULT_URL, else LCM's default udpm://239.255.76.67:7667?ttl=0)
@@ -68,7 +80,16 @@ int dfp_lcm_segment_attach(dfp_lcm_segment_t *s, tty_runner_t *r, const sim_stat
 /* For --capture: called with every frame sent (local) and received at our rate without error,
  * t_start_ns from dfp_lcm_segment_open. */
 void dfp_lcm_segment_set_tap(dfp_lcm_segment_t *s, sim_frame_tap_t tap, void *ctx);
-/* Leaves the runner and closes LCM. */
+/* Makes the segment keyed: every frame sent is signed with key, only telegrams signed with it
+ * are heard. Returns 0, or -1 when libsodium cannot start. */
+int dfp_lcm_segment_set_key(dfp_lcm_segment_t *s, const uint8_t key[DFP_SEG_KEY_BYTES]);
+/* Where the drop lines go (and the totals at close). */
+void dfp_lcm_segment_set_log(dfp_lcm_segment_t *s, dfp_seg_log_fn log, void *ctx);
+/* One message as LCM delivered it on the channel (what the subscription calls; tests feed
+ * octets with it). */
+void dfp_lcm_segment_receive(dfp_lcm_segment_t *s, const uint8_t *buf, size_t len);
+/* Leaves the runner, logs the totals of a keyed segment or one that dropped anything
+ * ("segment CH: N telegrams taken, M dropped (...)"), wipes the key and closes LCM. */
 void dfp_lcm_segment_close(dfp_lcm_segment_t *s);
 /* "lcm:CHANNEL" → CHANNEL (1..63 characters of [A-Za-z0-9_.-]); NULL when text is not one. */
 const char *dfp_lcm_segment_channel(const char *text);

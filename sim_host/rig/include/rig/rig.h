@@ -109,6 +109,7 @@ typedef struct rig_cfg {
     const char *lcm_channel;
     const char *lcm_url;
     int16_t lcm_station_address; /* the local station's address on the segment (-1: several) */
+    const uint8_t *lcm_key;      /* a keyed segment's 32-octet key (NULL: plain segment) */
     uint32_t baud;               /* the medium's starting rate */
     bool echo_suppress;          /* tty adapters that hear themselves */
     /* Optional: wraps the medium's UART of each card (telemetry that must know which frames
