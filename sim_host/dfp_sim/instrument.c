@@ -242,7 +242,8 @@ static void print_urls(const instrument_opts_t *o, const char *host, uint16_t po
     snprintf(base, sizeof base, "%s://%s%s%s:%u/", tls ? "https" : "http", v6 ? "[" : "",
              shown, v6 ? "]" : "", port);
     if (o->web.no_auth) {
-        fprintf(stderr, "dfp-sim: control panel at %s%s\n", base, read_only ? " (read-only)" : "");
+        fprintf(stderr, "dfp-sim: control panel at %s%s\n", base,
+                read_only ? " (read-only)" : "");
     } else {
         fprintf(stderr, "dfp-sim: control panel at %s?token=%s%s\n", base, k->token,
                 read_only ? " (read-only)" : "");
