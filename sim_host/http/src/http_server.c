@@ -165,7 +165,7 @@ static int open_listener(const char *host, uint16_t port, char *err, size_t errl
     return fd;
 }
 
-/* ---- TLS: MHD_USE_TLS with GnuTLS; the PEM texts stay in srv->auth while the daemon runs ---- */
+/* ---- TLS: MHD_USE_TLS with GnuTLS; the PEM texts stay in srv->auth while the daemon runs */
 static bool tls_options(const http_auth_t *a, struct MHD_OptionItem *opts, unsigned *flags,
                         char *err, size_t errlen)
 {
