@@ -163,6 +163,7 @@ static int start_http(const replay_args_t *a)
     instrument_opts_t io;
     instrument_defaults(&io, RIG_LOG_TIME_BUS);
     io.http = a->http;
+    io.web = a->web;
     rig_t *rig = &rc_state.replay.rig;
     memset(&rc_state.in, 0, sizeof rc_state.in);
     rig_log_init(&rc_state.in.log, rig, stderr);

@@ -172,7 +172,30 @@ static const help_note_t notes[] = {
      "docs/captures.md describes the formats."},
     {NOTE_HTTP, "--http [ADDR:]PORT", " ",
      "serves the control API (JSON, docs/api.md) and the front panel at /;\n"
-     "127.0.0.1 unless ADDR is given. A taken port is an error (exit 2)."},
+     "127.0.0.1 unless ADDR is given. A taken port is an error (exit 2). Every client\n"
+     "needs a token: the URL to open with it is printed on stderr at start (control\n"
+     "panel at http://127.0.0.1:PORT/?token=...). Off loopback without TLS a warning\n"
+     "says the token crosses the network in clear text."},
+    {NOTE_HTTP, "--http-token-file FILE", " ",
+     "the operator's token is FILE's first line (16..256\n"
+     "printable ASCII characters, no spaces); else $DFP_SIM_TOKEN; else a random one is\n"
+     "made at start."},
+    {NOTE_HTTP, "--http-viewer-token-file FILE", " ",
+     "the same for a viewer, who reads and watches but\n"
+     "may not act (else $DFP_SIM_VIEWER_TOKEN; else there is no viewer)."},
+    {NOTE_HTTP, "--http-no-auth", ": ",
+     "no token: every client is operator. Refused (exit 2) unless ADDR is\n"
+     "loopback (127.0.0.0/8, ::1); the Host, Origin and Content-Type checks stay."},
+    {NOTE_HTTP, "--http-allow-host NAME", " ",
+     "a Host name answered besides IP addresses and localhost\n"
+     "(against DNS rebinding; repeatable, up to 8)."},
+    {NOTE_HTTP, "--http-allow-origin ORIGIN", " ",
+     "an Origin (scheme://host[:port]) whose pages may send\n"
+     "actions besides the server's own (repeatable, up to 8)."},
+    {NOTE_HTTP, "--http-cert FILE --http-key FILE", " ",
+     "HTTPS with this PEM certificate and key (both or\n"
+     "neither; exit 2 when unreadable or invalid). docs/api.md, \"Security\", says what is\n"
+     "protected and what is not."},
     {NOTE_LOG, "LOG OPTIONS", ": ",
      "--quiet (warnings and errors only), --log-level error|warn|info|debug (debug\n"
      "adds every baud-search step), --timestamps bus|wall (ms since start, or clock time)."},
@@ -196,12 +219,15 @@ static const help_item_t exit_codes[] = {
           "--eeprom or --card-nvm path that is no regular file or in no writable directory,\n"
           "two files of the command line that are one (--capture and --eeprom, FILE and\n"
           "--report ...), a --pty path that is no symbolic link; an --eeprom or --card-nvm\n"
-          "file in use by another process, a --http port that is taken"},
+          "file in use by another process, a --http port that is taken, a bad token, a\n"
+          "bad --http-cert or --http-key file, --http-no-auth off loopback"},
 };
 
 static const help_item_t environment[] = {
     {"LCM_DEFAULT_URL", "the LCM URL for --bus lcm:CHANNEL without --lcm-url and for --lcm ''\n"
                         "(unset: udpm://239.255.76.67:7667?ttl=0)"},
+    {"DFP_SIM_TOKEN", "the control API's operator token when --http-token-file is not given"},
+    {"DFP_SIM_VIEWER_TOKEN", "its viewer token when --http-viewer-token-file is not given"},
 };
 
 static const char see_also[] =

@@ -1,6 +1,7 @@
 #include "instrument.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
@@ -14,11 +15,60 @@ void instrument_defaults(instrument_opts_t *o, rig_log_time_t time)
     o->time = time;
 }
 
+/* A repeatable option's value into list (at most HTTP_MAX_ALLOWED). */
+static int list_value(int argc, char **argv, int *i, const char **list, size_t *n)
+{
+    const char *opt = argv[*i];
+    const char *v = cli_value(argc, argv, i);
+    if (v == NULL) {
+        return -1;
+    }
+    if (*n == HTTP_MAX_ALLOWED || v[0] == '\0' || strlen(v) >= 256u) {
+        cli_error("%s: at most %u of them, each 1..255 characters ('%s')", opt, HTTP_MAX_ALLOWED,
+                  v);
+        return -1;
+    }
+    list[(*n)++] = v;
+    return 1;
+}
+
+int instrument_http_option(int argc, char **argv, int *i, instrument_http_opts_t *w)
+{
+    const char *opt = argv[*i];
+    const char **value = NULL;
+    if (strcmp(opt, "--http-no-auth") == 0) {
+        w->no_auth = w->given = true;
+        return 1;
+    }
+    if (strcmp(opt, "--http-allow-host") == 0 || strcmp(opt, "--http-allow-origin") == 0) {
+        w->given = true;
+        return opt[13] == 'h' ? list_value(argc, argv, i, w->allow_host, &w->n_allow_host)
+                              : list_value(argc, argv, i, w->allow_origin, &w->n_allow_origin);
+    }
+    if (strcmp(opt, "--http-token-file") == 0) {
+        value = &w->token_file;
+    } else if (strcmp(opt, "--http-viewer-token-file") == 0) {
+        value = &w->viewer_token_file;
+    } else if (strcmp(opt, "--http-cert") == 0) {
+        value = &w->cert;
+    } else if (strcmp(opt, "--http-key") == 0) {
+        value = &w->key;
+    } else {
+        return 0;
+    }
+    w->given = true;
+    return (*value = cli_value(argc, argv, i)) != NULL ? 1 : -1;
+}
+
 int instrument_option(int argc, char **argv, int *i, instrument_opts_t *o)
 {
     const char *opt = argv[*i];
     if (strcmp(opt, "--http") == 0) {
         return (o->http = cli_value(argc, argv, i)) != NULL ? 1 : -1;
+    }
+    int web = instrument_http_option(argc, argv, i, &o->web);
+    if (web != 0) {
+        return web;
     }
     if (strcmp(opt, "--quiet") == 0) {
         o->level = RIG_LOG_WARN;
@@ -71,10 +121,184 @@ static hal_time_us_t service_timer(void *ctx, hal_time_us_t now)
     return now + PUBLISH_EVERY_NS / 1000u;
 }
 
+/* ---- the control API's credentials and TLS (docs/api.md "Security") ---- */
+
+typedef struct http_secrets {
+    char token[HTTP_TOKEN_MAX + 1u];
+    char viewer[HTTP_TOKEN_MAX + 1u];
+    char *cert_pem;
+    char *key_pem;
+} http_secrets_t;
+
+static void secrets_free(http_secrets_t *k)
+{
+    explicit_bzero(k->token, sizeof k->token);
+    explicit_bzero(k->viewer, sizeof k->viewer);
+    free(k->cert_pem);
+    if (k->key_pem != NULL) {
+        explicit_bzero(k->key_pem, strlen(k->key_pem));
+        free(k->key_pem);
+    }
+}
+
+/* A token from --OPTION FILE, else from the environment variable; "" when neither. */
+static bool token_from(const char *option, const char *file, const char *env, char *out,
+                       size_t n)
+{
+    char err[400];
+    if (file != NULL) {
+        if (!http_token_read_file(option, file, out, n, err, sizeof err)) {
+            cli_error("%s", err);
+            return false;
+        }
+        return true;
+    }
+    const char *v = getenv(env);
+    if (v == NULL || v[0] == '\0') {
+        out[0] = '\0';
+        return true;
+    }
+    if (!http_token_valid(v) || strlen(v) >= n) {
+        cli_error("%s: the token must be %u..%u printable ASCII characters without spaces", env,
+                  HTTP_TOKEN_MIN, HTTP_TOKEN_MAX);
+        return false;
+    }
+    memcpy(out, v, strlen(v) + 1u);
+    return true;
+}
+
+/* The checks between the options, then the tokens and PEM texts into k. */
+static bool http_secrets(const instrument_opts_t *o, const char *host, http_secrets_t *k)
+{
+    const instrument_http_opts_t *w = &o->web;
+    char err[400];
+    if (w->no_auth && !http_is_loopback(host)) {
+        cli_error("--http-no-auth: refused on %s, which is not a loopback address (127.0.0.0/8, "
+                  "::1): anyone who reaches it could steer the rig; use a token", host);
+        return false;
+    }
+    if ((w->cert == NULL) != (w->key == NULL)) {
+        cli_error("--http-cert and --http-key go together: give both or neither");
+        return false;
+    }
+    if (!w->no_auth) {
+        if (!token_from("--http-token-file", w->token_file, "DFP_SIM_TOKEN", k->token,
+                        sizeof k->token) ||
+            !token_from("--http-viewer-token-file", w->viewer_token_file,
+                        "DFP_SIM_VIEWER_TOKEN", k->viewer, sizeof k->viewer)) {
+            return false;
+        }
+        if (k->token[0] == '\0' && !http_token_generate(k->token, sizeof k->token)) {
+            cli_error("--http: no random token could be made (libsodium did not start)");
+            return false;
+        }
+        if (strcmp(k->token, k->viewer) == 0) {
+            cli_error("--http: the viewer token must differ from the operator token");
+            return false;
+        }
+    }
+    if (w->cert != NULL) {
+        k->cert_pem = http_pem_read_file("--http-cert", w->cert, err, sizeof err);
+        k->key_pem = k->cert_pem != NULL
+                         ? http_pem_read_file("--http-key", w->key, err, sizeof err)
+                         : NULL;
+        if (k->key_pem == NULL) {
+            cli_error("%s", err);
+            return false;
+        }
+    }
+    return true;
+}
+
+static void http_config_from(const instrument_opts_t *o, const http_secrets_t *k,
+                             http_config_t *c)
+{
+    const instrument_http_opts_t *w = &o->web;
+    memset(c, 0, sizeof *c);
+    c->listen = o->http;
+    c->no_auth = w->no_auth;
+    c->token = w->no_auth ? NULL : k->token;
+    c->viewer_token = k->viewer[0] != '\0' ? k->viewer : NULL;
+    memcpy(c->allow_host, w->allow_host, sizeof c->allow_host);
+    c->n_allow_host = w->n_allow_host;
+    memcpy(c->allow_origin, w->allow_origin, sizeof c->allow_origin);
+    c->n_allow_origin = w->n_allow_origin;
+    c->cert_pem = k->cert_pem;
+    c->key_pem = k->key_pem;
+}
+
+/* Like Jupyter: the URL to open, with the token, once on stderr (never into the rig's log,
+ * which the API serves). */
+static void print_urls(const instrument_opts_t *o, const char *host, uint16_t port,
+                       const http_secrets_t *k, bool read_only)
+{
+    bool tls = o->web.cert != NULL;
+    /* A wildcard address is reached through loopback from this machine. */
+    const char *shown = strcmp(host, "0.0.0.0") == 0 ? "127.0.0.1"
+                        : strcmp(host, "::") == 0    ? "::1"
+                                                     : host;
+    bool v6 = strchr(shown, ':') != NULL;
+    char base[128];
+    snprintf(base, sizeof base, "%s://%s%s%s:%u/", tls ? "https" : "http", v6 ? "[" : "",
+             shown, v6 ? "]" : "", port);
+    if (o->web.no_auth) {
+        fprintf(stderr, "dfp-sim: control panel at %s%s\n", base, read_only ? " (read-only)" : "");
+    } else {
+        fprintf(stderr, "dfp-sim: control panel at %s?token=%s%s\n", base, k->token,
+                read_only ? " (read-only)" : "");
+    }
+    if (k->viewer[0] != '\0') {
+        fprintf(stderr, "dfp-sim: read-only panel at %s?token=%s\n", base, k->viewer);
+    }
+    if (!http_is_loopback(host) && !tls) {
+        fprintf(stderr, "dfp-sim: warning: --http %s without --http-cert: the token crosses "
+                "the network in clear text\n", o->http);
+    }
+    (void)fflush(stderr);
+}
+
+/* Starts the server itself; 0, or EXIT_USAGE after reporting. */
+static int http_begin(instrument_t *in, const instrument_opts_t *o, bool read_only)
+{
+    char host[64] = "127.0.0.1";
+    char err[400];
+    uint16_t port;
+    if (!http_parse_listen(o->http, host, sizeof host, &port, err, sizeof err)) {
+        cli_error("%s", err);
+        return EXIT_USAGE;
+    }
+    http_secrets_t k = {0};
+    http_config_t cfg;
+    int rc = 0;
+    if (!http_secrets(o, host, &k)) {
+        rc = EXIT_USAGE;
+    } else {
+        http_config_from(o, &k, &cfg);
+        in->http = http_server_start(&in->ctl, &cfg, err, sizeof err);
+        if (in->http == NULL) {
+            cli_error("%s", err);
+            rc = EXIT_USAGE;
+        } else {
+            print_urls(o, host, http_server_port(in->http), &k, read_only);
+            bool v6 = strchr(host, ':') != NULL;
+            rig_log(&in->log, RIG_LOG_INFO, "sim", "action", "control API and front panel on "
+                    "%s://%s%s%s:%u/%s", o->web.cert != NULL ? "https" : "http", v6 ? "[" : "",
+                    host, v6 ? "]" : "", http_server_port(in->http),
+                    read_only ? " (read-only)" : "");
+        }
+    }
+    secrets_free(&k);
+    return rc;
+}
+
 int instrument_start_http(instrument_t *in, rig_t *r, const instrument_opts_t *o,
                           const char *mode, bool read_only)
 {
     if (o->http == NULL) {
+        if (o->web.given) {
+            cli_error("the --http-* options need --http [ADDR:]PORT");
+            return EXIT_USAGE;
+        }
         return 0;
     }
     if (rig_ctl_init(&in->ctl, r, mode, read_only) != 0) {
@@ -89,20 +313,7 @@ int instrument_start_http(instrument_t *in, rig_t *r, const instrument_opts_t *o
     }
     rig_add_timer(r, service_timer, in);
     rig_ctl_service(&in->ctl, 0);
-    char err[300];
-    in->http = http_server_start(&in->ctl, o->http, err, sizeof err);
-    if (in->http == NULL) {
-        cli_error("%s", err);
-        return EXIT_USAGE;
-    }
-    char host[64] = "127.0.0.1";
-    uint16_t port;
-    (void)http_parse_listen(o->http, host, sizeof host, &port, err, sizeof err);
-    bool v6 = strchr(host, ':') != NULL;
-    rig_log(&in->log, RIG_LOG_INFO, "sim", "action", "control API and front panel on "
-            "http://%s%s%s:%u/%s", v6 ? "[" : "", host, v6 ? "]" : "",
-            http_server_port(in->http), read_only ? " (read-only)" : "");
-    return 0;
+    return http_begin(in, o, read_only);
 }
 
 void instrument_service(instrument_t *in)

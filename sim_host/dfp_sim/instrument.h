@@ -1,5 +1,6 @@
 /* What every running command shares: the log a person follows (--quiet, --log-level,
- * --timestamps) and the control API with the front panel (--http), both attached to the rig. */
+ * --timestamps) and the control API with the front panel (--http and its --http-* options),
+ * both attached to the rig. */
 #ifndef DFP_SIM_INSTRUMENT_H
 #define DFP_SIM_INSTRUMENT_H
 
@@ -9,8 +10,23 @@
 #include "rig/rig_ctl.h"
 #include "rig/rig_log.h"
 
+/* Who may use the control API (docs/api.md "Security"). */
+typedef struct instrument_http_opts {
+    const char *token_file;        /* --http-token-file, else $DFP_SIM_TOKEN, else made */
+    const char *viewer_token_file; /* --http-viewer-token-file, else $DFP_SIM_VIEWER_TOKEN */
+    bool no_auth;                  /* --http-no-auth (loopback only) */
+    const char *allow_host[HTTP_MAX_ALLOWED];
+    size_t n_allow_host;
+    const char *allow_origin[HTTP_MAX_ALLOWED];
+    size_t n_allow_origin;
+    const char *cert; /* --http-cert and --http-key: HTTPS */
+    const char *key;
+    bool given; /* any of these was given */
+} instrument_http_opts_t;
+
 typedef struct instrument_opts {
     const char *http; /* [ADDR:]PORT, NULL: no server */
+    instrument_http_opts_t web;
     rig_log_level_t level;
     rig_log_time_t time;
 } instrument_opts_t;
@@ -26,10 +42,13 @@ void instrument_defaults(instrument_opts_t *o, rig_log_time_t time);
 /* --http, --quiet, --log-level, --timestamps: 1 when argv[*i] was one (consumed), 0 when not,
  * -1 after reporting a bad value. */
 int instrument_option(int argc, char **argv, int *i, instrument_opts_t *o);
+/* The --http-* options alone (for a command that reads --http itself): the same codes. */
+int instrument_http_option(int argc, char **argv, int *i, instrument_http_opts_t *w);
 /* Attaches the log to the rig (before its cards and master, so it sees their first events). */
 void instrument_attach_log(instrument_t *in, rig_t *r, const instrument_opts_t *o);
-/* Starts the control API when asked (after rig_open). Returns 0, or EXIT_USAGE after reporting
- * (a taken port is a usage error: the user picks another). */
+/* Starts the control API when asked (after rig_open) and prints on stderr the URL to open, with
+ * its token. Returns 0, or EXIT_USAGE after reporting (a taken port, a bad token or TLS file,
+ * --http-no-auth off loopback: usage errors). */
 int instrument_start_http(instrument_t *in, rig_t *r, const instrument_opts_t *o,
                           const char *mode, bool read_only);
 /* From the loop: carries out queued actions and publishes the state. */

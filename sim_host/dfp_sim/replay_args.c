@@ -154,6 +154,7 @@ static int parse_flags(int argc, char **argv, replay_args_t *a, bool *check_only
         *check_only = *check_only || strcmp(o, "--report") == 0 ||
                       strcmp(o, "--ignore") == 0 || strcmp(o, "--max-mismatches") == 0;
         int c = parse_value_option(argc, argv, &i, a);
+        c = c == 0 ? instrument_http_option(argc, argv, &i, &a->web) : c;
         if (c < 0) {
             return EXIT_USAGE;
         }

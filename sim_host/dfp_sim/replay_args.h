@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "capture/capture.h"
+#include "instrument.h"
 #include "replay/infer.h"
 #include "replay/mask.h"
 #include "replay/replay.h"
@@ -30,6 +31,7 @@ typedef struct replay_args {
     replay_speed_t speed;
     const char *lcm_url;
     const char *http;
+    instrument_http_opts_t web; /* --http-token-file ... */
     uint64_t max_listed;  /* --max-mismatches (0 given: REPLAY_LIST_ALL) */
     replay_mask_t mask;   /* --ignore */
     unsigned n_reports;

@@ -16,7 +16,8 @@ cd "$tmp" || exit 1
 
 same="refused before anything was opened (give each its own file)"
 free_port() { python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
-api() { curl -s --max-time 5 "$@"; }
+export DFP_SIM_TOKEN=cli-test-token-0123456789 # the API's operator token (docs/api.md)
+api() { curl -s --max-time 5 -H "Authorization: Bearer $DFP_SIM_TOKEN" -H 'Content-Type: application/json' "$@"; }
 # start_slave LINK EEPROM: a slave with the API on $port; returns once the API answers.
 start_slave() {
   port=$(free_port); slave_link=$1

@@ -7,8 +7,12 @@ sim=$1
 with_tmp
 
 free_port() { python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
-get() { curl -s --max-time 5 "http://127.0.0.1:$1$2"; }
-post() { curl -s --max-time 10 -o "$tmp/body" -w '%{http_code}' -X "${4:-POST}" -d "$3" "http://127.0.0.1:$1$2"; }
+# Both processes take the operator token from the environment; every request sends it
+# (test_http_security.sh tests the checks themselves).
+export DFP_SIM_TOKEN=cli-test-token-0123456789
+auth=(-H "Authorization: Bearer $DFP_SIM_TOKEN")
+get() { curl -s --max-time 5 "${auth[@]}" "http://127.0.0.1:$1$2"; }
+post() { curl -s --max-time 10 -o "$tmp/body" -w '%{http_code}' -X "${4:-POST}" "${auth[@]}" -H 'Content-Type: application/json' -d "$3" "http://127.0.0.1:$1$2"; }
 json() { python3 -c "import json,sys; d=json.load(sys.stdin); print($1)"; }
 wait_for() { # wait_for SECONDS DESCRIPTION COMMAND...: until the command prints "True"
   local limit=$1 what=$2; shift 2
@@ -161,7 +165,7 @@ expect_in "still running after all that" "True" "$(get "$ps" /api/v1/cards/5 | j
 
 # Ten clients on the event stream at once; each gets state events and the log.
 for k in $(seq 10); do
-  curl -s --max-time 3 -N "http://127.0.0.1:$ps/api/v1/events" >"$tmp/sse$k" 2>/dev/null &
+  curl -s --max-time 3 -N "${auth[@]}" "http://127.0.0.1:$ps/api/v1/events" >"$tmp/sse$k" 2>/dev/null &
 done
 sleep 1 # every stream connected before the action
 post "$ps" /api/v1/cards/5/inputs '{"DI00":true}' >/dev/null
@@ -176,20 +180,23 @@ expect_in "a stream carried the action's log line" 'DI00 /CONTROLLER INHIBIT hig
 # The connection limit (64) is not a way to hang the API: connections that never send a request
 # are closed after 5 s, event streams are capped at 32 and the next one is refused with 503;
 # a stream's place comes back when its client goes.
-timeout 60 python3 - "$ps" >"$tmp/limits" <<'PY'
+timeout 60 python3 - "$ps" "$DFP_SIM_TOKEN" >"$tmp/limits" <<'PY'
 import http.client, socket, sys, time
 port = int(sys.argv[1])
+token = sys.argv[2]
 def state(timeout):
     t = time.time()
     try:
         c = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout)
-        c.request("GET", "/api/v1/state"); r = c.getresponse(); r.read(); c.close()
+        c.request("GET", "/api/v1/state", headers={"Authorization": "Bearer " + token})
+        r = c.getresponse(); r.read(); c.close()
         return r.status, time.time() - t
     except OSError:
         return "no answer", time.time() - t
 def stream():
     s = socket.create_connection(("127.0.0.1", port), timeout=5)
-    s.sendall(b"GET /api/v1/events HTTP/1.1\r\nHost: x\r\n\r\n")
+    s.sendall(b"GET /api/v1/events HTTP/1.1\r\nHost: 127.0.0.1\r\nAuthorization: Bearer "
+              + token.encode() + b"\r\n\r\n")
     return s
 def recv_all(s, n=None):
     data = b""
@@ -238,7 +245,7 @@ expect_in "panel served at /" "<html" "$(get "$ps" /)"
 for js in panel_util.js panel_plot.js panel_log.js panel_params.js panel.js; do
   expect_in "index.html loads $js" "<script src=\"$js\"></script>" "$(get "$ps" /)"
   expect_in "$js served as JavaScript" "200 text/javascript; charset=utf-8" \
-    "$(curl -s --max-time 5 -o /dev/null -w '%{http_code} %{content_type}' "http://127.0.0.1:$ps/$js")"
+    "$(curl -s --max-time 5 -o /dev/null -w '%{http_code} %{content_type}' "${auth[@]}" "http://127.0.0.1:$ps/$js")"
 done
 
 # PLC STOP from the API: the cards' watchdogs run out.
@@ -249,7 +256,7 @@ wait_for 5 "master STOP: watchdog expiry" stopped
 # Card 7 (card 4 before) set to 5, which card 2 answers to: refused (409), so the line never has
 # two cards at one address that no /cards/N route could tell apart; nor to 9 once card 2's
 # switches say 9 for its next power-up. Every card is still reached.
-status() { curl -s --max-time 10 -o "$tmp/body" -w '%{http_code}' "http://127.0.0.1:$1$2"; }
+status() { curl -s --max-time 10 -o "$tmp/body" -w '%{http_code}' "${auth[@]}" "http://127.0.0.1:$1$2"; }
 expect_in "DIP to an address in use" \
   '409 {"error":"card 2 of the line answers to address 5: two cards must not share an address"}' \
   "$(post "$ps" /api/v1/cards/7/dip '{"address":5}') $(cat "$tmp/body")"

@@ -10,7 +10,8 @@ sim=$1
 with_tmp
 
 free_port() { python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
-note() { curl -s --max-time 5 "http://127.0.0.1:$port/api/v1/state" |
+export DFP_SIM_TOKEN=cli-test-token-0123456789 # the API's operator token (docs/api.md)
+note() { curl -s --max-time 5 -H "Authorization: Bearer $DFP_SIM_TOKEN" "http://127.0.0.1:$port/api/v1/state" |
   python3 -c 'import json,sys; print(json.load(sys.stdin)["cards"][0]["nvm"]["note"])'; }
 hint="refused (give a regular file, or a path where one can be created)"
 

@@ -7,8 +7,10 @@ sim=$1
 with_tmp
 
 free_port() { python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
-get() { curl -s --max-time 5 "http://127.0.0.1:$1$2"; }
-post() { curl -s --max-time 10 -o "$tmp/body" -w '%{http_code}' -X "${4:-POST}" -d "$3" "http://127.0.0.1:$1$2"; }
+export DFP_SIM_TOKEN=cli-test-token-0123456789 # the operator's: even it may not act on a replay
+auth=(-H "Authorization: Bearer $DFP_SIM_TOKEN")
+get() { curl -s --max-time 5 "${auth[@]}" "http://127.0.0.1:$1$2"; }
+post() { curl -s --max-time 10 -o "$tmp/body" -w '%{http_code}' -X "${4:-POST}" "${auth[@]}" -H 'Content-Type: application/json' -d "$3" "http://127.0.0.1:$1$2"; }
 json() { python3 -c "import json,sys; d=json.load(sys.stdin); print($1)"; }
 
 # About 5 s of bus time: 2500 Data_Exchange cycles of 2 ms.

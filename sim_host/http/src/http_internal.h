@@ -7,6 +7,7 @@
 
 #include <cjson/cJSON.h>
 #include <microhttpd.h>
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdbool.h>
 #include <stddef.h>
@@ -29,6 +30,44 @@
 #define KEEPALIVE_TIMEOUT_S 30u
 _Static_assert(MAX_STREAMS < MAX_CONNECTIONS, "event streams must leave connections for requests");
 
+/* ---- access control (http_auth.c, http_session.c; docs/api.md "Security") ----------------- */
+
+typedef enum http_role {
+    HTTP_ROLE_NONE = 0, /* no valid credential */
+    HTTP_ROLE_VIEWER,
+    HTTP_ROLE_OPERATOR,
+} http_role_t;
+
+#define HTTP_SESSIONS 64u
+#define HTTP_SESSION_ID_LEN HTTP_TOKEN_GENERATED_LEN
+#define HTTP_NAME_MAX 256u /* a Host name or an Origin of the allow-lists */
+#define HTTP_HASH_LEN 32u
+
+typedef struct http_session {
+    char id[HTTP_SESSION_ID_LEN + 1u]; /* "": a free entry */
+    http_role_t role;
+    uint64_t born; /* creation order: when the table is full the oldest goes */
+} http_session_t;
+
+typedef struct http_auth {
+    bool no_auth;
+    bool tls;
+    bool has_viewer;
+    /* Tokens are kept as hashes: comparing two hashes of one length in constant time says
+     * nothing about a token's length or its first differing octet. */
+    uint8_t operator_hash[HTTP_HASH_LEN];
+    uint8_t viewer_hash[HTTP_HASH_LEN];
+    char allow_host[HTTP_MAX_ALLOWED][HTTP_NAME_MAX];
+    size_t n_allow_host;
+    char allow_origin[HTTP_MAX_ALLOWED][HTTP_NAME_MAX];
+    size_t n_allow_origin;
+    char *cert_pem; /* kept for the daemon's life */
+    char *key_pem;
+    pthread_mutex_t lock; /* the sessions */
+    http_session_t sessions[HTTP_SESSIONS];
+    uint64_t born_next;
+} http_auth_t;
+
 struct http_server {
     struct MHD_Daemon *daemon;
     rig_ctl_t *ctl;
@@ -36,15 +75,38 @@ struct http_server {
     int listen_fd;
     uint16_t port;
     volatile int stopping;
+    http_auth_t auth;
 };
 
 typedef struct request {
     char body[BODY_MAX + 1u];
     size_t len;
     bool too_large;
+    http_role_t role;
+    char client[64]; /* "127.0.0.1:45122", for the audit */
 } request_t;
 
+/* One per connection (libmicrohttpd's socket context): what the last answer's error said, so
+ * the audit line of an action can give it. */
+typedef struct http_conn {
+    char error[RIG_CTL_TEXT];
+} http_conn_t;
+
 /* ---- replies (http_reply.c) ---------------------------------------------------------------- */
+
+/* Adds the headers every answer carries (docs/api.md: framing, sniffing, CSP, caching), queues
+ * r and releases it. Every answer goes through here. */
+enum MHD_Result http_queue(struct MHD_Connection *conn, unsigned status, struct MHD_Response *r);
+/* Sends obj and frees it, with more headers: NULL-terminated name, value pairs. */
+enum MHD_Result http_send_json_with(struct MHD_Connection *conn, unsigned status, cJSON *obj,
+                                    const char *const *headers);
+#define HTTP_NEED_TOKEN "a token is needed: open the URL dfp-sim printed at start, or send " \
+                        "Authorization: Bearer TOKEN"
+/* 401 {"error": HTTP_NEED_TOKEN} with WWW-Authenticate. */
+enum MHD_Result http_send_unauthorized(struct MHD_Connection *conn);
+/* The error text of the last answer on this connection ("" after a success). */
+const char *http_last_error(struct MHD_Connection *conn);
+void http_clear_error(struct MHD_Connection *conn);
 
 /* copy: MHD copies text; otherwise text must outlive the response (the embedded files). */
 enum MHD_Result http_send_text(struct MHD_Connection *conn, unsigned status, const char *type,
@@ -99,6 +161,31 @@ enum MHD_Result http_master_param(http_server_t *srv, struct MHD_Connection *con
                                   const request_t *req);
 enum MHD_Result http_master_outputs(http_server_t *srv, struct MHD_Connection *conn,
                                     uint8_t address, const request_t *req);
+
+/* ---- access control (http_auth.c, http_session.c) ----------------------------------------- */
+
+/* Copies what the server keeps from cfg; false with a reason. */
+bool http_auth_init(http_auth_t *a, const http_config_t *cfg, char *err, size_t errlen);
+void http_auth_destroy(http_auth_t *a);
+/* The checks of docs/api.md in order (Host, Origin, Content-Type, credential, role). true: the
+ * request may go on (req->role and req->client set); false: refused, answered (*rc), audited. */
+bool http_guard(http_server_t *srv, struct MHD_Connection *conn, const char *url,
+                const char *method, request_t *req, enum MHD_Result *rc);
+/* The role the request's credential (Bearer token or session cookie) gives. */
+http_role_t http_credential(http_server_t *srv, struct MHD_Connection *conn);
+const char *http_role_name(http_role_t role);
+/* One audit event (source "http", kind "audit") into the rig's log. */
+void http_audit(http_server_t *srv, rig_log_level_t level, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+/* The audit line of an action, once its answer is queued. */
+void http_audit_result(http_server_t *srv, struct MHD_Connection *conn, const request_t *req,
+                       const char *method, const char *url);
+/* POST /api/v1/login, POST /api/v1/logout, GET /api/v1/session. */
+enum MHD_Result http_login(http_server_t *srv, struct MHD_Connection *conn, const request_t *req);
+enum MHD_Result http_logout(http_server_t *srv, struct MHD_Connection *conn,
+                            const request_t *req);
+enum MHD_Result http_session_info(http_server_t *srv, struct MHD_Connection *conn,
+                                  const request_t *req);
 
 /* ---- routing (http_routes.c) --------------------------------------------------------------- */
 

@@ -211,6 +211,17 @@ enum MHD_Result http_route_api(http_server_t *srv, struct MHD_Connection *conn,
     if (strcmp(path, "params") == 0) {
         return serve_params(conn);
     }
+    if (strcmp(path, "session") == 0) {
+        return strcmp(method, "GET") == 0 ? http_session_info(srv, conn, req)
+                                          : http_send_error(conn, 405, "use GET");
+    }
+    if (strcmp(path, "login") == 0 || strcmp(path, "logout") == 0) {
+        if (strcmp(method, "POST") != 0) {
+            return http_send_error(conn, 405, "use POST");
+        }
+        return strcmp(path, "login") == 0 ? http_login(srv, conn, req)
+                                          : http_logout(srv, conn, req);
+    }
     const char *rest;
     if (http_starts(path, "cards/", &rest)) {
         return route_card(srv, conn, rest, method, req);

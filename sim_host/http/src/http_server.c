@@ -41,14 +41,41 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         return MHD_YES;
     }
     req->body[req->len] = '\0';
+    /* ---- access control: docs/api.md "Security" (http_auth.c) ---- */
+    enum MHD_Result rc = MHD_NO;
+    if (!http_guard(srv, conn, url, method, req, &rc)) {
+        return rc;
+    }
     const char *path;
     if (http_starts(url, "/api/v1/", &path)) {
-        return http_route_api(srv, conn, path, method, req);
+        bool action = strcmp(method, "GET") != 0 && strcmp(method, "HEAD") != 0 &&
+                      strcmp(path, "login") != 0 && strcmp(path, "logout") != 0;
+        http_clear_error(conn);
+        rc = http_route_api(srv, conn, path, method, req);
+        if (action) {
+            http_audit_result(srv, conn, req, method, url);
+        }
+        return rc;
     }
+    /* ---- end of access control ---- */
     if (strcmp(method, "GET") != 0 && strcmp(method, "HEAD") != 0) {
         return http_send_error(conn, 405, "use GET");
     }
     return http_serve_file(conn, url);
+}
+
+/* ---- per-connection context (http_conn_t: the last error, for the audit) ---- */
+static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_context,
+                          enum MHD_ConnectionNotificationCode toe)
+{
+    (void)cls;
+    (void)conn;
+    if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
+        *socket_context = calloc(1, sizeof(http_conn_t)); /* NULL: errors go unaudited */
+    } else {
+        free(*socket_context);
+        *socket_context = NULL;
+    }
 }
 
 static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
@@ -138,12 +165,38 @@ static int open_listener(const char *host, uint16_t port, char *err, size_t errl
     return fd;
 }
 
-http_server_t *http_server_start(rig_ctl_t *ctl, const char *listen_text, char *err,
+/* ---- TLS (MHD_USE_TLS with GnuTLS; the PEM texts stay in srv->auth for the daemon's life) ---- */
+static bool tls_options(const http_auth_t *a, struct MHD_OptionItem *opts, unsigned *flags,
+                        char *err, size_t errlen)
+{
+    opts[0] = (struct MHD_OptionItem){MHD_OPTION_END, 0, NULL};
+    if (!a->tls) {
+        return true;
+    }
+    if (MHD_is_feature_supported(MHD_FEATURE_TLS) != MHD_YES) {
+        snprintf(err, errlen, "--http-cert: this libmicrohttpd was built without TLS (GnuTLS), "
+                 "so there is no HTTPS");
+        return false;
+    }
+    *flags |= MHD_USE_TLS;
+    opts[0] = (struct MHD_OptionItem){MHD_OPTION_HTTPS_MEM_CERT, 0, a->cert_pem};
+    opts[1] = (struct MHD_OptionItem){MHD_OPTION_HTTPS_MEM_KEY, 0, a->key_pem};
+    opts[2] = (struct MHD_OptionItem){MHD_OPTION_END, 0, NULL};
+    return true;
+}
+
+static void server_free(http_server_t *s)
+{
+    http_auth_destroy(&s->auth);
+    free(s);
+}
+
+http_server_t *http_server_start(rig_ctl_t *ctl, const http_config_t *cfg, char *err,
                                  size_t errlen)
 {
     char host[64];
     uint16_t port;
-    if (!http_parse_listen(listen_text, host, sizeof host, &port, err, errlen)) {
+    if (!http_parse_listen(cfg->listen, host, sizeof host, &port, err, errlen)) {
         return NULL;
     }
     http_server_t *s = calloc(1, sizeof *s);
@@ -153,20 +206,36 @@ http_server_t *http_server_start(rig_ctl_t *ctl, const char *listen_text, char *
     }
     s->ctl = ctl;
     atomic_init(&s->streams, 0u);
+    struct MHD_OptionItem tls[3];
+    unsigned flags =
+        MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_THREAD_PER_CONNECTION | MHD_USE_ERROR_LOG;
+    if (!http_auth_init(&s->auth, cfg, err, errlen) ||
+        !tls_options(&s->auth, tls, &flags, err, errlen)) {
+        server_free(s);
+        return NULL;
+    }
     s->listen_fd = open_listener(host, port, err, errlen, &s->port);
     if (s->listen_fd < 0) {
-        free(s);
+        server_free(s);
         return NULL;
     }
     s->daemon = MHD_start_daemon(
-        MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_THREAD_PER_CONNECTION | MHD_USE_ERROR_LOG, 0,
-        NULL, NULL, on_request, s, MHD_OPTION_LISTEN_SOCKET, s->listen_fd,
+        flags, 0, NULL, NULL, on_request, s, MHD_OPTION_LISTEN_SOCKET, s->listen_fd,
         MHD_OPTION_CONNECTION_LIMIT, (unsigned)MAX_CONNECTIONS, MHD_OPTION_CONNECTION_TIMEOUT,
-        (unsigned)IDLE_TIMEOUT_S, MHD_OPTION_NOTIFY_COMPLETED, on_completed, NULL, MHD_OPTION_END);
+        (unsigned)IDLE_TIMEOUT_S, MHD_OPTION_NOTIFY_COMPLETED, on_completed, NULL,
+        MHD_OPTION_NOTIFY_CONNECTION, on_connection, NULL, MHD_OPTION_ARRAY, tls,
+        MHD_OPTION_END);
     if (s->daemon == NULL) {
-        snprintf(err, errlen, "--http: the HTTP server did not start on %s:%u", host, s->port);
+        if (s->auth.tls) {
+            snprintf(err, errlen, "--http-cert/--http-key: the HTTPS server did not start on "
+                     "%s:%u: the certificate or the key is not valid, or they do not match",
+                     host, s->port);
+        } else {
+            snprintf(err, errlen, "--http: the HTTP server did not start on %s:%u", host,
+                     s->port);
+        }
         close(s->listen_fd);
-        free(s);
+        server_free(s);
         return NULL;
     }
     return s;
@@ -187,6 +256,6 @@ void http_server_stop(http_server_t *s)
     pthread_cond_broadcast(&s->ctl->changed);
     pthread_mutex_unlock(&s->ctl->lock);
     MHD_stop_daemon(s->daemon); /* closes the listening socket it was given */
-    free(s);
+    server_free(s);
 }
 

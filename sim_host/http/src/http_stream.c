@@ -177,9 +177,6 @@ enum MHD_Result http_serve_events(http_server_t *srv, struct MHD_Connection *con
         return MHD_NO;
     }
     MHD_add_response_header(r, "Content-Type", "text/event-stream");
-    MHD_add_response_header(r, "Cache-Control", "no-store");
-    enum MHD_Result rc = MHD_queue_response(conn, MHD_HTTP_OK, r);
-    MHD_destroy_response(r);
-    return rc;
+    return http_queue(conn, MHD_HTTP_OK, r);
 }
 
