@@ -123,6 +123,27 @@ def out_dir(pytestconfig):
     return d
 
 
+def start_demo(exe, port, log_path):
+    """`dfp-sim demo --http PORT` with the test's tokens -> (Sim, True once its API answers,
+    False if it ended or did not answer within STARTUP_S)."""
+    logf = open(log_path, "w")
+    env = dict(os.environ, DFP_SIM_TOKEN=TOKEN, DFP_SIM_VIEWER_TOKEN=VIEWER_TOKEN)
+    proc = subprocess.Popen([exe, "demo", "--http", str(port)], stdout=logf,
+                            stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=env)
+    logf.close()
+    s = Sim(proc, "http://127.0.0.1:%d" % port, log_path)
+    deadline = time.monotonic() + STARTUP_S
+    while time.monotonic() < deadline and proc.poll() is None:
+        try:
+            status, _ = http(s.base, "GET", "/api/v1/state", timeout=2)
+            if status == 200:
+                return s, True
+        except OSError:
+            pass
+        time.sleep(0.1)
+    return s, False
+
+
 @pytest.fixture(scope="module")
 def sim(pytestconfig, out_dir):
     exe = pytestconfig.getoption("dfp_sim")
@@ -130,23 +151,8 @@ def sim(pytestconfig, out_dir):
     proc = None
     for _attempt in range(3):  # the port picked may be taken between bind() and dfp-sim's
         port = free_port()
-        logf = open(log_path, "w")
-        env = dict(os.environ, DFP_SIM_TOKEN=TOKEN, DFP_SIM_VIEWER_TOKEN=VIEWER_TOKEN)
-        proc = subprocess.Popen([exe, "demo", "--http", str(port)], stdout=logf,
-                                stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=env)
-        logf.close()
-        s = Sim(proc, "http://127.0.0.1:%d" % port, log_path)
-        deadline = time.monotonic() + STARTUP_S
-        up = False
-        while time.monotonic() < deadline and proc.poll() is None:
-            try:
-                status, _ = http(s.base, "GET", "/api/v1/state", timeout=2)
-                if status == 200:
-                    up = True
-                    break
-            except OSError:
-                pass
-            time.sleep(0.1)
+        s, up = start_demo(exe, port, log_path)
+        proc = s.proc
         if up:
             break
         if proc.poll() == 2:  # "port taken": try another one
@@ -568,3 +574,28 @@ def test_sigint_ends_dfp_sim(sim):
         sim.proc.wait()
         pytest.fail("dfp-sim still running %s s after SIGINT (a browser was connected)" % SIGINT_S)
     assert rc == 0, "dfp-sim exited %s after SIGINT:\n%s" % (rc, sim.output_tail())
+
+
+def test_a_restarted_dfp_sim_brings_the_login_form_back(pytestconfig, sim, browser, out_dir):
+    """dfp-sim started again behind the same address (the sessions died with the old one): the
+    open panel's stream gets 401, the login form comes back, and after logging in the panel
+    and its stream carry on."""
+    assert sim.proc.poll() is not None, "the first dfp-sim still runs"
+    assert browser.execute_script("return document.body.dataset.view") == "panel"
+    port = int(sim.base.rsplit(":", 1)[1])
+    again, up = start_demo(pytestconfig.getoption("dfp_sim"), port,
+                           os.path.join(out_dir, "dfp-sim-again.log"))
+    try:
+        assert up, "dfp-sim did not start again on port %d:\n%s" % (port, again.output_tail())
+        wait_for(lambda: login_shown(browser), PAGE_S, "the login form after the restart")
+        assert "log in again" in page_text(browser, "login-error")
+        log_in_with_the_form(browser, TOKEN)
+        wait_for(lambda: panel_shown(browser), PAGE_S, "the panel and its stream again")
+        assert browser.find_element(By.ID, "di00").is_enabled()
+    finally:
+        again.proc.send_signal(signal.SIGINT)
+        try:
+            again.proc.wait(timeout=SIGINT_S)
+        except subprocess.TimeoutExpired:
+            again.proc.kill()
+            again.proc.wait()
