@@ -21,8 +21,7 @@ from .wait import wait_for, wait_until
 __version__ = "0.1.0"
 
 __all__ = [
-    "API", "ApiError", "AuthError", "Card", "Client", "DfpSim", "DfpSimError", "Master", "PARAM_VIAS",
-    "ParamError", "ParamResult", "SlaveAndMaster", "TlsError", "find_dfp_sim", "free_port", "parse_sse",
-    "wait_for",
-    "wait_until",
+    "API", "ApiError", "AuthError", "Card", "Client", "DfpSim", "DfpSimError", "Master",
+    "PARAM_VIAS", "ParamError", "ParamResult", "SlaveAndMaster", "TlsError", "find_dfp_sim",
+    "free_port", "parse_sse", "wait_for", "wait_until",
 ]

@@ -123,12 +123,12 @@ def out_dir(pytestconfig):
     return d
 
 
-def start_demo(exe, port, log_path):
-    """`dfp-sim demo --http PORT` with the test's tokens -> (Sim, True once its API answers,
-    False if it ended or did not answer within STARTUP_S)."""
+def start_demo(exe, port, log_path, args=()):
+    """`dfp-sim demo --http PORT ARGS` with the test's tokens -> (Sim, True once its API
+    answers, False if it ended or did not answer within STARTUP_S)."""
     logf = open(log_path, "w")
     env = dict(os.environ, DFP_SIM_TOKEN=TOKEN, DFP_SIM_VIEWER_TOKEN=VIEWER_TOKEN)
-    proc = subprocess.Popen([exe, "demo", "--http", str(port)], stdout=logf,
+    proc = subprocess.Popen([exe, "demo", "--http", str(port)] + list(args), stdout=logf,
                             stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=env)
     logf.close()
     s = Sim(proc, "http://127.0.0.1:%d" % port, log_path)
@@ -576,6 +576,16 @@ def test_sigint_ends_dfp_sim(sim):
     assert rc == 0, "dfp-sim exited %s after SIGINT:\n%s" % (rc, sim.output_tail())
 
 
+def stop(s):
+    s.proc.send_signal(signal.SIGINT)
+    try:
+        return s.proc.wait(timeout=SIGINT_S)
+    except subprocess.TimeoutExpired:
+        s.proc.kill()
+        s.proc.wait()
+        return None
+
+
 def test_a_restarted_dfp_sim_brings_the_login_form_back(pytestconfig, sim, browser, out_dir):
     """dfp-sim started again behind the same address (the sessions died with the old one): the
     open panel's stream gets 401, the login form comes back, and after logging in the panel
@@ -593,9 +603,21 @@ def test_a_restarted_dfp_sim_brings_the_login_form_back(pytestconfig, sim, brows
         wait_for(lambda: panel_shown(browser), PAGE_S, "the panel and its stream again")
         assert browser.find_element(By.ID, "di00").is_enabled()
     finally:
-        again.proc.send_signal(signal.SIGINT)
-        try:
-            again.proc.wait(timeout=SIGINT_S)
-        except subprocess.TimeoutExpired:
-            again.proc.kill()
-            again.proc.wait()
+        stop(again)
+
+
+def test_no_auth_opens_the_panel_without_login(pytestconfig, browser, out_dir):
+    """--http-no-auth (loopback only): every browser is operator, no form, no Log out."""
+    nolog, up = start_demo(pytestconfig.getoption("dfp_sim"), free_port(),
+                           os.path.join(out_dir, "dfp-sim-no-auth.log"), ["--http-no-auth"])
+    try:
+        assert up, "dfp-sim --http-no-auth did not start:\n" + nolog.output_tail()
+        browser.delete_all_cookies()
+        browser.get(nolog.base + "/")
+        wait_for(lambda: panel_shown(browser), PAGE_S, "the panel without a login")
+        assert browser.find_element(By.ID, "di00").is_enabled()
+        assert not browser.find_element(By.ID, "logout").is_displayed()
+        assert session_cookie(browser) is None
+        assert not js_errors(browser), js_errors(browser)
+    finally:
+        stop(nolog)
