@@ -14,14 +14,14 @@ Standard library only.
 """
 
 from .client import API, PARAM_VIAS, Card, Client, Master, ParamResult, parse_sse
-from .errors import ApiError, DfpSimError, ParamError
+from .errors import ApiError, AuthError, DfpSimError, ParamError, TlsError
 from .process import DfpSim, SlaveAndMaster, find_dfp_sim, free_port
 from .wait import wait_for, wait_until
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "API", "ApiError", "Card", "Client", "DfpSim", "DfpSimError", "Master", "PARAM_VIAS",
-    "ParamError", "ParamResult", "SlaveAndMaster", "find_dfp_sim", "free_port", "parse_sse", "wait_for",
-    "wait_until",
+    "API", "ApiError", "AuthError", "Card", "Client", "DfpSim", "DfpSimError", "Master",
+    "PARAM_VIAS", "ParamError", "ParamResult", "SlaveAndMaster", "TlsError", "find_dfp_sim",
+    "free_port", "parse_sse", "wait_for", "wait_until",
 ]

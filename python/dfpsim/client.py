@@ -2,12 +2,14 @@
 
 import http.client
 import json
+import os
+import ssl
 import urllib.error
 import urllib.parse
 import urllib.request
 from dataclasses import dataclass
 
-from .errors import ApiError, DfpSimError, ParamError
+from .errors import ApiError, AuthError, DfpSimError, ParamError, TlsError
 
 API = "/api/v1"
 # The paths of a master parameter service (docs/api.md, POST /api/v1/master/param).
@@ -43,39 +45,67 @@ def _param_ref(p):
     return str(p)
 
 
+TOKEN_ENV = "DFP_SIM_TOKEN"
+
+
 class Client:
-    """One running dfp-sim with `--http`, e.g. Client("http://127.0.0.1:8080").
+    """One running dfp-sim with `--http`, e.g. Client("http://127.0.0.1:8080", token=T).
+
+    `token` (the operator or viewer token dfp-sim printed at start, or gave it by
+    --http-token-file) goes as `Authorization: Bearer` on every request, the event stream
+    included; None takes $DFP_SIM_TOKEN, "" sends none (for a server started with
+    --http-no-auth). An https URL verifies the server's certificate against `cafile` (a PEM
+    file: the self-signed certificate itself, or its CA), or the system's store without it.
 
     Every call is one HTTP request; nothing is cached, so properties always show the state the
     simulation published last (at most 50 ms old in wall-clock modes).
     """
 
-    def __init__(self, base_url, timeout=10.0):
+    def __init__(self, base_url, timeout=10.0, token=None, cafile=None):
         if "://" not in base_url:
             base_url = "http://" + base_url
         self.base_url = base_url.rstrip("/")
         # A parameter service through the master answers within 5 s or with 504: longer here.
         self.timeout = timeout
+        self.token = os.environ.get(TOKEN_ENV, "") if token is None else str(token)
+        self.cafile = None if cafile is None else os.fspath(cafile)
+        self._ssl = None
+        if urllib.parse.urlsplit(self.base_url).scheme == "https":
+            self._ssl = ssl.create_default_context(cafile=self.cafile)
 
     def __repr__(self):
         return "Client(%r)" % self.base_url
 
     # ---- plumbing --------------------------------------------------------------------------
 
+    def _headers(self, accept):
+        headers = {"Accept": accept}
+        if self.token:
+            headers["Authorization"] = "Bearer " + self.token
+        return headers
+
     def request(self, method, path, body=None, timeout=None):
-        """One request; returns the decoded JSON answer. HTTP errors raise ApiError."""
+        """One request; returns the decoded JSON answer. HTTP errors raise ApiError (401:
+        AuthError), a certificate that does not verify TlsError."""
         url = self.base_url + path
         data = None
-        headers = {"Accept": "application/json"}
+        headers = self._headers("application/json")
+        if method not in ("GET", "HEAD"):
+            # the server takes a state-changing request only as JSON, body or not (415)
+            headers["Content-Type"] = "application/json"
         if body is not None:
             data = json.dumps(body).encode("utf-8")
-            headers["Content-Type"] = "application/json"
         req = urllib.request.Request(url, data=data, method=method, headers=headers)
         try:
-            with urllib.request.urlopen(req, timeout=timeout or self.timeout) as rsp:
+            with urllib.request.urlopen(req, timeout=timeout or self.timeout,
+                                        context=self._ssl) as rsp:
                 raw = rsp.read()
         except urllib.error.HTTPError as e:
-            raise ApiError(e.code, _error_text(e.read(), e.reason), method, path) from None
+            raise _http_error(e.code, e.read(), e.reason, method, path) from None
+        except urllib.error.URLError as e:
+            if isinstance(e.reason, ssl.SSLError):
+                raise TlsError(self.base_url, e.reason) from None
+            raise
         if not raw:
             return None
         try:
@@ -132,18 +162,26 @@ class Client:
         drop the connection.
         """
         parts = urllib.parse.urlsplit(self.base_url)
-        conn_cls = (http.client.HTTPSConnection if parts.scheme == "https"
-                    else http.client.HTTPConnection)
-        conn = conn_cls(parts.hostname, parts.port, timeout=timeout or self.timeout)
+        if parts.scheme == "https":
+            conn = http.client.HTTPSConnection(parts.hostname, parts.port,
+                                               timeout=timeout or self.timeout,
+                                               context=self._ssl)
+        else:
+            conn = http.client.HTTPConnection(parts.hostname, parts.port,
+                                              timeout=timeout or self.timeout)
         path = parts.path + API + "/events"
-        headers = {"Accept": "text/event-stream", "Cache-Control": "no-cache"}
+        headers = self._headers("text/event-stream")
+        headers["Cache-Control"] = "no-cache"
         if last_event_id is not None:
             headers["Last-Event-ID"] = str(last_event_id)
         try:
-            conn.request("GET", path, headers=headers)
+            try:
+                conn.request("GET", path, headers=headers)
+            except ssl.SSLError as e:
+                raise TlsError(self.base_url, e) from None
             rsp = conn.getresponse()
             if rsp.status != 200:
-                raise ApiError(rsp.status, _error_text(rsp.read(), rsp.reason), "GET", path)
+                raise _http_error(rsp.status, rsp.read(), rsp.reason, "GET", path)
             yield from parse_sse(rsp)
         finally:
             conn.close()
@@ -185,6 +223,11 @@ def parse_sse(stream):
             if "\0" not in value:
                 last_id = value
         # "retry" and unknown fields: ignored
+
+
+def _http_error(status, raw, reason, method, path):
+    cls = AuthError if status == 401 else ApiError
+    return cls(status, _error_text(raw, reason), method, path)
 
 
 def _error_text(raw, fallback):

@@ -1,6 +1,7 @@
 """Starting and stopping dfp-sim processes (and the socat PTY pair between them)."""
 
 import os
+import secrets
 import shutil
 import signal
 import socket
@@ -9,8 +10,8 @@ import tempfile
 import time
 import urllib.error
 
-from .client import API, Client
-from .errors import ApiError, DfpSimError
+from .client import API, TOKEN_ENV, Client
+from .errors import ApiError, DfpSimError, TlsError
 
 EXIT_PORT_TAKEN = 2  # docs/api.md: a taken port is a one-line error and exit 2
 
@@ -45,14 +46,14 @@ def _tail(path, lines=30):
 class Process:
     """One child process whose stdout and stderr go to files in a directory."""
 
-    def __init__(self, name, argv, workdir):
+    def __init__(self, name, argv, workdir, env=None):
         self.name = name
         self.argv = [os.fspath(a) for a in argv]
         self.stdout_path = os.path.join(workdir, name + ".out")
         self.stderr_path = os.path.join(workdir, name + ".err")
         with open(self.stdout_path, "wb") as out, open(self.stderr_path, "wb") as err:
             self.popen = subprocess.Popen(self.argv, stdin=subprocess.DEVNULL, stdout=out,
-                                          stderr=err)
+                                          stderr=err, env=env)
         self.returncode = None
 
     @property
@@ -97,6 +98,9 @@ def _wait_api(proc, client, timeout):
         try:
             client.request("GET", API + "/state", timeout=1.0)
             return None
+        except TlsError:
+            proc.stop(signal.SIGKILL)
+            raise
         except (OSError, ApiError, urllib.error.URLError) as e:
             last = e
         time.sleep(0.05)
@@ -125,14 +129,24 @@ class _Session:
             self.workdir = os.fspath(workdir)
             os.makedirs(self.workdir, exist_ok=True)
 
-    def start_sim(self, name, args, http_port=None):
-        """dfp-sim ARGS --http 127.0.0.1:PORT, up to a first answer of the API -> Client."""
+    def start_sim(self, name, args, http_port=None, tls=None):
+        """dfp-sim ARGS --http 127.0.0.1:PORT, up to a first answer of the API -> Client.
+
+        The child gets a new operator token ($DFP_SIM_TOKEN in its environment; the rest of
+        the environment is passed on, $DFP_SIM_VIEWER_TOKEN included), and the Client sends
+        it. tls=(CERT, KEY): --http-cert/--http-key, and the Client trusts CERT."""
         tries = 1 if http_port else 3
+        token = secrets.token_urlsafe(32)
+        env = dict(os.environ, **{TOKEN_ENV: token})
+        extra, scheme, cafile = [], "http", None
+        if tls is not None:
+            cafile = os.fspath(tls[0])
+            extra, scheme = ["--http-cert", cafile, "--http-key", os.fspath(tls[1])], "https"
         for attempt in range(tries):
             port = http_port or free_port()
-            argv = [self.dfp_sim] + list(args) + ["--http", "127.0.0.1:%d" % port]
-            proc = Process(name, argv, self.workdir)
-            client = Client("http://127.0.0.1:%d" % port)
+            argv = [self.dfp_sim] + list(args) + ["--http", "127.0.0.1:%d" % port] + extra
+            proc = Process(name, argv, self.workdir, env=env)
+            client = Client("%s://127.0.0.1:%d" % (scheme, port), token=token, cafile=cafile)
             rc = _wait_api(proc, client, self.startup_timeout)
             if rc is None:
                 self.processes.append((proc, True))
@@ -251,13 +265,16 @@ class DfpSim:
 
     @staticmethod
     def run(*args, http_port=None, dfp_sim=None, check_exit=True, startup_timeout=10.0,
-            stop_timeout=5.0, workdir=None):
-        """Any `dfp-sim ARGS --http PORT` -> a Client (e.g. DfpSim.run("replay", "x.pcap"))."""
+            stop_timeout=5.0, workdir=None, tls=None):
+        """Any `dfp-sim ARGS --http PORT` -> a Client (e.g. DfpSim.run("replay", "x.pcap")).
+
+        The Client carries the token dfp-sim was started with (`client.token`). tls=(CERT,
+        KEY): HTTPS with these PEM files, the Client trusting CERT (a self-signed one)."""
         session = _Session(dfp_sim, check_exit, startup_timeout, stop_timeout)
 
         def start(s):
             s._mkworkdir(workdir)
-            client = s.start_sim(str(args[0]) if args else "dfp-sim", args, http_port)
+            client = s.start_sim(str(args[0]) if args else "dfp-sim", args, http_port, tls)
             client.session = s   # outputs() for a test report
             return client
 

@@ -13,8 +13,8 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import pytest
 
-from dfpsim import (ApiError, Client, DfpSim, DfpSimError, ParamError, ParamResult, free_port,
-                    parse_sse, wait_for, wait_until)
+from dfpsim import (ApiError, AuthError, Client, DfpSim, DfpSimError, ParamError, ParamResult,
+                    free_port, parse_sse, wait_for, wait_until)
 
 
 class FakeApi:
@@ -75,7 +75,8 @@ def api():
 
 
 @pytest.fixture
-def client(api):
+def client(api, monkeypatch):
+    monkeypatch.delenv("DFP_SIM_TOKEN", raising=False)
     return Client(api.url)
 
 
@@ -190,6 +191,61 @@ def test_action_bodies(api, client):
                for r in api.requests)
 
 
+def test_a_state_changing_request_without_body_is_still_json(api, client):
+    api.routes[("POST", "/api/v1/logout")] = (200, {"ok": True})
+    client.request("POST", "/api/v1/logout")
+    method, _, headers, body = api.requests[-1]
+    assert (method, headers["Content-Type"], body) == ("POST", "application/json", None)
+    api.routes[("GET", "/api/v1/state")] = (200, {"mode": "demo"})
+    client.state()
+    assert "Content-Type" not in api.requests[-1][2]
+
+
+# ---- the token -----------------------------------------------------------------------------
+
+def test_token_goes_as_bearer_on_every_request_and_the_stream(api, monkeypatch):
+    monkeypatch.delenv("DFP_SIM_TOKEN", raising=False)
+    api.routes[("GET", "/api/v1/state")] = (200, {"mode": "demo"})
+    api.routes[("POST", "/api/v1/master/run")] = (200, {"ok": True})
+    api.routes[("GET", "/api/v1/events")] = (200, SSE)
+    c = Client(api.url, token="op-token-0123456789")
+    c.state()
+    c.master().stop()
+    assert next(c.events())["event"] == "log"
+    assert [r[2].get("Authorization") for r in api.requests] == \
+        ["Bearer op-token-0123456789"] * 3
+    assert "op-token" not in repr(c)
+
+
+def test_token_from_the_environment_and_none(api, monkeypatch):
+    api.routes[("GET", "/api/v1/state")] = (200, {"mode": "demo"})
+    monkeypatch.setenv("DFP_SIM_TOKEN", "env-token-0123456789")
+    Client(api.url).state()
+    assert api.requests[-1][2]["Authorization"] == "Bearer env-token-0123456789"
+    Client(api.url, token="given-token-0123456").state()   # an argument wins
+    assert api.requests[-1][2]["Authorization"] == "Bearer given-token-0123456"
+    Client(api.url, token="").state()                      # "": no token at all
+    assert "Authorization" not in api.requests[-1][2]
+    monkeypatch.delenv("DFP_SIM_TOKEN")
+    Client(api.url).state()
+    assert "Authorization" not in api.requests[-1][2]
+
+
+NEED_TOKEN = ("a token is needed: open the URL dfp-sim printed at start, or send "
+              "Authorization: Bearer TOKEN")
+
+
+def test_401_is_an_auth_error_with_the_servers_text(api, client):
+    api.routes[("GET", "/api/v1/state")] = (401, {"error": NEED_TOKEN})
+    with pytest.raises(AuthError) as e:
+        client.state()
+    assert (e.value.status, e.value.message) == (401, NEED_TOKEN)
+    assert isinstance(e.value, ApiError)
+    api.routes[("GET", "/api/v1/events")] = (401, {"error": NEED_TOKEN})
+    with pytest.raises(AuthError, match="a token is needed"):
+        next(client.events())
+
+
 def test_card_parameter_access(api, client):
     api.routes[("GET", "/api/v1/cards/4/params/P100")] = (200, P100)
     api.routes[("GET", "/api/v1/cards/4/params/setpoint%20source")] = (200, P100)
@@ -240,6 +296,8 @@ def test_400_is_an_api_error_with_the_servers_text(api, client):
 
 @pytest.mark.parametrize("status, message", [
     (403, "read-only server (dfp-sim replay)"),
+    (403, "this needs the operator role; this client is a viewer"),
+    (415, "Content-Type must be application/json"),
     (404, "no card with address 9"),
     (405, "method not allowed"),
     (409, "no master in dfp-sim slave"),
@@ -427,8 +485,11 @@ FAKE_SIM = textwrap.dedent("""\
         def log_message(self, *a):
             pass
         def do_GET(self):
-            b = json.dumps({"mode": args[0], "argv": args}).encode()
-            self.send_response(200)
+            # as dfp-sim: the token from the environment, and nothing without it
+            ok = self.headers.get("Authorization") == "Bearer " + os.environ["DFP_SIM_TOKEN"]
+            b = json.dumps({"mode": args[0], "argv": args, "token": os.environ["DFP_SIM_TOKEN"]}
+                           if ok else {"error": "a token is needed"}).encode()
+            self.send_response(200 if ok else 401)
             self.send_header("Content-Length", str(len(b)))
             self.end_headers()
             self.wfile.write(b)
@@ -459,6 +520,16 @@ def test_demo_starts_waits_and_stops(fake_sim, monkeypatch):
         assert st["mode"] == "demo"
         assert st["argv"][1] == "--http" and st["argv"][2].startswith("127.0.0.1:")
         assert sim.base_url.endswith(":" + st["argv"][2].rsplit(":", 1)[1])
+
+
+def test_each_start_gets_its_own_token_and_the_client_sends_it(fake_sim, monkeypatch):
+    monkeypatch.setenv("DFP_SIM_TOKEN", "the-callers-own-token")
+    with DfpSim.demo(dfp_sim=fake_sim) as a, DfpSim.demo(dfp_sim=fake_sim) as b:
+        ta, tb = a.state()["token"], b.state()["token"]
+    assert ta == a.token and tb == b.token
+    assert ta != tb and "the-callers-own-token" not in (ta, tb)
+    assert len(ta) == 43   # secrets.token_urlsafe(32): 32 octets in base64url
+    assert all(ch.isalnum() or ch in "-_" for ch in ta)
 
 
 def test_demo_given_port(fake_sim):

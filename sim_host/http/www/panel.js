@@ -2,7 +2,8 @@
  * API of docs/api.md (GET /api/v1/state once, then the SSE stream /api/v1/events) and sends the
  * actions the API offers. URLs are relative so the panel also works behind a path prefix.
  * Classic scripts sharing one global scope, loaded in this order by index.html: panel_util.js,
- * panel_plot.js, panel_log.js, panel_params.js, then this file (state, rendering, controls). */
+ * panel_auth.js, panel_plot.js, panel_log.js, panel_params.js, then this file (state, rendering,
+ * controls). panel_auth.js decides between its login form and the panel (panelStart). */
 'use strict';
 
 const STALE_MS = 3000; /* no state event for this long: the stream is considered dropped */
@@ -295,8 +296,10 @@ function updateEnabled() {
 function render() {
   if (!state) return;
   try {
-    readOnly = !!state.read_only;
+    /* replay serves read-only; a viewer may read but not act (the server refuses with 403) */
+    readOnly = !!state.read_only || role === 'viewer';
     document.body.classList.toggle('read-only', readOnly);
+    text('ro-badge', role === 'viewer' ? 'read-only (viewer)' : 'read-only');
     $('ro-badge').hidden = !readOnly;
     text('sim-mode', state.mode);
     const med = state.medium || {};
@@ -336,16 +339,34 @@ function setConn(s, label) {
   el.textContent = label || s;
 }
 
+/* The browser gave up on the stream (it does on any answer but 200, e.g. the 401 of a dfp-sim
+ * started again): reconnect while the session holds, else the login form. */
+async function reconnect() {
+  if (role === null) return;
+  let valid;
+  try {
+    valid = await sessionStillValid();
+  } catch (e) {
+    setTimeout(reconnect, 2000);  /* dfp-sim not answering (yet) */
+    return;
+  }
+  if (role === null) return;
+  if (valid) connect();
+  else showLogin('the session ended (was dfp-sim started again?): log in again');
+}
+
 function connect() {
   if (es) es.close();
   setConn('connecting', 'connecting');
-  es = new EventSource(API + 'events');
-  es.onopen = () => { setConn('connected', 'connected'); lastStateAt = Date.now(); };
-  es.onerror = () => {
+  const src = new EventSource(API + 'events');  /* same origin: the session cookie goes along */
+  es = src;
+  src.onopen = () => { setConn('connected', 'connected'); lastStateAt = Date.now(); };
+  src.onerror = () => {
+    if (src !== es) return;
     setConn('disconnected', 'disconnected');
-    if (es.readyState === EventSource.CLOSED) setTimeout(connect, 2000); /* the browser gave up */
+    if (src.readyState === EventSource.CLOSED) setTimeout(reconnect, 2000);
   };
-  es.addEventListener('state', (m) => {
+  src.addEventListener('state', (m) => {
     let s;
     try { s = JSON.parse(m.data); } catch (e) { return; }
     lastStateAt = Date.now();
@@ -355,7 +376,7 @@ function connect() {
     render();
     drawPlot();
   });
-  es.addEventListener('log', (m) => {
+  src.addEventListener('log', (m) => {
     try { addLog(JSON.parse(m.data)); } catch (e) { /* a malformed line is skipped */ }
   });
 }
@@ -474,12 +495,9 @@ function wire() {
 
 /* ---------- start ---------- */
 
-async function start() {
-  buildDip();
-  buildCwBits();
-  LOG_KINDS.forEach(noteKind);
-  wire();
-  drawPlot();
+/* Logged in (or no login needed): the state, the stream, the log and the parameter list. Runs
+ * again after each login. */
+async function panelStart() {
   let since = 0;
   try {
     state = await api('GET', 'state');
@@ -498,6 +516,22 @@ async function start() {
     setStatus('cannot read the log: ' + e.message, 'error');
   }
   searchParams();
+}
+
+/* Logged out or the session gone: no stream (it would only answer 401). */
+function panelStop() {
+  if (es) es.close();
+  es = null;
+  setConn('disconnected', 'logged out');
+}
+
+function start() {
+  buildDip();
+  buildCwBits();
+  LOG_KINDS.forEach(noteKind);
+  wire();
+  drawPlot();
+  authStart();
 }
 
 if (document.readyState === 'loading') document.addEventListener('DOMContentLoaded', start);

@@ -58,14 +58,18 @@ function setStatus(msg, level) {
   el.dataset.level = level || 'info';
 }
 
-/* One API call. Resolves to the parsed JSON body; an HTTP error rejects with the server's
- * {"error": ...} text. */
+/* Called with the server's text when a call answers 401 (the session is gone, e.g. dfp-sim was
+ * started again): panel_auth.js sets it to bring the login form back. */
+let onUnauthorized = null;
+
+/* One API call, with the session cookie (same origin only). Resolves to the parsed JSON body; an
+ * HTTP error rejects with the server's {"error": ...} text. Every state-changing call says
+ * Content-Type: application/json, with or without a body: the server refuses it otherwise
+ * (415), which is what keeps another site's plain form or beacon from acting. */
 async function api(method, path, body) {
-  const opt = { method: method, headers: { Accept: 'application/json' } };
-  if (body !== undefined) {
-    opt.headers['Content-Type'] = 'application/json';
-    opt.body = JSON.stringify(body);
-  }
+  const opt = { method: method, credentials: 'same-origin', headers: { Accept: 'application/json' } };
+  if (method !== 'GET' && method !== 'HEAD') opt.headers['Content-Type'] = 'application/json';
+  if (body !== undefined) opt.body = JSON.stringify(body);
   let res;
   try {
     res = await fetch(API + path, opt);
@@ -76,7 +80,11 @@ async function api(method, path, body) {
   try { data = await res.json(); } catch (e) { data = null; }
   if (!res.ok) {
     const msg = (data && data.error) ? data.error : res.statusText;
-    throw new Error('HTTP ' + res.status + ': ' + msg);
+    if (res.status === 401 && path !== 'login' && onUnauthorized) onUnauthorized(msg);
+    const err = new Error('HTTP ' + res.status + ': ' + msg);
+    err.status = res.status;
+    err.serverText = msg;
+    throw err;
   }
   return data;
 }
