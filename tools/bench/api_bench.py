@@ -14,6 +14,7 @@ at 19.2 kbit/s, both with --http. Measures
 import argparse
 import json
 import os
+import secrets
 import signal
 import socket
 import statistics
@@ -23,6 +24,15 @@ import tempfile
 import threading
 import time
 import urllib.request
+
+# The API needs a credential (docs/api.md, "Security"): both processes get this token.
+TOKEN = secrets.token_urlsafe(32)
+os.environ["DFP_SIM_TOKEN"] = TOKEN
+
+
+def api_request(port, path):
+    return urllib.request.Request(f"http://127.0.0.1:{port}{path}",
+                                  headers={"Authorization": "Bearer " + TOKEN})
 
 
 def free_port():
@@ -34,7 +44,7 @@ def free_port():
 
 
 def get(port, path, timeout=5):
-    with urllib.request.urlopen(f"http://127.0.0.1:{port}{path}", timeout=timeout) as r:
+    with urllib.request.urlopen(api_request(port, path), timeout=timeout) as r:
         return json.loads(r.read())
 
 
@@ -63,7 +73,7 @@ def cycle_rate(port, window):
 
 def stream(port, stop, counter):
     try:
-        with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/v1/events", timeout=5) as r:
+        with urllib.request.urlopen(api_request(port, "/api/v1/events"), timeout=5) as r:
             while not stop.is_set():
                 line = r.readline()
                 if not line:
