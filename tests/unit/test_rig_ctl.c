@@ -36,11 +36,9 @@ static void teardown(void)
 static unsigned free_slots(void)
 {
     unsigned n = 0;
-    pthread_mutex_lock(&ctl.lock);
     for (unsigned i = 0; i < RIG_CTL_CMDS; i++) {
-        n += ctl.slot[i] == RIG_SLOT_FREE ? 1u : 0u;
+        n += atomic_load(&ctl.slot[i]) == RIG_SLOT_FREE ? 1u : 0u;
     }
-    pthread_mutex_unlock(&ctl.lock);
     return n;
 }
 
@@ -102,13 +100,10 @@ static void *take_up_first(void *arg)
 {
     (void)arg;
     const struct timespec ms = {0, 1000000L};
-    for (bool taken = false; !taken; nanosleep(&ms, NULL)) {
-        pthread_mutex_lock(&ctl.lock);
-        if (ctl.slot[0] == RIG_SLOT_QUEUED) {
-            ctl.slot[0] = RIG_SLOT_RUNNING;
-            taken = true;
-        }
-        pthread_mutex_unlock(&ctl.lock);
+    for (int seen = RIG_SLOT_QUEUED;
+         !atomic_compare_exchange_strong(&ctl.slot[0], &seen, RIG_SLOT_RUNNING);
+         seen = RIG_SLOT_QUEUED) {
+        nanosleep(&ms, NULL);
     }
     return NULL;
 }
@@ -125,7 +120,7 @@ static void test_running_timeout_may_still_happen(void)
     pthread_join(t, NULL);
     CHECK_EQ(cmd.status, 504);
     CHECK_STR(cmd.error, "no answer within 50 ms; the action may still be carried out");
-    CHECK_EQ(ctl.slot[0], RIG_SLOT_ABANDONED);
+    CHECK_EQ(atomic_load(&ctl.slot[0]), RIG_SLOT_ABANDONED);
     CHECK_EQ(free_slots(), RIG_CTL_CMDS - 1u);
     teardown();
 }

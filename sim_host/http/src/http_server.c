@@ -183,9 +183,7 @@ void http_server_stop(http_server_t *s)
         return;
     }
     s->stopping = 1;
-    pthread_mutex_lock(&s->ctl->lock);
-    pthread_cond_broadcast(&s->ctl->changed);
-    pthread_mutex_unlock(&s->ctl->lock);
+    rig_ctl_kick(s->ctl);
     MHD_stop_daemon(s->daemon); /* closes the listening socket it was given */
     free(s);
 }
