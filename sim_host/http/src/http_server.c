@@ -40,6 +40,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         *upload_size = 0;
         return MHD_YES;
     }
+    http_limits_delivered(conn);
     req->body[req->len] = '\0';
     const char *path;
     if (http_starts(url, "/api/v1/", &path)) {
@@ -55,8 +56,8 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
                          enum MHD_RequestTerminationCode toe)
 {
     (void)cls;
-    (void)conn;
     (void)toe;
+    http_limits_request_end(conn);
     free(*con_cls);
     *con_cls = NULL;
 }
@@ -153,8 +154,13 @@ http_server_t *http_server_start(rig_ctl_t *ctl, const char *listen_text, char *
     }
     s->ctl = ctl;
     atomic_init(&s->streams, 0u);
-    s->listen_fd = open_listener(host, port, err, errlen, &s->port);
+    s->limits = http_limits_new(ctl);
+    s->listen_fd = s->limits != NULL ? open_listener(host, port, err, errlen, &s->port) : -1;
     if (s->listen_fd < 0) {
+        if (s->limits == NULL) {
+            snprintf(err, errlen, "--http: cannot start the server's threads");
+        }
+        http_limits_free(s->limits);
         free(s);
         return NULL;
     }
@@ -162,10 +168,12 @@ http_server_t *http_server_start(rig_ctl_t *ctl, const char *listen_text, char *
         MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_THREAD_PER_CONNECTION | MHD_USE_ERROR_LOG, 0,
         NULL, NULL, on_request, s, MHD_OPTION_LISTEN_SOCKET, s->listen_fd,
         MHD_OPTION_CONNECTION_LIMIT, (unsigned)MAX_CONNECTIONS, MHD_OPTION_CONNECTION_TIMEOUT,
-        (unsigned)IDLE_TIMEOUT_S, MHD_OPTION_NOTIFY_COMPLETED, on_completed, NULL, MHD_OPTION_END);
+        (unsigned)IDLE_TIMEOUT_S, MHD_OPTION_NOTIFY_COMPLETED, on_completed, NULL,
+        MHD_OPTION_ARRAY, http_limits_options(s->limits), MHD_OPTION_END);
     if (s->daemon == NULL) {
         snprintf(err, errlen, "--http: the HTTP server did not start on %s:%u", host, s->port);
         close(s->listen_fd);
+        http_limits_free(s->limits);
         free(s);
         return NULL;
     }
@@ -185,6 +193,7 @@ void http_server_stop(http_server_t *s)
     s->stopping = 1;
     rig_ctl_kick(s->ctl);
     MHD_stop_daemon(s->daemon); /* closes the listening socket it was given */
+    http_limits_free(s->limits);
     free(s);
 }
 
