@@ -13,8 +13,8 @@ the master setting a 10 ms DP watchdog (time base 1 ms), both with --http. Then:
              of the slow connections the server closed and when.
 Output: one "key=value" line per figure. DFP_SIM_TOKEN, when set, goes to dfp-sim in its
 environment and to the server as "Authorization: Bearer" with every request.
-Usage: http_bench.py DFP_SIM [--part flood|slowloris|both] [--seconds S] [--workers N]
-                     [--conns N] [--addresses K] [--hold S] [--nice N]
+Usage: http_bench.py DFP_SIM [--part flood|slowloris|both] [--seconds S] [--workers N] [--pause-ms MS]
+                     [--conns N] [--addresses K] [--hold S] [--nice N] [--rt PRIO]
 """
 import argparse
 import http.client
@@ -62,22 +62,23 @@ def request(port, method, path, body=None, source="127.0.0.1", timeout=10.0):
 class Rig:
     """socat, the card (slave) and the master, in a temporary directory."""
 
-    def __init__(self, sim, nice):
-        self.prefix = (["chrt", "-f", str(-nice)] if nice < 0 and os.environ.get("H3RT") else ["nice", "-n", str(nice)]) if nice else []
+    def __init__(self, sim, nice, rt):
+        self.prefix = ["chrt", "-f", str(rt)] if rt else ["nice", "-n", str(nice)] if nice else []
         self.dir = tempfile.mkdtemp(prefix="dfp-http-bench.")
         self.procs = []
         a, b = os.path.join(self.dir, "a"), os.path.join(self.dir, "b")
-        self.spawn([*self.prefix, "socat", f"pty,raw,echo=0,link={a}", f"pty,raw,echo=0,link={b}"], "socat")
+        self.spawn([*self.prefix, "socat", f"pty,raw,echo=0,link={a}",
+                    f"pty,raw,echo=0,link={b}"], "socat")
         for _ in range(50):
             if os.path.exists(a) and os.path.exists(b):
                 break
             time.sleep(0.1)
         self.card_port, self.master_port = free_port(), free_port()
-        self.spawn([*self.prefix, sim, "slave", "--port", a, "--address", "4", "--http", str(self.card_port)],
-                   "slave")
-        self.spawn([*self.prefix, sim, "master", "--port", b, "--address", "4", "--config", "F3F2", "--baud",
-                    "1.5M", "--cycles", "0", *WATCHDOG_PRM, "--http", str(self.master_port)],
-                   "master")
+        self.spawn([*self.prefix, sim, "slave", "--port", a, "--address", "4", "--http",
+                    str(self.card_port)], "slave")
+        self.spawn([*self.prefix, sim, "master", "--port", b, "--address", "4", "--config", "F3F2",
+                    "--baud", "1.5M", "--cycles", "0", *WATCHDOG_PRM, "--http",
+                    str(self.master_port)], "master")
 
     def spawn(self, argv, name):
         out = open(os.path.join(self.dir, name + ".out"), "wb")
@@ -120,13 +121,12 @@ REQUESTS = [("GET", "/api/v1/state", None), ("GET", "/api/v1/log?limit=4096", No
 
 
 def flood_worker(args):
-    port, source, until, kind = args
+    port, source, until, kind, pause_s = args
     if kind == "events":
         return stream_worker(port, source, until)
-    mix = [REQUESTS[int(i)] for i in os.environ.get("H3MIX", "012")]
     n, conn = 0, None
     while time.time() < until:
-        method, path, body = mix[n % len(mix)]
+        method, path, body = REQUESTS[n % len(REQUESTS)]
         try:
             if conn is None:
                 conn = http.client.HTTPConnection("127.0.0.1", port, timeout=10,
@@ -134,6 +134,8 @@ def flood_worker(args):
             conn.request(method, path, body=body, headers=headers())
             conn.getresponse().read()
             n += 1
+            if pause_s > 0:
+                time.sleep(pause_s)
         except (OSError, http.client.HTTPException):
             conn = None
             time.sleep(0.01)
@@ -157,12 +159,13 @@ def stream_worker(port, source, until):
     return n
 
 
-def flood(rig, seconds, workers):
+def flood(rig, seconds, workers, pause_s):
     before = rig.expiries()
     until = time.time() + seconds
     # Each worker from an address of its own, so the per-address limit does not turn them away.
-    jobs = [(rig.card_port, f"127.0.0.{10 + i}", until, "requests") for i in range(workers)]
-    jobs += [(rig.card_port, f"127.0.0.{10 + i}", until, "events") for i in range(2)]
+    jobs = [(rig.card_port, f"127.0.0.{10 + i}", until, "requests", pause_s)
+            for i in range(workers)]
+    jobs += [(rig.card_port, f"127.0.0.{10 + i}", until, "events", 0) for i in range(2)]
     t0 = time.monotonic()
     with multiprocessing.Pool(len(jobs)) as pool:
         counts = pool.map(flood_worker, jobs)
@@ -250,6 +253,8 @@ def main():
     ap.add_argument("--part", choices=["flood", "slowloris", "both"], default="both")
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--workers", type=int, default=8)
+    ap.add_argument("--pause-ms", type=float, default=0.0,
+                    help="each flood worker waits this long between two requests")
     ap.add_argument("--conns", type=int, default=70)
     ap.add_argument("--addresses", type=int, default=1)
     ap.add_argument("--hold", type=float, default=16.0)
@@ -257,11 +262,14 @@ def main():
                     help="run dfp-sim with this nice value (e.g. -10 as root: other load on the "
                          "machine then disturbs the loops less; the request threads still go "
                          "to +10)")
+    ap.add_argument("--rt", type=int, default=0,
+                    help="run socat and dfp-sim with SCHED_FIFO at this priority (chrt; root or "
+                         "RLIMIT_RTPRIO); the request threads drop it")
     o = ap.parse_args()
     if not os.access(o.sim, os.X_OK):
         print(f"http_bench: {o.sim} is not an executable", file=sys.stderr)
         return 2
-    rig = Rig(o.sim, o.nice)
+    rig = Rig(o.sim, o.nice, o.rt)
     try:
         if not rig.wait_data_exchange():
             print(f"http_bench: the card did not reach Data_Exch with a 10 ms watchdog "
@@ -272,7 +280,7 @@ def main():
             quiet = rig.expiries()
             time.sleep(2.0)
             print(f"quiet_watchdog_expiries_2s={rig.expiries() - quiet}")
-            flood(rig, o.seconds, o.workers)
+            flood(rig, o.seconds, o.workers, o.pause_ms / 1000.0)
         if o.part in ("slowloris", "both"):
             slowloris(rig, o.conns, o.addresses, o.hold)
     finally:

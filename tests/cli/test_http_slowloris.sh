@@ -1,0 +1,25 @@
+# Slow-loris against the control API (docs/api.md, "Limits"): 70 connections from 127.0.0.2,
+# each sending one octet every 2 s, do not lock out the operator at 127.0.0.1: a STOP of the
+# master answers 200 within 5 s, and every slow connection is closed once its 10 s to deliver
+# a whole request are up (at most 8 of them are accepted at all). The card and the master run
+# over a PTY pair (sim_host/bench/http_bench.py, which also gives the figures).
+sim=$1
+. "$(dirname "$0")/lib.sh"
+with_tmp
+bench="$(dirname "$0")/../../sim_host/bench/http_bench.py"
+
+# ---- credentials: the lead fills this in once the token work (issue 30, point 1) is merged:
+# every /api/v1 request then needs "Authorization: Bearer TOKEN", dfp-sim taking TOKEN from
+# DFP_SIM_TOKEN. http_bench.py sends it whenever DFP_SIM_TOKEN is set.
+# export DFP_SIM_TOKEN=dfp-test-token-0123456789abcdef
+
+out=$(timeout 120 python3 "$bench" "$sim" --part slowloris --conns 70 --addresses 1 --hold 16 \
+      2>"$tmp/err") || { bad "http_bench.py failed: $(cat "$tmp/err")"; finish; exit 1; }
+val() { sed -n "s/^$1=//p" <<<"$out"; }
+expect_in "STOP answers 200 under slow-loris" "200" "$(val stop_status)"
+python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < 5.0 else 1)" "$(val stop_seconds)" \
+  && ok || bad "STOP took $(val stop_seconds) s (bound 5 s)"
+expect_in "every slow connection closed within 16 s" "0" "$(val slowloris_open_after_16s)"
+python3 -c "import sys; sys.exit(0 if 0 <= float(sys.argv[1]) < 14.0 else 1)" \
+  "$(val slowloris_last_closed_s)" && ok || bad "last slow connection closed at $(val slowloris_last_closed_s) s"
+finish
