@@ -28,6 +28,6 @@ if [ "$(val quiet_watchdog_expiries_2s)" != 0 ]; then
 fi
 req=$(val flood_requests)
 [ "${req:-0}" -gt 100 ] && ok || bad "the flood sent only ${req:-0} requests"
-expect_in "no watchdog expiry during the flood" "0" "$(val flood_watchdog_expiries)"
-expect_in "the card still in Data_Exch" "Data_Exch" "$(val flood_card_state)"
+[ "$(val flood_watchdog_expiries)" = 0 ] && ok || bad "no watchdog expiry during the flood: $(val flood_watchdog_expiries)"
+[ "$(val flood_card_state)" = Data_Exch ] && ok || bad "the card in $(val flood_card_state), not Data_Exch"
 finish

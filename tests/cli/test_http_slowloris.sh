@@ -16,10 +16,10 @@ bench="$(dirname "$0")/../../sim_host/bench/http_bench.py"
 out=$(timeout 120 python3 "$bench" "$sim" --part slowloris --conns 70 --addresses 1 --hold 16 \
       2>"$tmp/err") || { bad "http_bench.py failed: $(cat "$tmp/err")"; finish; exit 1; }
 val() { sed -n "s/^$1=//p" <<<"$out"; }
-expect_in "STOP answers 200 under slow-loris" "200" "$(val stop_status)"
+[ "$(val stop_status)" = 200 ] && ok || bad "STOP answered $(val stop_status), not 200"
 python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < 5.0 else 1)" "$(val stop_seconds)" \
   && ok || bad "STOP took $(val stop_seconds) s (bound 5 s)"
-expect_in "every slow connection closed within 16 s" "0" "$(val slowloris_open_after_16s)"
+[ "$(val slowloris_open_after_16s)" = 0 ] && ok || bad "every slow connection closed within 16 s: $(val slowloris_open_after_16s)"
 python3 -c "import sys; sys.exit(0 if 0 <= float(sys.argv[1]) < 14.0 else 1)" \
   "$(val slowloris_last_closed_s)" && ok || bad "last slow connection closed at $(val slowloris_last_closed_s) s"
 finish
