@@ -163,9 +163,11 @@ code=$(post "$pm" /api/v1/master/param '{"slave":5,"op":"read","param":"P999"}')
 expect_in "unknown parameter" "400" "$code"
 expect_in "still running after all that" "True" "$(get "$ps" /api/v1/cards/5 | json 'd["drive"]["speed_actual_rpm"] == 300')"
 
-# Ten clients on the event stream at once; each gets state events and the log.
+# Ten clients on the event stream at once; each gets state events and the log. Each from an
+# address of its own: the server takes at most 8 connections from one address.
 for k in $(seq 10); do
-  curl -s --max-time 3 -N "${auth[@]}" "http://127.0.0.1:$ps/api/v1/events" >"$tmp/sse$k" 2>/dev/null &
+  curl -s --max-time 3 -N "${auth[@]}" --interface "127.0.0.$((10 + k))" \
+    "http://127.0.0.1:$ps/api/v1/events" >"$tmp/sse$k" 2>/dev/null &
 done
 sleep 1 # every stream connected before the action
 post "$ps" /api/v1/cards/5/inputs '{"DI00":true}' >/dev/null
@@ -179,7 +181,8 @@ expect_in "a stream carried the action's log line" 'DI00 /CONTROLLER INHIBIT hig
 
 # The connection limit (64) is not a way to hang the API: connections that never send a request
 # are closed after 5 s, event streams are capped at 32 and the next one is refused with 503;
-# a stream's place comes back when its client goes.
+# a stream's place comes back when its client goes. Eight connections from each address (the
+# limit per address).
 timeout 60 python3 - "$ps" "$DFP_SIM_TOKEN" >"$tmp/limits" <<'PY'
 import http.client, socket, sys, time
 port = int(sys.argv[1])
@@ -193,8 +196,13 @@ def state(timeout):
         return r.status, time.time() - t
     except OSError:
         return "no answer", time.time() - t
+opened = 0
+def source():
+    global opened
+    opened += 1
+    return (f"127.0.0.{20 + opened // 8}", 0)
 def stream():
-    s = socket.create_connection(("127.0.0.1", port), timeout=5)
+    s = socket.create_connection(("127.0.0.1", port), timeout=5, source_address=source())
     s.sendall(b"GET /api/v1/events HTTP/1.1\r\nHost: 127.0.0.1\r\nAuthorization: Bearer "
               + token.encode() + b"\r\n\r\n")
     return s
@@ -209,7 +217,8 @@ def recv_all(s, n=None):
     except OSError:
         pass
     return data
-idle = [socket.create_connection(("127.0.0.1", port), timeout=5) for _ in range(64)]
+idle = [socket.create_connection(("127.0.0.1", port), timeout=5, source_address=source())
+        for _ in range(64)]
 st, dt = state(15)
 print(f"64 idle: state {st} within 10 s {dt < 10}")
 for s in idle:

@@ -3,6 +3,7 @@
  * stalled loop: a replay waiting for input, a stopped process) or a thread that calls
  * rig_ctl_service as the real loop does. Also: a command to an address two cards share. */
 #include <pthread.h>
+#include <stdio.h>
 #include <stdatomic.h>
 #include <string.h>
 #include <time.h>
@@ -36,11 +37,9 @@ static void teardown(void)
 static unsigned free_slots(void)
 {
     unsigned n = 0;
-    pthread_mutex_lock(&ctl.lock);
     for (unsigned i = 0; i < RIG_CTL_CMDS; i++) {
-        n += ctl.slot[i] == RIG_SLOT_FREE ? 1u : 0u;
+        n += atomic_load(&ctl.slot[i]) == RIG_SLOT_FREE ? 1u : 0u;
     }
-    pthread_mutex_unlock(&ctl.lock);
     return n;
 }
 
@@ -102,13 +101,10 @@ static void *take_up_first(void *arg)
 {
     (void)arg;
     const struct timespec ms = {0, 1000000L};
-    for (bool taken = false; !taken; nanosleep(&ms, NULL)) {
-        pthread_mutex_lock(&ctl.lock);
-        if (ctl.slot[0] == RIG_SLOT_QUEUED) {
-            ctl.slot[0] = RIG_SLOT_RUNNING;
-            taken = true;
-        }
-        pthread_mutex_unlock(&ctl.lock);
+    for (int seen = RIG_SLOT_QUEUED;
+         !atomic_compare_exchange_strong(&ctl.slot[0], &seen, RIG_SLOT_RUNNING);
+         seen = RIG_SLOT_QUEUED) {
+        nanosleep(&ms, NULL);
     }
     return NULL;
 }
@@ -125,7 +121,7 @@ static void test_running_timeout_may_still_happen(void)
     pthread_join(t, NULL);
     CHECK_EQ(cmd.status, 504);
     CHECK_STR(cmd.error, "no answer within 50 ms; the action may still be carried out");
-    CHECK_EQ(ctl.slot[0], RIG_SLOT_ABANDONED);
+    CHECK_EQ(atomic_load(&ctl.slot[0]), RIG_SLOT_ABANDONED);
     CHECK_EQ(free_slots(), RIG_CTL_CMDS - 1u);
     teardown();
 }
@@ -178,11 +174,114 @@ static void test_ambiguous_address_is_refused(void)
     teardown();
 }
 
+/* A thread other than the loop in the middle of writing an event (it holds the writers' lock)
+ * does not hold the loop up: the loop's events wait in its queue, in order, and reach the ring
+ * at the next service turn; past the queue's room they are counted in one "lost" event. */
+static void test_loop_never_waits_for_a_writer(void)
+{
+    setup();
+    rig_ctl_event(&ctl, 1u, RIG_LOG_INFO, "sim", "test", "before");
+    CHECK_EQ(pthread_mutex_lock(&ctl.ev_lock), 0);
+    const unsigned n = RIG_CTL_STAGED + 44u;
+    for (unsigned i = 0; i < n; i++) {
+        char text[32];
+        (void)snprintf(text, sizeof text, "staged %u", i);
+        rig_ctl_event(&ctl, 2u + i, RIG_LOG_INFO, "sim", "test", text);
+    }
+    rig_ctl_service(&ctl, 0u);
+    CHECK_EQ(rig_ctl_next_seq(&ctl), 1u);
+    CHECK_EQ(pthread_mutex_unlock(&ctl.ev_lock), 0);
+    rig_ctl_service(&ctl, 0u);
+    CHECK_EQ(rig_ctl_next_seq(&ctl), 2u + RIG_CTL_STAGED);
+    static rig_ctl_event_t ev[RIG_CTL_STAGED + 2u];
+    uint64_t lost = 99;
+    CHECK_EQ(rig_ctl_events(&ctl, 0u, ev, RIG_CTL_STAGED + 2u, &lost), RIG_CTL_STAGED + 2u);
+    CHECK_EQ(lost, 0u);
+    CHECK_STR(ev[0].text, "before");
+    CHECK_STR(ev[1].text, "staged 0");
+    CHECK_STR(ev[RIG_CTL_STAGED].text, "staged 255");
+    CHECK_EQ(ev[RIG_CTL_STAGED].seq, RIG_CTL_STAGED);
+    CHECK_STR(ev[RIG_CTL_STAGED + 1u].kind, "lost");
+    CHECK_STR(ev[RIG_CTL_STAGED + 1u].text, "44 log events dropped while the log was busy");
+    teardown();
+}
+
+/* ---- readers against a writer (run under ThreadSanitizer too) ------------------------------- */
+
+static atomic_bool writer_done;
+static atomic_uint torn;
+
+static void *event_writer(void *arg)
+{
+    (void)arg;
+    for (unsigned i = 0; i < 3u * RIG_CTL_EVENTS; i++) {
+        uint64_t seq = rig_ctl_next_seq(&ctl);
+        char text[32];
+        (void)snprintf(text, sizeof text, "event %llu", (unsigned long long)seq);
+        rig_ctl_event(&ctl, seq, RIG_LOG_INFO, "sim", "test", text);
+        if (i % 64u == 0u) {
+            rig_ctl_service(&ctl, 0u);
+        }
+    }
+    atomic_store(&writer_done, true);
+    return NULL;
+}
+
+/* Every event read is whole (its text names its own seq, its time is its seq), every snapshot
+ * one publication (its cards' count is the rig's), and the seqs come in order without gaps
+ * except those reported lost. */
+static void *event_reader(void *arg)
+{
+    (void)arg;
+    static _Thread_local rig_ctl_event_t ev[512];
+    static _Thread_local rig_snapshot_t snap;
+    uint64_t next = 0;
+    while (!atomic_load(&writer_done)) {
+        uint64_t lost = 0;
+        size_t n = rig_ctl_events(&ctl, next, ev, 512u, &lost);
+        next += lost;
+        for (size_t i = 0; i < n; i++) {
+            char want[32];
+            (void)snprintf(want, sizeof want, "event %llu", (unsigned long long)ev[i].seq);
+            if (ev[i].seq != next || ev[i].t_us != ev[i].seq || strcmp(ev[i].text, want) != 0) {
+                atomic_fetch_add(&torn, 1u);
+            }
+            next = ev[i].seq + 1u;
+        }
+        rig_ctl_snapshot(&ctl, &snap);
+        if (snap.num_cards != 2u || snap.cards[1].address != 5u) {
+            atomic_fetch_add(&torn, 1u);
+        }
+    }
+    return NULL;
+}
+
+static void test_readers_see_whole_events_and_snapshots(void)
+{
+    setup();
+    rig_ctl_service(&ctl, 0u);
+    atomic_store(&writer_done, false);
+    atomic_store(&torn, 0u);
+    pthread_t r[3];
+    for (unsigned i = 0; i < 3u; i++) {
+        CHECK_EQ(pthread_create(&r[i], NULL, event_reader, NULL), 0);
+    }
+    (void)event_writer(NULL);
+    for (unsigned i = 0; i < 3u; i++) {
+        pthread_join(r[i], NULL);
+    }
+    CHECK_EQ(atomic_load(&torn), 0u);
+    CHECK_EQ(rig_ctl_next_seq(&ctl), 3u * RIG_CTL_EVENTS);
+    teardown();
+}
+
 int main(void)
 {
     RUN_TEST(test_queued_timeout_is_withdrawn);
     RUN_TEST(test_running_timeout_may_still_happen);
     RUN_TEST(test_dip_to_a_used_address_is_refused);
     RUN_TEST(test_ambiguous_address_is_refused);
+    RUN_TEST(test_loop_never_waits_for_a_writer);
+    RUN_TEST(test_readers_see_whole_events_and_snapshots);
     return check_report();
 }

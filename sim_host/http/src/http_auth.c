@@ -59,14 +59,6 @@ static void client_address(struct MHD_Connection *conn, char *out, size_t n)
 }
 
 /* The event's time: the rig's, as the last published state has it (the loop owns the clock). */
-static uint64_t audit_time_us(rig_ctl_t *ctl)
-{
-    pthread_mutex_lock(&ctl->lock);
-    uint64_t t = ctl->snap.t_us;
-    pthread_mutex_unlock(&ctl->lock);
-    return t;
-}
-
 void http_audit(http_server_t *srv, rig_log_level_t level, const char *fmt, ...)
 {
     char text[RIG_CTL_TEXT];
@@ -74,7 +66,7 @@ void http_audit(http_server_t *srv, rig_log_level_t level, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
-    rig_ctl_event(srv->ctl, audit_time_us(srv->ctl), level, "http", "audit", text);
+    rig_ctl_event(srv->ctl, rig_ctl_time_us(srv->ctl), level, "http", "audit", text);
 }
 
 void http_audit_result(http_server_t *srv, struct MHD_Connection *conn, const request_t *req,

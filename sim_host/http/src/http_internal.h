@@ -29,6 +29,11 @@
 #define IDLE_TIMEOUT_S 5u
 #define KEEPALIVE_TIMEOUT_S 30u
 _Static_assert(MAX_STREAMS < MAX_CONNECTIONS, "event streams must leave connections for requests");
+/* Per client (http_limits.c, docs/api.md): connections from one address, the time to deliver a
+ * whole request, and the nice value of the threads serving them (the bus loop runs at 0). */
+#define PER_ADDRESS_CONNECTIONS 8u
+#define REQUEST_LIMIT_S 10u
+#define REQUEST_NICE 10
 
 /* ---- access control (http_auth.c, http_session.c; docs/api.md "Security") ----------------- */
 
@@ -71,6 +76,7 @@ typedef struct http_auth {
 struct http_server {
     struct MHD_Daemon *daemon;
     rig_ctl_t *ctl;
+    struct http_limits *limits;
     atomic_uint streams; /* event streams open now */
     int listen_fd;
     uint16_t port;
@@ -86,11 +92,30 @@ typedef struct request {
     char client[64]; /* "127.0.0.1:45122", for the audit */
 } request_t;
 
-/* One per connection (libmicrohttpd's socket context): what the last answer's error said, so
- * the audit line of an action can give it. */
+/* One per connection (libmicrohttpd's socket context, an entry of http_limits.c's table): its
+ * deadline, and what its last answer's error said, so the audit line of an action can give it. */
 typedef struct http_conn {
+    struct http_limits *owner;
+    bool used;
+    int fd;
+    uint64_t deadline_ns; /* 0: none (its request is being answered) */
+    char peer[64];
     char error[RIG_CTL_TEXT];
 } http_conn_t;
+
+/* ---- limits per client (http_limits.c) ---------------------------------------------------- */
+
+typedef struct http_limits http_limits_t;
+/* Starts the reaper; NULL when out of memory or threads. */
+http_limits_t *http_limits_new(rig_ctl_t *ctl);
+/* Options for MHD_start_daemon (MHD_OPTION_ARRAY); they live as long as l. */
+struct MHD_OptionItem *http_limits_options(http_limits_t *l);
+/* After MHD_stop_daemon (it tells l of the connections it closes). NULL: nothing. */
+void http_limits_free(http_limits_t *l);
+/* The request is complete (headers and body): no deadline until its answer ends. */
+void http_limits_delivered(struct MHD_Connection *conn);
+/* Its answer ended: the next request has REQUEST_LIMIT_S. */
+void http_limits_request_end(struct MHD_Connection *conn);
 
 /* ---- replies (http_reply.c) ---------------------------------------------------------------- */
 

@@ -40,6 +40,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         *upload_size = 0;
         return MHD_YES;
     }
+    http_limits_delivered(conn);
     req->body[req->len] = '\0';
     /* ---- access control: docs/api.md "Security" (http_auth.c) ---- */
     enum MHD_Result rc = MHD_NO;
@@ -64,26 +65,12 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     return http_serve_file(conn, url);
 }
 
-/* ---- per-connection context (http_conn_t: the last error, for the audit) ---- */
-static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_context,
-                          enum MHD_ConnectionNotificationCode toe)
-{
-    (void)cls;
-    (void)conn;
-    if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
-        *socket_context = calloc(1, sizeof(http_conn_t)); /* NULL: errors go unaudited */
-    } else {
-        free(*socket_context);
-        *socket_context = NULL;
-    }
-}
-
 static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
                          enum MHD_RequestTerminationCode toe)
 {
     (void)cls;
-    (void)conn;
     (void)toe;
+    http_limits_request_end(conn);
     free(*con_cls);
     *con_cls = NULL;
 }
@@ -185,8 +172,10 @@ static bool tls_options(const http_auth_t *a, struct MHD_OptionItem *opts, unsig
     return true;
 }
 
+/* After MHD_stop_daemon, if it ran: the limits hear of every connection it closes. */
 static void server_free(http_server_t *s)
 {
+    http_limits_free(s->limits);
     http_auth_destroy(&s->auth);
     free(s);
 }
@@ -214,8 +203,12 @@ http_server_t *http_server_start(rig_ctl_t *ctl, const http_config_t *cfg, char 
         server_free(s);
         return NULL;
     }
-    s->listen_fd = open_listener(host, port, err, errlen, &s->port);
+    s->limits = http_limits_new(ctl);
+    s->listen_fd = s->limits != NULL ? open_listener(host, port, err, errlen, &s->port) : -1;
     if (s->listen_fd < 0) {
+        if (s->limits == NULL) {
+            snprintf(err, errlen, "--http: cannot start the server's threads");
+        }
         server_free(s);
         return NULL;
     }
@@ -223,7 +216,7 @@ http_server_t *http_server_start(rig_ctl_t *ctl, const http_config_t *cfg, char 
         flags, 0, NULL, NULL, on_request, s, MHD_OPTION_LISTEN_SOCKET, s->listen_fd,
         MHD_OPTION_CONNECTION_LIMIT, (unsigned)MAX_CONNECTIONS, MHD_OPTION_CONNECTION_TIMEOUT,
         (unsigned)IDLE_TIMEOUT_S, MHD_OPTION_NOTIFY_COMPLETED, on_completed, NULL,
-        MHD_OPTION_NOTIFY_CONNECTION, on_connection, NULL, MHD_OPTION_ARRAY, tls,
+        MHD_OPTION_ARRAY, http_limits_options(s->limits), MHD_OPTION_ARRAY, tls,
         MHD_OPTION_END);
     if (s->daemon == NULL) {
         if (s->auth.tls) {
@@ -252,9 +245,7 @@ void http_server_stop(http_server_t *s)
         return;
     }
     s->stopping = 1;
-    pthread_mutex_lock(&s->ctl->lock);
-    pthread_cond_broadcast(&s->ctl->changed);
-    pthread_mutex_unlock(&s->ctl->lock);
+    rig_ctl_kick(s->ctl);
     MHD_stop_daemon(s->daemon); /* closes the listening socket it was given */
     server_free(s);
 }

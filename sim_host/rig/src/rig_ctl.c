@@ -1,10 +1,13 @@
 #include "rig/rig_ctl.h"
 
 #include <errno.h>
+#include <limits.h>
+#include <linux/futex.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/eventfd.h>
+#include <sys/syscall.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -15,6 +18,52 @@
 
 #define SERVICE_TIMEOUT_US 5000000u
 
+/* ---- waking clients ------------------------------------------------------------------------ */
+
+/* Whoever changes what a client waits for calls this afterwards. It never blocks: FUTEX_WAKE
+ * only makes sleepers runnable, and it is skipped when nobody waits. A client that is about to
+ * sleep cannot miss it: it counts itself in waiters before it reads gen, and futex_wait
+ * returns at once when gen is no longer what it read (both sides seq_cst). */
+static void wake_clients(rig_ctl_t *c)
+{
+    atomic_fetch_add(&c->gen, 1u);
+    if (atomic_load(&c->waiters) > 0u) {
+        (void)syscall(SYS_futex, &c->gen, FUTEX_WAKE_PRIVATE, INT_MAX, NULL, NULL, 0);
+    }
+}
+
+void rig_ctl_kick(rig_ctl_t *c)
+{
+    wake_clients(c);
+}
+
+static uint64_t ms_since(uint64_t t0_ns)
+{
+    return (host_clock_mono_ns() - t0_ns) / 1000000u;
+}
+
+/* Sleeps until ready(c, arg), the close or timeout_ms; returns ready's last answer. */
+static bool wait_until(rig_ctl_t *c, bool (*ready)(rig_ctl_t *, uint64_t), uint64_t arg,
+                       unsigned timeout_ms)
+{
+    uint64_t t0 = host_clock_mono_ns();
+    bool ok = false;
+    atomic_fetch_add(&c->waiters, 1u);
+    for (;;) {
+        unsigned g = atomic_load(&c->gen);
+        ok = ready(c, arg);
+        uint64_t spent = ms_since(t0);
+        if (ok || atomic_load(&c->closing) || spent >= timeout_ms) {
+            break;
+        }
+        uint64_t left = timeout_ms - spent;
+        struct timespec rel = {(time_t)(left / 1000u), (long)(left % 1000u) * 1000000L};
+        (void)syscall(SYS_futex, &c->gen, FUTEX_WAIT_PRIVATE, g, &rel, NULL, 0);
+    }
+    atomic_fetch_sub(&c->waiters, 1u);
+    return ok;
+}
+
 int rig_ctl_init(rig_ctl_t *c, rig_t *r, const char *mode, bool read_only)
 {
     memset(c, 0, sizeof *c);
@@ -23,16 +72,20 @@ int rig_ctl_init(rig_ctl_t *c, rig_t *r, const char *mode, bool read_only)
     c->read_only = read_only;
     c->active_slot = -1;
     c->wake_fd = -1;
-    if (pthread_mutex_init(&c->lock, NULL) != 0) {
-        return -1;
+    c->loop_thread = pthread_self();
+    atomic_init(&c->closing, false);
+    atomic_init(&c->gen, 0u);
+    atomic_init(&c->waiters, 0u);
+    atomic_init(&c->snap_current, 0u);
+    atomic_init(&c->next_seq, 0u);
+    atomic_init(&c->now_us, 0u);
+    for (unsigned i = 0; i < RIG_CTL_SNAPS; i++) {
+        atomic_init(&c->snap_use[i], 0u);
     }
-    pthread_condattr_t ca;
-    pthread_condattr_init(&ca);
-    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-    int rc = pthread_cond_init(&c->changed, &ca);
-    pthread_condattr_destroy(&ca);
-    if (rc != 0) {
-        pthread_mutex_destroy(&c->lock);
+    for (unsigned i = 0; i < RIG_CTL_CMDS; i++) {
+        atomic_init(&c->slot[i], RIG_SLOT_FREE);
+    }
+    if (pthread_mutex_init(&c->ev_lock, NULL) != 0) {
         return -1;
     }
     c->wake_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
@@ -41,10 +94,8 @@ int rig_ctl_init(rig_ctl_t *c, rig_t *r, const char *mode, bool read_only)
 
 void rig_ctl_destroy(rig_ctl_t *c)
 {
-    pthread_mutex_lock(&c->lock);
-    c->closing = true;
-    pthread_cond_broadcast(&c->changed);
-    pthread_mutex_unlock(&c->lock);
+    atomic_store(&c->closing, true);
+    wake_clients(c);
     if (c->wake_fd >= 0) {
         close(c->wake_fd);
         c->wake_fd = -1;
@@ -73,70 +124,125 @@ static void copy_text(char *dst, size_t n, const char *src)
     snprintf(dst, n, "%s", src != NULL ? src : "");
 }
 
+/* Appends e as the next event; the caller holds ev_lock, so writers come one at a time. */
+static void ring_put(rig_ctl_t *c, const rig_ctl_event_t *e)
+{
+    uint64_t seq = atomic_load_explicit(&c->next_seq, memory_order_relaxed);
+    rig_ctl_ev_slot_t *sl = &c->ring[seq % RIG_CTL_EVENTS];
+    uint64_t w[RIG_CTL_EVENT_WORDS] = {0};
+    rig_ctl_event_t copy = *e;
+    copy.seq = seq;
+    memcpy(w, &copy, sizeof copy);
+    atomic_store_explicit(&sl->stamp, 2u * seq + 1u, memory_order_relaxed);
+    atomic_thread_fence(memory_order_release);
+    for (size_t i = 0; i < RIG_CTL_EVENT_WORDS; i++) {
+        atomic_store_explicit(&sl->words[i], w[i], memory_order_relaxed);
+    }
+    atomic_store_explicit(&sl->stamp, 2u * seq + 2u, memory_order_release);
+    atomic_store_explicit(&c->next_seq, seq + 1u, memory_order_release);
+}
+
+/* Copies event seq; false when its entry holds a later one (overwritten, also while copied). */
+static bool ring_get(rig_ctl_t *c, uint64_t seq, rig_ctl_event_t *out)
+{
+    rig_ctl_ev_slot_t *sl = &c->ring[seq % RIG_CTL_EVENTS];
+    uint64_t want = 2u * seq + 2u;
+    if (atomic_load_explicit(&sl->stamp, memory_order_acquire) != want) {
+        return false;
+    }
+    uint64_t w[RIG_CTL_EVENT_WORDS];
+    for (size_t i = 0; i < RIG_CTL_EVENT_WORDS; i++) {
+        w[i] = atomic_load_explicit(&sl->words[i], memory_order_relaxed);
+    }
+    atomic_thread_fence(memory_order_acquire);
+    if (atomic_load_explicit(&sl->stamp, memory_order_relaxed) != want) {
+        return false;
+    }
+    memcpy(out, w, sizeof *out);
+    return true;
+}
+
+/* Loop side: moves the staged events into the ring when no other writer is at it. */
+static void flush_staged(rig_ctl_t *c)
+{
+    if ((c->staged_n == 0u && c->staged_dropped == 0u) ||
+        !pthread_equal(pthread_self(), c->loop_thread) ||
+        pthread_mutex_trylock(&c->ev_lock) != 0) {
+        return;
+    }
+    for (unsigned i = 0; i < c->staged_n; i++) {
+        ring_put(c, &c->staged[i]);
+    }
+    if (c->staged_dropped > 0u) {
+        rig_ctl_event_t e = {.t_us = c->staged[c->staged_n - 1u].t_us, .level = RIG_LOG_WARN};
+        copy_text(e.source, sizeof e.source, "sim");
+        copy_text(e.kind, sizeof e.kind, "lost");
+        (void)snprintf(e.text, sizeof e.text, "%llu log events dropped while the log was busy",
+                       (unsigned long long)c->staged_dropped);
+        ring_put(c, &e);
+    }
+    c->staged_n = 0;
+    c->staged_dropped = 0;
+    pthread_mutex_unlock(&c->ev_lock);
+    wake_clients(c);
+}
+
 void rig_ctl_event(rig_ctl_t *c, uint64_t t_us, rig_log_level_t level, const char *source,
                    const char *kind, const char *text)
 {
-    pthread_mutex_lock(&c->lock);
-    rig_ctl_event_t *e = &c->events[c->next_seq % RIG_CTL_EVENTS];
-    e->seq = c->next_seq++;
-    e->t_us = t_us;
-    e->level = level;
-    copy_text(e->source, sizeof e->source, source);
-    copy_text(e->kind, sizeof e->kind, kind);
-    copy_text(e->text, sizeof e->text, text);
-    pthread_cond_broadcast(&c->changed);
-    pthread_mutex_unlock(&c->lock);
+    rig_ctl_event_t e = {.t_us = t_us, .level = level};
+    copy_text(e.source, sizeof e.source, source);
+    copy_text(e.kind, sizeof e.kind, kind);
+    copy_text(e.text, sizeof e.text, text);
+    if (!pthread_equal(pthread_self(), c->loop_thread)) {
+        pthread_mutex_lock(&c->ev_lock);
+        ring_put(c, &e);
+        pthread_mutex_unlock(&c->ev_lock);
+        wake_clients(c);
+        return;
+    }
+    /* Staged even when the queue is empty: one path keeps the loop's events in order. The
+     * queue always has room for one (it was emptied, or the last one dropped is counted). */
+    if (c->staged_n < RIG_CTL_STAGED) {
+        c->staged[c->staged_n++] = e;
+    } else {
+        c->staged_dropped++;
+    }
+    flush_staged(c);
 }
 
 size_t rig_ctl_events(rig_ctl_t *c, uint64_t since, rig_ctl_event_t *out, size_t max,
                       uint64_t *lost)
 {
-    pthread_mutex_lock(&c->lock);
-    uint64_t oldest = c->next_seq > RIG_CTL_EVENTS ? c->next_seq - RIG_CTL_EVENTS : 0u;
+    uint64_t next = atomic_load_explicit(&c->next_seq, memory_order_acquire);
+    uint64_t oldest = next > RIG_CTL_EVENTS ? next - RIG_CTL_EVENTS : 0u;
     *lost = 0;
     if (since < oldest) {
         *lost = oldest - since;
         since = oldest;
     }
+    /* Stops at an entry overwritten meanwhile: the caller asks again from there and is then
+     * told it lost it. */
     size_t n = 0;
-    for (uint64_t s = since; s < c->next_seq && n < max; s++) {
-        out[n++] = c->events[s % RIG_CTL_EVENTS];
+    for (uint64_t s = since; s < next && n < max && ring_get(c, s, &out[n]); s++) {
+        n++;
     }
-    pthread_mutex_unlock(&c->lock);
     return n;
 }
 
 uint64_t rig_ctl_next_seq(rig_ctl_t *c)
 {
-    pthread_mutex_lock(&c->lock);
-    uint64_t s = c->next_seq;
-    pthread_mutex_unlock(&c->lock);
-    return s;
+    return atomic_load_explicit(&c->next_seq, memory_order_acquire);
 }
 
-static struct timespec deadline_in(unsigned ms)
+static bool seq_reached(rig_ctl_t *c, uint64_t since)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    ts.tv_sec += (time_t)(ms / 1000u);
-    ts.tv_nsec += (long)(ms % 1000u) * 1000000L;
-    if (ts.tv_nsec >= 1000000000L) {
-        ts.tv_sec++;
-        ts.tv_nsec -= 1000000000L;
-    }
-    return ts;
+    return rig_ctl_next_seq(c) > since;
 }
 
 void rig_ctl_wait(rig_ctl_t *c, uint64_t since, unsigned timeout_ms)
 {
-    struct timespec until = deadline_in(timeout_ms);
-    pthread_mutex_lock(&c->lock);
-    while (c->next_seq <= since && !c->closing) {
-        if (pthread_cond_timedwait(&c->changed, &c->lock, &until) == ETIMEDOUT) {
-            break;
-        }
-    }
-    pthread_mutex_unlock(&c->lock);
+    (void)wait_until(c, seq_reached, since, timeout_ms);
 }
 
 /* ---- snapshot ------------------------------------------------------------------------------ */
@@ -228,13 +334,35 @@ static const char *medium_text(const rig_t *r, char *buf, size_t n)
     return "";
 }
 
-static void publish(rig_ctl_t *c)
+/* A buffer no client is copying, marked as being filled; -1 when every one but the current is
+ * being read (the publication waits for the next turn). */
+static int snap_claim(rig_ctl_t *c)
 {
-    rig_snapshot_t *sp = &c->scratch; /* filled outside the lock: only the loop writes it */
+    unsigned cur = atomic_load_explicit(&c->snap_current, memory_order_relaxed);
+    for (unsigned i = 0; i < RIG_CTL_SNAPS; i++) {
+        unsigned idle = 0u;
+        if (i != cur && atomic_compare_exchange_strong_explicit(
+                            &c->snap_use[i], &idle, RIG_CTL_SNAP_WRITER, memory_order_acquire,
+                            memory_order_relaxed)) {
+            return (int)i;
+        }
+    }
+    return -1;
+}
+
+static bool publish(rig_ctl_t *c)
+{
+    int b = snap_claim(c);
+    if (b < 0) {
+        c->snaps_skipped++;
+        return false;
+    }
+    rig_snapshot_t *sp = &c->snaps[b];
     const rig_t *r = c->rig;
     char buf[96];
     memset(sp, 0, offsetof(rig_snapshot_t, cards));
     sp->t_us = rig_elapsed_ns(r) / 1000u;
+    atomic_store_explicit(&c->now_us, sp->t_us, memory_order_relaxed);
     sp->medium = (uint8_t)r->cfg.medium;
     copy_text(sp->medium_name, sizeof sp->medium_name, medium_text(r, buf, sizeof buf));
     sp->num_cards = (uint8_t)r->num_cards;
@@ -254,81 +382,92 @@ static void publish(rig_ctl_t *c)
             snap_slave(&m->slaves[i], &sp->slaves[i]);
         }
     }
-    pthread_mutex_lock(&c->lock);
-    memcpy(&c->snap, sp, sizeof *sp);
-    c->snap_version++;
-    pthread_cond_broadcast(&c->changed);
-    pthread_mutex_unlock(&c->lock);
+    atomic_fetch_sub_explicit(&c->snap_use[b], RIG_CTL_SNAP_WRITER, memory_order_release);
+    atomic_store_explicit(&c->snap_current, (unsigned)b, memory_order_release);
+    return true;
 }
 
+uint64_t rig_ctl_time_us(rig_ctl_t *c)
+{
+    return atomic_load_explicit(&c->now_us, memory_order_relaxed);
+}
+
+/* Pins the current buffer and copies it. A buffer the loop has claimed meanwhile is let go and
+ * the new current one taken; a pinned buffer is never claimed, so the copy is of one whole
+ * publication. */
 void rig_ctl_snapshot(rig_ctl_t *c, rig_snapshot_t *out)
 {
-    pthread_mutex_lock(&c->lock);
-    memcpy(out, &c->snap, sizeof *out);
-    pthread_mutex_unlock(&c->lock);
+    for (;;) {
+        unsigned i = atomic_load_explicit(&c->snap_current, memory_order_acquire);
+        unsigned use = atomic_fetch_add_explicit(&c->snap_use[i], 1u, memory_order_acquire);
+        if ((use & RIG_CTL_SNAP_WRITER) == 0u) {
+            memcpy(out, &c->snaps[i], sizeof *out);
+            atomic_fetch_sub_explicit(&c->snap_use[i], 1u, memory_order_release);
+            return;
+        }
+        atomic_fetch_sub_explicit(&c->snap_use[i], 1u, memory_order_release);
+    }
 }
 
 /* ---- commands ------------------------------------------------------------------------------ */
 
-/* The client stops waiting (under the lock). A command the loop has not taken up is withdrawn,
- * so it is never carried out and its slot is free at once: marking it abandoned would leave it
- * for good, since the loop runs only queued commands and frees only the abandoned ones it ran.
- * One already running cannot be called back; the loop frees it when it ends. */
-static void give_up(rig_ctl_t *c, int k, rig_cmd_t *cmd, unsigned timeout_ms)
+/* The client stops waiting. A command the loop has not taken up is withdrawn, so it is never
+ * carried out and its slot is free at once. One already running cannot be called back; the loop
+ * frees it when it ends. One that ended meanwhile is the client's after all: true. */
+static bool give_up(rig_ctl_t *c, int k, rig_cmd_t *cmd, unsigned timeout_ms)
 {
-    cmd->status = 504;
-    if (c->slot[k] == RIG_SLOT_QUEUED) {
-        c->slot[k] = RIG_SLOT_FREE;
+    int seen = RIG_SLOT_QUEUED;
+    if (atomic_compare_exchange_strong_explicit(&c->slot[k], &seen, RIG_SLOT_FREE,
+                                                memory_order_acq_rel, memory_order_acquire)) {
+        cmd->status = 504;
         snprintf(cmd->error, sizeof cmd->error, "the simulation did not take the action up "
                  "within %u ms; it was withdrawn and not carried out", timeout_ms);
-        return;
+        return false;
     }
-    c->slot[k] = RIG_SLOT_ABANDONED;
-    snprintf(cmd->error, sizeof cmd->error, "no answer within %u ms; the action may still be "
-             "carried out", timeout_ms);
+    seen = RIG_SLOT_RUNNING;
+    if (atomic_compare_exchange_strong_explicit(&c->slot[k], &seen, RIG_SLOT_ABANDONED,
+                                                memory_order_acq_rel, memory_order_acquire)) {
+        cmd->status = 504;
+        snprintf(cmd->error, sizeof cmd->error, "no answer within %u ms; the action may still "
+                 "be carried out", timeout_ms);
+        return false;
+    }
+    return seen == RIG_SLOT_DONE;
+}
+
+static bool slot_done(rig_ctl_t *c, uint64_t k)
+{
+    return atomic_load_explicit(&c->slot[k], memory_order_acquire) == RIG_SLOT_DONE;
 }
 
 bool rig_ctl_submit(rig_ctl_t *c, rig_cmd_t *cmd, unsigned timeout_ms)
 {
-    pthread_mutex_lock(&c->lock);
     int k = -1;
-    for (unsigned i = 0; i < RIG_CTL_CMDS; i++) {
-        if (c->slot[i] == RIG_SLOT_FREE) {
+    for (unsigned i = 0; i < RIG_CTL_CMDS && k < 0 && !atomic_load(&c->closing); i++) {
+        int idle = RIG_SLOT_FREE;
+        if (atomic_compare_exchange_strong_explicit(&c->slot[i], &idle, RIG_SLOT_FILLING,
+                                                    memory_order_acquire,
+                                                    memory_order_relaxed)) {
             k = (int)i;
-            break;
         }
     }
-    if (k < 0 || c->closing) {
-        pthread_mutex_unlock(&c->lock);
+    if (k < 0) {
         cmd->status = 503;
         snprintf(cmd->error, sizeof cmd->error, "too many actions waiting; try again");
         return false;
     }
     c->cmds[k] = *cmd;
-    c->slot[k] = RIG_SLOT_QUEUED;
-    pthread_mutex_unlock(&c->lock);
+    atomic_store_explicit(&c->slot[k], RIG_SLOT_QUEUED, memory_order_release);
     uint64_t one = 1;
     if (write(c->wake_fd, &one, sizeof one) < 0) {
         /* The loop also looks at the queue on every turn; the wake-up only makes it sooner. */
     }
-    struct timespec until = deadline_in(timeout_ms);
-    bool done = false;
-    pthread_mutex_lock(&c->lock);
-    while (!c->closing) {
-        if (c->slot[k] == RIG_SLOT_DONE) {
-            *cmd = c->cmds[k];
-            c->slot[k] = RIG_SLOT_FREE;
-            done = true;
-            break;
-        }
-        if (pthread_cond_timedwait(&c->changed, &c->lock, &until) == ETIMEDOUT) {
-            break;
-        }
+    bool done = wait_until(c, slot_done, (uint64_t)k, timeout_ms) ||
+                give_up(c, k, cmd, timeout_ms);
+    if (done) {
+        *cmd = c->cmds[k];
+        atomic_store_explicit(&c->slot[k], RIG_SLOT_FREE, memory_order_release);
     }
-    if (!done) {
-        give_up(c, k, cmd, timeout_ms);
-    }
-    pthread_mutex_unlock(&c->lock);
     return done;
 }
 
@@ -519,34 +658,31 @@ static void run_cmd(rig_ctl_t *c, rig_cmd_t *cmd, int k)
     }
 }
 
+/* The loop hands the result back (DONE), or frees the slot of a client that gave up. */
 static void finish(rig_ctl_t *c, int k)
 {
-    pthread_mutex_lock(&c->lock);
-    c->slot[k] = c->slot[k] == RIG_SLOT_ABANDONED ? RIG_SLOT_FREE : RIG_SLOT_DONE;
-    pthread_cond_broadcast(&c->changed);
-    pthread_mutex_unlock(&c->lock);
+    int seen = RIG_SLOT_RUNNING;
+    if (!atomic_compare_exchange_strong_explicit(&c->slot[k], &seen, RIG_SLOT_DONE,
+                                                 memory_order_release, memory_order_relaxed)) {
+        atomic_store_explicit(&c->slot[k], RIG_SLOT_FREE, memory_order_release);
+    }
+    wake_clients(c);
 }
 
-/* The running master parameter service. Its command goes back into the slot on every turn: a
- * class-2 service has its answer before the connection is closed. */
+/* The running master parameter service. Its command stays in the slot, which the loop owns
+ * until it ends: a class-2 service has its answer before the connection is closed. */
 static void advance_active(rig_ctl_t *c)
 {
     int k = c->active_slot;
-    rig_cmd_t cmd;
-    pthread_mutex_lock(&c->lock);
-    cmd = c->cmds[k];
-    pthread_mutex_unlock(&c->lock);
-    bool done = rig_ctl_param_advance(c, &cmd);
+    rig_cmd_t *cmd = &c->cmds[k];
+    bool done = rig_ctl_param_advance(c, cmd);
     if (!done && rig_elapsed_ns(c->rig) / 1000u > c->slot_deadline_us[k]) {
-        cmd.status = 504;
-        (void)snprintf(cmd.error, sizeof cmd.error, "no answer from slave %u within 5 s",
-                       cmd.card);
+        cmd->status = 504;
+        (void)snprintf(cmd->error, sizeof cmd->error, "no answer from slave %u within 5 s",
+                       cmd->card);
         rig_ctl_param_give_up(c);
         done = true;
     }
-    pthread_mutex_lock(&c->lock);
-    c->cmds[k] = cmd;
-    pthread_mutex_unlock(&c->lock);
     if (done) {
         c->active_slot = -1;
         finish(c, k);
@@ -555,23 +691,16 @@ static void advance_active(rig_ctl_t *c)
 
 void rig_ctl_service(rig_ctl_t *c, uint64_t publish_every_ns)
 {
-    /* The command is copied out of the slot under the lock and run outside it. */
+    flush_staged(c);
+    /* A queued command becomes the loop's by one compare-exchange: nothing to wait for. */
     for (int k = 0; k < (int)RIG_CTL_CMDS; k++) {
-        pthread_mutex_lock(&c->lock);
-        bool queued = c->slot[k] == RIG_SLOT_QUEUED;
-        rig_cmd_t cmd;
-        if (queued) {
-            cmd = c->cmds[k];
-            c->slot[k] = RIG_SLOT_RUNNING;
-        }
-        pthread_mutex_unlock(&c->lock);
-        if (!queued) {
+        int seen = RIG_SLOT_QUEUED;
+        if (!atomic_compare_exchange_strong_explicit(&c->slot[k], &seen, RIG_SLOT_RUNNING,
+                                                     memory_order_acquire,
+                                                     memory_order_relaxed)) {
             continue;
         }
-        run_cmd(c, &cmd, k);
-        pthread_mutex_lock(&c->lock);
-        c->cmds[k] = cmd;
-        pthread_mutex_unlock(&c->lock);
+        run_cmd(c, &c->cmds[k], k);
         if (c->active_slot != k) {
             finish(c, k);
         }
@@ -581,7 +710,8 @@ void rig_ctl_service(rig_ctl_t *c, uint64_t publish_every_ns)
     }
     uint64_t now = host_clock_mono_ns();
     if (publish_every_ns == 0u || now - c->last_publish_ns >= publish_every_ns) {
-        c->last_publish_ns = now;
-        publish(c);
+        if (publish(c)) {
+            c->last_publish_ns = now;
+        }
     }
 }

@@ -1,20 +1,27 @@
 /* The bridge between a running rig and clients in other threads (the HTTP control API).
  *
  * The bus loop owns the rig; nothing outside it touches the rig's structs. Instead:
- * - the loop publishes a snapshot (plain values) that clients copy under a mutex;
- * - log events go into a ring of RIG_CTL_EVENTS entries that clients read by sequence number;
- *   a client that falls behind loses the oldest and is told how many, the loop never waits;
- * - actions are queued as commands; the loop carries them out between two bus events
- *   (rig_ctl_service) and a client waits for the result with a timeout. A command whose client
- *   gave up before the loop took it up is withdrawn and never carried out (the client is told
- *   so); one the loop had already started is carried out to its end and then freed. Either way
- *   the rig sees exactly what the clients were told, and no slot stays taken.
- * A slow or stuck client can therefore never delay the bus: the loop only ever holds the mutex
- * for a copy. */
+ * - the loop publishes a snapshot (plain values) into one of RIG_CTL_SNAPS buffers; a client
+ *   pins the current one with an atomic count and copies it; the loop fills a buffer nobody
+ *   has pinned, or skips that publication when there is none;
+ * - log events go into a ring of RIG_CTL_EVENTS entries that clients read by sequence number,
+ *   each entry checked by its own stamp (a seqlock), so readers take no lock; a client that
+ *   falls behind loses the oldest and is told how many;
+ * - actions are queued as commands in slots whose state is one atomic; the loop carries them
+ *   out between two bus events (rig_ctl_service) and a client waits for the result with a
+ *   timeout. A command whose client gave up before the loop took it up is withdrawn and never
+ *   carried out (the client is told so); one the loop had already started is carried out to
+ *   its end and then freed. Either way the rig sees exactly what the clients were told, and no
+ *   slot stays taken.
+ * The loop never waits on anything a client holds: writers of log events from other threads
+ * share a mutex the loop only ever tries (its events wait in a private queue meanwhile), and
+ * clients sleep on a futex word the loop only increments and wakes. A slow, stuck or starved
+ * client can therefore never delay the bus. */
 #ifndef RIG_RIG_CTL_H
 #define RIG_RIG_CTL_H
 
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -27,6 +34,9 @@
 #define RIG_CTL_EVENTS 4096u
 #define RIG_CTL_CMDS 16u
 #define RIG_CTL_TEXT 240u
+#define RIG_CTL_SNAPS 4u    /* the current snapshot, the one being filled, two being read */
+#define RIG_CTL_STAGED 256u /* the loop's events waiting while another thread writes one */
+#define RIG_CTL_SNAP_WRITER 0x80000000u /* in snap_use: the loop is filling that buffer */
 /* The refusal of a card command (409) when more than one card of the line answers to its
  * address (DIP switches changed, then a power cycle): either card might be the one meant.
  * Arguments: the number of cards, the address. The HTTP routes answer reads with it too. */
@@ -172,28 +182,53 @@ typedef struct rig_cmd {
 
 typedef enum rig_slot_state {
     RIG_SLOT_FREE = 0,
+    RIG_SLOT_FILLING,  /* a client is writing its command into the slot */
     RIG_SLOT_QUEUED,
     RIG_SLOT_RUNNING,  /* a master parameter service over the bus */
     RIG_SLOT_DONE,
     RIG_SLOT_ABANDONED, /* the client gave up while it ran; freed when done */
 } rig_slot_state_t;
 
+/* One log event of the ring, copied word by word through relaxed atomics: a reader may copy
+ * while a writer overwrites it, and the stamp tells it so (a seqlock without data races). */
+#define RIG_CTL_EVENT_WORDS ((sizeof(rig_ctl_event_t) + 7u) / 8u)
+typedef struct rig_ctl_ev_slot {
+    _Atomic uint64_t stamp; /* 2 seq + 1 while written, 2 seq + 2 once complete; 0: never */
+    _Atomic uint64_t words[RIG_CTL_EVENT_WORDS];
+} rig_ctl_ev_slot_t;
+
 typedef struct rig_ctl {
-    pthread_mutex_t lock;
-    pthread_cond_t changed;   /* new events, a new snapshot or a command done */
     rig_t *rig;
     bool read_only;
     const char *mode;         /* "demo", "slave", "master", "replay" */
-    rig_snapshot_t snap;      /* under lock */
-    rig_snapshot_t scratch;   /* the loop fills it, then copies it into snap under the lock */
-    uint64_t snap_version;
-    rig_ctl_event_t events[RIG_CTL_EVENTS];
-    uint64_t next_seq;        /* seq of the next event; events[seq % N] */
+    atomic_bool closing;
+    /* Clients sleep on gen (a futex word) while waiting for an event, a command's end or the
+     * close; whoever changes one of those increments gen and wakes them when waiters > 0. */
+    atomic_uint gen;
+    atomic_uint waiters;
+    /* The snapshot: snaps[snap_current] is the newest complete one. snap_use[i] counts the
+     * clients copying snaps[i], plus RIG_CTL_SNAP_WRITER while the loop fills it. */
+    rig_snapshot_t snaps[RIG_CTL_SNAPS];
+    atomic_uint snap_use[RIG_CTL_SNAPS];
+    atomic_uint snap_current;
+    uint64_t snaps_skipped;   /* loop side: publications skipped, every buffer being read */
+    _Atomic uint64_t now_us;  /* the rig's clock at the loop's last turn (rig_ctl_time_us) */
+    /* Log events: ring[seq % N]; next_seq is the seq of the next event, stored once the event
+     * is complete. Writers take ev_lock (the loop only tries it). */
+    rig_ctl_ev_slot_t ring[RIG_CTL_EVENTS];
+    _Atomic uint64_t next_seq;
+    pthread_mutex_t ev_lock;
+    pthread_t loop_thread;    /* the thread that called rig_ctl_init */
+    rig_ctl_event_t staged[RIG_CTL_STAGED]; /* loop side: its events not yet in the ring */
+    unsigned staged_n;
+    uint64_t staged_dropped;
+    /* Commands: a slot's state is slot[k] (rig_slot_state_t); cmds[k] belongs to the client
+     * while FREE or FILLING and once DONE, to the loop while QUEUED (taken), RUNNING or
+     * ABANDONED. Each handover is a release store or compare-exchange of slot[k]. */
     rig_cmd_t cmds[RIG_CTL_CMDS];
-    rig_slot_state_t slot[RIG_CTL_CMDS];
+    atomic_int slot[RIG_CTL_CMDS];
     uint64_t slot_deadline_us[RIG_CTL_CMDS]; /* a running service's time limit (rig time) */
     int wake_fd;              /* eventfd the loop waits on; -1 on the in-memory bus */
-    bool closing;
     /* the master's parameter service in progress (one at a time, like a PLC's FB) */
     int active_slot;          /* -1: none */
     dp_master_param_t param;
@@ -215,7 +250,10 @@ typedef struct rig_ctl {
 int rig_ctl_init(rig_ctl_t *c, rig_t *r, const char *mode, bool read_only);
 void rig_ctl_destroy(rig_ctl_t *c);
 
-/* Loop side. Publishes a log event (any thread may call it; it never blocks for long). */
+/* Publishes a log event. Any thread may call it. In the loop's thread (the one that called
+ * rig_ctl_init) it never waits: when another thread is writing an event, the loop's waits in a
+ * private queue until the next call or rig_ctl_service (kept in order; should the queue fill
+ * up, one "lost" event says how many it dropped). */
 void rig_ctl_event(rig_ctl_t *c, uint64_t t_us, rig_log_level_t level, const char *source,
                    const char *kind, const char *text);
 /* Runs queued commands, advances a master parameter service, publishes the snapshot when it is
@@ -223,8 +261,11 @@ void rig_ctl_event(rig_ctl_t *c, uint64_t t_us, rig_log_level_t level, const cha
 void rig_ctl_service(rig_ctl_t *c, uint64_t publish_every_ns);
 /* Registers the wake-up descriptor with the rig's wall-clock loop. */
 int rig_ctl_attach(rig_ctl_t *c);
+/* Wakes every client waiting in rig_ctl_wait or rig_ctl_submit, so it looks again at what it
+ * waits for (e.g. a server that is stopping). Never blocks. */
+void rig_ctl_kick(rig_ctl_t *c);
 
-/* Client side. Copies the snapshot. */
+/* Client side. Copies the newest snapshot (never waits for the loop). */
 void rig_ctl_snapshot(rig_ctl_t *c, rig_snapshot_t *out);
 /* Queues cmd and waits up to timeout_ms for the loop to carry it out; cmd gets the result.
  * Returns false on timeout (cmd->status = 504; the text says whether the command was withdrawn
@@ -237,5 +278,8 @@ size_t rig_ctl_events(rig_ctl_t *c, uint64_t since, rig_ctl_event_t *out, size_t
 /* Waits until an event with seq >= since exists or timeout_ms passes. */
 void rig_ctl_wait(rig_ctl_t *c, uint64_t since, unsigned timeout_ms);
 uint64_t rig_ctl_next_seq(rig_ctl_t *c);
+/* The rig's clock (t_us of the events) as of the loop's last turn, for events that other
+ * threads log (the API's audit), without copying a snapshot. */
+uint64_t rig_ctl_time_us(rig_ctl_t *c);
 
 #endif
