@@ -125,7 +125,10 @@ REQUESTS = [("GET", "/api/v1/state", None), ("GET", "/api/v1/log?limit=4096", No
 
 
 def flood_worker(args):
-    port, source, until, kind, pause_s = args
+    port, source, until, kind, pause_s, client_nice = args
+    # The flood's clients stand for other machines: on this one they must not take the CPU from
+    # the processes under test, or the figure would be the load generator's, not the server's.
+    os.nice(client_nice)
     if kind == "events":
         return stream_worker(port, source, until)
     n, conn = 0, None
@@ -163,13 +166,14 @@ def stream_worker(port, source, until):
     return n
 
 
-def flood(rig, seconds, workers, pause_s):
+def flood(rig, seconds, workers, pause_s, client_nice):
     before = rig.expiries()
     until = time.time() + seconds
     # Each worker from an address of its own, so the per-address limit does not turn them away.
-    jobs = [(rig.card_port, f"127.0.0.{10 + i}", until, "requests", pause_s)
+    jobs = [(rig.card_port, f"127.0.0.{10 + i}", until, "requests", pause_s, client_nice)
             for i in range(workers)]
-    jobs += [(rig.card_port, f"127.0.0.{10 + i}", until, "events", 0) for i in range(2)]
+    jobs += [(rig.card_port, f"127.0.0.{10 + i}", until, "events", 0, client_nice)
+             for i in range(2)]
     t0 = time.monotonic()
     with multiprocessing.Pool(len(jobs)) as pool:
         counts = pool.map(flood_worker, jobs)
@@ -262,6 +266,9 @@ def main():
     ap.add_argument("--conns", type=int, default=70)
     ap.add_argument("--addresses", type=int, default=1)
     ap.add_argument("--hold", type=float, default=16.0)
+    ap.add_argument("--client-nice", type=int, default=19,
+                    help="the flood's clients run at this nice value (default 19: they stand for "
+                    "other machines; 0 lets them compete with dfp-sim for the CPU)")
     ap.add_argument("--nice", type=int, default=0,
                     help="run dfp-sim with this nice value (e.g. -10 as root: other load on the "
                          "machine then disturbs the loops less; the request threads still go "
@@ -285,7 +292,7 @@ def main():
             quiet = rig.expiries()
             time.sleep(2.0)
             print(f"quiet_watchdog_expiries_2s={rig.expiries() - quiet}")
-            flood(rig, o.seconds, o.workers, o.pause_ms / 1000.0)
+            flood(rig, o.seconds, o.workers, o.pause_ms / 1000.0, o.client_nice)
         if o.part in ("slowloris", "both"):
             rig.wait_data_exchange(5.0)
             slowloris(rig, o.conns, o.addresses, o.hold)
