@@ -166,6 +166,12 @@ def param_line(channel, msg):
         msg.subindex, msg.value, result)
 
 
+def api_line(channel, msg):
+    """An event of a dfp-sim's control API (the audit of a request, a limit)."""
+    return "%s %-14s     api %s %s: %s" % (time_text(msg.utime), channel, msg.level, msg.kind,
+                                           msg.text)
+
+
 # ---- per station ---------------------------------------------------------------------------
 
 class Station:
@@ -224,7 +230,11 @@ class Viewer:
             types["param_service_t"]._get_packed_fingerprint():
                 (types["param_service_t"], self.param),
         }
-        self.counts = {"telegram": 0, "state": 0, "param": 0, "undecodable": 0, "other": 0}
+        if "api_event_t" in types:  # a checkout's .lcm files from before it are still read
+            self.handlers[types["api_event_t"]._get_packed_fingerprint()] = \
+                (types["api_event_t"], self.api_event)
+        self.counts = {"telegram": 0, "state": 0, "param": 0, "api": 0, "undecodable": 0,
+                       "other": 0}
         self.other_channels = set()
         self._status_shown = False
         self._drawn_at = 0.0
@@ -233,7 +243,8 @@ class Viewer:
     @property
     def messages(self):
         """Messages of the project's types so far."""
-        return self.counts["telegram"] + self.counts["state"] + self.counts["param"]
+        return (self.counts["telegram"] + self.counts["state"] + self.counts["param"] +
+                self.counts["api"])
 
     def station(self, address):
         if address not in self.stations:
@@ -286,6 +297,10 @@ class Viewer:
         self.counts["param"] += 1
         self.emit(param_line(channel, msg))
 
+    def api_event(self, channel, msg):
+        self.counts["api"] += 1
+        self.emit(api_line(channel, msg))
+
     # -- output --
 
     def status_text(self):
@@ -329,8 +344,8 @@ class Viewer:
     def summary_lines(self, seconds):
         c = self.counts
         lines = ["summary: %d messages in %.1f s (%d telegrams, %d card states, %d parameter "
-                 "services); %d undecodable, %d of other types%s"
-                 % (self.messages, seconds, c["telegram"], c["state"], c["param"],
+                 "services, %d API events); %d undecodable, %d of other types%s"
+                 % (self.messages, seconds, c["telegram"], c["state"], c["param"], c["api"],
                     c["undecodable"], c["other"],
                     " (%s)" % ", ".join(sorted(self.other_channels)) if c["other"] else "")]
         for addr in sorted(self.stations):

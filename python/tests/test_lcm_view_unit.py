@@ -110,7 +110,8 @@ def test_viewer_lines_through_the_generated_types():
     line = out.getvalue().splitlines()[0]
     assert line.split(None, 1)[1] == ("DFP_TELEGRAM     4 RX SD1 DA   4 SA   2 FC 49  "
                                       "FDL_Status           10 04 02 49 4E 16  ! parity, bad FCS")
-    assert v.counts == {"telegram": 1, "state": 0, "param": 0, "undecodable": 1, "other": 1}
+    assert v.counts == {"telegram": 1, "state": 0, "param": 0, "api": 0, "undecodable": 1,
+                        "other": 1}
     assert v.summary_lines(1.0)[1] == "station 4: no card state; 1 telegrams, " \
                                       "Data_Exchange sent 0, errors 1"
 
@@ -151,6 +152,23 @@ def test_control_characters_from_the_wire_are_shown_escaped():
         lines[2].endswith("1 of other types (OTHER\\x1b[2J)")
     assert lines[3].startswith("station 5: Data_Exch\\x1b[H, searching, RUN on\\x7f")
     assert lines[4:] == [""]
+
+
+def test_api_events_are_shown_escaped():
+    # The audit of a dfp-sim's control API (DFP_API): who asked for what, and the answer.
+    pytest.importorskip("lcm")
+    from dfpsim import lcm_types
+    types = lcm_types.load()
+    out = io.StringIO()
+    v = Viewer(types, out)
+    ev = types["api_event_t"]()
+    ev.utime, ev.t_us, ev.seq, ev.level, ev.kind = 0, 3003500, 12, "warn", "audit"
+    ev.text = "127.0.0.1:43600 none POST /api/v1/master/run -> 415 Content-Type\x1b[2J"
+    v.on_message("DFP_API", ev.encode())
+    assert out.getvalue().split(None, 1)[1] == (
+        "DFP_API            api warn audit: 127.0.0.1:43600 none POST /api/v1/master/run -> "
+        "415 Content-Type\\x1b[2J\n")
+    assert v.counts["api"] == 1 and v.messages == 1
 
 
 def test_the_status_line_shows_wire_text_escaped():

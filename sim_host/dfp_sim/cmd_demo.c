@@ -319,6 +319,10 @@ static int scene_startup(const demo_opts_t *o)
     scene("1. Power-up, baud search and start-up with \"Param + 3 PD\" (F3 F2)");
     setup(&o->io);
     if (o->io.http != NULL) {
+        if (demo.lcm.open) {
+            demo.in.api_event = lcm_cli_api_event;
+            demo.in.api_event_ctx = &demo.lcm;
+        }
         int rc = instrument_start_http(&demo.in, &demo.rig, &o->io, "demo", false);
         if (rc != 0) {
             return rc;

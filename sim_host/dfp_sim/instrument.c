@@ -308,6 +308,7 @@ int instrument_start_http(instrument_t *in, rig_t *r, const instrument_opts_t *o
     }
     in->ctl_on = true;
     in->log.ctl = &in->ctl;
+    in->api_seen = rig_ctl_next_seq(&in->ctl);
     if (rig_ctl_attach(&in->ctl) != 0) {
         cli_error("--http: the loop cannot wait on another descriptor");
         return 1;
@@ -317,10 +318,36 @@ int instrument_start_http(instrument_t *in, rig_t *r, const instrument_opts_t *o
     return http_begin(in, o, read_only);
 }
 
+/* The request threads publish the API's events to the bridge only: the terminal log and the
+ * LCM telemetry belong to the loop's thread. */
+static void pass_on_api_events(instrument_t *in)
+{
+    for (;;) {
+        uint64_t lost = 0;
+        size_t n = rig_ctl_events(&in->ctl, in->api_seen, in->batch, INSTRUMENT_EVENT_BATCH,
+                                  &lost);
+        for (size_t i = 0; i < n; i++) {
+            const rig_ctl_event_t *e = &in->batch[i];
+            in->api_seen = e->seq + 1u;
+            if (strcmp(e->source, "http") != 0) {
+                continue;
+            }
+            rig_log_print(&in->log, e->level, e->source, e->t_us, e->text);
+            if (in->api_event != NULL) {
+                in->api_event(in->api_event_ctx, e);
+            }
+        }
+        if (n < INSTRUMENT_EVENT_BATCH) {
+            return;
+        }
+    }
+}
+
 void instrument_service(instrument_t *in)
 {
     if (in->ctl_on) {
         rig_ctl_service(&in->ctl, PUBLISH_EVERY_NS);
+        pass_on_api_events(in);
     }
 }
 

@@ -31,11 +31,20 @@ typedef struct instrument_opts {
     rig_log_time_t time;
 } instrument_opts_t;
 
+/* Where an event of the API itself goes besides GET /api/v1/log and the event stream (the
+ * LCM telemetry): its request threads publish it to the bridge, the loop passes it on. */
+typedef void instrument_api_event_fn(void *ctx, const rig_ctl_event_t *e);
+#define INSTRUMENT_EVENT_BATCH 16u
+
 typedef struct instrument {
     rig_log_t log;
     rig_ctl_t ctl;
     bool ctl_on;
     http_server_t *http;
+    instrument_api_event_fn *api_event; /* NULL: only the terminal */
+    void *api_event_ctx;
+    uint64_t api_seen; /* the bridge's first event not looked at yet */
+    rig_ctl_event_t batch[INSTRUMENT_EVENT_BATCH];
 } instrument_t;
 
 void instrument_defaults(instrument_opts_t *o, rig_log_time_t time);
@@ -51,7 +60,9 @@ void instrument_attach_log(instrument_t *in, rig_t *r, const instrument_opts_t *
  * --http-no-auth off loopback: usage errors). */
 int instrument_start_http(instrument_t *in, rig_t *r, const instrument_opts_t *o,
                           const char *mode, bool read_only);
-/* From the loop: carries out queued actions and publishes the state. */
+/* From the loop: carries out queued actions, publishes the state, and prints the API's own
+ * events (source "http": the audit of each action, a connection closed by a limit) on the
+ * terminal log and hands them to api_event. */
 void instrument_service(instrument_t *in);
 void instrument_stop(instrument_t *in);
 

@@ -138,3 +138,13 @@ void lcm_cli_close(lcm_cli_t *l)
     dfp_lcm_bridge_close(&l->bridge);
     l->open = false;
 }
+
+void lcm_cli_api_event(void *ctx, const rig_ctl_event_t *e)
+{
+    lcm_cli_t *l = ctx;
+    if (l->open && dfp_lcm_bridge_api_event(&l->bridge, dfp_lcm_wall_us(), (int64_t)e->t_us,
+                                            (int64_t)e->seq, rig_log_level_name(e->level),
+                                            e->kind, e->text) != 0) {
+        report_failure(l);
+    }
+}

@@ -7,6 +7,8 @@
 #include <stdint.h>
 
 #include "lcm_bridge/lcm_bridge.h"
+#include "rig/rig_ctl.h"
+#include "rig/rig_log.h"
 #include "report.h"
 #include "sim_stations/stations.h"
 
@@ -49,6 +51,8 @@ void lcm_cli_pace(lcm_cli_t *l, uint64_t sim_ns);
 hal_time_us_t lcm_cli_timer(void *ctx, hal_time_us_t now);
 /* The card options' param_observer / ctx for this context. */
 void lcm_cli_observe_params(lcm_cli_t *l, card_options_t *co);
+/* instrument_api_event_fn (ctx = the lcm_cli_t): an event of the control API to DFP_API. */
+void lcm_cli_api_event(void *ctx, const rig_ctl_event_t *e);
 /* Publishes the last state, prints "lcm: N messages published to URL" (and the failures: they
  * never change the exit status, telemetry is not the card's job) and closes. */
 void lcm_cli_close(lcm_cli_t *l);

@@ -110,6 +110,8 @@ int session_telemetry(session_t *s, const char *url, const dfp21b_t *card, uint8
         return -1;
     }
     (void)rig_add_timer(&s->rig, lcm_cli_timer, &s->telemetry);
+    s->in.api_event = lcm_cli_api_event;
+    s->in.api_event_ctx = &s->telemetry;
     return 0;
 }
 

@@ -52,7 +52,7 @@ expect_in "\$LCM_DEFAULT_URL is the default URL" "listening on $url, channels .*
 expect_in "every message arrived" \
   "summary: 1351 messages in" "$all_out"
 expect_in "counted by type" \
-  "(1311 telegrams, 16 card states, 24 parameter services); 0 undecodable" "$all_out"
+  "(1311 telegrams, 16 card states, 24 parameter services, 0 API events); 0 undecodable" "$all_out"
 # Every telegram line holds the octets of the demo's own capture, in the same order.
 grep ' DFP_TELEGRAM ' "$tmp/all.out" | grep -oE '( [0-9A-F]{2})+$' | sed 's/^ //' >"$tmp/view.hex"
 cut -d' ' -f3- "$tmp/demo.txt" >"$tmp/demo.hex"
@@ -85,7 +85,7 @@ n=$(grep -c ' DFP_CARD_STATE   4 state ' "$tmp/state.out")
 if [ "$n" = 16 ]; then ok; else bad "16 state lines expected, $n"; fi
 expect_in "only the state channel" \
   "summary: 16 messages in" "$state_out"
-expect_in "only states counted" "(0 telegrams, 16 card states, 0 parameter services)" "$state_out"
+expect_in "only states counted" "(0 telegrams, 16 card states, 0 parameter services, 0 API events)" "$state_out"
 expect_in "state in Data_Exch" "state Data_Exch, 1.5 Mbit/s" "$state_out"
 
 # --status line: the line rewritten in place (CR, erase line), no telegram lines, then the summary.

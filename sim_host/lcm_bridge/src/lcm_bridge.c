@@ -10,6 +10,7 @@
 #include <lcm/lcm.h>
 
 #include "dfp_lcm/dfp_lcm_card_state_t.h"
+#include "dfp_lcm/dfp_lcm_api_event_t.h"
 #include "dfp_lcm/dfp_lcm_param_service_t.h"
 #include "dfp_lcm/dfp_lcm_telegram_t.h"
 #include "dp_master/param_channel.h"
@@ -261,6 +262,29 @@ int dfp_lcm_bridge_param_service(dfp_lcm_bridge_t *b, int64_t utime, uint8_t cha
     memcpy(m.response, rsp, ML_TELEGRAM_LEN);
     if (dfp_lcm_param_service_t_publish(b->lcm, DFP_LCM_CH_PARAM, &m) != 0) {
         failed(b, "a parameter service");
+        return -1;
+    }
+    b->messages++;
+    return 0;
+}
+
+int dfp_lcm_bridge_api_event(dfp_lcm_bridge_t *b, int64_t utime, int64_t t_us, int64_t seq,
+                             const char *level, const char *kind, const char *text)
+{
+    if (b->lcm == NULL) {
+        return -1;
+    }
+    dfp_lcm_api_event_t m = {
+        .utime = utime,
+        .source_id = b->source_id,
+        .t_us = t_us,
+        .seq = seq,
+        .level = (char *)level,
+        .kind = (char *)kind,
+        .text = (char *)text,
+    };
+    if (dfp_lcm_api_event_t_publish(b->lcm, DFP_LCM_CH_API, &m) != 0) {
+        failed(b, "an API event");
         return -1;
     }
     b->messages++;

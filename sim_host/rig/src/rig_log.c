@@ -34,24 +34,10 @@ void rig_log_init(rig_log_t *l, rig_t *r, FILE *out)
     l->level = RIG_LOG_INFO;
 }
 
-void rig_vlog(rig_log_t *l, rig_log_level_t level, const char *source, const char *kind,
-              const char *fmt, va_list ap)
+/* The terminal line: texts carry strings from the wire and from files, so they go out
+ * escaped. */
+static void print_line(rig_log_t *l, const char *source, uint64_t ns, const char *text)
 {
-    bool print = level <= l->level;
-    bool publish = l->ctl != NULL && (level <= RIG_LOG_INFO || print);
-    if (!print && !publish) {
-        return;
-    }
-    char text[RIG_CTL_TEXT];
-    vsnprintf(text, sizeof text, fmt, ap);
-    uint64_t ns = rig_elapsed_ns(l->rig);
-    if (publish) {
-        rig_ctl_event(l->ctl, ns / 1000u, level, source, kind, text);
-    }
-    if (!print || l->out == NULL) {
-        return;
-    }
-    /* Texts carry strings from the wire and from files: the terminal gets them escaped. */
     char shown[4u * RIG_CTL_TEXT];
     sim_text_visible(text, shown, sizeof shown);
     if (l->time == RIG_LOG_TIME_WALL) {
@@ -68,6 +54,33 @@ void rig_vlog(rig_log_t *l, rig_log_level_t level, const char *source, const cha
         fprintf(l->out, "%10.3f ms  %-7s  %s\n", (double)ns / 1e6, source, shown);
     }
     fflush(l->out);
+}
+
+void rig_vlog(rig_log_t *l, rig_log_level_t level, const char *source, const char *kind,
+              const char *fmt, va_list ap)
+{
+    bool print = level <= l->level;
+    bool publish = l->ctl != NULL && (level <= RIG_LOG_INFO || print);
+    if (!print && !publish) {
+        return;
+    }
+    char text[RIG_CTL_TEXT];
+    vsnprintf(text, sizeof text, fmt, ap);
+    uint64_t ns = rig_elapsed_ns(l->rig);
+    if (publish) {
+        rig_ctl_event(l->ctl, ns / 1000u, level, source, kind, text);
+    }
+    if (print && l->out != NULL) {
+        print_line(l, source, ns, text);
+    }
+}
+
+void rig_log_print(rig_log_t *l, rig_log_level_t level, const char *source, uint64_t t_us,
+                   const char *text)
+{
+    if (level <= l->level && l->out != NULL) {
+        print_line(l, source, t_us * 1000u, text);
+    }
 }
 
 void rig_log(rig_log_t *l, rig_log_level_t level, const char *source, const char *kind,

@@ -32,6 +32,7 @@
 #define DFP_LCM_CH_TELEGRAM "DFP_TELEGRAM"
 #define DFP_LCM_CH_CARD_STATE "DFP_CARD_STATE"
 #define DFP_LCM_CH_PARAM "DFP_PARAM"
+#define DFP_LCM_CH_API "DFP_API"
 /* A card's state goes out at most this often (ms) unless the context says otherwise. */
 #define DFP_LCM_STATE_INTERVAL_MS_DEFAULT 100u
 
@@ -97,6 +98,10 @@ int dfp_lcm_bridge_param_service(dfp_lcm_bridge_t *b, int64_t utime, uint8_t cha
                                  const uint8_t rsp[ML_TELEGRAM_LEN]);
 /* The same with the shape of card_options_t.param_observer (ctx = the bridge; time from
  * b->clock). */
+/* Publishes an event of the control API (api_event_t on DFP_API). level: "warn", "info"...
+ * Returns 0, or -1 (counted in failures). */
+int dfp_lcm_bridge_api_event(dfp_lcm_bridge_t *b, int64_t utime, int64_t t_us, int64_t seq,
+                             const char *level, const char *kind, const char *text);
 void dfp_lcm_bridge_param_observer(void *ctx, uint8_t channel, const uint8_t req[ML_TELEGRAM_LEN],
                                    const uint8_t rsp[ML_TELEGRAM_LEN]);
 

@@ -41,6 +41,10 @@ void rig_log(rig_log_t *l, rig_log_level_t level, const char *source, const char
              const char *fmt, ...) __attribute__((format(printf, 5, 6)));
 void rig_vlog(rig_log_t *l, rig_log_level_t level, const char *source, const char *kind,
               const char *fmt, va_list ap);
+/* Prints a line another thread published to the control bridge (the API's audit) on the
+ * terminal, as rig_log would have at its time t_us, without publishing it again. */
+void rig_log_print(rig_log_t *l, rig_log_level_t level, const char *source, uint64_t t_us,
+                   const char *text);
 /* "error", "warn", "info", "debug" → level; false for anything else. */
 bool rig_log_level_parse(const char *text, rig_log_level_t *level);
 const char *rig_log_level_name(rig_log_level_t level);
