@@ -20,4 +20,72 @@ python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < 5.0 else 1)" "$(val s
 [ "$(val slowloris_open_after_16s)" = 0 ] && ok || bad "every slow connection closed within 16 s: $(val slowloris_open_after_16s)"
 python3 -c "import sys; sys.exit(0 if 0 <= float(sys.argv[1]) < 14.0 else 1)" \
   "$(val slowloris_last_closed_s)" && ok || bad "last slow connection closed at $(val slowloris_last_closed_s) s"
+# The log names a connection the limit closed when it never had a request answered (a slow
+# client), not a browser's keep-alive connection that idles after its answer: both are closed
+# 10 s after their last answer or their opening.
+export DFP_SIM_TOKEN=slowloris-test-token-0123456789
+port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
+"$sim" demo --http "$port" >"$tmp/demo.out" 2>"$tmp/demo.err" &
+pids+=($!)
+for _ in $(seq 100); do
+  curl -s --max-time 2 -H "Authorization: Bearer $DFP_SIM_TOKEN" "http://127.0.0.1:$port/api/v1/state" >/dev/null && break
+  sleep 0.1
+done
+timeout 60 python3 - "$port" "$DFP_SIM_TOKEN" >"$tmp/kinds" <<'PY'
+import json, socket, sys, threading, time
+port, token = int(sys.argv[1]), sys.argv[2]
+ports = {}
+def closed_after(s, t0):
+    try:
+        while s.recv(4096):
+            pass
+    except OSError:
+        pass
+    return time.time() - t0
+def keep_alive():
+    s = socket.create_connection(("127.0.0.1", port), timeout=20)
+    ports["keep-alive"] = s.getsockname()[1]
+    s.sendall(b"GET /api/v1/session HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")
+    t0 = time.time()
+    s.settimeout(20)
+    ports["keep-alive closed"] = closed_after(s, t0) > 9
+def slow():
+    s = socket.create_connection(("127.0.0.1", port), timeout=20)
+    ports["slow"] = s.getsockname()[1]
+    t0 = time.time()
+    s.sendall(b"GET /api/v1/state HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: ")
+    s.settimeout(2)  # one octet every 2 s, until the server closes (EOF or reset)
+    try:
+        while time.time() - t0 < 15:
+            try:
+                if not s.recv(4096):
+                    break
+            except socket.timeout:
+                s.sendall(b"a")
+    except OSError:
+        pass
+    ports["slow closed"] = time.time() - t0 < 14
+threads = [threading.Thread(target=f) for f in (keep_alive, slow)]
+for t in threads:
+    t.start()
+for t in threads:
+    t.join()
+time.sleep(0.5)
+import urllib.request
+req = urllib.request.Request("http://127.0.0.1:%d/api/v1/log?since=0&limit=4096" % port,
+                             headers={"Authorization": "Bearer " + token})
+log = json.load(urllib.request.urlopen(req, timeout=5))
+limits = [e["text"] for e in log if e["kind"] == "limit"]
+print("keep-alive closed after 9 s:", ports["keep-alive closed"])
+print("slow closed within 14 s:", ports["slow closed"])
+print("limit events:", len(limits))
+print("names the slow one:", any(":%d closed" % ports["slow"] in t for t in limits))
+print("names the keep-alive one:", any(":%d closed" % ports["keep-alive"] in t for t in limits))
+PY
+kinds=$(cat "$tmp/kinds")
+expect_in "the idle keep-alive connection is closed" "keep-alive closed after 9 s: True" "$kinds"
+expect_in "the slow one is closed" "slow closed within 14 s: True" "$kinds"
+expect_in "one limit event" "limit events: 1" "$kinds"
+expect_in "it names the slow connection" "names the slow one: True" "$kinds"
+expect_in "not the keep-alive one" "names the keep-alive one: False" "$kinds"
 finish

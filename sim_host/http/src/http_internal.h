@@ -99,6 +99,7 @@ typedef struct http_conn {
     bool used;
     int fd;
     uint64_t deadline_ns; /* 0: none (its request is being answered) */
+    bool answered;        /* a request of it was answered: idle now is keep-alive */
     char peer[64];
     char error[RIG_CTL_TEXT];
 } http_conn_t;

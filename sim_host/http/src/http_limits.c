@@ -101,7 +101,7 @@ static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_
     }
 }
 
-static void set_deadline(struct MHD_Connection *conn, uint64_t deadline_ns)
+static void set_deadline(struct MHD_Connection *conn, uint64_t deadline_ns, bool answered)
 {
     const union MHD_ConnectionInfo *ci =
         MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
@@ -109,21 +109,24 @@ static void set_deadline(struct MHD_Connection *conn, uint64_t deadline_ns)
     if (c != NULL) {
         pthread_mutex_lock(&c->owner->lock);
         c->deadline_ns = deadline_ns;
+        c->answered = c->answered || answered;
         pthread_mutex_unlock(&c->owner->lock);
     }
 }
 
 void http_limits_delivered(struct MHD_Connection *conn)
 {
-    set_deadline(conn, 0u);
+    set_deadline(conn, 0u, false);
 }
 
 void http_limits_request_end(struct MHD_Connection *conn)
 {
-    set_deadline(conn, host_clock_mono_ns() + (uint64_t)REQUEST_LIMIT_S * NS_PER_S);
+    set_deadline(conn, host_clock_mono_ns() + (uint64_t)REQUEST_LIMIT_S * NS_PER_S, true);
 }
 
-/* Under the lock: shuts down every connection past its deadline, and says so in the log. */
+/* Under the lock: shuts down every connection past its deadline, and says so in the log for
+ * one that never had a request answered. One that had is a browser's keep-alive connection
+ * gone idle, closed every 10 s in ordinary use of the panel: not worth a warning. */
 static void reap(http_limits_t *l)
 {
     uint64_t now = host_clock_mono_ns();
@@ -132,6 +135,9 @@ static void reap(http_limits_t *l)
         if (c->used && c->deadline_ns != 0u && now > c->deadline_ns) {
             (void)shutdown(c->fd, SHUT_RDWR);
             c->deadline_ns = 0u;
+            if (c->answered) {
+                continue;
+            }
             char text[RIG_CTL_TEXT];
             snprintf(text, sizeof text, "connection from %s closed: no complete request within "
                      "%u s", c->peer, (unsigned)REQUEST_LIMIT_S);
