@@ -13,6 +13,7 @@
 #include "dfp_lcm/dfp_lcm_signed_telegram_t.h"
 #include "dfp_lcm/dfp_lcm_telegram_t.h"
 #include "lcm_bridge/lcm_bridge.h"
+#include "sim_hal/tty_port.h"
 #include "lcm_bridge/lcm_segment.h"
 #include "lcm_bridge/seg_auth.h"
 #include "lcm_bridge/telegram_decode.h"
@@ -310,7 +311,8 @@ static void test_sent_telegrams(void)
     open_segment(&tx, key1);
     CHECK(lcm_subscribe(tx.lcm, "SEG", keep_sent, NULL) != NULL);
     hal_uart_t u = dfp_lcm_segment_uart(&tx);
-    CHECK_EQ(u.ops->transmit(u.ctx, sd1, sizeof sd1, 0), 0);
+    /* Now, on the port's clock: it wraps (32 bits of us), so 0 is no fixed "past". */
+    CHECK_EQ(u.ops->transmit(u.ctx, sd1, sizeof sd1, tty_now_us()), 0);
     CHECK_EQ(lcm_handle_timeout(tx.lcm, 100), 1);
     CHECK_EQ(tx.own_ignored, 1);
     CHECK(dfp_seg_is_signed(sent, sent_len));
@@ -331,7 +333,7 @@ static void test_sent_telegrams(void)
     open_segment(&tx, NULL);
     CHECK(lcm_subscribe(tx.lcm, "SEG", keep_sent, NULL) != NULL);
     u = dfp_lcm_segment_uart(&tx);
-    CHECK_EQ(u.ops->transmit(u.ctx, sd1, sizeof sd1, 0), 0);
+    CHECK_EQ(u.ops->transmit(u.ctx, sd1, sizeof sd1, tty_now_us()), 0);
     CHECK_EQ(lcm_handle_timeout(tx.lcm, 100), 1);
     CHECK(dfp_lcm_is_telegram(sent, sent_len));
     open_segment(&rx, key1);
