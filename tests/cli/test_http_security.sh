@@ -164,10 +164,49 @@ expect_in "the viewer's login" '200 {"role":"viewer"}' "$(call "${as_json[@]}" -
 vjar=(-H "Cookie: $(header Set-Cookie | sed -E 's/^Set-Cookie: (dfp_session=[^;]*);.*/\1/')")
 expect_in "a viewer's cookie may not act" "$viewer_no" \
   "$(call "${vjar[@]}" "${as_json[@]}" -d '{"running":false}' "$url/api/v1/master/run")"
+# Each role has half of the 64 sessions: 64 logins with the viewer token push out the oldest
+# viewer sessions, never the operator's.
+for _ in $(seq 64); do
+  curl -s --max-time 5 -o /dev/null "${as_json[@]}" -d "{\"token\":\"$viewer\"}" "$url/api/v1/login"
+done
+expect_in "the operator's session outlives 64 viewer logins" '200 {"auth":true,"role":"operator"}' \
+  "$(call "${jar[@]}" "$url/api/v1/session")"
+expect_in "the first viewer session made room" '200 {"auth":true,"role":null}' \
+  "$(call "${vjar[@]}" "$url/api/v1/session")"
 expect_in "logout" '200 {"ok":true}' "$(call "${jar[@]}" "${as_json[@]}" -X POST "$url/api/v1/logout")"
 expect_in "logout clears the cookie" "Set-Cookie: dfp_session=; Path=/; Max-Age=0; HttpOnly; SameSite=Strict" "$(header Set-Cookie)"
 expect_in "the cookie no longer works" "$need" "$(call "${jar[@]}" "$url/api/v1/state")"
 expect_in "the RUN state is what the operator left" "[True, [6, 900, 0]]" "$(master)"
+
+# Request headers as RFC 9112 3.2 and RFC 9110 7.2 have them: one Host, and only a port after
+# its name; a JSON Content-Type with nothing but parameters after it.
+raw() { # raw REQUEST-HEAD: the status line of the answer to it (no body)
+  python3 - "$port" "$1" <<'PY'
+import socket, sys
+s = socket.create_connection(("127.0.0.1", int(sys.argv[1])), timeout=5)
+s.sendall(sys.argv[2].encode().replace(b"|", b"\r\n") + b"\r\n\r\n")
+print(s.recv(4096).split(b"\r\n")[0].decode())
+PY
+}
+expect_in "two Host headers" "HTTP/1.1 400" \
+  "$(raw "GET /api/v1/state HTTP/1.1|Host: 127.0.0.1|Host: evil.example|Authorization: Bearer $token")"
+expect_in "two Host headers, the other order" "HTTP/1.1 400" \
+  "$(raw "GET /api/v1/state HTTP/1.1|Host: evil.example|Host: 127.0.0.1|Authorization: Bearer $token")"
+expect_in "no port but words after the name" "400 {\"error\":\"Host 'localhost:evil' is not NAME[:PORT]\"}" \
+  "$(call "${bearer[@]}" -H 'Host: localhost:evil' "$url/api/v1/state")"
+expect_in "a name after an IPv6 literal" "400 {\"error\":\"Host '[::1]evil.example' is not NAME[:PORT]\"}" \
+  "$(call "${bearer[@]}" -H 'Host: [::1]evil.example' "$url/api/v1/state")"
+expect_in "an empty port is a port" '200 {"t_us":' "$(call "${bearer[@]}" -H 'Host: localhost:' "$url/api/v1/state")"
+expect_in "words after application/json" "415 {\"error\":\"Content-Type must be application/json\"}" \
+  "$(call "${bearer[@]}" -H 'Content-Type: application/json garbage' -d '{"running":false}' "$url/api/v1/master/run")"
+expect_in "application/json with a charset" '200 {"ok":true}' \
+  "$(call "${bearer[@]}" -H 'Content-Type: application/json ; charset=utf-8' -d '{"running":true}' "$url/api/v1/master/run")"
+# A path and a body key hold a newline and ESC: the action's error repeats them, the audit
+# line does not carry them.
+call "${bearer[@]}" "${as_json[@]}" -d '{}' "$url/api/v1/cards/4/x%0A%1b%5b2Jfake%20line" >/dev/null
+call "${bearer[@]}" "${as_json[@]}" -d '{"a\nb\u001b[31m":1}' "$url/api/v1/master/run" >/dev/null
+# A wrong token at /api/v1/session: its answer tells, so it is logged like any refusal.
+call -H "Authorization: Bearer not-the-token-at-all" "$url/api/v1/session" >/dev/null
 
 # The audit: actions and refusals in the log with the client's address, role, method, path
 # and status; logins without the token.
@@ -184,6 +223,11 @@ audit_has "the viewer refused" '^warn 127\.0\.0\.1:[0-9]+ viewer POST /api/v1/ma
 audit_has "a login" '^info 127\.0\.0\.1:[0-9]+ login operator -> 200$'
 audit_has "a wrong login" '^warn 127\.0\.0\.1:[0-9]+ login -> 401$'
 audit_has "a logout" '^info 127\.0\.0\.1:[0-9]+ logout operator -> 200$'
+audit_has "a wrong token at /session" '^warn 127\.0\.0\.1:[0-9]+ none GET /api/v1/session -> 200 a wrong credential$'
+audit_has "the path's newline and ESC as ?" "^warn 127\.0\.0\.1:[0-9]+ operator POST /api/v1/cards/4/x\?\?\[2Jfake line -> 404 no action 'x\?\?\[2Jfake line'"
+audit_has "the body key's too" '^warn 127\.0\.0\.1:[0-9]+ operator POST /api/v1/master/run -> 400 .*a\?b\?\[31m'
+ctl_events=$(json 'sum(1 for e in d if e["source"] == "http" and any(c in e["text"] for c in "\n\r\x1b"))' <<<"$log")
+[ "$ctl_events" = 0 ] && ok || bad "$ctl_events audit texts hold a newline, CR or ESC"
 for t in "$token" "$viewer" "not-the-token-at-all"; do
   if grep -qF -- "$t" <<<"$log"; then bad "a token is in the log: $t"; else ok; fi
 done

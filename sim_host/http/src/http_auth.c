@@ -77,35 +77,70 @@ void http_audit_result(http_server_t *srv, struct MHD_Connection *conn, const re
     unsigned status = ci != NULL ? ci->http_status : 0u;
     char path[128];
     char verb[16];
+    char error[RIG_CTL_TEXT];
     printable(path, sizeof path, url);
     printable(verb, sizeof verb, method);
-    const char *error = http_last_error(conn);
+    /* An error may repeat what the client sent (a path, a key of its body). */
+    printable(error, sizeof error, http_last_error(conn));
     http_audit(srv, status < 400u ? RIG_LOG_INFO : RIG_LOG_WARN, "%s %s %s %s -> %u%s%s",
                req->client, http_role_name(req->role), verb, path, status,
                error[0] != '\0' ? " " : "", error);
 }
 
-/* "NAME" of "NAME:PORT", "[V6]:PORT", "[V6]", "NAME"; false when it does not fit. */
+/* ":PORT" with up to 5 digits, or nothing (RFC 9110 7.2: uri-host [ ":" port ], port =
+ * *DIGIT). */
+static bool port_part(const char *p)
+{
+    if (*p == '\0') {
+        return true;
+    }
+    size_t digits = strspn(p + 1, "0123456789");
+    return p[0] == ':' && digits <= 5u && p[1u + digits] == '\0';
+}
+
+/* "NAME" of "NAME:PORT", "[V6]:PORT", "[V6]", "NAME"; false when it does not fit or anything
+ * but a port follows the name. */
 static bool host_name(const char *host, char *name, size_t n)
 {
     const char *end;
+    const char *after;
     if (host[0] == '[') {
         host++;
         end = strchr(host, ']');
         if (end == NULL) {
             return false;
         }
+        after = end + 1;
     } else {
         end = strchr(host, ':');
         end = end != NULL ? end : host + strlen(host);
+        after = end;
     }
     size_t len = (size_t)(end - host);
-    if (len == 0u || len >= n) {
+    if (len == 0u || len >= n || !port_part(after)) {
         return false;
     }
     memcpy(name, host, len);
     name[len] = '\0';
     return true;
+}
+
+static enum MHD_Result count_host(void *cls, enum MHD_ValueKind kind, const char *key,
+                                  const char *value)
+{
+    (void)kind;
+    (void)value;
+    *(unsigned *)cls += strcasecmp(key, "Host") == 0 ? 1u : 0u;
+    return MHD_YES;
+}
+
+/* RFC 9112 3.2: a request with more than one Host is refused (400); each proxy or server on
+ * the way might take another one. */
+static unsigned host_fields(struct MHD_Connection *conn)
+{
+    unsigned n = 0;
+    (void)MHD_get_connection_values(conn, MHD_HEADER_KIND, count_host, &n);
+    return n;
 }
 
 static bool host_allowed(const http_auth_t *a, const char *host)
@@ -158,8 +193,11 @@ static bool json_type(const char *type)
     }
     type += strspn(type, " \t");
     size_t n = sizeof want - 1u;
-    return strncasecmp(type, want, n) == 0 &&
-           (type[n] == '\0' || type[n] == ';' || type[n] == ' ' || type[n] == '\t');
+    if (strncasecmp(type, want, n) != 0) {
+        return false;
+    }
+    type += n + strspn(type + n, " \t");
+    return *type == '\0' || *type == ';';
 }
 
 static bool reads_only(const char *method)
@@ -193,6 +231,15 @@ static unsigned refusal(http_server_t *srv, struct MHD_Connection *conn, const c
     const http_auth_t *a = &srv->auth;
     const char *host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Host");
     char name[HTTP_NAME_MAX];
+    if (host_fields(conn) > 1u) {
+        snprintf(msg, n, "more than one Host header");
+        return 400u;
+    }
+    if (host != NULL && !host_name(host, name, sizeof name)) {
+        printable(name, 80u, host);
+        snprintf(msg, n, "Host '%s' is not NAME[:PORT]", name);
+        return 400u;
+    }
     if (!host_allowed(a, host)) {
         printable(name, 80u, host != NULL && host_name(host, name, sizeof name) ? name : "");
         snprintf(msg, n, "Host '%s' is not allowed; start dfp-sim with --http-allow-host %s to "

@@ -33,6 +33,13 @@ _Static_assert(MAX_STREAMS < MAX_CONNECTIONS, "event streams must leave connecti
  * whole request, and the nice value of the threads serving them (the bus loop runs at 0). */
 #define PER_ADDRESS_CONNECTIONS 8u
 #define REQUEST_LIMIT_S 10u
+/* Connections still to deliver a request (opened, or idle after an answer): past this many the
+ * oldest of them is closed for a new one. Slow clients from many addresses then hold at most
+ * these, never all MAX_CONNECTIONS, and an honest request (delivered within milliseconds of
+ * its connection) still finds a place. */
+#define PENDING_CONNECTIONS 16u
+_Static_assert(PENDING_CONNECTIONS + MAX_STREAMS < MAX_CONNECTIONS,
+               "slow clients and event streams must leave connections for requests");
 #define REQUEST_NICE 10
 
 /* ---- access control (http_auth.c, http_session.c; docs/api.md "Security") ----------------- */
@@ -199,6 +206,8 @@ bool http_guard(http_server_t *srv, struct MHD_Connection *conn, const char *url
                 const char *method, request_t *req, enum MHD_Result *rc);
 /* The role the request's credential (Bearer token or session cookie) gives. */
 http_role_t http_credential(http_server_t *srv, struct MHD_Connection *conn);
+/* Whether the request carries a credential at all (a Bearer token or the session cookie). */
+bool http_credential_given(struct MHD_Connection *conn);
 const char *http_role_name(http_role_t role);
 /* One audit event (source "http", kind "audit") into the rig's log. */
 void http_audit(http_server_t *srv, rig_log_level_t level, const char *fmt, ...)

@@ -67,6 +67,37 @@ static void lower_priority(void)
     (void)setpriority(PRIO_PROCESS, (id_t)gettid(), REQUEST_NICE);
 }
 
+static void closed_text(const http_conn_t *c, const char *why, char *text, size_t n)
+{
+    snprintf(text, n, "connection from %s closed: %s", c->peer, why);
+}
+
+/* Under the lock: at most PENDING_CONNECTIONS - 1 connections wait for a request, so a new
+ * one fits; the one waiting longest is closed (slow clients, from however many addresses,
+ * only ever push out each other and idle keep-alive connections). */
+static void make_room(http_limits_t *l)
+{
+    unsigned pending = 0;
+    http_conn_t *oldest = NULL;
+    for (unsigned i = 0; i < MAX_CONNECTIONS; i++) {
+        http_conn_t *c = &l->conns[i];
+        if (c->used && c->deadline_ns != 0u) {
+            pending++;
+            oldest = oldest != NULL && oldest->deadline_ns <= c->deadline_ns ? oldest : c;
+        }
+    }
+    if (pending + 1u > PENDING_CONNECTIONS && oldest != NULL) {
+        (void)shutdown(oldest->fd, SHUT_RDWR);
+        oldest->deadline_ns = 0u;
+        if (!oldest->answered) {
+            char text[RIG_CTL_TEXT];
+            closed_text(oldest, "no complete request yet, and a new connection needed its place",
+                        text, sizeof text);
+            rig_ctl_event(l->ctl, rig_ctl_time_us(l->ctl), RIG_LOG_WARN, "http", "limit", text);
+        }
+    }
+}
+
 static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_context,
                           enum MHD_ConnectionNotificationCode code)
 {
@@ -76,6 +107,7 @@ static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_
         const union MHD_ConnectionInfo *fi =
             MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
         pthread_mutex_lock(&l->lock);
+        make_room(l);
         for (unsigned i = 0; i < MAX_CONNECTIONS && fi != NULL; i++) {
             http_conn_t *c = &l->conns[i];
             if (!c->used) {
@@ -139,8 +171,10 @@ static void reap(http_limits_t *l)
                 continue;
             }
             char text[RIG_CTL_TEXT];
-            snprintf(text, sizeof text, "connection from %s closed: no complete request within "
-                     "%u s", c->peer, (unsigned)REQUEST_LIMIT_S);
+            char why[64];
+            snprintf(why, sizeof why, "no complete request within %u s",
+                     (unsigned)REQUEST_LIMIT_S);
+            closed_text(c, why, text, sizeof text);
             rig_ctl_event(l->ctl, rig_ctl_time_us(l->ctl), RIG_LOG_WARN, "http", "limit", text);
         }
     }

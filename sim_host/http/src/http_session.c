@@ -141,23 +141,38 @@ http_role_t http_credential(http_server_t *srv, struct MHD_Connection *conn)
                        MHD_lookup_connection_value(conn, MHD_COOKIE_KIND, COOKIE_NAME));
 }
 
-/* A new session with role: its id into id; false when no random id could be made. The oldest
- * session makes room when all are taken. */
+bool http_credential_given(struct MHD_Connection *conn)
+{
+    return MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Authorization") != NULL ||
+           MHD_lookup_connection_value(conn, MHD_COOKIE_KIND, COOKIE_NAME) != NULL;
+}
+
+/* A new session with role: its id into id; false when no random id could be made. Each role
+ * has half the table: when its half is full, its own oldest session makes room, so logins with
+ * the viewer token can never end an operator's session (nor the reverse). */
 static bool session_new(http_auth_t *a, http_role_t role, char *id, size_t n)
 {
     if (!http_token_generate(id, n)) {
         return false;
     }
     pthread_mutex_lock(&a->lock);
-    size_t pick = 0;
+    size_t pick = HTTP_SESSIONS;
+    size_t oldest = HTTP_SESSIONS;
+    size_t mine = 0;
     for (size_t i = 0; i < HTTP_SESSIONS; i++) {
-        if (a->sessions[i].role == HTTP_ROLE_NONE) {
-            pick = i;
-            break;
+        const http_session_t *e = &a->sessions[i];
+        if (e->role == HTTP_ROLE_NONE) {
+            pick = pick < HTTP_SESSIONS ? pick : i;
+        } else if (e->role == role) {
+            mine++;
+            oldest = oldest < HTTP_SESSIONS && a->sessions[oldest].born <= e->born ? oldest : i;
         }
-        if (a->sessions[i].born < a->sessions[pick].born) {
-            pick = i;
-        }
+    }
+    if (mine >= HTTP_SESSIONS / 2u || pick == HTTP_SESSIONS) {
+        pick = oldest; /* a full table holds a half of this role: there is one */
+    }
+    if (pick == HTTP_SESSIONS) {
+        pick = 0u;
     }
     http_session_t *s = &a->sessions[pick];
     snprintf(s->id, sizeof s->id, "%s", id);
@@ -226,6 +241,11 @@ enum MHD_Result http_logout(http_server_t *srv, struct MHD_Connection *conn,
 enum MHD_Result http_session_info(http_server_t *srv, struct MHD_Connection *conn,
                                   const request_t *req)
 {
+    if (req->role == HTTP_ROLE_NONE && http_credential_given(conn)) {
+        /* It answers whether a token is right, like every route: such a try is told too. */
+        http_audit(srv, RIG_LOG_WARN, "%s %s GET /api/v1/session -> 200 a wrong credential",
+                   req->client, http_role_name(req->role));
+    }
     cJSON *o = cJSON_CreateObject();
     cJSON_AddBoolToObject(o, "auth", !srv->auth.no_auth);
     if (req->role == HTTP_ROLE_NONE) {
