@@ -168,7 +168,7 @@ static void test_key_files(void)
 {
     char dir[] = "/tmp/test_seg_auth.XXXXXX";
     CHECK(mkdtemp(dir) != NULL);
-    char path[200];
+    char path[64]; /* "/tmp/test_seg_auth.XXXXXX/k" */
     char err[400];
     char want[400];
     uint8_t key[DFP_SEG_KEY_BYTES];

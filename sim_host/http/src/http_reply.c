@@ -113,7 +113,10 @@ enum MHD_Result http_send_error(struct MHD_Connection *conn, unsigned status, co
     va_end(ap);
     http_conn_t *c = conn_context(conn);
     if (c != NULL) {
-        snprintf(c->error, sizeof c->error, "%s", msg);
+        /* The audit line has room for RIG_CTL_TEXT: a longer message is cut there. */
+        size_t len = strnlen(msg, sizeof c->error - 1u);
+        memcpy(c->error, msg, len);
+        c->error[len] = '\0';
     }
     cJSON *o = cJSON_CreateObject();
     cJSON_AddStringToObject(o, "error", msg);
