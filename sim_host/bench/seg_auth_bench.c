@@ -81,7 +81,9 @@ int main(int argc, char **argv)
     long n = 200000;
     if (argc == 3 && strcmp(argv[1], "--telegrams") == 0) {
         n = strtol(argv[2], NULL, 10);
-    } else if (argc != 1 || n <= 0) {
+    }
+    if ((argc != 1 && argc != 3) || (argc == 3 && strcmp(argv[1], "--telegrams") != 0) ||
+        n <= 0) {
         fprintf(stderr, "usage: dfp-seg-auth-bench [--telegrams N]\n");
         return 2;
     }

@@ -145,8 +145,8 @@ static void secrets_free(http_secrets_t *k)
 static bool token_from(const char *option, const char *file, const char *env, char *out,
                        size_t n)
 {
-    char err[400];
     if (file != NULL) {
+        char err[400];
         if (!http_token_read_file(option, file, out, n, err, sizeof err)) {
             cli_error("%s", err);
             return false;
@@ -171,7 +171,6 @@ static bool token_from(const char *option, const char *file, const char *env, ch
 static bool http_secrets(const instrument_opts_t *o, const char *host, http_secrets_t *k)
 {
     const instrument_http_opts_t *w = &o->web;
-    char err[400];
     if (w->no_auth && !http_is_loopback(host)) {
         cli_error("--http-no-auth: refused on %s, which is not a loopback address (127.0.0.0/8, "
                   "::1): anyone who reaches it could steer the rig; use a token", host);
@@ -198,6 +197,7 @@ static bool http_secrets(const instrument_opts_t *o, const char *host, http_secr
         }
     }
     if (w->cert != NULL) {
+        char err[400];
         k->cert_pem = http_pem_read_file("--http-cert", w->cert, err, sizeof err);
         k->key_pem = k->cert_pem != NULL
                          ? http_pem_read_file("--http-key", w->key, err, sizeof err)

@@ -22,8 +22,11 @@ for addresses in 1 9; do
   python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < 5.0 else 1)" "$(val stop_seconds)" \
     && ok || bad "$addresses addresses: STOP took $(val stop_seconds) s (bound 5 s)"
   [ "$(val slowloris_open_after_16s)" = 0 ] && ok || bad "$addresses addresses: every slow connection closed within 16 s: $(val slowloris_open_after_16s)"
-  python3 -c "import sys; sys.exit(0 if 0 <= float(sys.argv[1]) < 14.0 else 1)" \
-    "$(val slowloris_last_closed_s)" && ok || bad "$addresses addresses: last slow connection closed at $(val slowloris_last_closed_s) s"
+  # 10 s after its acceptance, found by the client within its 2 s between octets; from 9
+  # addresses the last ones wait in the listen backlog until older ones are pushed out.
+  bound=$([ "$addresses" = 1 ] && echo 14 || echo 16)
+  python3 -c "import sys; sys.exit(0 if 0 <= float(sys.argv[1]) < float(sys.argv[2]) else 1)" \
+    "$(val slowloris_last_closed_s)" "$bound" && ok || bad "$addresses addresses: last slow connection closed at $(val slowloris_last_closed_s) s (bound $bound s)"
 done
 
 # The log names a connection the limit closed when it never had a request answered (a slow

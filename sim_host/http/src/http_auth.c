@@ -31,7 +31,10 @@ static void printable(char *out, size_t n, const char *text)
     size_t k = 0;
     for (; text != NULL && text[k] != '\0' && k + 1u < n; k++) {
         unsigned char ch = (unsigned char)text[k];
-        out[k] = ch < 0x20u || ch == 0x7fu ? '?' : (char)ch;
+        out[k] = text[k];
+        if (ch < 0x20u || ch == 0x7fu) {
+            out[k] = '?';
+        }
     }
     out[k] = '\0';
 }
@@ -41,18 +44,15 @@ static void client_address(struct MHD_Connection *conn, char *out, size_t n)
     const union MHD_ConnectionInfo *ci =
         MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
     char ip[INET6_ADDRSTRLEN] = "?";
-    unsigned port = 0;
     const struct sockaddr *sa = ci != NULL ? ci->client_addr : NULL;
     if (sa != NULL && sa->sa_family == AF_INET) {
         const struct sockaddr_in *v4 = (const struct sockaddr_in *)(const void *)sa;
         (void)inet_ntop(AF_INET, &v4->sin_addr, ip, sizeof ip);
-        port = ntohs(v4->sin_port);
-        snprintf(out, n, "%s:%u", ip, port);
+        snprintf(out, n, "%s:%u", ip, (unsigned)ntohs(v4->sin_port));
     } else if (sa != NULL && sa->sa_family == AF_INET6) {
         const struct sockaddr_in6 *v6 = (const struct sockaddr_in6 *)(const void *)sa;
         (void)inet_ntop(AF_INET6, &v6->sin6_addr, ip, sizeof ip);
-        port = ntohs(v6->sin6_port);
-        snprintf(out, n, "[%s]:%u", ip, port);
+        snprintf(out, n, "[%s]:%u", ip, (unsigned)ntohs(v6->sin6_port));
     } else {
         snprintf(out, n, "?");
     }
@@ -168,8 +168,8 @@ static bool origin_allowed(const http_auth_t *a, const char *origin, const char 
     if (strcmp(origin, "null") == 0) {
         return false;
     }
-    char own[HTTP_NAME_MAX + 16u];
     if (host != NULL) {
+        char own[HTTP_NAME_MAX + 16u];
         snprintf(own, sizeof own, "%s://%s", a->tls ? "https" : "http", host);
         if (strcasecmp(origin, own) == 0) {
             return true;

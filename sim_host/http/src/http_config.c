@@ -11,7 +11,7 @@
 
 #include "http/http_server.h"
 
-#define PEM_MAX (64u * 1024u)
+#define PEM_MAX ((size_t)64u * 1024u)
 
 bool http_is_loopback(const char *host)
 {
@@ -99,7 +99,7 @@ char *http_pem_read_file(const char *option, const char *path, char *err, size_t
     size_t n = text != NULL ? fread(text, 1, (size_t)st.st_size, f) : 0u;
     (void)fclose(f);
     if (text == NULL || n != (size_t)st.st_size || strstr(text, "-----BEGIN ") == NULL) {
-        snprintf(err, errlen, "%s '%s': not a PEM file (a regular file of at most %u KiB with a "
+        snprintf(err, errlen, "%s '%s': not a PEM file (a regular file of at most %zu KiB with a "
                  "-----BEGIN line)", option, path, PEM_MAX / 1024u);
         free(text);
         return NULL;

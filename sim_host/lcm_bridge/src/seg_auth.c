@@ -55,7 +55,7 @@ static int key_parse(const char *path, char *text, size_t n, uint8_t key[DFP_SEG
                  "64 hex digits %s", path, digits + 1u, KEY_HOWTO);
         return -1;
     }
-    if (n != 2u * DFP_SEG_KEY_BYTES) {
+    if (n != (size_t)2u * DFP_SEG_KEY_BYTES) {
         snprintf(err, errlen, "--key %s: %zu hex digits, a key is 64 (32 octets) %s", path, n,
                  KEY_HOWTO);
         return -1;
