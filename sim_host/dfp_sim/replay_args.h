@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "capture/capture.h"
+#include "cli_table.h"
 #include "instrument.h"
 #include "replay/infer.h"
 #include "replay/mask.h"
@@ -24,6 +25,7 @@ typedef struct replay_args {
     const char *file;
     replay_given_t given; /* --address, --baud, --fixed-baud, --inverter-delay, --timing */
     bool check;
+    bool check_options; /* --report, --ignore or --max-mismatches given: they need --check */
     bool verbose;
     cap_format_t format;
     const char *lcm_channel;
@@ -37,6 +39,9 @@ typedef struct replay_args {
     unsigned n_reports;
     replay_report_file_t reports[REPLAY_MAX_REPORTS];
 } replay_args_t;
+
+/* Its option table (cli_table.h). */
+extern const cli_command_t cli_replay;
 
 /* Parses and checks argv[2..]: 0, or EXIT_USAGE after one line on stderr. */
 int replay_parse_args(int argc, char **argv, replay_args_t *a);
