@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 
 #include "cli.h"
+#include "commands.h"
 
 static const char replay_usage_hint[] = "(see dfp-sim --help)";
 

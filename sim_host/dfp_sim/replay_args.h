@@ -7,7 +7,6 @@
 #include <stdint.h>
 
 #include "capture/capture.h"
-#include "cli_table.h"
 #include "instrument.h"
 #include "replay/infer.h"
 #include "replay/mask.h"
@@ -39,9 +38,6 @@ typedef struct replay_args {
     unsigned n_reports;
     replay_report_file_t reports[REPLAY_MAX_REPORTS];
 } replay_args_t;
-
-/* Its option table (cli_table.h). */
-extern const cli_command_t cli_replay;
 
 /* Parses and checks argv[2..]: 0, or EXIT_USAGE after one line on stderr. */
 int replay_parse_args(int argc, char **argv, replay_args_t *a);
