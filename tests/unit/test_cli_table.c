@@ -190,7 +190,8 @@ static void test_operands(void)
     expect_error(&operands, ARGS("a", "b", "c", "d"), "t: 'd' is a fourth operand");
     CHECK_EQ(parse(&operands_dd, &o, ARGS("write", "-5", "-")), 0); /* a negative VALUE */
     CHECK_STR(o.operands[1], "-5");
-    expect_error(&operands_dd, ARGS("write", "--5"), "t: unknown option '--5' (see dfp-sim --help)");
+    expect_error(&operands_dd, ARGS("write", "--5"),
+                 "t: unknown option '--5' (see dfp-sim --help)");
 }
 
 /* ---- the help against the tables (completion.c) ---- */
