@@ -3,12 +3,14 @@
  * which no Wireshark release maps, into USER0 (147) for the Lua dissector in tools/wireshark/,
  * or a text dump into pcapng and back. Damaged records are copied as they are and reported. */
 #include <inttypes.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "capture/capture.h"
 #include "cli.h"
 #include "commands.h"
+#include "report.h"
 
 /* Enough to locate the trouble without flooding a terminal for a badly damaged file. */
 #define CONVERT_MAX_REPORTED 10u
@@ -42,74 +44,54 @@ typedef struct convert_opts {
     bool quiet;
 } convert_opts_t;
 
-/* --format / --in-format VALUE: 0, or EXIT_USAGE after reporting. */
-static int format_option(convert_opts_t *o, const char *opt, const char *v)
+static bool convert_operand(void *opts, const char *word)
 {
-    cap_format_t f;
-    bool out_side = strcmp(opt, "--format") == 0;
-    if (!cap_format_parse(v, &f) || f == CAP_FORMAT_AUTO || (out_side && f == CAP_FORMAT_LCM)) {
-        cli_error("%s: '%s' is not one of %s", opt, v,
-                  out_side ? "pcap, pcapng, text" : "pcap, pcapng, text, lcm");
-        return EXIT_USAGE;
-    }
-    *(out_side ? &o->w.format : &o->in_format) = f;
-    return 0;
-}
-
-static int linktype_option(convert_opts_t *o, const char *v)
-{
-    if (strcmp(v, "profibus") == 0 || strcmp(v, "257") == 0) {
-        o->w.linktype = PCAP_LINKTYPE_PROFIBUS_DL;
-    } else if (strcmp(v, "user0") == 0 || strcmp(v, "147") == 0) {
-        o->w.linktype = PCAP_LINKTYPE_USER0;
-    } else {
-        cli_error("--linktype: '%s' is not profibus (257) or user0 (147)", v);
-        return EXIT_USAGE;
-    }
-    return 0;
-}
-
-/* One argument at argv[*i]: 0, or EXIT_USAGE after reporting. */
-static int convert_argument(convert_opts_t *o, int argc, char **argv, int *i)
-{
-    const char *arg = argv[*i];
-    if (strcmp(arg, "--format") == 0 || strcmp(arg, "--in-format") == 0 ||
-        strcmp(arg, "--linktype") == 0) {
-        const char *v = cli_value(argc, argv, i);
-        if (v == NULL) return EXIT_USAGE;
-        return strcmp(arg, "--linktype") == 0 ? linktype_option(o, v)
-                                              : format_option(o, arg, v);
-    }
-    if (strcmp(arg, "--channel") == 0) {
-        o->lcm_channel = cli_value(argc, argv, i);
-        return o->lcm_channel != NULL ? 0 : EXIT_USAGE;
-    }
-    if (strcmp(arg, "--ns") == 0) {
-        o->w.nanosecond = true;
-    } else if (strcmp(arg, "--quiet") == 0) {
-        o->quiet = true;
-    } else if (arg[0] == '-' && arg[1] != '\0') {
-        cli_error("convert: unknown option '%s' (see dfp-sim --help)", arg);
-        return EXIT_USAGE;
-    } else if (o->in == NULL) {
-        o->in = arg;
+    convert_opts_t *o = opts;
+    if (o->in == NULL) {
+        o->in = word;
     } else if (o->out == NULL) {
-        o->out = arg;
+        o->out = word;
     } else {
-        cli_error("convert takes two files, IN and OUT; '%s' is a third", arg);
-        return EXIT_USAGE;
+        cli_error("convert takes two files, IN and OUT; '%s' is a third", word);
+        return false;
     }
-    return 0;
+    return true;
 }
+
+static const cli_choice_t in_formats[] = {
+    {"pcap", CAP_FORMAT_PCAP, false}, {"pcapng", CAP_FORMAT_PCAPNG, false},
+    {"text", CAP_FORMAT_TEXT, false}, {"lcm", CAP_FORMAT_LCM, false},
+    {NULL, 0, false}};
+
+#define CONVERT(field) offsetof(convert_opts_t, field)
+
+static const cli_opt_t convert_options[] = {
+    {CLI_OPT("--format", "pcap|pcapng|text", CLI_CHOICE, CONVERT(w.format)),
+     .choices = capture_format_words, .bad = "--format: '%s' is not one of pcap, pcapng, text"},
+    {CLI_OPT("--linktype", "profibus|user0", CLI_CHOICE, CONVERT(w.linktype)),
+     .choices = capture_linktype_words,
+     .bad = "--linktype: '%s' is not profibus (257) or user0 (147)"},
+    {CLI_OPT("--ns", NULL, CLI_FLAG, CONVERT(w.nanosecond))},
+    {CLI_OPT("--in-format", "pcap|pcapng|text|lcm", CLI_CHOICE, CONVERT(in_format)),
+     .choices = in_formats, .bad = "--in-format: '%s' is not one of pcap, pcapng, text, lcm"},
+    {CLI_OPT("--channel", "NAME", CLI_TEXT, CONVERT(lcm_channel))},
+    {CLI_OPT("--quiet", NULL, CLI_FLAG, CONVERT(quiet))},
+};
+
+static const cli_group_t convert_groups[] = {
+    {convert_options, CLI_COUNT(convert_options), 0},
+};
+
+const cli_command_t cli_convert = {.name = "convert", .groups = convert_groups,
+                                   .n_groups = CLI_COUNT(convert_groups),
+                                   .operands = CLI_OPERANDS, .operand = convert_operand};
 
 /* The command line into o: 0, or EXIT_USAGE after reporting. */
 static int convert_parse(convert_opts_t *o, int argc, char **argv)
 {
     *o = (convert_opts_t){.in_format = CAP_FORMAT_AUTO,
                           .w = {.format = CAP_FORMAT_AUTO, .linktype = 0}};
-    for (int i = 2; i < argc; i++) {
-        if (convert_argument(o, argc, argv, &i) != 0) return EXIT_USAGE;
-    }
+    if (cli_parse(&cli_convert, argc, argv, o) != 0) return EXIT_USAGE;
     if (o->in == NULL || o->out == NULL) {
         cli_error("convert needs an input and an output file: dfp-sim convert IN OUT");
         return EXIT_USAGE;

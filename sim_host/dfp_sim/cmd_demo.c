@@ -254,29 +254,27 @@ typedef struct demo_opts {
     instrument_opts_t io;
 } demo_opts_t;
 
+static const cli_opt_t demo_options[] = {
+    {CLI_OPT("--lcm", "URL", CLI_TEXT, offsetof(demo_opts_t, lcm_url))},
+};
+
+static const cli_group_t demo_groups[] = {
+    {capture_options, CLI_COUNT(capture_options), offsetof(demo_opts_t, capture)},
+    {demo_options, CLI_COUNT(demo_options), 0},
+    {instrument_options, CLI_COUNT(instrument_options), offsetof(demo_opts_t, io)},
+    {instrument_http_options, CLI_COUNT(instrument_http_options), offsetof(demo_opts_t, io.web)},
+};
+
+const cli_command_t cli_demo = {.name = "demo", .groups = demo_groups,
+                                .n_groups = CLI_COUNT(demo_groups)};
+
 /* The command line into o: 0, or EXIT_USAGE after reporting. */
 static int demo_parse(demo_opts_t *o, int argc, char **argv)
 {
     *o = (demo_opts_t){.capture = {.path = NULL}};
     instrument_defaults(&o->io, RIG_LOG_TIME_BUS);
-    for (int i = 2; i < argc; i++) {
-        if (strcmp(argv[i], "--lcm") == 0) {
-            if ((o->lcm_url = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
-            continue;
-        }
-        int iopt = instrument_option(argc, argv, &i, &o->io);
-        if (iopt != 0) {
-            if (iopt < 0) return EXIT_USAGE;
-            continue;
-        }
-        int copt = capture_option(argc, argv, &i, &o->capture);
-        if (copt < 0) {
-            return EXIT_USAGE;
-        }
-        if (copt == 0) {
-            cli_error("demo: unknown option '%s' (see dfp-sim --help)", argv[i]);
-            return EXIT_USAGE;
-        }
+    if (cli_parse(&cli_demo, argc, argv, o) != 0) {
+        return EXIT_USAGE;
     }
     char lcm_log[512];
     const cli_file_t files[] = {{"--capture", o->capture.path, false},

@@ -181,42 +181,54 @@ typedef struct inverter_opts {
     uint32_t address;
     uint32_t duration_s;
     bool channel2;
+    bool quiet;
 } inverter_opts_t;
+
+/* --eeprom FILE, refused at once when it can be no EEPROM file. */
+static bool set_eeprom(void *base, const cli_opt_t *opt, const char *value, cli_args_t *args)
+{
+    (void)opt;
+    (void)args;
+    inverter_opts_t *o = base;
+    o->eeprom = value;
+    char why[300];
+    int rc = file_nvm_check_path(o->eeprom, why, sizeof why);
+    if (rc != 0) {
+        cli_error("inverter: --eeprom %s: refused%s", why,
+                  rc == FILE_NVM_NOT_FILE ? " (give a regular file, or a path where "
+                                            "one can be created)" : "");
+        return false;
+    }
+    return true;
+}
+
+#define INVERTER(field) offsetof(inverter_opts_t, field)
+
+static const cli_opt_t inverter_options[] = {
+    {CLI_OPT("--can", "IFACE", CLI_TEXT, INVERTER(ifname))},
+    {CLI_OPT("--sbus-address", "N", CLI_U32, INVERTER(address)),
+     .min = 0, .max = SBUS_MAX_ADDRESS},
+    {CLI_OPT("--eeprom", "FILE", CLI_CALL, 0), .set = set_eeprom},
+    {CLI_OPT("--duration", "S", CLI_U32, INVERTER(duration_s)), .min = 1, .max = 86400u * 365u},
+    {CLI_OPT("--channel2", NULL, CLI_FLAG, INVERTER(channel2))},
+    {CLI_OPT("--quiet", NULL, CLI_FLAG, INVERTER(quiet))},
+};
+
+static const cli_group_t inverter_groups[] = {
+    {inverter_options, CLI_COUNT(inverter_options), 0},
+};
+
+const cli_command_t cli_inverter = {.name = "inverter", .groups = inverter_groups,
+                                    .n_groups = CLI_COUNT(inverter_groups)};
 
 /* The command line into o (and --quiet into inv): 0, or EXIT_USAGE after reporting. */
 static int inverter_parse(inverter_opts_t *o, int argc, char **argv)
 {
     *o = (inverter_opts_t){.ifname = NULL};
-    for (int i = 2; i < argc; i++) {
-        const char *v;
-        const char *opt = argv[i];
-        if (strcmp(opt, "--can") == 0) {
-            if ((o->ifname = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
-        } else if (strcmp(opt, "--sbus-address") == 0) {
-            if ((v = cli_value(argc, argv, &i)) == NULL ||
-                !cli_u32(opt, v, 0, SBUS_MAX_ADDRESS, &o->address)) return EXIT_USAGE;
-        } else if (strcmp(opt, "--eeprom") == 0) {
-            if ((o->eeprom = cli_value(argc, argv, &i)) == NULL) return EXIT_USAGE;
-            char why[300];
-            int rc = file_nvm_check_path(o->eeprom, why, sizeof why);
-            if (rc != 0) {
-                cli_error("inverter: --eeprom %s: refused%s", why,
-                          rc == FILE_NVM_NOT_FILE ? " (give a regular file, or a path where "
-                                                    "one can be created)" : "");
-                return EXIT_USAGE;
-            }
-        } else if (strcmp(opt, "--duration") == 0) {
-            if ((v = cli_value(argc, argv, &i)) == NULL ||
-                !cli_u32(opt, v, 1, 86400u * 365u, &o->duration_s)) return EXIT_USAGE;
-        } else if (strcmp(opt, "--channel2") == 0) {
-            o->channel2 = true;
-        } else if (strcmp(opt, "--quiet") == 0) {
-            inv.quiet = true;
-        } else {
-            cli_error("inverter: unknown option '%s' (see dfp-sim --help)", opt);
-            return EXIT_USAGE;
-        }
+    if (cli_parse(&cli_inverter, argc, argv, o) != 0) {
+        return EXIT_USAGE;
     }
+    inv.quiet = o->quiet;
     if (o->ifname == NULL) {
         cli_error("inverter: --can IFACE is required (a SocketCAN interface such as can0 or vcan0)");
         return EXIT_USAGE;

@@ -40,88 +40,38 @@ typedef struct master_opts {
     size_t num_slaves;
 } master_opts_t;
 
-/* A number option: 1 when argv[*i] was one (consumed), 0 when not, -1 after reporting. */
-static int number_option(master_opts_t *o, int argc, char **argv, int *i)
-{
-    const struct {
-        const char *name;
-        uint32_t *value;
-        uint32_t min;
-        uint32_t max;
-    } numbers[] = {
-        {"--master-address", &o->own, 0, 126},   {"--ident", &o->ident, 0, 0xFFFF},
-        {"--cycles", &o->cycles, 0, 100000000u}, {"--timeout", &o->timeout_s, 1, 86400u},
-        {"--watchdog", &o->wd_ms, 0, 650000u},   {"--slot-time", &o->slot_ms, 1, 10000u},
-    };
-    const char *opt = argv[*i];
-    for (size_t k = 0; k < sizeof numbers / sizeof numbers[0]; k++) {
-        if (strcmp(opt, numbers[k].name) == 0) {
-            const char *v = cli_value(argc, argv, i);
-            if (v == NULL || !cli_u32(opt, v, numbers[k].min, numbers[k].max, numbers[k].value)) {
-                return -1;
-            }
-            o->timeout_given = o->timeout_given || numbers[k].value == &o->timeout_s;
-            return 1;
-        }
-    }
-    return 0;
-}
+#define MASTER(field) offsetof(master_opts_t, field)
 
-/* --config, --prm, --outputs: 1 when argv[*i] was one (consumed), 0 when not, -1 after
- * reporting. */
-static int hex_option(master_opts_t *o, int argc, char **argv, int *i)
-{
-    const struct {
-        const char *name;
-        uint8_t *buf;
-        size_t max;
-        size_t *len;
-    } hexes[] = {
-        {"--config", o->cfg, sizeof o->cfg, &o->cfg_len},
-        {"--prm", o->user, sizeof o->user - 7u, &o->user_len},
-        {"--outputs", o->outputs, sizeof o->outputs, &o->out_given},
-    };
-    const char *opt = argv[*i];
-    for (size_t k = 0; k < sizeof hexes / sizeof hexes[0]; k++) {
-        if (strcmp(opt, hexes[k].name) == 0) {
-            const char *v = cli_value(argc, argv, i);
-            return v != NULL && cli_hex(opt, v, hexes[k].buf, hexes[k].max, hexes[k].len) ? 1
-                                                                                           : -1;
-        }
-    }
-    return 0;
-}
+static const cli_opt_t master_options[] = {
+    {CLI_OPT("--address", "N|N-M,...", CLI_TEXT, MASTER(addresses))},
+    {CLI_OPT("--config", "HEX", CLI_HEX, MASTER(cfg)),
+     .aux = MASTER(cfg_len), .max = DP_MASTER_MAX_CFG},
+    {CLI_OPT("--prm", "HEX", CLI_HEX, MASTER(user)),
+     .aux = MASTER(user_len), .max = DP_MASTER_MAX_PRM - 7u},
+    {CLI_OPT("--cycles", "N", CLI_U32, MASTER(cycles)), .min = 0, .max = 100000000u},
+    {CLI_OPT("--baud", "RATE", CLI_BAUD, MASTER(baud))},
+    {CLI_OPT("--ident", "N", CLI_U32, MASTER(ident)), .min = 0, .max = 0xFFFF},
+    {CLI_OPT("--watchdog", "MS", CLI_U32, MASTER(wd_ms)), .min = 0, .max = 650000u},
+    {CLI_OPT("--master-address", "N", CLI_U32, MASTER(own)), .min = 0, .max = 126},
+    {CLI_OPT("--slot-time", "MS", CLI_U32, MASTER(slot_ms)), .min = 1, .max = 10000u},
+    {CLI_OPT("--outputs", "HEX", CLI_HEX, MASTER(outputs)),
+     .aux = MASTER(out_given), .max = DP_MASTER_MAX_IO},
+    {CLI_OPT("--timeout", "S", CLI_U32, MASTER(timeout_s)), .min = 1, .max = 86400u,
+     .seen = CLI_SEEN(master_opts_t, timeout_given)},
+    {CLI_OPT("--verbose", NULL, CLI_FLAG, MASTER(verbose))},
+    {CLI_OPT("--reset-fault", NULL, CLI_FLAG, MASTER(reset_fault))},
+};
 
-/* One option at argv[*i]: 0, or EXIT_USAGE after reporting. */
-static int master_option(master_opts_t *o, int argc, char **argv, int *i)
-{
-    const char *opt = argv[*i];
-    int mo = medium_option(&o->med, argc, argv, i);
-    if (mo == 0) mo = instrument_option(argc, argv, i, &o->io);
-    if (mo == 0) mo = number_option(o, argc, argv, i);
-    if (mo == 0) mo = hex_option(o, argc, argv, i);
-    if (mo == 0) mo = capture_option(argc, argv, i, &o->capture);
-    if (mo != 0) {
-        return mo < 0 ? EXIT_USAGE : 0;
-    }
-    if (strcmp(opt, "--address") == 0) {
-        return (o->addresses = cli_value(argc, argv, i)) == NULL ? EXIT_USAGE : 0;
-    }
-    if (strcmp(opt, "--baud") == 0) {
-        const char *v = cli_value(argc, argv, i);
-        return v == NULL || !cli_baud(opt, v, false, &o->baud) ? EXIT_USAGE : 0;
-    }
-    if (strcmp(opt, "--verbose") == 0) {
-        o->verbose = true;
-        return 0;
-    }
-    if (strcmp(opt, "--reset-fault") == 0) {
-        o->reset_fault = true;
-        return 0;
-    }
-    cli_error("master: unknown option '%s' (see dfp-sim --help)", opt);
-    return EXIT_USAGE;
-}
+static const cli_group_t master_groups[] = {
+    {medium_options, CLI_COUNT(medium_options), MASTER(med)},
+    {master_options, CLI_COUNT(master_options), 0},
+    {capture_options, CLI_COUNT(capture_options), MASTER(capture)},
+    {instrument_options, CLI_COUNT(instrument_options), MASTER(io)},
+    {instrument_http_options, CLI_COUNT(instrument_http_options), MASTER(io.web)},
+};
+
+const cli_command_t cli_master = {.name = "master", .groups = master_groups,
+                                  .n_groups = CLI_COUNT(master_groups)};
 
 /* The command line into o: 0, or EXIT_USAGE after reporting. */
 static int master_parse(master_opts_t *o, int argc, char **argv)
@@ -130,10 +80,8 @@ static int master_parse(master_opts_t *o, int argc, char **argv)
                          .wd_ms = 1000, .slot_ms = 100, .ident = DFP21B_IDENT,
                          .user_len = SIZE_MAX};
     instrument_defaults(&o->io, RIG_LOG_TIME_BUS);
-    for (int i = 2; i < argc; i++) {
-        if (master_option(o, argc, argv, &i) != 0) {
-            return EXIT_USAGE;
-        }
+    if (cli_parse(&cli_master, argc, argv, o) != 0) {
+        return EXIT_USAGE;
     }
     if ((o->med.dev == NULL && o->med.bus == NULL) || o->addresses == NULL || o->cfg_len == 0u) {
         cli_error("master: --port DEV (or --bus lcm:CHANNEL), --address N and --config HEX are "

@@ -343,80 +343,64 @@ typedef struct param_opts {
     bool have_own;
     uint32_t baud;
     uint32_t timeout_s;
+    via_t via;
     bool via_given;
+    bool volatile_write;
+    bool json;
     bool verbose;
     const char *pos[1 + DS47_MAX_PARAMS]; /* read and its indices, or write INDEX VALUE */
     int npos;
 } param_opts_t;
 
-/* --via NAME: 0, or EXIT_USAGE after reporting. */
-static int via_option(const char *v, param_opts_t *o)
+/* An operand: read, write or im0 and what follows it. */
+static bool param_operand(void *opts, const char *arg)
 {
-    unsigned k = 0;
-    while (k < 4u && strcmp(v, param_via_names[k]) != 0) k++;
-    if (k == 4u) {
-        cli_error("param: --via '%s': use channel, movilink, profidrive or c2", v);
-        return EXIT_USAGE;
-    }
-    run.via = (via_t)k;
-    o->via_given = true;
-    return 0;
-}
-
-/* An option taking a value at argv[*i]: 1 when it was one (0 or EXIT_USAGE in *rc), 0 when
- * not. */
-static int value_option(param_opts_t *o, int argc, char **argv, int *i, int *rc)
-{
-    const char *opt = argv[*i];
-    const char *v;
-    *rc = EXIT_USAGE;
-    if (strcmp(opt, "--address") == 0) {
-        o->have_address = true;
-        if ((v = cli_value(argc, argv, i)) != NULL && cli_u32(opt, v, 0, 125, &o->address)) *rc = 0;
-    } else if (strcmp(opt, "--master-address") == 0) {
-        o->have_own = true;
-        if ((v = cli_value(argc, argv, i)) != NULL && cli_u32(opt, v, 0, 126, &o->own)) *rc = 0;
-    } else if (strcmp(opt, "--baud") == 0) {
-        if ((v = cli_value(argc, argv, i)) != NULL && cli_baud(opt, v, false, &o->baud)) *rc = 0;
-    } else if (strcmp(opt, "--timeout") == 0) {
-        if ((v = cli_value(argc, argv, i)) != NULL && cli_u32(opt, v, 1, 3600u, &o->timeout_s))
-            *rc = 0;
-    } else if (strcmp(opt, "--via") == 0) {
-        if ((v = cli_value(argc, argv, i)) != NULL) *rc = via_option(v, o);
-    } else {
-        return 0;
-    }
-    return 1;
-}
-
-/* One argument at argv[*i]: 0, or EXIT_USAGE after reporting. */
-static int param_argument(param_opts_t *o, int argc, char **argv, int *i)
-{
-    const char *arg = argv[*i];
-    int rc = 0;
-    int mo = medium_option(&o->med, argc, argv, i);
-    if (mo == 0) mo = capture_option(argc, argv, i, &o->capture);
-    if (mo != 0) return mo < 0 ? EXIT_USAGE : 0;
-    if (value_option(o, argc, argv, i, &rc) != 0) return rc;
-    if (strcmp(arg, "--volatile") == 0) {
-        run.volatile_write = true;
-    } else if (strcmp(arg, "--json") == 0) {
-        run.json = true;
-    } else if (strcmp(arg, "--verbose") == 0) {
-        o->verbose = true;
-    } else if (arg[0] == '-' && arg[1] == '-') {
-        cli_error("param: unknown option '%s' (see dfp-sim --help)", arg);
-        return EXIT_USAGE;
-    } else if (o->npos == (int)(sizeof o->pos / sizeof o->pos[0])) {
+    param_opts_t *o = opts;
+    if (o->npos == (int)(sizeof o->pos / sizeof o->pos[0])) {
         cli_error("param: too many arguments ('%s'%s)", arg,
                   strcmp(o->pos[0], "read") == 0 ? "; a read takes up to 19 indices" : "");
         _Static_assert(DS47_MAX_PARAMS == 19u, "the message above names 19");
-        return EXIT_USAGE;
-    } else {
-        o->pos[o->npos++] = arg;
+        return false;
     }
-    return 0;
+    o->pos[o->npos++] = arg;
+    return true;
 }
+
+static const cli_choice_t param_vias[] = {
+    {"channel", VIA_CHANNEL, false},
+    {"movilink", VIA_MOVILINK, false},
+    {"profidrive", VIA_PROFIDRIVE, false},
+    {"c2", VIA_C2, false},
+    {NULL, 0, false},
+};
+
+#define PARAM(field) offsetof(param_opts_t, field)
+
+static const cli_opt_t param_options[] = {
+    {CLI_OPT("--address", "N", CLI_U32, PARAM(address)), .min = 0, .max = 125,
+     .seen = CLI_SEEN(param_opts_t, have_address)},
+    {CLI_OPT("--via", "channel|movilink|profidrive|c2", CLI_CHOICE, PARAM(via)),
+     .choices = param_vias, .bad = "param: --via '%s': use channel, movilink, profidrive or c2",
+     .seen = CLI_SEEN(param_opts_t, via_given)},
+    {CLI_OPT("--baud", "RATE", CLI_BAUD, PARAM(baud))},
+    {CLI_OPT("--master-address", "N", CLI_U32, PARAM(own)), .min = 0, .max = 126,
+     .seen = CLI_SEEN(param_opts_t, have_own)},
+    {CLI_OPT("--timeout", "S", CLI_U32, PARAM(timeout_s)), .min = 1, .max = 3600u},
+    {CLI_OPT("--json", NULL, CLI_FLAG, PARAM(json))},
+    {CLI_OPT("--verbose", NULL, CLI_FLAG, PARAM(verbose))},
+    {CLI_OPT("--volatile", NULL, CLI_FLAG, PARAM(volatile_write))},
+};
+
+static const cli_group_t param_groups[] = {
+    {medium_options, CLI_COUNT(medium_options), PARAM(med)},
+    {param_options, CLI_COUNT(param_options), 0},
+    {capture_options, CLI_COUNT(capture_options), PARAM(capture)},
+};
+
+const cli_command_t cli_param = {.name = "param", .groups = param_groups,
+                                 .n_groups = CLI_COUNT(param_groups),
+                                 .operands = CLI_OPERANDS_DD, .operand = param_operand,
+                                 .words = "read write im0"};
 
 /* read INDEX..., write INDEX VALUE or im0: the operation and its argument count. */
 static bool param_operation(const param_opts_t *o)
@@ -488,9 +472,10 @@ static bool param_combination(param_opts_t *o)
 static int param_parse(param_opts_t *o, int argc, char **argv)
 {
     *o = (param_opts_t){.baud = 19200, .timeout_s = 10};
-    for (int i = 2; i < argc; i++) {
-        if (param_argument(o, argc, argv, &i) != 0) return EXIT_USAGE;
-    }
+    if (cli_parse(&cli_param, argc, argv, o) != 0) return EXIT_USAGE;
+    run.via = o->via;
+    run.volatile_write = o->volatile_write;
+    run.json = o->json;
     if ((o->med.dev == NULL && o->med.bus == NULL) || !o->have_address) {
         cli_error("param: --port DEV and --address N are required (or --bus lcm:CHANNEL instead "
                   "of --port)");

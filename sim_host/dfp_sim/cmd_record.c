@@ -27,76 +27,58 @@ static void record_progress(void *ctx, uint32_t cycles, uint64_t telegrams)
     p->shown = true;
 }
 
-/* One option of dfp-sim record that is not a capture option. 1: consumed, 0: unknown, -1:
- * reported. */
-static int record_option(int argc, char **argv, int *i, gen_options_t *o, uint32_t *address,
-                         bool *have_cycles)
-{
-    const char *opt = argv[*i];
-    const char *v;
-    if (strcmp(opt, "--dpv1") == 0 || strcmp(opt, "--faults") == 0 ||
-        strcmp(opt, "--foreign") == 0) {
-        o->dpv1 = o->dpv1 || strcmp(opt, "--dpv1") == 0;
-        o->faults = o->faults || strcmp(opt, "--faults") == 0;
-        o->foreign = o->foreign || strcmp(opt, "--foreign") == 0;
-        return 1;
-    }
-    if (strcmp(opt, "--cycles") == 0) {
-        *have_cycles = true;
-        return (v = cli_value(argc, argv, i)) != NULL &&
-               cli_u32(opt, v, 1, 100000000u, &o->cycles) ? 1 : -1;
-    }
-    if (strcmp(opt, "--baud") == 0) {
-        return (v = cli_value(argc, argv, i)) != NULL && cli_baud(opt, v, false, &o->baud) ? 1
-                                                                                           : -1;
-    }
-    if (strcmp(opt, "--address") == 0) {
-        return (v = cli_value(argc, argv, i)) != NULL && cli_u32(opt, v, 0, 125, address) ? 1
-                                                                                           : -1;
-    }
-    if (strcmp(opt, "--param-every") == 0) {
-        return (v = cli_value(argc, argv, i)) != NULL &&
-               cli_u32(opt, v, 0, 100000000u, &o->param_every) ? 1 : -1;
-    }
-    if (strcmp(opt, "--inverter") != 0) {
-        return 0;
-    }
-    if ((v = cli_value(argc, argv, i)) == NULL) return -1;
-    if (strcmp(v, "sim") == 0 || strcmp(v, "none") == 0) {
-        o->inverter = strcmp(v, "sim") == 0 ? CARD_INVERTER_SIM : CARD_INVERTER_NONE;
-        return 1;
-    }
-    cli_error("record: --inverter '%s': use sim or none", v);
-    return -1;
-}
+/* The command line as given. */
+typedef struct record_opts {
+    gen_options_t gen;
+    capture_opts_t capture;
+    uint32_t address;
+    bool have_cycles;
+} record_opts_t;
 
-static int parse_record_args(int argc, char **argv, gen_options_t *o, uint32_t *address)
+static const cli_choice_t record_inverters[] = {
+    {"sim", CARD_INVERTER_SIM, false},
+    {"none", CARD_INVERTER_NONE, false},
+    {NULL, 0, false},
+};
+
+#define RECORD(field) offsetof(record_opts_t, field)
+
+static const cli_opt_t record_options[] = {
+    {CLI_OPT("--cycles", "N", CLI_U32, RECORD(gen.cycles)), .min = 1, .max = 100000000u,
+     .seen = CLI_SEEN(record_opts_t, have_cycles)},
+    {CLI_OPT("--baud", "RATE", CLI_BAUD, RECORD(gen.baud))},
+    {CLI_OPT("--address", "N", CLI_U32, RECORD(address)), .min = 0, .max = 125},
+    {CLI_OPT("--dpv1", NULL, CLI_FLAG, RECORD(gen.dpv1))},
+    {CLI_OPT("--faults", NULL, CLI_FLAG, RECORD(gen.faults))},
+    {CLI_OPT("--foreign", NULL, CLI_FLAG, RECORD(gen.foreign))},
+    {CLI_OPT("--param-every", "N", CLI_U32, RECORD(gen.param_every)),
+     .min = 0, .max = 100000000u},
+    {CLI_OPT("--inverter", "sim|none", CLI_CHOICE, RECORD(gen.inverter)),
+     .choices = record_inverters,
+     .bad = "record: --inverter '%s': use sim or none"},
+};
+
+static const cli_group_t record_groups[] = {
+    {capture_options, CLI_COUNT(capture_options), RECORD(capture)},
+    {record_options, CLI_COUNT(record_options), 0},
+};
+
+const cli_command_t cli_record = {.name = "record", .groups = record_groups,
+                                  .n_groups = CLI_COUNT(record_groups)};
+
+static int parse_record_args(int argc, char **argv, record_opts_t *r)
 {
-    bool have_cycles = false;
-    for (int i = 2; i < argc; i++) {
-        capture_opts_t co = {.path = o->path, .w = o->writer};
-        int c = capture_option(argc, argv, &i, &co);
-        if (c > 0) {
-            o->path = co.path;
-            o->writer = co.w;
-            continue;
-        }
-        if (c == 0) {
-            c = record_option(argc, argv, &i, o, address, &have_cycles);
-        }
-        if (c < 0) {
-            return EXIT_USAGE;
-        }
-        if (c == 0) {
-            cli_error("record: unknown option '%s' (see dfp-sim --help)", argv[i]);
-            return EXIT_USAGE;
-        }
+    gen_options_t *o = &r->gen;
+    if (cli_parse(&cli_record, argc, argv, r) != 0) {
+        return EXIT_USAGE;
     }
-    if (o->path == NULL || !have_cycles) {
+    o->path = r->capture.path;
+    o->writer = r->capture.w;
+    if (o->path == NULL || !r->have_cycles) {
         cli_error("record: --capture FILE and --cycles N are required");
         return EXIT_USAGE;
     }
-    if (o->foreign && *address > 114u) {
+    if (o->foreign && r->address > 114u) {
         cli_error("record: --foreign puts stations at --address + 1 and + 10: the address must "
                   "be 114 or lower");
         return EXIT_USAGE;
@@ -107,13 +89,15 @@ static int parse_record_args(int argc, char **argv, gen_options_t *o, uint32_t *
 
 int cmd_record(int argc, char **argv)
 {
-    gen_options_t o = {.address = 4, .param_every = 10, .inverter = CARD_INVERTER_SIM,
-                       .inverter_delay_us = REPLAY_INVERTER_DELAY_US_DEFAULT};
-    uint32_t address = 4;
-    int rc = parse_record_args(argc, argv, &o, &address);
+    record_opts_t r = {.gen = {.address = 4, .param_every = 10, .inverter = CARD_INVERTER_SIM,
+                               .inverter_delay_us = REPLAY_INVERTER_DELAY_US_DEFAULT},
+                       .address = 4};
+    int rc = parse_record_args(argc, argv, &r);
     if (rc != 0) {
         return rc;
     }
+    gen_options_t o = r.gen;
+    uint32_t address = r.address;
     o.address = (uint8_t)address;
     progress_t prog;
     progress_begin(&prog, "record");

@@ -36,52 +36,30 @@ typedef struct slave_opts {
     card_inverter_t kind;
 } slave_opts_t;
 
-/* The options that take a text value as is; NULL when argv[i] is none of them. */
-static const char **text_option(slave_opts_t *o, const char *opt)
-{
-    if (strcmp(opt, "--lcm") == 0) return &o->lcm_url;
-    if (strcmp(opt, "--pty") == 0) return &o->pty;
-    if (strcmp(opt, "--address") == 0) return &o->address_text;
-    if (strcmp(opt, "--inverter") == 0) return &o->inverter;
-    if (strcmp(opt, "--eeprom") == 0) return &o->eeprom;
-    if (strcmp(opt, "--card-nvm") == 0) return &o->card_nvm;
-    return NULL;
-}
+#define SLAVE(field) offsetof(slave_opts_t, field)
 
-/* One option at argv[*i]: 0, or EXIT_USAGE after reporting. */
-static int slave_option(slave_opts_t *o, int argc, char **argv, int *i)
-{
-    const char *v;
-    const char **slot;
-    int mo = medium_option(&o->med, argc, argv, i);
-    if (mo == 0) {
-        mo = instrument_option(argc, argv, i, &o->io);
-    }
-    if (mo == 0) {
-        mo = capture_option(argc, argv, i, &o->capture);
-    }
-    if (mo != 0) {
-        return mo < 0 ? EXIT_USAGE : 0;
-    }
-    if ((slot = text_option(o, argv[*i])) != NULL) {
-        return (*slot = cli_value(argc, argv, i)) == NULL ? EXIT_USAGE : 0;
-    }
-    if (strcmp(argv[*i], "--baud") == 0) {
-        return (v = cli_value(argc, argv, i)) == NULL || !cli_baud("--baud", v, true, &o->baud)
-                   ? EXIT_USAGE : 0;
-    }
-    if (strcmp(argv[*i], "--duration") == 0) {
-        return (v = cli_value(argc, argv, i)) == NULL ||
-                       !cli_u32("--duration", v, 1, 86400u * 365u, &o->duration_s)
-                   ? EXIT_USAGE : 0;
-    }
-    if (strcmp(argv[*i], "--echo-suppress") == 0) {
-        o->echo = true;
-        return 0;
-    }
-    cli_error("slave: unknown option '%s' (see dfp-sim --help)", argv[*i]);
-    return EXIT_USAGE;
-}
+static const cli_opt_t slave_options[] = {
+    {CLI_OPT("--pty", "LINK", CLI_TEXT, SLAVE(pty))},
+    {CLI_OPT("--address", "N|N-M,...", CLI_TEXT, SLAVE(address_text))},
+    {CLI_OPT("--baud", "RATE|auto", CLI_BAUD_AUTO, SLAVE(baud))},
+    {CLI_OPT("--duration", "S", CLI_U32, SLAVE(duration_s)), .min = 1, .max = 86400u * 365u},
+    {CLI_OPT("--inverter", "sim|none|can:IFACE[:ADDR]", CLI_TEXT, SLAVE(inverter))},
+    {CLI_OPT("--eeprom", "FILE|DIR", CLI_TEXT, SLAVE(eeprom))},
+    {CLI_OPT("--card-nvm", "FILE|DIR", CLI_TEXT, SLAVE(card_nvm))},
+    {CLI_OPT("--echo-suppress", NULL, CLI_FLAG, SLAVE(echo))},
+    {CLI_OPT("--lcm", "URL", CLI_TEXT, SLAVE(lcm_url))},
+};
+
+static const cli_group_t slave_groups[] = {
+    {medium_options, CLI_COUNT(medium_options), SLAVE(med)},
+    {slave_options, CLI_COUNT(slave_options), 0},
+    {capture_options, CLI_COUNT(capture_options), SLAVE(capture)},
+    {instrument_options, CLI_COUNT(instrument_options), SLAVE(io)},
+    {instrument_http_options, CLI_COUNT(instrument_http_options), SLAVE(io.web)},
+};
+
+const cli_command_t cli_slave = {.name = "slave", .groups = slave_groups,
+                                 .n_groups = CLI_COUNT(slave_groups)};
 
 /* One address (0..127, above 125 the card stays off the bus) or a line of cards. */
 static bool slave_addresses(slave_opts_t *o)
@@ -243,10 +221,8 @@ static int slave_parse(slave_opts_t *o, int argc, char **argv)
 {
     *o = (slave_opts_t){.address_text = "4", .inverter = "sim"};
     instrument_defaults(&o->io, RIG_LOG_TIME_BUS);
-    for (int i = 2; i < argc; i++) {
-        if (slave_option(o, argc, argv, &i) != 0) {
-            return EXIT_USAGE;
-        }
+    if (cli_parse(&cli_slave, argc, argv, o) != 0) {
+        return EXIT_USAGE;
     }
     if (o->med.dev == NULL && o->med.bus == NULL && o->pty == NULL) {
         cli_error("slave: --port DEV is required (a tty such as /dev/ttyUSB0, or a PTY), or --pty "

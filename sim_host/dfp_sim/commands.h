@@ -1,6 +1,12 @@
 #ifndef DFP_SIM_COMMANDS_H
 #define DFP_SIM_COMMANDS_H
 
+#include "cli_table.h"
+
+/* Each command's option table (cli_table.h), beside the command. */
+extern const cli_command_t cli_demo, cli_slave, cli_master, cli_inverter, cli_param, cli_convert,
+    cli_replay, cli_record;
+
 int cmd_demo(int argc, char **argv);
 int cmd_slave(int argc, char **argv);
 int cmd_master(int argc, char **argv);

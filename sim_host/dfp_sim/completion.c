@@ -1,230 +1,187 @@
-/* The bash and zsh completion scripts, read from the help table: each command's options are the
- * --words of its synopsis and of the shared options it takes; an option followed by a value
- * placeholder takes a value, and by a list of plain words (--via channel|movilink|...) takes one
- * of them; the plain words of a synopsis outside an option (param's read, write, im0) are its
- * positional words. The build writes the scripts with this, so they cannot drift from the help. */
+/* The bash and zsh completion scripts, written from the option tables (cli_table.h): each
+ * command's options, the words of those that take one of a list (--via channel|movilink|...),
+ * and the literal operands of param (read, write, im0). Before writing, the help (help.c) is
+ * checked against the tables: every --option the help names for a command must be in its table,
+ * and every option of the table must be named in its help. The build writes the scripts and the
+ * man page with dfp-sim, so an option cannot be added to one side alone. */
 #include "completion.h"
 
-#include <ctype.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "cli.h"
+#include "cli_table.h"
 #include "help.h"
 
-#define MAX_COMMANDS 16
-#define MAX_OPTIONS 48
-#define NAME_LEN 32
-#define LIST_LEN 96
+#define MAX_OPTIONS 64
 
-typedef struct {
-    char name[NAME_LEN];
-    bool takes_value;
-    char choices[LIST_LEN]; /* "a b c", or empty: any value */
-} comp_option_t;
+/* ---- the help against the tables ---- */
 
-typedef struct {
-    char name[NAME_LEN];
-    comp_option_t options[MAX_OPTIONS];
-    size_t n_options;
-    char words[LIST_LEN]; /* positional words, "a b c" */
-} comp_command_t;
+typedef struct agree {
+    char error[200]; /* empty: they agree so far */
+    size_t commands; /* commands of the help seen */
+} agree_t;
 
-typedef struct {
-    comp_command_t commands[MAX_COMMANDS];
-    size_t n;
-    const char *error; /* a limit above was too small: the table outgrew this file */
-} comp_table_t;
-
-/* ---- reading the help table ---- */
-
-/* "--name" at the start of s (lower case, digits, inner dashes): its length, else 0. */
-static size_t option_len(const char *s, size_t len)
+static const cli_command_t *table_of(const char *name)
 {
-    if (len < 3u || s[0] != '-' || s[1] != '-' || !isalnum((unsigned char)s[2])) {
-        return 0;
+    for (size_t i = 0; i < cli_n_commands; i++) {
+        if (strcmp(cli_commands[i]->name, name) == 0) {
+            return cli_commands[i];
+        }
     }
-    size_t n = 2;
-    while (n < len && (islower((unsigned char)s[n]) || isdigit((unsigned char)s[n]) || s[n] == '-')) {
-        n++;
-    }
-    while (s[n - 1u] == '-') {
-        n--;
+    return NULL;
+}
+
+/* The option's place among all the command's options (the seen[] index of check_command). */
+static size_t option_index(const cli_command_t *c, const cli_opt_t *o)
+{
+    size_t n = 0;
+    for (size_t g = 0; g < c->n_groups; g++) {
+        if (o >= c->groups[g].opts && o < c->groups[g].opts + c->groups[g].n) {
+            return n + (size_t)(o - c->groups[g].opts);
+        }
+        n += c->groups[g].n;
     }
     return n;
 }
 
-/* A word typed as printed (channel, user0, 1.5), not a placeholder (FILE, [ADDR:]PORT). */
-static bool is_literal(const char *s, size_t len)
+/* Every "--name" of text (after a space, a bracket, a bar or a parenthesis) into seen[];
+ * false, with a->error set, on one the table does not have. */
+static bool scan_text(agree_t *a, const cli_command_t *c, const char *text, bool *seen)
 {
-    if (len == 0u || !(islower((unsigned char)s[0]) || isdigit((unsigned char)s[0]))) {
-        return false;
-    }
-    for (size_t i = 0; i < len; i++) {
-        if (!(islower((unsigned char)s[i]) || isdigit((unsigned char)s[i]) || s[i] == '.')) {
+    for (const char *p = strstr(text, "--"); p != NULL; p = strstr(p + 2, "--")) {
+        if (p != text && strchr(" \n[|(\"", p[-1]) == NULL) {
+            continue;
+        }
+        size_t n = 2u + strspn(p + 2, "abcdefghijklmnopqrstuvwxyz0123456789-");
+        while (n > 2u && p[n - 1u] == '-') {
+            n--;
+        }
+        char name[40];
+        if (n == 2u || n >= sizeof name) {
+            continue;
+        }
+        (void)snprintf(name, sizeof name, "%.*s", (int)n, p);
+        const cli_opt_t *o = cli_find(c, name, NULL);
+        if (o == NULL) {
+            (void)snprintf(a->error, sizeof a->error,
+                           "the help of %s names %s, which its option table does not have",
+                           c->name, name);
             return false;
         }
+        seen[option_index(c, o)] = true;
     }
     return true;
 }
 
-static void list_add(comp_table_t *t, char *list, const char *s, size_t len)
+static void check_command(void *ctx, const char *name, const char *const *texts, size_t n)
 {
-    size_t used = strlen(list);
-    if (used + len + 2u > LIST_LEN) {
-        t->error = "a list of words is too long";
+    agree_t *a = ctx;
+    const cli_command_t *c = table_of(name);
+    a->commands++;
+    if (a->error[0] != '\0') {
         return;
     }
-    (void)snprintf(list + used, LIST_LEN - used, "%s%.*s", used > 0u ? " " : "", (int)len, s);
-}
-
-static comp_option_t *add_option(comp_table_t *t, comp_command_t *c, const char *s, size_t len)
-{
-    for (size_t i = 0; i < c->n_options; i++) {
-        if (strlen(c->options[i].name) == len && strncmp(c->options[i].name, s, len) == 0) {
-            return &c->options[i];
-        }
+    if (c == NULL) {
+        (void)snprintf(a->error, sizeof a->error, "%s is in the help but has no option table",
+                       name);
+        return;
     }
-    if (c->n_options == MAX_OPTIONS || len >= NAME_LEN) {
-        t->error = "too many options or too long a name";
-        return NULL;
-    }
-    comp_option_t *o = &c->options[c->n_options++];
-    (void)snprintf(o->name, sizeof o->name, "%.*s", (int)len, s);
-    return o;
-}
-
-/* One token of a text ("[--via", "channel|movilink]", "DEV|--bus"). value_of: the option just
- * before it that may take it as its value. Returns the option that may take the next token. */
-static comp_option_t *read_token(comp_table_t *t, comp_command_t *c, bool synopsis,
-                                 comp_option_t *value_of, const char *p, size_t len)
-{
-    /* Brackets mark optional parts; only those at the ends of a token are syntax
-     * (can:IFACE[:ADDR] keeps its inner one). */
-    while (len > 0u && p[0] == '[') {
-        p++;
-        len--;
-    }
-    bool closed = false;
-    while (len > 0u && p[len - 1u] == ']') {
-        len--;
-        closed = true;
-    }
-    const char *alt[16];
-    size_t alt_len[16];
-    size_t n = 0;
-    for (size_t start = 0, i = 0; i <= len && n < 16u; i++) {
-        if (i == len || p[i] == '|') {
-            alt[n] = p + start;
-            alt_len[n++] = i - start;
-            start = i + 1u;
-        }
-    }
-    comp_option_t *next = NULL;
-    bool plain = true; /* every alternative a literal word */
+    bool seen[MAX_OPTIONS] = {false};
     for (size_t i = 0; i < n; i++) {
-        size_t ol = option_len(alt[i], alt_len[i]);
-        if (ol > 0u) {
-            comp_option_t *o = add_option(t, c, alt[i], ol);
-            /* "--capture-ns:" in a sentence or "[--verbose]" take nothing */
-            next = (ol == alt_len[i] && !closed && i + 1u == n) ? o : NULL;
-            plain = false;
-        } else if (!is_literal(alt[i], alt_len[i])) {
-            plain = false;
+        if (!scan_text(a, c, texts[i], seen)) {
+            return;
         }
     }
-    bool value_like = len > 0u && (isalnum((unsigned char)p[0]) || p[0] == '.');
-    if (value_of != NULL && value_like && option_len(alt[0], alt_len[0]) == 0u) {
-        value_of->takes_value = true;
-        if (plain && n >= 2u && value_of->choices[0] == '\0') {
-            for (size_t i = 0; i < n; i++) {
-                list_add(t, value_of->choices, alt[i], alt_len[i]);
+    for (size_t g = 0, k = 0; g < c->n_groups; g++) {
+        for (size_t j = 0; j < c->groups[g].n; j++, k++) {
+            if (k >= MAX_OPTIONS || !seen[k]) {
+                (void)snprintf(a->error, sizeof a->error,
+                               "%s takes %s, which its help does not name", name,
+                               c->groups[g].opts[j].name);
+                return;
             }
         }
-    } else if (synopsis && value_of == NULL && plain && n == 1u && isalpha((unsigned char)p[0])) {
-        list_add(t, c->words, p, len);
-    }
-    return next;
-}
-
-static void read_text(comp_table_t *t, comp_command_t *c, const char *text, bool synopsis)
-{
-    comp_option_t *pending = NULL;
-    for (const char *p = text; *p != '\0';) {
-        while (*p == ' ' || *p == '\n') {
-            p++;
-        }
-        size_t len = strcspn(p, " \n");
-        if (len > 0u) {
-            pending = read_token(t, c, synopsis, pending, p, len);
-        }
-        p += len;
     }
 }
 
-static void read_command(void *ctx, const char *name, const char *const *texts, size_t n)
+/* NULL when the help and the tables agree, else what differs (in buf). */
+static const char *help_disagrees(agree_t *a)
 {
-    comp_table_t *t = ctx;
-    if (t->n == MAX_COMMANDS || strlen(name) >= NAME_LEN) {
-        t->error = "too many commands";
-        return;
+    memset(a, 0, sizeof *a);
+    help_each_command(check_command, a);
+    if (a->error[0] == '\0' && a->commands != cli_n_commands) {
+        (void)snprintf(a->error, sizeof a->error, "the help has %zu commands, the tables %zu",
+                       a->commands, cli_n_commands);
     }
-    comp_command_t *c = &t->commands[t->n++];
-    (void)snprintf(c->name, sizeof c->name, "%s", name);
-    for (size_t i = 0; i < n; i++) {
-        read_text(t, c, texts[i], i == 0u);
-    }
-    (void)add_option(t, c, "--help", strlen("--help"));
+    return a->error[0] != '\0' ? a->error : NULL;
 }
 
 /* ---- the scripts ---- */
 
-static void print_names(FILE *out, const comp_table_t *t)
+static void print_names(FILE *out)
 {
-    for (size_t i = 0; i < t->n; i++) {
-        fprintf(out, "%s%s", i > 0u ? " " : "", t->commands[i].name);
+    for (size_t i = 0; i < cli_n_commands; i++) {
+        fprintf(out, "%s%s", i > 0u ? " " : "", cli_commands[i]->name);
     }
 }
 
-static void print_options(FILE *out, const comp_command_t *c)
+static void print_options(FILE *out, const cli_command_t *c)
 {
-    for (size_t i = 0; i < c->n_options; i++) {
-        fprintf(out, "%s%s", i > 0u ? " " : "", c->options[i].name);
+    for (size_t g = 0; g < c->n_groups; g++) {
+        for (size_t k = 0; k < c->groups[g].n; k++) {
+            fprintf(out, "%s ", c->groups[g].opts[k].name);
+        }
     }
+    fputs("--help", out);
 }
 
 /* The case patterns "cmd:--opt|cmd:--opt2" of the options that take any value (a file name, a
  * number): there the shell's own completion (file names) applies. */
-static bool print_free_values(FILE *out, const comp_table_t *t, const char *indent)
+static bool print_free_values(FILE *out, const char *indent)
 {
     bool any = false;
-    for (size_t i = 0; i < t->n; i++) {
-        const comp_command_t *c = &t->commands[i];
-        for (size_t k = 0; k < c->n_options; k++) {
-            if (c->options[k].takes_value && c->options[k].choices[0] == '\0') {
-                fprintf(out, "%s%s:%s", any ? "|" : indent, c->name, c->options[k].name);
-                any = true;
+    for (size_t i = 0; i < cli_n_commands; i++) {
+        const cli_command_t *c = cli_commands[i];
+        for (size_t g = 0; g < c->n_groups; g++) {
+            for (size_t k = 0; k < c->groups[g].n; k++) {
+                const cli_opt_t *o = &c->groups[g].opts[k];
+                if (o->value != NULL && o->choices == NULL) {
+                    fprintf(out, "%s%s:%s", any ? "|" : indent, c->name, o->name);
+                    any = true;
+                }
             }
         }
     }
     return any;
 }
 
-/* One case branch per option with a list of values; fmt gets "cmd:--opt" and the list. */
-static void print_choices(FILE *out, const comp_table_t *t, const char *fmt)
+/* One case branch per option with a list of values; fmt gets "cmd", "--opt" and the list. */
+static void print_choices(FILE *out, const char *fmt)
 {
-    for (size_t i = 0; i < t->n; i++) {
-        const comp_command_t *c = &t->commands[i];
-        for (size_t k = 0; k < c->n_options; k++) {
-            if (c->options[k].choices[0] != '\0') {
-                fprintf(out, fmt, c->name, c->options[k].name, c->options[k].choices);
+    for (size_t i = 0; i < cli_n_commands; i++) {
+        const cli_command_t *c = cli_commands[i];
+        for (size_t g = 0; g < c->n_groups; g++) {
+            for (size_t k = 0; k < c->groups[g].n; k++) {
+                const cli_opt_t *o = &c->groups[g].opts[k];
+                char words[160] = "";
+                size_t n = 0;
+                for (const cli_choice_t *w = o->choices; w != NULL && w->word != NULL; w++) {
+                    if (!w->alias && n < sizeof words) {
+                        n += (size_t)snprintf(words + n, sizeof words - n, "%s%s",
+                                              n > 0u ? " " : "", w->word);
+                    }
+                }
+                if (n > 0u) {
+                    fprintf(out, fmt, c->name, o->name, words);
+                }
             }
         }
     }
 }
 
-static void print_bash(FILE *out, const comp_table_t *t)
+static void print_bash(FILE *out)
 {
     fputs("# bash completion for dfp-sim: its commands, each command's options and the values some\n"
           "# of them take, from its help table (written by dfp-sim --completion bash).\n"
@@ -233,20 +190,21 @@ static void print_bash(FILE *out, const comp_table_t *t)
           "    COMPREPLY=()\n"
           "    if [ \"$COMP_CWORD\" -eq 1 ]; then\n"
           "        mapfile -t COMPREPLY < <(compgen -W '", out);
-    print_names(out, t);
+    print_names(out);
     fputs(" help --help --version' -- \"$cur\")\n        return 0\n    fi\n"
           "    case ${COMP_WORDS[1]} in\n"
           "    help)\n        [ \"$COMP_CWORD\" -eq 2 ] && mapfile -t COMPREPLY < <(compgen -W '", out);
-    print_names(out, t);
+    print_names(out);
     fputs("' -- \"$cur\")\n        return 0 ;;\n", out);
-    for (size_t i = 0; i < t->n; i++) {
-        fprintf(out, "    %s) opts='", t->commands[i].name);
-        print_options(out, &t->commands[i]);
-        fprintf(out, "'; words='%s' ;;\n", t->commands[i].words);
+    for (size_t i = 0; i < cli_n_commands; i++) {
+        const cli_command_t *c = cli_commands[i];
+        fprintf(out, "    %s) opts='", c->name);
+        print_options(out, c);
+        fprintf(out, "'; words='%s' ;;\n", c->words != NULL ? c->words : "");
     }
     fputs("    *) return 0 ;;\n    esac\n    case ${COMP_WORDS[1]}:$prev in\n", out);
-    print_choices(out, t, "    %s:%s) mapfile -t COMPREPLY < <(compgen -W '%s' -- \"$cur\"); return 0 ;;\n");
-    if (print_free_values(out, t, "    ")) {
+    print_choices(out, "    %s:%s) mapfile -t COMPREPLY < <(compgen -W '%s' -- \"$cur\"); return 0 ;;\n");
+    if (print_free_values(out, "    ")) {
         fputs(") return 0 ;; # a file, a number ...: readline's default\n", out);
     }
     fputs("    esac\n"
@@ -261,7 +219,7 @@ static void print_bash(FILE *out, const comp_table_t *t)
           "complete -F _dfp_sim -o default dfp-sim\n", out);
 }
 
-static void print_zsh(FILE *out, const comp_table_t *t)
+static void print_zsh(FILE *out)
 {
     fputs("#compdef dfp-sim\n"
           "# zsh completion for dfp-sim: its commands, each command's options and the values some\n"
@@ -269,20 +227,21 @@ static void print_zsh(FILE *out, const comp_table_t *t)
           "local cur=${words[CURRENT]} prev=${words[CURRENT-1]} w\n"
           "local -a opts pos\n"
           "if (( CURRENT == 2 )); then\n    compadd -- ", out);
-    print_names(out, t);
+    print_names(out);
     fputs(" help --help --version\n    return\nfi\n"
           "case ${words[2]} in\n"
           "help) (( CURRENT == 3 )) && compadd -- ", out);
-    print_names(out, t);
+    print_names(out);
     fputs("; return ;;\n", out);
-    for (size_t i = 0; i < t->n; i++) {
-        fprintf(out, "%s) opts=(", t->commands[i].name);
-        print_options(out, &t->commands[i]);
-        fprintf(out, "); pos=(%s) ;;\n", t->commands[i].words);
+    for (size_t i = 0; i < cli_n_commands; i++) {
+        const cli_command_t *c = cli_commands[i];
+        fprintf(out, "%s) opts=(", c->name);
+        print_options(out, c);
+        fprintf(out, "); pos=(%s) ;;\n", c->words != NULL ? c->words : "");
     }
     fputs("*) _files; return ;;\nesac\ncase ${words[2]}:$prev in\n", out);
-    print_choices(out, t, "%s:%s) compadd -- %s; return ;;\n");
-    if (print_free_values(out, t, "")) {
+    print_choices(out, "%s:%s) compadd -- %s; return ;;\n");
+    if (print_free_values(out, "")) {
         fputs(") _files; return ;;\n", out);
     }
     fputs("esac\n"
@@ -301,17 +260,16 @@ int completion_main(int argc, char **argv)
         cli_error("--completion takes one shell: bash or zsh");
         return EXIT_USAGE;
     }
-    static comp_table_t table;
-    memset(&table, 0, sizeof table);
-    help_each_command(read_command, &table);
-    if (table.error != NULL) {
-        cli_error("--completion: %s for completion.c's tables", table.error);
+    agree_t agree;
+    const char *differ = help_disagrees(&agree);
+    if (differ != NULL) {
+        cli_error("--completion: %s", differ);
         return 1;
     }
     if (bash) {
-        print_bash(stdout, &table);
+        print_bash(stdout);
     } else {
-        print_zsh(stdout, &table);
+        print_zsh(stdout);
     }
     return 0;
 }

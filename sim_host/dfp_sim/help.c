@@ -364,9 +364,10 @@ const char *help_command_names(void)
 void help_each_command(help_command_fn *fn, void *ctx)
 {
     for (size_t i = 0; i < COUNT(commands); i++) {
-        const char *texts[1u + 2u * COUNT(notes)];
+        const char *texts[2u + 2u * COUNT(notes)];
         size_t n = 0;
         texts[n++] = commands[i].synopsis;
+        texts[n++] = commands[i].text;
         for (size_t k = 0; k < COUNT(notes); k++) {
             if ((notes[k].bit & commands[i].notes) != 0u) {
                 texts[n++] = notes[k].term;

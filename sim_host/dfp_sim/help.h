@@ -1,5 +1,5 @@
 /* dfp-sim's usage text and its man page, both printed from the one table in help.c so that they
- * cannot drift apart. */
+ * cannot drift apart; completion.c checks its options against the option tables. */
 #ifndef DFP_SIM_HELP_H
 #define DFP_SIM_HELP_H
 
@@ -13,9 +13,9 @@ void help_print_all(FILE *out);
 bool help_print_command(FILE *out, const char *cmd);
 /* "demo, slave, ...": the commands in the order of the help, for error messages. */
 const char *help_command_names(void);
-/* For the shell completions (completion.c): fn once per command, in the order of the help, with
- * the texts that name its options: texts[0] its synopsis, then the term and the text of each
- * shared option it takes. */
+/* For completion.c, which checks them against the option tables (cli_table.h): fn once per
+ * command, in the order of the help, with the texts that name its options: texts[0] its
+ * synopsis and text, then the term and the text of each shared option it takes. */
 typedef void help_command_fn(void *ctx, const char *name, const char *const *texts, size_t n);
 void help_each_command(help_command_fn *fn, void *ctx);
 /* The same content as a man(7) page for section 1. */

@@ -1,5 +1,6 @@
 #include "instrument.h"
 
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,93 +16,55 @@ void instrument_defaults(instrument_opts_t *o, rig_log_time_t time)
     o->time = time;
 }
 
-/* A repeatable option's value into list (at most HTTP_MAX_ALLOWED). */
-static int list_value(int argc, char **argv, int *i, const char **list, size_t *n)
+#define WEB(field) offsetof(instrument_http_opts_t, field)
+#define GIVEN CLI_SEEN(instrument_http_opts_t, given)
+
+const cli_opt_t instrument_http_options[7] = {
+    {CLI_OPT("--http-token-file", "FILE", CLI_TEXT, WEB(token_file)), .seen = GIVEN},
+    {CLI_OPT("--http-viewer-token-file", "FILE", CLI_TEXT, WEB(viewer_token_file)),
+     .seen = GIVEN},
+    {CLI_OPT("--http-no-auth", NULL, CLI_FLAG, WEB(no_auth)), .seen = GIVEN},
+    {CLI_OPT("--http-allow-host", "NAME", CLI_LIST, WEB(allow_host)), .aux = WEB(n_allow_host),
+     .max = HTTP_MAX_ALLOWED, .seen = GIVEN},
+    {CLI_OPT("--http-allow-origin", "ORIGIN", CLI_LIST, WEB(allow_origin)),
+     .aux = WEB(n_allow_origin),
+     .max = HTTP_MAX_ALLOWED, .seen = GIVEN},
+    {CLI_OPT("--http-cert", "FILE", CLI_TEXT, WEB(cert)), .seen = GIVEN},
+    {CLI_OPT("--http-key", "FILE", CLI_TEXT, WEB(key)), .seen = GIVEN},
+};
+
+static bool set_quiet(void *base, const cli_opt_t *opt, const char *value, cli_args_t *args)
 {
-    const char *opt = argv[*i];
-    const char *v = cli_value(argc, argv, i);
-    if (v == NULL) {
-        return -1;
-    }
-    if (*n == HTTP_MAX_ALLOWED || v[0] == '\0' || strlen(v) >= 256u) {
-        cli_error("%s: at most %u of them, each 1..255 characters ('%s')", opt, HTTP_MAX_ALLOWED,
-                  v);
-        return -1;
-    }
-    list[(*n)++] = v;
-    return 1;
+    (void)opt;
+    (void)value;
+    (void)args;
+    ((instrument_opts_t *)base)->level = RIG_LOG_WARN;
+    return true;
 }
 
-int instrument_http_option(int argc, char **argv, int *i, instrument_http_opts_t *w)
-{
-    const char *opt = argv[*i];
-    const char **value = NULL;
-    if (strcmp(opt, "--http-no-auth") == 0) {
-        w->no_auth = w->given = true;
-        return 1;
-    }
-    if (strcmp(opt, "--http-allow-host") == 0 || strcmp(opt, "--http-allow-origin") == 0) {
-        w->given = true;
-        return opt[13] == 'h' ? list_value(argc, argv, i, w->allow_host, &w->n_allow_host)
-                              : list_value(argc, argv, i, w->allow_origin, &w->n_allow_origin);
-    }
-    if (strcmp(opt, "--http-token-file") == 0) {
-        value = &w->token_file;
-    } else if (strcmp(opt, "--http-viewer-token-file") == 0) {
-        value = &w->viewer_token_file;
-    } else if (strcmp(opt, "--http-cert") == 0) {
-        value = &w->cert;
-    } else if (strcmp(opt, "--http-key") == 0) {
-        value = &w->key;
-    } else {
-        return 0;
-    }
-    w->given = true;
-    return (*value = cli_value(argc, argv, i)) != NULL ? 1 : -1;
-}
+static const cli_choice_t log_levels[] = {
+    {"error", RIG_LOG_ERROR, false},
+    {"warn", RIG_LOG_WARN, false},
+    {"info", RIG_LOG_INFO, false},
+    {"debug", RIG_LOG_DEBUG, false},
+    {NULL, 0, false},
+};
 
-int instrument_option(int argc, char **argv, int *i, instrument_opts_t *o)
-{
-    const char *opt = argv[*i];
-    if (strcmp(opt, "--http") == 0) {
-        return (o->http = cli_value(argc, argv, i)) != NULL ? 1 : -1;
-    }
-    int web = instrument_http_option(argc, argv, i, &o->web);
-    if (web != 0) {
-        return web;
-    }
-    if (strcmp(opt, "--quiet") == 0) {
-        o->level = RIG_LOG_WARN;
-        return 1;
-    }
-    if (strcmp(opt, "--log-level") == 0) {
-        const char *v = cli_value(argc, argv, i);
-        if (v == NULL) {
-            return -1;
-        }
-        if (!rig_log_level_parse(v, &o->level)) {
-            cli_error("--log-level: '%s' is not one of error, warn, info, debug", v);
-            return -1;
-        }
-        return 1;
-    }
-    if (strcmp(opt, "--timestamps") == 0) {
-        const char *v = cli_value(argc, argv, i);
-        if (v == NULL) {
-            return -1;
-        }
-        if (strcmp(v, "wall") == 0) {
-            o->time = RIG_LOG_TIME_WALL;
-        } else if (strcmp(v, "bus") == 0) {
-            o->time = RIG_LOG_TIME_BUS;
-        } else {
-            cli_error("--timestamps: '%s' is not wall or bus", v);
-            return -1;
-        }
-        return 1;
-    }
-    return 0;
-}
+static const cli_choice_t log_times[] = {
+    {"bus", RIG_LOG_TIME_BUS, false},
+    {"wall", RIG_LOG_TIME_WALL, false},
+    {NULL, 0, false},
+};
+
+const cli_opt_t instrument_options[4] = {
+    {CLI_OPT("--http", "[ADDR:]PORT", CLI_TEXT, offsetof(instrument_opts_t, http))},
+    {CLI_OPT("--quiet", NULL, CLI_CALL, 0), .set = set_quiet},
+    {CLI_OPT("--log-level", "error|warn|info|debug", CLI_CHOICE,
+            offsetof(instrument_opts_t, level)),
+     .choices = log_levels, .bad = "--log-level: '%s' is not one of error, warn, info, debug"},
+    {CLI_OPT("--timestamps", "bus|wall", CLI_CHOICE, offsetof(instrument_opts_t, time)),
+     .choices = log_times, .bad = "--timestamps: '%s' is not wall or bus"},
+};
 
 void instrument_attach_log(instrument_t *in, rig_t *r, const instrument_opts_t *o)
 {

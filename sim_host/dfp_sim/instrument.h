@@ -6,6 +6,7 @@
 
 #include <stdbool.h>
 
+#include "cli_table.h"
 #include "http/http_server.h"
 #include "rig/rig_ctl.h"
 #include "rig/rig_log.h"
@@ -48,11 +49,11 @@ typedef struct instrument {
 } instrument_t;
 
 void instrument_defaults(instrument_opts_t *o, rig_log_time_t time);
-/* --http, --quiet, --log-level, --timestamps: 1 when argv[*i] was one (consumed), 0 when not,
- * -1 after reporting a bad value. */
-int instrument_option(int argc, char **argv, int *i, instrument_opts_t *o);
-/* The --http-* options alone (for a command that reads --http itself): the same codes. */
-int instrument_http_option(int argc, char **argv, int *i, instrument_http_opts_t *w);
+/* --http [ADDR:]PORT and the log options (--quiet, --log-level, --timestamps) into an
+ * instrument_opts_t; the --http-* options into its web (or another instrument_http_opts_t, for
+ * a command that reads --http itself). */
+extern const cli_opt_t instrument_options[4];
+extern const cli_opt_t instrument_http_options[7];
 /* Attaches the log to the rig (before its cards and master, so it sees their first events). */
 void instrument_attach_log(instrument_t *in, rig_t *r, const instrument_opts_t *o);
 /* Starts the control API when asked (after rig_open) and prints on stderr the URL to open, with

@@ -1,28 +1,19 @@
 /* --port / --bus / --lcm-url. See medium.h. */
 #include "medium.h"
 
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "cli.h"
 #include "lcm_bridge/lcm_segment.h"
 
-int medium_option(medium_opts_t *m, int argc, char **argv, int *i)
-{
-    const char **slot = NULL;
-    if (strcmp(argv[*i], "--port") == 0) {
-        slot = &m->dev;
-    } else if (strcmp(argv[*i], "--bus") == 0) {
-        slot = &m->bus;
-    } else if (strcmp(argv[*i], "--lcm-url") == 0) {
-        slot = &m->lcm_url;
-    } else if (strcmp(argv[*i], "--key") == 0) {
-        slot = &m->key_file;
-    } else {
-        return 0;
-    }
-    return (*slot = cli_value(argc, argv, i)) != NULL ? 1 : -1;
-}
+const cli_opt_t medium_options[4] = {
+    {CLI_OPT("--port", "DEV", CLI_TEXT, offsetof(medium_opts_t, dev))},
+    {CLI_OPT("--bus", "lcm:CHANNEL", CLI_TEXT, offsetof(medium_opts_t, bus))},
+    {CLI_OPT("--lcm-url", "URL", CLI_TEXT, offsetof(medium_opts_t, lcm_url))},
+    {CLI_OPT("--key", "FILE", CLI_TEXT, offsetof(medium_opts_t, key_file))},
+};
 
 bool medium_check(medium_opts_t *m, const char *cmd)
 {

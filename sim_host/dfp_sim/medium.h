@@ -8,6 +8,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "cli_table.h"
 #include "lcm_bridge/seg_auth.h"
 
 typedef struct medium_opts {
@@ -24,9 +25,8 @@ typedef struct medium_opts {
     int fd;
 } medium_opts_t;
 
-/* --port / --bus / --lcm-url / --key. Returns 1 when argv[*i] was one of them, 0 when not,
- * -1 on a usage error (reported). */
-int medium_option(medium_opts_t *m, int argc, char **argv, int *i);
+/* --port DEV, --bus lcm:CHANNEL, --lcm-url URL, --key FILE into a medium_opts_t. */
+extern const cli_opt_t medium_options[4];
 /* At most one of --port and --bus, a valid channel, --lcm-url and --key only with --bus, and
  * the key file read (seg_auth.h's rules); false after reporting. Whether one of them is
  * required is the command's business. */

@@ -1,67 +1,57 @@
 /* The command line of dfp-sim replay (replay_args.h). */
 #include "replay_args.h"
 
+#include <stddef.h>
 #include <string.h>
 #include <sys/stat.h>
 
 #include "cli.h"
+#include "commands.h"
 
 static const char replay_usage_hint[] = "(see dfp-sim --help)";
 
-/* --speed, --inverter, --format, --timing: a word each. */
-static bool parse_word_option(const char *o, const char *v, replay_args_t *a)
+/* --timing auto|line|relaxed: auto leaves it to the capture. */
+static bool set_timing(void *base, const cli_opt_t *opt, const char *v, cli_args_t *args)
 {
-    if (strcmp(o, "--speed") == 0) {
-        if (strcmp(v, "real") == 0 || strcmp(v, "max") == 0) {
-            a->speed = strcmp(v, "real") == 0 ? REPLAY_SPEED_REAL : REPLAY_SPEED_MAX;
-            return true;
-        }
-        cli_error("replay: --speed '%s': use real (the capture's pace) or max", v);
-        return false;
+    (void)opt;
+    (void)args;
+    replay_args_t *a = base;
+    bool line = strcmp(v, "line") == 0;
+    a->given.have_timing = line || strcmp(v, "relaxed") == 0;
+    a->given.timing = line ? REPLAY_TIMING_LINE : REPLAY_TIMING_RELAXED;
+    if (a->given.have_timing || strcmp(v, "auto") == 0) {
+        return true;
     }
-    if (strcmp(o, "--inverter") == 0) {
-        if (strcmp(v, "sim") == 0 || strcmp(v, "none") == 0) {
-            a->inverter = strcmp(v, "sim") == 0 ? CARD_INVERTER_SIM : CARD_INVERTER_NONE;
-            return true;
-        }
-        cli_error("replay: --inverter '%s': use sim (emulated MOVIDRIVE) or none (PI echoes PO)",
-                  v);
-        return false;
-    }
-    if (strcmp(o, "--timing") == 0) {
-        bool line = strcmp(v, "line") == 0;
-        a->given.have_timing = line || strcmp(v, "relaxed") == 0;
-        a->given.timing = line ? REPLAY_TIMING_LINE : REPLAY_TIMING_RELAXED;
-        if (a->given.have_timing || strcmp(v, "auto") == 0) {
-            return true;
-        }
-        cli_error("replay: --timing '%s': use auto (from the capture), line or relaxed (a "
-                  "tty/PTY capture)", v);
-        return false;
-    }
-    if (!cap_format_parse(v, &a->format)) {
-        cli_error("replay: --format '%s': use pcap, pcapng, text or lcm", v);
-        return false;
-    }
-    return true;
+    cli_error("replay: --timing '%s': use auto (from the capture), line or relaxed (a "
+              "tty/PTY capture)", v);
+    return false;
+}
+
+static bool set_address(void *base, const cli_opt_t *opt, const char *v, cli_args_t *args)
+{
+    (void)args;
+    replay_args_t *a = base;
+    uint32_t n = 0;
+    bool ok = cli_u32(opt->name, v, 0, 125, &n);
+    a->given.address = (uint8_t)n;
+    a->given.have_address = true;
+    return ok;
 }
 
 /* --report json|junit FILE: two values. */
-static bool parse_report(int argc, char **argv, int *i, replay_args_t *a)
+static bool set_report(void *base, const cli_opt_t *opt, const char *kind, cli_args_t *args)
 {
-    const char *kind = cli_value(argc, argv, i);
-    if (kind == NULL) {
-        return false;
-    }
+    (void)opt;
+    replay_args_t *a = base;
     if (strcmp(kind, "json") != 0 && strcmp(kind, "junit") != 0) {
         cli_error("replay: --report '%s': use json FILE or junit FILE", kind);
         return false;
     }
-    if (*i + 1 >= argc) {
+    if (args->i + 1 >= args->argc) {
         cli_error("replay: --report %s: which file? --report %s FILE", kind, kind);
         return false;
     }
-    const char *path = argv[++*i];
+    const char *path = args->argv[++args->i];
     if (a->n_reports == REPLAY_MAX_REPORTS) {
         cli_error("replay: --report: at most %u report files", REPLAY_MAX_REPORTS);
         return false;
@@ -72,113 +62,90 @@ static bool parse_report(int argc, char **argv, int *i, replay_args_t *a)
     return true;
 }
 
-/* The options of the check: --ignore, --max-mismatches. */
-static bool parse_check_option(const char *o, const char *v, replay_args_t *a)
+static bool set_ignore(void *base, const cli_opt_t *opt, const char *v, cli_args_t *args)
 {
-    if (strcmp(o, "--ignore") == 0) {
-        char err[400];
-        if (!replay_mask_add(&a->mask, v, err, sizeof err)) {
-            cli_error("replay: --ignore %s", err);
-            return false;
-        }
-        return true;
-    }
-    uint32_t n = 0;
-    if (!cli_u32(o, v, 0, 1000000000u, &n)) {
+    (void)opt;
+    (void)args;
+    char err[400];
+    if (!replay_mask_add(&((replay_args_t *)base)->mask, v, err, sizeof err)) {
+        cli_error("replay: --ignore %s", err);
         return false;
     }
-    a->max_listed = n == 0u ? REPLAY_LIST_ALL : n;
     return true;
 }
 
-static bool is_value_option(const char *o, bool *word)
+static bool set_max_listed(void *base, const cli_opt_t *opt, const char *v, cli_args_t *args)
 {
-    static const char *const words[] = {"--speed", "--inverter", "--format", "--timing"};
-    static const char *const others[] = {"--address", "--baud", "--lcm", "--inverter-delay",
-                                         "--http", "--channel", "--ignore", "--max-mismatches"};
-    *word = false;
-    for (size_t k = 0; k < sizeof words / sizeof words[0]; k++) {
-        *word = *word || strcmp(o, words[k]) == 0;
-    }
-    bool known = *word;
-    for (size_t k = 0; k < sizeof others / sizeof others[0]; k++) {
-        known = known || strcmp(o, others[k]) == 0;
-    }
-    return known;
-}
-
-/* An option with a value. 1: consumed, 0: not one of these, -1: reported. */
-static int parse_value_option(int argc, char **argv, int *i, replay_args_t *a)
-{
-    const char *o = argv[*i];
-    if (strcmp(o, "--report") == 0) {
-        return parse_report(argc, argv, i, a) ? 1 : -1;
-    }
-    bool word = false;
-    if (!is_value_option(o, &word)) {
-        return 0;
-    }
-    const char *v = cli_value(argc, argv, i);
-    if (v == NULL) {
-        return -1;
-    }
-    bool ok = true;
+    (void)args;
     uint32_t n = 0;
-    if (word) {
-        ok = parse_word_option(o, v, a);
-    } else if (strcmp(o, "--address") == 0) {
-        ok = cli_u32(o, v, 0, 125, &n);
-        a->given.address = (uint8_t)n;
-        a->given.have_address = true;
-    } else if (strcmp(o, "--baud") == 0) {
-        ok = cli_baud(o, v, false, &a->given.baud);
-    } else if (strcmp(o, "--inverter-delay") == 0) {
-        ok = cli_u32(o, v, 0, 10000000u, &a->given.delay_us);
-        a->given.have_delay = true;
-    } else if (strcmp(o, "--lcm") == 0) {
-        a->lcm_url = v;
-    } else if (strcmp(o, "--channel") == 0) {
-        a->lcm_channel = v;
-    } else if (strcmp(o, "--http") == 0) {
-        a->http = v;
-    } else {
-        ok = parse_check_option(o, v, a);
+    if (!cli_u32(opt->name, v, 0, 1000000000u, &n)) {
+        return false;
     }
-    return ok ? 1 : -1;
+    ((replay_args_t *)base)->max_listed = n == 0u ? REPLAY_LIST_ALL : n;
+    return true;
 }
 
-static int parse_flags(int argc, char **argv, replay_args_t *a, bool *check_only)
+static bool replay_operand(void *opts, const char *word)
 {
-    for (int i = 2; i < argc; i++) {
-        const char *o = argv[i];
-        *check_only = *check_only || strcmp(o, "--report") == 0 ||
-                      strcmp(o, "--ignore") == 0 || strcmp(o, "--max-mismatches") == 0;
-        int c = parse_value_option(argc, argv, &i, a);
-        c = c == 0 ? instrument_http_option(argc, argv, &i, &a->web) : c;
-        if (c < 0) {
-            return EXIT_USAGE;
-        }
-        if (c > 0) {
-            continue;
-        }
-        if (strcmp(o, "--check") == 0) {
-            a->check = true;
-        } else if (strcmp(o, "--verbose") == 0) {
-            a->verbose = true;
-        } else if (strcmp(o, "--fixed-baud") == 0) {
-            a->given.fixed_baud = true;
-        } else if (o[0] == '-' && o[1] != '\0') {
-            cli_error("replay: unknown option '%s' %s", o, replay_usage_hint);
-            return EXIT_USAGE;
-        } else if (a->file == NULL) {
-            a->file = o;
-        } else {
-            cli_error("replay: one capture file only ('%s' and '%s')", a->file, o);
-            return EXIT_USAGE;
-        }
+    replay_args_t *a = opts;
+    if (a->file != NULL) {
+        cli_error("replay: one capture file only ('%s' and '%s')", a->file, word);
+        return false;
     }
-    return 0;
+    a->file = word;
+    return true;
 }
+
+static const cli_choice_t speeds[] = {
+    {"real", REPLAY_SPEED_REAL, false}, {"max", REPLAY_SPEED_MAX, false}, {NULL, 0, false}};
+static const cli_choice_t formats[] = {
+    {"pcap", CAP_FORMAT_PCAP, false}, {"pcapng", CAP_FORMAT_PCAPNG, false},
+    {"text", CAP_FORMAT_TEXT, false}, {"lcm", CAP_FORMAT_LCM, false},
+    {"auto", CAP_FORMAT_AUTO, true},  {NULL, 0, false}};
+static const cli_choice_t inverters[] = {
+    {"sim", CARD_INVERTER_SIM, false}, {"none", CARD_INVERTER_NONE, false}, {NULL, 0, false}};
+static const cli_choice_t timings[] = {
+    {"auto", 0, false}, {"line", 0, false}, {"relaxed", 0, false}, {NULL, 0, false}};
+static const cli_choice_t report_kinds[] = {
+    {"json", 0, false}, {"junit", 0, false}, {NULL, 0, false}};
+
+#define ARGS(field) offsetof(replay_args_t, field)
+#define CHECK_OPTION CLI_SEEN(replay_args_t, check_options)
+
+static const cli_opt_t replay_options[] = {
+    {CLI_OPT("--address", "N", CLI_CALL, 0), .set = set_address},
+    {CLI_OPT("--check", NULL, CLI_FLAG, ARGS(check))},
+    {CLI_OPT("--speed", "real|max", CLI_CHOICE, ARGS(speed)), .choices = speeds,
+     .bad = "replay: --speed '%s': use real (the capture's pace) or max"},
+    {CLI_OPT("--baud", "RATE", CLI_BAUD, ARGS(given.baud))},
+    {CLI_OPT("--format", "pcap|pcapng|text|lcm", CLI_CHOICE, ARGS(format)), .choices = formats,
+     .bad = "replay: --format '%s': use pcap, pcapng, text or lcm"},
+    {CLI_OPT("--inverter", "sim|none", CLI_CHOICE, ARGS(inverter)), .choices = inverters,
+     .bad = "replay: --inverter '%s': use sim (emulated MOVIDRIVE) or none (PI echoes PO)"},
+    {CLI_OPT("--inverter-delay", "US", CLI_U32, ARGS(given.delay_us)), .min = 0,
+     .max = 10000000u, .seen = CLI_SEEN(replay_args_t, given.have_delay)},
+    {CLI_OPT("--fixed-baud", NULL, CLI_FLAG, ARGS(given.fixed_baud))},
+    {CLI_OPT("--timing", "auto|line|relaxed", CLI_CALL, 0), .choices = timings,
+     .set = set_timing},
+    {CLI_OPT("--verbose", NULL, CLI_FLAG, ARGS(verbose))},
+    {CLI_OPT("--lcm", "URL", CLI_TEXT, ARGS(lcm_url))},
+    {CLI_OPT("--channel", "NAME", CLI_TEXT, ARGS(lcm_channel))},
+    {CLI_OPT("--http", "[ADDR:]PORT", CLI_TEXT, ARGS(http))},
+    {CLI_OPT("--max-mismatches", "N", CLI_CALL, 0), .set = set_max_listed,
+     .seen = CHECK_OPTION},
+    {CLI_OPT("--ignore", "MASK", CLI_CALL, 0), .set = set_ignore, .seen = CHECK_OPTION},
+    {CLI_OPT("--report", "json|junit FILE", CLI_CALL, 0), .choices = report_kinds,
+     .set = set_report, .seen = CHECK_OPTION},
+};
+
+static const cli_group_t replay_groups[] = {
+    {replay_options, CLI_COUNT(replay_options), 0},
+    {instrument_http_options, CLI_COUNT(instrument_http_options), ARGS(web)},
+};
+
+const cli_command_t cli_replay = {.name = "replay", .groups = replay_groups,
+                                  .n_groups = CLI_COUNT(replay_groups),
+                                  .operands = CLI_OPERANDS, .operand = replay_operand};
 
 /* The capture, the report files and an LCM log --lcm writes: no two may be one file (a report
  * written over the capture would destroy what may be the only copy of a field recording). */
@@ -197,14 +164,14 @@ static bool files_distinct(const replay_args_t *a)
     return cli_files_distinct("replay", files, n);
 }
 
-static int check_args(replay_args_t *a, bool check_only)
+static int check_args(replay_args_t *a)
 {
     if (a->file == NULL) {
         cli_error("replay: which capture? dfp-sim replay FILE [--check] ... %s",
                   replay_usage_hint);
         return EXIT_USAGE;
     }
-    if (check_only && !a->check) {
+    if (a->check_options && !a->check) {
         cli_error("replay: --report, --ignore and --max-mismatches belong to the check: add "
                   "--check");
         return EXIT_USAGE;
@@ -234,10 +201,9 @@ int replay_parse_args(int argc, char **argv, replay_args_t *a)
     a->inverter = CARD_INVERTER_SIM;
     a->speed = REPLAY_SPEED_MAX;
     a->max_listed = REPLAY_LIST_DEFAULT;
-    bool check_only = false;
-    int rc = parse_flags(argc, argv, a, &check_only);
+    int rc = cli_parse(&cli_replay, argc, argv, a);
     if (rc == 0) {
-        rc = check_args(a, check_only);
+        rc = check_args(a);
     }
     a->given.file = a->file;
     return rc;

@@ -24,6 +24,7 @@ typedef struct replay_args {
     const char *file;
     replay_given_t given; /* --address, --baud, --fixed-baud, --inverter-delay, --timing */
     bool check;
+    bool check_options; /* --report, --ignore or --max-mismatches given: they need --check */
     bool verbose;
     cap_format_t format;
     const char *lcm_channel;

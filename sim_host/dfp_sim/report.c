@@ -1,6 +1,7 @@
 #include "report.h"
 
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -81,45 +82,33 @@ void report_tap(void *ctx, uint64_t t_start_ns, const uint8_t *frame, size_t len
     r->frames_captured++;
 }
 
-int capture_option(int argc, char **argv, int *i, capture_opts_t *o)
-{
-    const char *opt = argv[*i];
-    if (strcmp(opt, "--capture") == 0) {
-        return (o->path = cli_value(argc, argv, i)) != NULL ? 1 : -1;
-    }
-    if (strcmp(opt, "--capture-ns") == 0) {
-        o->w.nanosecond = true;
-        return 1;
-    }
-    if (strcmp(opt, "--capture-format") == 0) {
-        const char *v = cli_value(argc, argv, i);
-        if (v == NULL) {
-            return -1;
-        }
-        if (!cap_format_parse(v, &o->w.format) || o->w.format == CAP_FORMAT_LCM ||
-            o->w.format == CAP_FORMAT_AUTO) {
-            cli_error("--capture-format: '%s' is not one of pcap, pcapng, text", v);
-            return -1;
-        }
-        return 1;
-    }
-    if (strcmp(opt, "--capture-linktype") == 0) {
-        const char *v = cli_value(argc, argv, i);
-        if (v == NULL) {
-            return -1;
-        }
-        if (strcmp(v, "profibus") == 0 || strcmp(v, "257") == 0) {
-            o->w.linktype = PCAP_LINKTYPE_PROFIBUS_DL;
-        } else if (strcmp(v, "user0") == 0 || strcmp(v, "147") == 0) {
-            o->w.linktype = PCAP_LINKTYPE_USER0;
-        } else {
-            cli_error("--capture-linktype: '%s' is not profibus (257) or user0 (147)", v);
-            return -1;
-        }
-        return 1;
-    }
-    return 0;
-}
+const cli_choice_t capture_format_words[4] = {
+    {"pcap", CAP_FORMAT_PCAP, false},
+    {"pcapng", CAP_FORMAT_PCAPNG, false},
+    {"text", CAP_FORMAT_TEXT, false},
+    {NULL, 0, false},
+};
+
+const cli_choice_t capture_linktype_words[5] = {
+    {"profibus", PCAP_LINKTYPE_PROFIBUS_DL, false},
+    {"user0", PCAP_LINKTYPE_USER0, false},
+    {"257", PCAP_LINKTYPE_PROFIBUS_DL, true},
+    {"147", PCAP_LINKTYPE_USER0, true},
+    {NULL, 0, false},
+};
+
+const cli_opt_t capture_options[4] = {
+    {CLI_OPT("--capture", "FILE", CLI_TEXT, offsetof(capture_opts_t, path))},
+    {CLI_OPT("--capture-format", "pcap|pcapng|text", CLI_CHOICE,
+            offsetof(capture_opts_t, w.format)),
+     .choices = capture_format_words,
+     .bad = "--capture-format: '%s' is not one of pcap, pcapng, text"},
+    {CLI_OPT("--capture-linktype", "profibus|user0", CLI_CHOICE,
+            offsetof(capture_opts_t, w.linktype)),
+     .choices = capture_linktype_words,
+     .bad = "--capture-linktype: '%s' is not profibus (257) or user0 (147)"},
+    {CLI_OPT("--capture-ns", NULL, CLI_FLAG, offsetof(capture_opts_t, w.nanosecond))},
+};
 
 bool report_open_capture(report_t *r, const capture_opts_t *o, uint64_t base_ns)
 {

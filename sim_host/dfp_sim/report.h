@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "capture/capture.h"
+#include "cli_table.h"
 #include "dfp21b/dfp21b.h"
 #include "dp_master/dp_master.h"
 #include "hal/hal_led.h"
@@ -41,9 +42,11 @@ typedef struct capture_opts {
 } capture_opts_t;
 
 /* --capture FILE, --capture-format pcap|pcapng|text, --capture-linktype profibus|user0,
- * --capture-ns. Returns 1 when argv[*i] was one of them (consumed with its value), 0 when it is
- * not, -1 after reporting a bad value. */
-int capture_option(int argc, char **argv, int *i, capture_opts_t *o);
+ * --capture-ns into a capture_opts_t. */
+extern const cli_opt_t capture_options[4];
+/* The words of --capture-format and --capture-linktype (convert's --format and --linktype). */
+extern const cli_choice_t capture_format_words[4];
+extern const cli_choice_t capture_linktype_words[5];
 /* Opens o->path (if set) with times counted from base_ns (wall clock at start); false after
  * reporting why. */
 bool report_open_capture(report_t *r, const capture_opts_t *o, uint64_t base_ns);
