@@ -20,8 +20,21 @@ const cli_opt_t *cli_find(const cli_command_t *cmd, const char *name, size_t *gr
     return NULL;
 }
 
+/* v NULL (a table entry of a value kind without a placeholder): a bug of the table, told. */
+static bool value_given(const cli_opt_t *o, const char *v)
+{
+    if (v == NULL) {
+        cli_error("%s: the option table gives it no value (a bug of dfp-sim)", o->name);
+        return false;
+    }
+    return true;
+}
+
 static bool set_choice(char *field, const cli_opt_t *o, const char *v)
 {
+    if (!value_given(o, v)) {
+        return false;
+    }
     for (const cli_choice_t *c = o->choices; c->word != NULL; c++) {
         if (strcmp(c->word, v) == 0) {
             int value = c->value;
@@ -37,6 +50,9 @@ static bool set_choice(char *field, const cli_opt_t *o, const char *v)
 static bool set_list(char *base, const cli_opt_t *o, const char *v)
 {
     size_t *n = (size_t *)(void *)(base + o->aux);
+    if (!value_given(o, v)) {
+        return false;
+    }
     if (*n == o->max || v[0] == '\0' || strlen(v) >= 256u) {
         cli_error("%s: at most %u of them, each 1..255 characters ('%s')", o->name, o->max, v);
         return false;

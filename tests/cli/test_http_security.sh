@@ -241,7 +241,13 @@ nurl=http://127.0.0.1:$nport
 start_demo noauth "$nurl" --http "$nport" --http-no-auth || { finish; exit 1; }
 expect_in "no token in its URL" "dfp-sim: control panel at $nurl/"$'\n' "$(cat "$tmp/noauth.err")"$'\n'
 expect_in "an action without a token" '200 {"ok":true}' "$(call "${as_json[@]}" -d '{"running":false}' "$nurl/api/v1/master/run")"
-expect_in "done" "False" "$(curl -s "$nurl/api/v1/state" | json 'd["master"]["running"]')"
+# The state is published at most 20 ms after the action: look for up to 3 s.
+for _ in $(seq 30); do
+  running=$(curl -s "$nurl/api/v1/state" | json 'd["master"]["running"]')
+  [ "$running" = False ] && break
+  sleep 0.1
+done
+expect_in "done" "False" "$running"
 expect_in "session says no auth" '200 {"auth":false,"role":"operator"}' "$(call "$nurl/api/v1/session")"
 expect_in "login needs nothing" '200 {"role":"operator"}' "$(call "${as_json[@]}" -d '{}' "$nurl/api/v1/login")"
 expect_in "still no simple POST" "$unsupported" "$(call -d '{"running":true}' "$nurl/api/v1/master/run")"
