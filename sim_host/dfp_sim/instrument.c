@@ -282,9 +282,13 @@ int instrument_start_http(instrument_t *in, rig_t *r, const instrument_opts_t *o
 }
 
 /* The request threads publish the API's events to the bridge only: the terminal log and the
- * LCM telemetry belong to the loop's thread. */
+ * LCM telemetry belong to the loop's thread. At most INSTRUMENT_API_EVENTS_PER_TURN go on per
+ * turn, so a client provoking refusals by the thousand costs the loop a bounded time; the rest
+ * of a burst is counted in one line (GET /api/v1/log has them while the ring holds them). */
 static void pass_on_api_events(instrument_t *in)
 {
+    unsigned passed = 0;
+    uint64_t skipped = 0;
     for (;;) {
         uint64_t lost = 0;
         size_t n = rig_ctl_events(&in->ctl, in->api_seen, in->batch, INSTRUMENT_EVENT_BATCH,
@@ -295,14 +299,26 @@ static void pass_on_api_events(instrument_t *in)
             if (strcmp(e->source, "http") != 0) {
                 continue;
             }
+            if (passed == INSTRUMENT_API_EVENTS_PER_TURN) {
+                skipped++;
+                continue;
+            }
+            passed++;
             rig_log_print(&in->log, e->level, e->source, e->t_us, e->text);
             if (in->api_event != NULL) {
                 in->api_event(in->api_event_ctx, e);
             }
         }
         if (n < INSTRUMENT_EVENT_BATCH) {
-            return;
+            break;
         }
+    }
+    if (skipped != 0u) {
+        char text[RIG_CTL_TEXT];
+        snprintf(text, sizeof text, "%llu more events of the API not shown here (over %u in "
+                 "%u ms); GET /api/v1/log has them", (unsigned long long)skipped,
+                 INSTRUMENT_API_EVENTS_PER_TURN, (unsigned)(PUBLISH_EVERY_NS / 1000000u));
+        rig_log_print(&in->log, RIG_LOG_WARN, "http", rig_ctl_time_us(&in->ctl), text);
     }
 }
 

@@ -36,6 +36,8 @@ typedef struct instrument_opts {
  * LCM telemetry): its request threads publish it to the bridge, the loop passes it on. */
 typedef void instrument_api_event_fn(void *ctx, const rig_ctl_event_t *e);
 #define INSTRUMENT_EVENT_BATCH 16u
+/* The API's events the loop passes on in one turn (every 20 ms in wall-clock modes). */
+#define INSTRUMENT_API_EVENTS_PER_TURN 32u
 
 typedef struct instrument {
     rig_log_t log;

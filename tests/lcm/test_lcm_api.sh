@@ -2,7 +2,8 @@
 # The control API's own events in the LCM telemetry (docs/api.md "Security", the audit): `dfp-sim
 # demo --http --lcm file://LOG` audits an accepted action and three refused requests; each is an
 # api_event_t on DFP_API with exactly the level, kind and text GET /api/v1/log gives, and a line
-# of the terminal log. A file:// log needs no network.
+# of the terminal log. Then a burst of 400 refusals: the terminal shows or counts every one, and
+# DFP_API carries those shown. A file:// log needs no network.
 # Usage: test_lcm_api.sh DFP_SIM PYTHON
 sim=$1
 py=$2
@@ -32,6 +33,23 @@ expect_in "no token" 401 "$(post -H 'Content-Type: application/json' -d '{"runni
 expect_in "a foreign Origin" 403 "$(post "${bearer[@]}" -H 'Content-Type: application/json' -H 'Origin: http://evil.example' -d '{"running": true}' "$url/api/v1/master/run")"
 sleep 0.3 # the loop passes the API's events on at its next turn (every 20 ms)
 curl -s --max-time 5 "${bearer[@]}" "$url/api/v1/log?since=0&limit=4096" >"$tmp/log.json"
+# A burst of 400 refusals (no token, on 4 keep-alive connections): the loop passes on at most
+# 32 per turn and counts the rest in a line; nothing is lost from the count.
+python3 - "$port" <<'PY'
+import http.client, sys, threading
+def burst():
+    c = http.client.HTTPConnection("127.0.0.1", int(sys.argv[1]), timeout=5)
+    for _ in range(100):
+        c.request("GET", "/api/v1/state")
+        c.getresponse().read()
+threads = [threading.Thread(target=burst) for _ in range(4)]
+for t in threads:
+    t.start()
+for t in threads:
+    t.join()
+PY
+sleep 0.3
+curl -s --max-time 5 "${bearer[@]}" "$url/api/v1/log?since=0&limit=4096" >"$tmp/log_all.json"
 kill -INT "$pid"; wait "$pid"; rc=$?
 [ "$rc" = 0 ] && ok || bad "the demo ended with exit $rc: $(cat "$tmp/demo.err")"
 
@@ -51,6 +69,8 @@ for e in lcm.EventLog(sys.argv[1], "r"):
         m = api_event_t.decode(e.data)
         print(m.level, m.kind, m.text)
 PY
+cp "$tmp/api_lcm.txt" "$tmp/api_lcm_all.txt"
+head -n "$(wc -l <"$tmp/api_log.txt")" "$tmp/api_lcm_all.txt" >"$tmp/api_lcm.txt"
 expect_in "four audit events in the API's log" 4 "$(grep -c ' audit ' "$tmp/api_log.txt")"
 if [ -s "$tmp/api_lcm.txt" ] && cmp -s "$tmp/api_log.txt" "$tmp/api_lcm.txt"; then ok; else
   bad "DFP_API differs from the API's log:"$'\n'"$(diff "$tmp/api_log.txt" "$tmp/api_lcm.txt")"; fi
@@ -60,6 +80,15 @@ expect_in "the refusals at level warn" \
 expect_in "the client without a token" " none POST /api/v1/master/run -> 401 a token is needed" "$(cat "$tmp/api_lcm.txt")"
 expect_in "the foreign Origin" "-> 403 Origin 'http://evil.example' is not allowed" "$(cat "$tmp/api_lcm.txt")"
 if grep -qF "$token" "$tmp/api_lcm.txt"; then bad "the token is on DFP_API"; else ok; fi
+# The burst: every refusal in the API's log; the terminal shows some and counts the others, and
+# DFP_API carries those it shows.
+in_log=$("$py" -c 'import json,sys; print(sum(e["source"] == "http" for e in json.load(open(sys.argv[1]))))' "$tmp/log_all.json")
+expect_in "404 events of the API in its log" "x404x" "x${in_log}x"
+shown=$(grep -cE '^ *[0-9.]+ ms  http     127\.0\.0\.1:' "$tmp/demo.out")
+counted=$(sed -nE 's/.*  http     ([0-9]+) more events of the API not shown here \(over 32 in 20 ms\).*/\1/p' "$tmp/demo.out" | awk '{s += $1} END {print s + 0}')
+[ "$((shown + counted))" = "$in_log" ] && ok || bad "terminal: $shown shown + $counted counted, log: $in_log"
+on_lcm=$("$py" -c 'import sys; print(sum(1 for _ in open(sys.argv[1])))' "$tmp/api_lcm_all.txt")
+[ "$on_lcm" = "$shown" ] && ok || bad "DFP_API carries $on_lcm, the terminal shows $shown"
 # The terminal log: one line per event, source "http".
 expect_in "each on the terminal" 4 "$(grep -cE '^ *[0-9.]+ ms  http     127\.0\.0\.1:[0-9]+ (operator|none) POST /api/v1/master/run -> ' "$tmp/demo.out")"
 finish
