@@ -86,94 +86,7 @@ static hal_time_us_t service_timer(void *ctx, hal_time_us_t now)
 
 /* ---- the control API's credentials and TLS (docs/api.md "Security") ---- */
 
-typedef struct http_secrets {
-    char token[HTTP_TOKEN_MAX + 1u];
-    char viewer[HTTP_TOKEN_MAX + 1u];
-    char *cert_pem;
-    char *key_pem;
-} http_secrets_t;
-
-static void secrets_free(http_secrets_t *k)
-{
-    explicit_bzero(k->token, sizeof k->token);
-    explicit_bzero(k->viewer, sizeof k->viewer);
-    free(k->cert_pem);
-    if (k->key_pem != NULL) {
-        explicit_bzero(k->key_pem, strlen(k->key_pem));
-        free(k->key_pem);
-    }
-}
-
-/* A token from --OPTION FILE, else from the environment variable; "" when neither. */
-static bool token_from(const char *option, const char *file, const char *env, char *out,
-                       size_t n)
-{
-    if (file != NULL) {
-        char err[400];
-        if (!http_token_read_file(option, file, out, n, err, sizeof err)) {
-            cli_error("%s", err);
-            return false;
-        }
-        return true;
-    }
-    const char *v = getenv(env);
-    if (v == NULL || v[0] == '\0') {
-        out[0] = '\0';
-        return true;
-    }
-    if (!http_token_valid(v) || strlen(v) >= n) {
-        cli_error("%s: the token must be %u..%u printable ASCII characters without spaces", env,
-                  HTTP_TOKEN_MIN, HTTP_TOKEN_MAX);
-        return false;
-    }
-    memcpy(out, v, strlen(v) + 1u);
-    return true;
-}
-
-/* The checks between the options, then the tokens and PEM texts into k. */
-static bool http_secrets(const instrument_opts_t *o, const char *host, http_secrets_t *k)
-{
-    const instrument_http_opts_t *w = &o->web;
-    if (w->no_auth && !http_is_loopback(host)) {
-        cli_error("--http-no-auth: refused on %s, which is not a loopback address (127.0.0.0/8, "
-                  "::1): anyone who reaches it could steer the rig; use a token", host);
-        return false;
-    }
-    if ((w->cert == NULL) != (w->key == NULL)) {
-        cli_error("--http-cert and --http-key go together: give both or neither");
-        return false;
-    }
-    if (!w->no_auth) {
-        if (!token_from("--http-token-file", w->token_file, "DFP_SIM_TOKEN", k->token,
-                        sizeof k->token) ||
-            !token_from("--http-viewer-token-file", w->viewer_token_file,
-                        "DFP_SIM_VIEWER_TOKEN", k->viewer, sizeof k->viewer)) {
-            return false;
-        }
-        if (k->token[0] == '\0' && !http_token_generate(k->token, sizeof k->token)) {
-            cli_error("--http: no random token could be made (libsodium did not start)");
-            return false;
-        }
-        if (strcmp(k->token, k->viewer) == 0) {
-            cli_error("--http: the viewer token must differ from the operator token");
-            return false;
-        }
-    }
-    if (w->cert != NULL) {
-        char err[400];
-        k->cert_pem = http_pem_read_file("--http-cert", w->cert, err, sizeof err);
-        k->key_pem = k->cert_pem != NULL
-                         ? http_pem_read_file("--http-key", w->key, err, sizeof err)
-                         : NULL;
-        if (k->key_pem == NULL) {
-            cli_error("%s", err);
-            return false;
-        }
-    }
-    return true;
-}
-
-static void http_config_from(const instrument_opts_t *o, const http_secrets_t *k,
+static void http_config_from(const instrument_opts_t *o, const http_credentials_t *k,
                              http_config_t *c)
 {
     const instrument_http_opts_t *w = &o->web;
@@ -193,7 +106,7 @@ static void http_config_from(const instrument_opts_t *o, const http_secrets_t *k
 /* Like Jupyter: the URL to open, with the token, once on stderr (never into the rig's log,
  * which the API serves). */
 static void print_urls(const instrument_opts_t *o, const char *host, uint16_t port,
-                       const http_secrets_t *k, bool read_only)
+                       const http_credentials_t *k, bool read_only)
 {
     bool tls = o->web.cert != NULL;
     /* A wildcard address is reached through loopback from this machine. */
@@ -231,10 +144,17 @@ static int http_begin(instrument_t *in, const instrument_opts_t *o, bool read_on
         cli_error("%s", err);
         return EXIT_USAGE;
     }
-    http_secrets_t k = {0};
+    const instrument_http_opts_t *w = &o->web;
+    const http_credential_sources_t src = {.no_auth = w->no_auth,
+                                           .token_file = w->token_file,
+                                           .viewer_token_file = w->viewer_token_file,
+                                           .cert = w->cert,
+                                           .key = w->key};
+    http_credentials_t k;
     http_config_t cfg;
     int rc = 0;
-    if (!http_secrets(o, host, &k)) {
+    if (!http_credentials_load(&src, host, &k, err, sizeof err)) {
+        cli_error("%s", err);
         rc = EXIT_USAGE;
     } else {
         http_config_from(o, &k, &cfg);
@@ -251,7 +171,7 @@ static int http_begin(instrument_t *in, const instrument_opts_t *o, bool read_on
                     read_only ? " (read-only)" : "");
         }
     }
-    secrets_free(&k);
+    http_credentials_free(&k);
     return rc;
 }
 

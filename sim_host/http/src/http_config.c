@@ -1,5 +1,5 @@
-/* What the command line gives the server: tokens (from a file, or made here), PEM files, and
- * whether an address is loopback (--http-no-auth is only allowed there). */
+/* The server's credentials: tokens (from a file, the environment, or made here), PEM files,
+ * and the rules between them (--http-no-auth only on a loopback address). */
 #include <arpa/inet.h>
 #include <errno.h>
 #include <netinet/in.h>
@@ -105,4 +105,87 @@ char *http_pem_read_file(const char *option, const char *path, char *err, size_t
         return NULL;
     }
     return text;
+}
+
+void http_credentials_free(http_credentials_t *c)
+{
+    sodium_memzero(c->token, sizeof c->token);
+    sodium_memzero(c->viewer, sizeof c->viewer);
+    free(c->cert_pem);
+    if (c->key_pem != NULL) {
+        sodium_memzero(c->key_pem, strlen(c->key_pem));
+        free(c->key_pem);
+    }
+    c->cert_pem = NULL;
+    c->key_pem = NULL;
+}
+
+/* A token from --OPTION FILE, else from the environment variable; "" when neither. */
+static bool token_from(const char *option, const char *file, const char *env, char *out,
+                       size_t n, char *err, size_t errlen)
+{
+    if (file != NULL) {
+        return http_token_read_file(option, file, out, n, err, errlen);
+    }
+    const char *v = getenv(env);
+    if (v == NULL || v[0] == '\0') {
+        out[0] = '\0';
+        return true;
+    }
+    if (!http_token_valid(v) || strlen(v) >= n) {
+        snprintf(err, errlen, "%s: the token must be %u..%u printable ASCII characters without "
+                 "spaces", env, HTTP_TOKEN_MIN, HTTP_TOKEN_MAX);
+        return false;
+    }
+    memcpy(out, v, strlen(v) + 1u);
+    return true;
+}
+
+static bool tokens_load(const http_credential_sources_t *src, http_credentials_t *out,
+                        char *err, size_t errlen)
+{
+    if (!token_from("--http-token-file", src->token_file, "DFP_SIM_TOKEN", out->token,
+                    sizeof out->token, err, errlen) ||
+        !token_from("--http-viewer-token-file", src->viewer_token_file, "DFP_SIM_VIEWER_TOKEN",
+                    out->viewer, sizeof out->viewer, err, errlen)) {
+        return false;
+    }
+    if (out->token[0] == '\0' && !http_token_generate(out->token, sizeof out->token)) {
+        snprintf(err, errlen, "--http: no random token could be made (libsodium did not start)");
+        return false;
+    }
+    if (strcmp(out->token, out->viewer) == 0) {
+        snprintf(err, errlen, "--http: the viewer token must differ from the operator token");
+        return false;
+    }
+    return true;
+}
+
+bool http_credentials_load(const http_credential_sources_t *src, const char *host,
+                           http_credentials_t *out, char *err, size_t errlen)
+{
+    memset(out, 0, sizeof *out);
+    if (src->no_auth && !http_is_loopback(host)) {
+        snprintf(err, errlen, "--http-no-auth: refused on %s, which is not a loopback address "
+                 "(127.0.0.0/8, ::1): anyone who reaches it could steer the rig; use a token",
+                 host);
+        return false;
+    }
+    if ((src->cert == NULL) != (src->key == NULL)) {
+        snprintf(err, errlen, "--http-cert and --http-key go together: give both or neither");
+        return false;
+    }
+    if (!src->no_auth && !tokens_load(src, out, err, errlen)) {
+        return false;
+    }
+    if (src->cert != NULL) {
+        out->cert_pem = http_pem_read_file("--http-cert", src->cert, err, errlen);
+        out->key_pem = out->cert_pem != NULL
+                           ? http_pem_read_file("--http-key", src->key, err, errlen)
+                           : NULL;
+        if (out->key_pem == NULL) {
+            return false;
+        }
+    }
+    return true;
 }

@@ -51,6 +51,30 @@ bool http_token_read_file(const char *option, const char *path, char *out, size_
                           char *err, size_t errlen);
 /* A whole PEM file (certificate or key) into a heap string (free it); NULL with a reason. */
 char *http_pem_read_file(const char *option, const char *path, char *err, size_t errlen);
+/* Where the credentials come from (a command line's options; NULL: not given). */
+typedef struct http_credential_sources {
+    bool no_auth;                  /* only on a loopback address */
+    const char *token_file;        /* else $DFP_SIM_TOKEN, else a token is made */
+    const char *viewer_token_file; /* else $DFP_SIM_VIEWER_TOKEN, else no viewer */
+    const char *cert;              /* PEM files: both or neither */
+    const char *key;
+} http_credential_sources_t;
+
+/* The tokens and PEM texts the server is started with (docs/api.md "Security"). */
+typedef struct http_credentials {
+    char token[HTTP_TOKEN_MAX + 1u];  /* "" with no_auth */
+    char viewer[HTTP_TOKEN_MAX + 1u]; /* "": no viewer role */
+    char *cert_pem;
+    char *key_pem;
+} http_credentials_t;
+
+/* The rules between the sources (--http-no-auth only on loopback host, cert with key, two
+ * different tokens), then the tokens and PEM texts into out. False with a one-line reason;
+ * free out with http_credentials_free either way. */
+bool http_credentials_load(const http_credential_sources_t *src, const char *host,
+                           http_credentials_t *out, char *err, size_t errlen);
+/* Wipes the tokens and the key and frees the PEM texts. */
+void http_credentials_free(http_credentials_t *c);
 /* Starts serving; NULL with a one-line reason in err (port taken, bad address, bad TLS files). */
 http_server_t *http_server_start(rig_ctl_t *ctl, const http_config_t *cfg, char *err,
                                  size_t errlen);
