@@ -132,6 +132,33 @@ static void restart_slave(dp_master_t *m, unsigned idx, hal_time_us_t t, const c
     c1_lost(s, t, why);
 }
 
+static void ring_event(void *ctx, const fdl_active_event_t *ev)
+{
+    dp_master_t *m = ctx;
+    if (m->cfg.ring_event != NULL) {
+        m->cfg.ring_event(m->cfg.event_ctx, ev);
+    }
+}
+
+/* The bus parameters decide the reply deadline (TSL, plus the first character's own time) and
+ * the retry limit. */
+static void ring_init(dp_master_t *m, hal_time_us_t now)
+{
+    if (m->cfg.bus.baud == 0u) {
+        fdl_bus_params_default(&m->cfg.bus, m->cfg.baud, FDL_BUS_PROFILE_DP);
+    }
+    m->cfg.bus.baud = m->cfg.baud;
+    m->cfg.slot_time_us = fdl_bus_us(&m->cfg.bus, m->cfg.bus.tsl_bits) +
+                          hal_uart_char_ns(m->cfg.baud) / 1000u + 1u;
+    if (m->cfg.max_retry == 0u) {
+        m->cfg.max_retry = m->cfg.bus.max_retry;
+    }
+    fdl_active_cfg_t ac = {.address = m->cfg.address, .bus = m->cfg.bus, .uart = m->cfg.uart,
+                           .event = ring_event, .event_ctx = m};
+    fdl_active_init(&m->mac, &ac, now);
+    fdl_active_start(&m->mac, now);
+}
+
 void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t now)
 {
     memset(m, 0, sizeof *m);
@@ -141,6 +168,9 @@ void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t no
         uint32_t bits = b <= 187500u ? 100u : b <= 500000u ? 200u : b <= 1500000u ? 300u
                         : b <= 3000000u ? 400u : b <= 6000000u ? 600u : 1000u;
         m->cfg.slot_time_us = hal_uart_bits_us(b, bits);
+    }
+    if (cfg->token_ring) {
+        ring_init(m, now);
     }
     if (m->cfg.max_retry == 0u) m->cfg.max_retry = 1u;
     if (m->cfg.backoff_min_us == 0u) m->cfg.backoff_min_us = 10000u;
@@ -221,6 +251,9 @@ void dp_master_stop(dp_master_t *m)
 {
     m->running = false;
     m->waiting = false;
+    if (m->cfg.token_ring) {
+        fdl_active_stop(&m->mac, m->mac.last_activity);
+    }
 }
 
 void dp_master_start(dp_master_t *m, hal_time_us_t now)
@@ -228,6 +261,9 @@ void dp_master_start(dp_master_t *m, hal_time_us_t now)
     m->running = true;
     m->waiting = false;
     m->next_send = now;
+    if (m->cfg.token_ring) {
+        fdl_active_start(&m->mac, now);
+    }
     /* A class-2 telegram that was on the wire when the master stopped will never be answered:
      * settle it now, or a later Abort waits for that answer for ever (soak finding
      * c2_abort_stuck). */
@@ -335,6 +371,9 @@ static void send(dp_master_t *m, hal_time_us_t now, bool expect_reply, unsigned 
     uint32_t tx_us = (uint32_t)(((uint64_t)char_ns * m->request_len + 999u) / 1000u);
     if (m->cfg.uart.ops != NULL && m->cfg.uart.ops->transmit != NULL) {
         (void)m->cfg.uart.ops->transmit(m->cfg.uart.ctx, m->request, m->request_len, now);
+    }
+    if (m->cfg.token_ring) {
+        fdl_active_sent(&m->mac, now, now + tx_us, expect_reply);
     }
     fdl_rx_reset(&m->rx);
     if (expect_reply) {
@@ -541,14 +580,30 @@ static void answer_coming(dp_master_t *m, hal_time_us_t t)
 
 static void frame_received(dp_master_t *m);
 
+/* Every telegram goes to the ring's rules (tokens, FDL status, the LAS); the answer we wait for
+ * also to the master. */
+static void heard(dp_master_t *m)
+{
+    if (m->cfg.token_ring) {
+        fdl_active_frame(&m->mac, m->rx.frame, m->rx.frame_len, m->rx.frame_end_t,
+                         m->rx.frame_end_t);
+    }
+    if (m->waiting) {
+        frame_received(m);
+    }
+}
+
 void dp_master_rx_char(dp_master_t *m, uint8_t byte, uint8_t flags, hal_time_us_t t)
 {
     fdl_rx_result_t r = fdl_rx_char(&m->rx, byte, flags, t);
+    if (m->cfg.token_ring) {
+        fdl_active_activity(&m->mac, t);
+    }
     if (m->waiting && m->rx.collecting) {
         answer_coming(m, t);
     }
-    if (r == FDL_RX_FRAME && m->waiting) {
-        frame_received(m);
+    if (r == FDL_RX_FRAME) {
+        heard(m);
     }
 }
 
@@ -560,8 +615,11 @@ void dp_master_rx_telegram(dp_master_t *m, const dp_master_whole_t *w)
          * the last moves it furthest */
         answer_coming(m, w->before_last_t);
     }
-    if (fdl_rx_telegram(&m->rx, &tg) == FDL_RX_FRAME && m->waiting) {
-        frame_received(m);
+    if (m->cfg.token_ring) {
+        fdl_active_activity(&m->mac, w->first_t);
+    }
+    if (fdl_rx_telegram(&m->rx, &tg) == FDL_RX_FRAME) {
+        heard(m);
     }
 }
 
@@ -754,6 +812,84 @@ static void send_to_slave(dp_master_t *m, unsigned idx, bool c1, hal_time_us_t n
     send(m, now, true, idx);
 }
 
+/* ---- as an FDL active station ----------------------------------------------------------- */
+
+/* The next slave for this token visit: each slave at most one cyclic telegram per visit, and
+ * only what the token's time allows. Data_Exchange is high priority; start-up, diagnosis and
+ * acyclic telegrams are low priority and wait for an early token. */
+static int pick_slave_ring(dp_master_t *m, hal_time_us_t now, bool *c1, bool *high)
+{
+    bool low_ok = fdl_active_may_start(&m->mac, now, false);
+    bool high_ok = fdl_active_may_start(&m->mac, now, true);
+    for (unsigned k = 0; k < m->num_slaves; k++) {
+        unsigned idx = (m->next_slave + k) % m->num_slaves;
+        dp_master_slave_t *s = &m->slaves[idx];
+        if (low_ok && s->phase == DP_MASTER_PHASE_DATA_EXCH && s->c1_turn &&
+            dp_master_xfer_busy(&s->c1)) {
+            *c1 = true;
+            *high = false;
+            m->next_slave = (uint8_t)((idx + 1u) % m->num_slaves);
+            return (int)idx;
+        }
+        if (!hal_time_reached(now, s->due) || s->served_visit == m->mac.visit) {
+            continue;
+        }
+        *high = s->phase == DP_MASTER_PHASE_DATA_EXCH;
+        if (!(*high ? high_ok : low_ok)) {
+            continue;
+        }
+        *c1 = false;
+        s->served_visit = m->mac.visit;
+        if (s->phase == DP_MASTER_PHASE_BACKOFF) {
+            set_phase(m, idx, DP_MASTER_PHASE_FDL_STATUS, now);
+        }
+        m->next_slave = (uint8_t)((idx + 1u) % m->num_slaves);
+        return (int)idx;
+    }
+    return -1;
+}
+
+/* Holding the token: Global_Control, then the slaves' telegrams and the class-2 connections'
+ * in turn while the token's time lasts; then the token goes on. */
+static hal_time_us_t ring_poll(dp_master_t *m, hal_time_us_t now)
+{
+    for (unsigned i = 0; i < m->num_slaves; i++) {
+        (void)dp_master_xfer_check_timeout(&m->slaves[i].c1, now);
+    }
+    hal_time_us_t mac_next = fdl_active_poll(&m->mac, now);
+    if (!fdl_active_holds_token(&m->mac)) {
+        return hal_time_earlier(mac_next, idle_until(m, now));
+    }
+    hal_time_us_t from = m->next_send;
+    if (hal_time_diff(fdl_active_line_free(&m->mac), from) > 0) {
+        from = fdl_active_line_free(&m->mac);
+    }
+    if (!hal_time_reached(now, from)) {
+        return from;
+    }
+    if (m->gc_pending && fdl_active_may_start(&m->mac, now, true)) {
+        fdl_active_cycle(&m->mac, true);
+        send_global_control(m, now);
+        return m->next_send;
+    }
+    if (m->c2_turn && fdl_active_may_start(&m->mac, now, false) && send_c2(m, now)) {
+        return m->reply_deadline;
+    }
+    bool c1 = false;
+    bool high = false;
+    int idx = pick_slave_ring(m, now, &c1, &high);
+    if (idx >= 0) {
+        fdl_active_cycle(&m->mac, high);
+        send_to_slave(m, (unsigned)idx, c1, now);
+        return m->reply_deadline;
+    }
+    if (fdl_active_may_start(&m->mac, now, false) && send_c2(m, now)) {
+        return m->reply_deadline;
+    }
+    fdl_active_release(&m->mac, now);
+    return fdl_active_poll(&m->mac, now);
+}
+
 hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
 {
     if (!m->running) {
@@ -766,6 +902,9 @@ hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
         if (reply_timed_out(m, now)) {
             return m->reply_deadline;
         }
+    }
+    if (m->cfg.token_ring) {
+        return ring_poll(m, now);
     }
     if (!hal_time_reached(now, m->next_send)) {
         return m->next_send;

@@ -25,6 +25,7 @@
 
 #include "dp_master/dpv1_xfer.h"
 #include "dp_slave/fdl_rx.h"
+#include "fdl_active/fdl_active.h"
 #include "dp_master/rx_whole.h"
 #include "hal/hal_time.h"
 #include "hal/hal_uart.h"
@@ -93,6 +94,13 @@ typedef struct dp_master_cfg {
     hal_uart_t uart;
     void (*event)(void *ctx, const dp_master_event_t *ev);
     void *event_ctx;
+    /* The master as an FDL active station (fdl_active.h): it sends only while it holds the
+     * token, and takes part in the ring with bus (bus.baud 0: the DP profile at baud). The
+     * reply deadline is then TSL and max_retry the bus's retry limit (when 0 here). Without
+     * it the master owns the line and sends whenever it likes (a bus of its own only). */
+    bool token_ring;
+    fdl_bus_params_t bus;
+    void (*ring_event)(void *ctx, const fdl_active_event_t *ev); /* gets event_ctx */
 } dp_master_cfg_t;
 
 typedef struct dp_master_slave {
@@ -118,6 +126,7 @@ typedef struct dp_master_slave {
     /* DP-V1 class 1 */
     dp_master_xfer_t c1;
     bool c1_turn; /* a Data_Exchange completed since the last acyclic telegram */
+    uint32_t served_visit; /* token ring: the token visit of its last cyclic telegram */
 } dp_master_slave_t;
 
 struct dp_master_c2;
@@ -168,6 +177,8 @@ typedef struct dp_master {
     bool c2_turn;        /* a cyclic telegram went out since the last class-2 one */
     dp_master_fcb_t fcbs[2u * DP_MASTER_MAX_C2];
     uint32_t acyclic_telegrams;
+    /* Medium access (cfg.token_ring). */
+    fdl_active_t mac;
 } dp_master_t;
 
 void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t now);
@@ -189,6 +200,8 @@ void dp_master_rx_char(dp_master_t *m, uint8_t byte, uint8_t flags, hal_time_us_
  * yes (rx_whole.h). */
 void dp_master_rx_telegram(dp_master_t *m, const dp_master_whole_t *w);
 hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now);
+/* The FDL active station (LAS, live list, rotation figures); meaningful with cfg.token_ring. */
+static inline const fdl_active_t *dp_master_ring(const dp_master_t *m) { return &m->mac; }
 
 const char *dp_master_phase_name(dp_master_phase_t p);
 /* Standard DP-V0 Set_Prm: Lock_Req, WD_On with the given time (10 ms base), min TSDR 11. */
