@@ -236,7 +236,7 @@ static void setup(const instrument_opts_t *io)
                          .inverter_delay_us = DEMO_INVERTER_DELAY_US};
     demo.card = &rig_add_card(&demo.rig, &co, 0)->cs;
     dp_master_cfg_t mc = {.address = DEMO_MASTER, .baud = DEMO_BAUD, .strict_timing = true,
-                          .cycle_us = 2000};
+                          .cycle_us = 2000, .token_ring = true};
     demo.master = rig_add_master(&demo.rig, &mc, 0);
 }
 

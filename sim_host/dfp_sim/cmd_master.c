@@ -7,6 +7,7 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "bus_opts.h"
 #include "session.h"
 #include "hal/hal_byte_order.h"
 #include "sim_hal/host_clock.h"
@@ -15,6 +16,7 @@
 
 typedef struct master_opts {
     medium_opts_t med;
+    bus_opts_t bus;
     capture_opts_t capture;
     instrument_opts_t io;
     const char *addresses;
@@ -23,7 +25,6 @@ typedef struct master_opts {
     uint32_t cycles;
     uint32_t timeout_s;
     uint32_t wd_ms;
-    uint32_t slot_ms;
     uint32_t ident;
     uint8_t cfg[DP_MASTER_MAX_CFG];
     size_t cfg_len;
@@ -38,6 +39,7 @@ typedef struct master_opts {
     size_t control_word; /* offset of PO1, the control word, in the outputs */
     uint8_t slave_addr[DP_MASTER_MAX_SLAVES];
     size_t num_slaves;
+    fdl_bus_params_t ring;
 } master_opts_t;
 
 #define MASTER(field) offsetof(master_opts_t, field)
@@ -53,7 +55,6 @@ static const cli_opt_t master_options[] = {
     {CLI_OPT("--ident", "N", CLI_U32, MASTER(ident)), .min = 0, .max = 0xFFFF},
     {CLI_OPT("--watchdog", "MS", CLI_U32, MASTER(wd_ms)), .min = 0, .max = 650000u},
     {CLI_OPT("--master-address", "N", CLI_U32, MASTER(own)), .min = 0, .max = 126},
-    {CLI_OPT("--slot-time", "MS", CLI_U32, MASTER(slot_ms)), .min = 1, .max = 10000u},
     {CLI_OPT("--outputs", "HEX", CLI_HEX, MASTER(outputs)),
      .aux = MASTER(out_given), .max = DP_MASTER_MAX_IO},
     {CLI_OPT("--timeout", "S", CLI_U32, MASTER(timeout_s)), .min = 1, .max = 86400u,
@@ -65,6 +66,7 @@ static const cli_opt_t master_options[] = {
 static const cli_group_t master_groups[] = {
     {medium_options, CLI_COUNT(medium_options), MASTER(med)},
     {master_options, CLI_COUNT(master_options), 0},
+    {bus_options, CLI_COUNT(bus_options), MASTER(bus)},
     {capture_options, CLI_COUNT(capture_options), MASTER(capture)},
     {instrument_options, CLI_COUNT(instrument_options), MASTER(io)},
     {instrument_http_options, CLI_COUNT(instrument_http_options), MASTER(io.web)},
@@ -77,9 +79,10 @@ const cli_command_t cli_master = {.name = "master", .groups = master_groups,
 static int master_parse(master_opts_t *o, int argc, char **argv)
 {
     *o = (master_opts_t){.own = 2, .baud = 19200, .cycles = 100, .timeout_s = 10,
-                         .wd_ms = 1000, .slot_ms = 100, .ident = DFP21B_IDENT,
+                         .wd_ms = 1000, .ident = DFP21B_IDENT,
                          .user_len = SIZE_MAX};
     instrument_defaults(&o->io, RIG_LOG_TIME_BUS);
+    bus_opts_defaults(&o->bus);
     if (cli_parse(&cli_master, argc, argv, o) != 0) {
         return EXIT_USAGE;
     }
@@ -89,7 +92,8 @@ static int master_parse(master_opts_t *o, int argc, char **argv)
         return EXIT_USAGE;
     }
     const cli_file_t capture = {"--capture", o->capture.path, false};
-    if (!medium_check(&o->med, "master") || !cli_no_links("master", &capture, 1u) ||
+    if (!medium_check(&o->med, "master") ||
+        !bus_opts_apply(&o->bus, "master", o->baud, true, &o->ring) || !cli_no_links("master", &capture, 1u) ||
         !cli_address_list(o->addresses, o->slave_addr, DP_MASTER_MAX_SLAVES, &o->num_slaves)) {
         return EXIT_USAGE;
     }
@@ -118,7 +122,7 @@ static int master_build(session_t *s, const master_opts_t *o)
     sc.cfg_len = (uint8_t)o->cfg_len;
     s->in.log.show_inputs = o->verbose;
     dp_master_cfg_t mc = {.address = (uint8_t)o->own, .baud = o->baud, .strict_timing = false,
-                          .slot_time_us = o->slot_ms * 1000u};
+                          .token_ring = true, .bus = o->ring};
     dp_master_t *master = rig_add_master(&s->rig, &mc, tty_now_us());
     for (size_t i = 0; master != NULL && i < o->num_slaves; i++) {
         sc.address = o->slave_addr[i];

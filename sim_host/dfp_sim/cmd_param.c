@@ -16,6 +16,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "bus_opts.h"
 #include "cli.h"
 #include "commands.h"
 #include "lcm_bridge/lcm_segment.h"
@@ -336,6 +337,8 @@ static uint64_t clock_now(void *ctx)
 /* The command line as given. */
 typedef struct param_opts {
     medium_opts_t med;
+    bus_opts_t bus;
+    fdl_bus_params_t ring; /* from bus */
     capture_opts_t capture;
     uint32_t address;
     bool have_address;
@@ -394,6 +397,7 @@ static const cli_opt_t param_options[] = {
 static const cli_group_t param_groups[] = {
     {medium_options, CLI_COUNT(medium_options), PARAM(med)},
     {param_options, CLI_COUNT(param_options), 0},
+    {bus_options, CLI_COUNT(bus_options), PARAM(bus)},
     {capture_options, CLI_COUNT(capture_options), PARAM(capture)},
 };
 
@@ -472,6 +476,7 @@ static bool param_combination(param_opts_t *o)
 static int param_parse(param_opts_t *o, int argc, char **argv)
 {
     *o = (param_opts_t){.baud = 19200, .timeout_s = 10};
+    bus_opts_defaults(&o->bus);
     if (cli_parse(&cli_param, argc, argv, o) != 0) return EXIT_USAGE;
     run.via = o->via;
     run.volatile_write = o->volatile_write;
@@ -482,7 +487,8 @@ static int param_parse(param_opts_t *o, int argc, char **argv)
         return EXIT_USAGE;
     }
     const cli_file_t capture = {"--capture", o->capture.path, false};
-    if (!medium_check(&o->med, "param") || !cli_no_links("param", &capture, 1u)) {
+    if (!medium_check(&o->med, "param") || !cli_no_links("param", &capture, 1u) ||
+        !bus_opts_apply(&o->bus, "param", o->baud, true, &o->ring)) {
         return EXIT_USAGE;
     }
     if (o->npos == 0) {
@@ -551,7 +557,7 @@ static bool param_open(const param_opts_t *o)
 static bool param_master(const param_opts_t *o)
 {
     dp_master_cfg_t mc = {.address = (uint8_t)o->own, .baud = o->baud, .strict_timing = false,
-                          .slot_time_us = 100000u};
+                          .token_ring = true, .bus = o->ring};
     master = rig_add_master(&rig, &mc, tty_now_us());
     if (master == NULL) {
         cli_error("param: the master could not join the medium");

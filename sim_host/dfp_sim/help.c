@@ -13,6 +13,7 @@ enum {
     NOTE_LOG = 1u << 3,
     NOTE_LCM = 1u << 4,
     NOTE_SEGMENT = 1u << 5,
+    NOTE_BUS = 1u << 6,
 };
 
 typedef struct {
@@ -81,7 +82,7 @@ static const help_cmd_t commands[] = {
      "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] [--key FILE] --address N|N-M,...\n"
      "--config HEX "
      "[--prm HEX] [--cycles N] [--baud RATE] [--ident N] [--watchdog MS]\n"
-     "[--master-address N] [--slot-time MS] [--outputs HEX] [--timeout S]\n"
+     "[--master-address N] [--outputs HEX] [--timeout S] [BUS OPTIONS]\n"
      "[--capture FILE] [--verbose] [--reset-fault] [--http [ADDR:]PORT] [LOG OPTIONS]",
      "the built-in class-1 master against one slave or several (up to 32, e.g. 3-34 or\n"
      "3,5,7-9, all with the same configuration); exit 0 once each ran N cycles (default\n"
@@ -91,7 +92,7 @@ static const help_cmd_t commands[] = {
      "leaves (after --cycles, or on SIGINT/SIGTERM) with Global_Control Clear_Data and zero\n"
      "outputs for 3 cycles; --reset-fault acknowledges a drive fault at start (control\n"
      "word bit 6 set, then cleared; the drive needs P101 = FIELDBUS)",
-     NOTE_RATE | NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG | NOTE_SEGMENT},
+     NOTE_RATE | NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG | NOTE_SEGMENT | NOTE_BUS},
     {"inverter",
      "--can IFACE [--sbus-address N] [--eeprom FILE] [--duration S] [--channel2]\n"
      "[--quiet]",
@@ -102,7 +103,7 @@ static const help_cmd_t commands[] = {
     {"param",
      "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] [--key FILE] --address N\n"
      "[--via channel|movilink|profidrive|c2] [--baud RATE] [--master-address N]\n"
-     "[--timeout S] [--json] [--capture FILE] [--verbose]\n"
+     "[--timeout S] [--json] [--capture FILE] [--verbose] [BUS OPTIONS]\n"
      "read PARAM [PARAM ...] | write PARAM VALUE [--volatile] | im0",
      "one parameter service against the card on a tty, or as a master on an LCM segment\n"
      "(--bus, --lcm-url, --key as for slave). PARAM: an index (8461, 0x210D), a P-number\n"
@@ -123,7 +124,7 @@ static const help_cmd_t commands[] = {
      "1 on a negative one or none within --timeout (default 10 s), 2 on a bad command\n"
      "line or an unknown PARAM; --json: one JSON object per result (p_number, name,\n"
      "value, text ...)",
-     NOTE_RATE | NOTE_CAPTURE | NOTE_SEGMENT},
+     NOTE_RATE | NOTE_CAPTURE | NOTE_SEGMENT | NOTE_BUS},
     {"convert",
      "IN OUT [--format pcap|pcapng|text] [--linktype profibus|user0] [--ns]\n"
      "[--in-format pcap|pcapng|text|lcm] [--channel NAME] [--quiet]",
@@ -201,6 +202,16 @@ static const help_note_t notes[] = {
     {NOTE_LOG, "LOG OPTIONS", ": ",
      "--quiet (warnings and errors only), --log-level error|warn|info|debug (debug\n"
      "adds every baud-search step), --timestamps bus|wall (ms since start, or clock time)."},
+    {NOTE_BUS, "BUS OPTIONS", ": ",
+     "the master is an FDL active station: it joins the token ring of the\n"
+     "segment (or passes the token to itself alone) and sends only while it holds the\n"
+     "token. Its bus parameters must match every other master's (a PLC's): --bus-profile\n"
+     "dp|usb (dp: the DP profile's values for the rate; usb, the default on a tty, PTY or\n"
+     "LCM segment: TSL 100 ms, max TSDR 10 ms, TTR 2 s, for adapters and hosts whose\n"
+     "timing is milliseconds), then in bit times --tsl BITS (slot time), --min-tsdr BITS,\n"
+     "--max-tsdr BITS, --tset BITS, --tqui BITS, --ttr BITS (target rotation time),\n"
+     "--gap-factor G (1..100), --hsa N (highest station address, 1..126), --max-retry N\n"
+     "(0..7). A set that breaks a rule (TSL above max TSDR ...) exits 2."},
     {NOTE_LCM, "--lcm URL", " ",
      "publishes the card's telegrams, state and parameter services to LCM (channels\n"
      "DFP_TELEGRAM, DFP_CARD_STATE, DFP_PARAM; sim_host/lcm_bridge/README.md)."},

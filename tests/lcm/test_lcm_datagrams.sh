@@ -33,7 +33,7 @@ if kill -0 "$slave" 2>/dev/null; then ok; else
     >/dev/null ) &
 expect_exit 0 "a master still reaches Data_Exchange with the slave" -- \
   timeout 60 "$sim" master --bus lcm:SEG --lcm-url "$url" --address 5 --config F3F2 --baud 19200 \
-  --slot-time 100 --cycles 20 --timeout 30
+  --cycles 20 --timeout 30
 expect_in "master done" "done: slave 5 in data exchange" "$out"
 if kill -0 "$slave" 2>/dev/null; then ok; else bad "the slave died during the master's run"; fi
 kill -INT "$slave"

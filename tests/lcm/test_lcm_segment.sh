@@ -40,7 +40,7 @@ if [ "$n" = "$nslaves" ]; then ok; else bad "only $n of $nslaves slaves started"
 
 t0=$(date +%s%N)
 timeout 300 "$sim" master --bus lcm:SEG --lcm-url "$url" --address "$first-$last" --config F3F2 \
-  --baud "$baud" --slot-time "$slot_ms" --cycles 50 --timeout 240 --outputs 0000000000000000000605DC0000 \
+  --baud "$baud" --tsl "$((baud * slot_ms / 1000))" --cycles 50 --timeout 240 --outputs 0000000000000000000605DC0000 \
   >"$tmp/master.out" 2>&1
 rc=$?
 t1=$(date +%s%N)

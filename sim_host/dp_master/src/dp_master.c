@@ -849,6 +849,26 @@ static int pick_slave_ring(dp_master_t *m, hal_time_us_t now, bool *c1, bool *hi
     return -1;
 }
 
+/* A master alone in its ring with nothing due keeps the token on an idle line until its next
+ * slave is due, but never for 3 slot times: a station listening to join must not take the
+ * silence for a lost token (its TTO is at least 6 slot times). Passing the token to itself at
+ * once would fill the line with tokens between two cycles (e.g. 40 per 2 ms at 1.5 Mbit/s)
+ * that say nothing another station could use. */
+static hal_time_us_t alone_hold_until(dp_master_t *m, hal_time_us_t now)
+{
+    if (m->mac.ns != m->cfg.address || m->mac.gap_due) {
+        return now;
+    }
+    for (unsigned i = 0; i < m->num_slaves; i++) {
+        if (hal_time_reached(now, m->slaves[i].due)) {
+            return now; /* served in this visit, due again: the next visit is for it */
+        }
+    }
+    hal_time_us_t limit = m->mac.last_activity +
+                          3u * fdl_bus_us(&m->cfg.bus, m->cfg.bus.tsl_bits);
+    return hal_time_earlier(idle_until(m, now), limit);
+}
+
 /* Holding the token: Global_Control, then the slaves' telegrams and the class-2 connections'
  * in turn while the token's time lasts; then the token goes on. */
 static hal_time_us_t ring_poll(dp_master_t *m, hal_time_us_t now)
@@ -858,7 +878,7 @@ static hal_time_us_t ring_poll(dp_master_t *m, hal_time_us_t now)
     }
     hal_time_us_t mac_next = fdl_active_poll(&m->mac, now);
     if (!fdl_active_holds_token(&m->mac)) {
-        return hal_time_earlier(mac_next, idle_until(m, now));
+        return mac_next; /* nothing to send before the token comes, and it comes by a telegram */
     }
     hal_time_us_t from = m->next_send;
     if (hal_time_diff(fdl_active_line_free(&m->mac), from) > 0) {
@@ -885,6 +905,10 @@ static hal_time_us_t ring_poll(dp_master_t *m, hal_time_us_t now)
     }
     if (fdl_active_may_start(&m->mac, now, false) && send_c2(m, now)) {
         return m->reply_deadline;
+    }
+    hal_time_us_t hold = alone_hold_until(m, now);
+    if (!hal_time_reached(now, hold)) {
+        return hold;
     }
     fdl_active_release(&m->mac, now);
     return fdl_active_poll(&m->mac, now);

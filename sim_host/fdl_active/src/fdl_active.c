@@ -242,7 +242,7 @@ static void take_token(fdl_active_t *s, uint8_t from, hal_time_us_t t)
     s->ps = from;
     s->foreign_ps = NO_ADDRESS;
     s->gap_asked_this_visit = false;
-    if (!s->gap_round && ++s->gap_rotations >= s->cfg.bus.gap_factor) {
+    if (++s->gap_rotations >= s->cfg.bus.gap_factor) {
         s->gap_rotations = 0;
         s->gap_due = true;
     }
@@ -442,14 +442,12 @@ void fdl_active_release(fdl_active_t *s, hal_time_us_t now)
         return;
     }
     /* GAP maintenance only with time left on the token (TTH > 0): one address every G
-     * rotations, or one per visit in the round that follows a claim (ring initialisation). */
+     * rotations, the first at once after a claim. */
     s->gap_pending = false;
-    bool want = s->gap_round ? !s->gap_asked_this_visit : s->gap_due;
-    if (want && !s->late && !hal_time_reached(now, s->tth_end)) {
+    if (s->gap_due && !s->late && !hal_time_reached(now, s->tth_end)) {
         s->gap_due = false;
         if (!in_gap(s, s->gap_next)) {
             /* past NS (or round HSA): the GAP starts again after TS */
-            s->gap_round = false;
             s->gap_next = next_address(s, ts(s));
             while (!in_gap(s, s->gap_next) && s->gap_next != s->ns && s->gap_next != ts(s)) {
                 s->gap_next = next_address(s, s->gap_next);
@@ -557,7 +555,7 @@ static hal_time_us_t claim_token(fdl_active_t *s, hal_time_us_t now)
     if (++s->claim_tokens < 2u) {
         return s->line_free;
     }
-    s->gap_round = true;
+    s->gap_due = true; /* the ring is rebuilt by GAP maintenance, from TS+1 on */
     s->gap_rotations = 0;
     s->gap_next = next_address(s, ts(s));
     s->have_token_t = false;

@@ -8,8 +8,8 @@
  *   - the real rotation time TRR is measured from one token receipt to the next; the token
  *     holding time TTH = TTR - TRR allows high-priority message cycles, then low-priority ones,
  *     while the token is early; a late token (TTH <= 0) allows exactly one high-priority cycle;
- *   - GAP maintenance: every G rotations the addresses between TS and NS (up to HSA) are asked,
- *     one Request FDL Status per token visit; a master answering "ready to enter the ring"
+ *   - GAP maintenance: every G rotations one address between TS and NS (up to HSA) is asked
+ *     with Request FDL Status, in turn from TS+1 on (the first at once after a claim); a master answering "ready to enter the ring"
  *     becomes the new NS; what every address answered is the live list;
  *   - FDL status requests to this station are answered: master not ready / ready to enter the
  *     ring / in the ring (FC 0x10 / 0x20 / 0x30);
@@ -163,7 +163,6 @@ typedef struct fdl_active {
     uint32_t visit;            /* counts token receipts; the user serves each slave once */
     /* GAP maintenance. */
     uint8_t gap_rotations;
-    bool gap_round;            /* after a claim: one address per visit until the GAP is done */
     bool gap_due;              /* G rotations passed: one address at the next visit */
     uint8_t gap_next;
     bool gap_asked_this_visit;
