@@ -356,6 +356,7 @@ static void status_answer(fdl_active_t *s, uint8_t sa, uint8_t fc, hal_time_us_t
     live_put(s, sa, k, t);
     if (k == FDL_STATION_READY) {
         s->ns = sa; /* it enters the ring: the token goes to it now */
+        s->pass_to = sa;
         emit(s, (fdl_active_event_t){.type = FDL_EV_NEW_SUCCESSOR, .t = t, .state = s->state,
                                      .address = sa});
     }
