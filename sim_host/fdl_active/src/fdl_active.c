@@ -241,6 +241,9 @@ static void take_token(fdl_active_t *s, uint8_t from, hal_time_us_t t)
     }
     s->ps = from;
     s->foreign_ps = NO_ADDRESS;
+    /* NS is the next station of the LAS: the LAS changed since we last held the token (a station
+     * entered the ring after us, or one was skipped). */
+    s->ns = las_next(s, ts(s));
     s->gap_asked_this_visit = false;
     if (!s->gap_round && ++s->gap_rotations >= s->cfg.bus.gap_factor) {
         s->gap_rotations = 0;
