@@ -263,6 +263,19 @@ static void take_token(fdl_active_t *s, uint8_t from, hal_time_us_t t)
 static void token_seen(fdl_active_t *s, uint8_t sa, uint8_t da, hal_time_us_t t)
 {
     las_put(s, sa, true, t);
+    if (sa == da) {
+        /* A station alone (after its claim): its ring is itself, so this station is out of it
+         * and enters again through sa's GAP ("ready", not "in ring"). */
+        for (unsigned a = 0; a <= FDL_ACTIVE_HSA_MAX; a++) {
+            if (a != sa && a != ts(s)) {
+                las_put(s, (uint8_t)a, false, t);
+            }
+        }
+        if (s->in_ring && s->state == FDL_MAC_ACTIVE_IDLE) {
+            s->in_ring = false;
+        }
+        return;
+    }
     for (uint8_t a = sa == FDL_ACTIVE_HSA_MAX ? 0u : (uint8_t)(sa + 1u); a != da;
          a = a >= FDL_ACTIVE_HSA_MAX ? 0u : (uint8_t)(a + 1u)) {
         if (a == ts(s)) {
@@ -272,9 +285,6 @@ static void token_seen(fdl_active_t *s, uint8_t sa, uint8_t da, hal_time_us_t t)
             continue;
         }
         las_put(s, a, false, t);
-        if (sa == da) {
-            break; /* a lone station: the addresses around it say nothing */
-        }
     }
 }
 
