@@ -192,11 +192,16 @@ static bool ring_complete(const ring_rig_t *rr, const uint8_t *cards_master)
 {
     for (unsigned i = 0; i < rr->num_masters; i++) {
         const fdl_active_t *a = dp_master_ring(rr->m[i]);
+        if (!rr->m[i]->running || a->state == FDL_MAC_OFFLINE) {
+            continue; /* switched off, or off the bus (a duplicate address) */
+        }
         if (!a->in_ring) {
             return false;
         }
         for (unsigned k = 0; k < rr->num_masters; k++) {
-            if (!fdl_active_in_las(a, rr->m[k]->cfg.address)) {
+            const dp_master_t *o = rr->m[k];
+            if (o->running && o->mac.state != FDL_MAC_OFFLINE &&
+                !fdl_active_in_las(a, o->cfg.address)) {
                 return false;
             }
         }

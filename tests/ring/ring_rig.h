@@ -59,7 +59,7 @@ size_t ring_rig_find_token(const ring_rig_t *rr, size_t from, uint8_t da, uint8_
 unsigned ring_rig_foreign_senders(const ring_rig_t *rr, size_t from);
 /* A Data_Exchange request (SRD high, no SAP) from master to slave. */
 bool ring_frame_is_data_exch(const ring_frame_t *f, uint8_t slave, uint8_t master);
-/* Runs in steps of 1 ms until every master is in the ring with every other one in its LAS
+/* Runs in steps of 1 ms until every running master is in the ring with the others in its LAS
  * and every card is in Data_Exchange with the master at cards_master[i] (0: not checked), at
  * most max_us. True when reached. */
 bool ring_rig_settle(ring_rig_t *rr, const uint8_t *cards_master, uint64_t max_us);
