@@ -20,6 +20,7 @@ static void tap(void *ctx, uint64_t t_ns, const uint8_t *f, size_t len, bool loc
     ring_frame_t *r = &rr->trace[rr->trace_len++];
     r->t_ns = t_ns;
     r->len = (uint8_t)(len > sizeof r->b ? sizeof r->b : len);
+    r->full_len = (uint16_t)len;
     memcpy(r->b, f, r->len);
 }
 
@@ -140,4 +141,119 @@ size_t ring_rig_count(const ring_rig_t *rr, const uint8_t *prefix, size_t len)
         }
     }
     return n;
+}
+
+bool ring_frame_is_token(const ring_frame_t *f, uint8_t da, uint8_t sa)
+{
+    return f->len == FDL_SD4_LEN && f->b[0] == FDL_SD4 && f->b[1] == da && f->b[2] == sa;
+}
+
+bool ring_frame_addr(const ring_frame_t *f, uint8_t *da, uint8_t *sa, uint8_t *fc)
+{
+    size_t at = 0;
+    if ((f->b[0] == FDL_SD1 || f->b[0] == FDL_SD3) && f->len >= 4u) {
+        at = 1;
+    } else if (f->b[0] == FDL_SD2 && f->len >= 7u) {
+        at = 4;
+    } else {
+        return false;
+    }
+    *da = f->b[at] & FDL_ADDR_MASK;
+    *sa = f->b[at + 1u] & FDL_ADDR_MASK;
+    *fc = f->b[at + 2u];
+    return true;
+}
+
+uint64_t ring_frame_end_ns(const ring_rig_t *rr, const ring_frame_t *f)
+{
+    return f->t_ns + (uint64_t)hal_uart_char_ns(rr->rig.cfg.baud) * f->full_len;
+}
+
+void ring_rig_dump(const ring_rig_t *rr, size_t from, size_t n)
+{
+    char line[128];
+    for (size_t i = from; i < rr->trace_len && i < from + n; i++) {
+        (void)ring_rig_trace_text(rr, i, 1, line, sizeof line);
+        fprintf(stderr, "    %4zu %12.3f %s", i, (double)rr->trace[i].t_ns / 1000.0, line);
+    }
+}
+
+size_t ring_rig_find_token(const ring_rig_t *rr, size_t from, uint8_t da, uint8_t sa)
+{
+    for (size_t i = from; i < rr->trace_len; i++) {
+        if (ring_frame_is_token(&rr->trace[i], da, sa)) {
+            return i;
+        }
+    }
+    return rr->trace_len;
+}
+
+static bool ring_complete(const ring_rig_t *rr, const uint8_t *cards_master)
+{
+    for (unsigned i = 0; i < rr->num_masters; i++) {
+        const fdl_active_t *a = dp_master_ring(rr->m[i]);
+        if (!rr->m[i]->running || a->state == FDL_MAC_OFFLINE) {
+            continue; /* switched off, or off the bus (a duplicate address) */
+        }
+        if (!a->in_ring) {
+            return false;
+        }
+        for (unsigned k = 0; k < rr->num_masters; k++) {
+            const dp_master_t *o = rr->m[k];
+            if (o->running && o->mac.state != FDL_MAC_OFFLINE &&
+                !fdl_active_in_las(a, o->cfg.address)) {
+                return false;
+            }
+        }
+    }
+    for (unsigned c = 0; c < rr->rig.num_cards; c++) {
+        const dp_slave_t *s = &rr->rig.cards[c].cs.card.dp;
+        if (cards_master[c] != 0u && (dp_slave_state(s) != DP_STATE_DATA_EXCH ||
+                                      dp_slave_master(s) != cards_master[c])) {
+            return false;
+        }
+    }
+    return true;
+}
+
+bool ring_rig_settle(ring_rig_t *rr, const uint8_t *cards_master, uint64_t max_us)
+{
+    for (uint64_t t = 0; t < max_us; t += 1000u) {
+        if (ring_complete(rr, cards_master)) {
+            return true;
+        }
+        ring_rig_run_us(rr, 1000u);
+    }
+    return ring_complete(rr, cards_master);
+}
+
+unsigned ring_rig_foreign_senders(const ring_rig_t *rr, size_t from)
+{
+    unsigned bad = 0;
+    int holder = -1;
+    int passer = -1; /* repeats a token its successor did not take */
+    for (size_t i = from; i < rr->trace_len; i++) {
+        const ring_frame_t *f = &rr->trace[i];
+        uint8_t da;
+        uint8_t sa;
+        uint8_t fc;
+        if (f->b[0] == FDL_SD4) {
+            bad += holder >= 0 && f->b[2] != holder && f->b[2] != passer;
+            holder = f->b[1];
+            passer = f->b[2];
+        } else if (ring_frame_addr(f, &da, &sa, &fc) && holder >= 0) {
+            bad += (fc & FDL_FC_REQUEST) != 0u ? sa != holder : da != holder;
+            passer = -1;
+        }
+    }
+    return bad;
+}
+
+bool ring_frame_is_data_exch(const ring_frame_t *f, uint8_t slave, uint8_t master)
+{
+    uint8_t da;
+    uint8_t sa;
+    uint8_t fc;
+    return f->b[0] == FDL_SD2 && ring_frame_addr(f, &da, &sa, &fc) && da == slave &&
+           sa == master && (f->b[4] & FDL_ADDR_EXT) == 0u && (fc == 0x5Du || fc == 0x7Du);
 }

@@ -14,8 +14,9 @@
 
 typedef struct ring_frame {
     uint64_t t_ns;
-    uint8_t len;
-    uint8_t b[24]; /* the first octets */
+    uint8_t len;      /* octets kept in b */
+    uint16_t full_len; /* octets on the line */
+    uint8_t b[24];    /* the first octets */
 } ring_frame_t;
 
 typedef struct ring_rig {
@@ -42,5 +43,25 @@ void ring_rig_run_us(ring_rig_t *rr, uint64_t us);
 size_t ring_rig_trace_text(const ring_rig_t *rr, size_t from, size_t n, char *out, size_t cap);
 /* Number of telegrams in the trace whose octets start with prefix. */
 size_t ring_rig_count(const ring_rig_t *rr, const uint8_t *prefix, size_t len);
+
+/* A token from sa to da. */
+bool ring_frame_is_token(const ring_frame_t *f, uint8_t da, uint8_t sa);
+/* DA, SA (without the SAP bit) and FC of an SD1/SD2/SD3 telegram; false for a token or SC. */
+bool ring_frame_addr(const ring_frame_t *f, uint8_t *da, uint8_t *sa, uint8_t *fc);
+/* The end of the telegram's last character on the line. */
+uint64_t ring_frame_end_ns(const ring_rig_t *rr, const ring_frame_t *f);
+/* The trace with times (µs from the bus start) on stderr: what a failed check looks at. */
+void ring_rig_dump(const ring_rig_t *rr, size_t from, size_t n);
+/* Index of the first token from sa to da at or after from, or rr->trace_len. */
+size_t ring_rig_find_token(const ring_rig_t *rr, size_t from, uint8_t da, uint8_t sa);
+/* Requests or tokens from a station that does not hold the token, or replies to one, from
+ * trace index from on (the holder: the DA of the last token). */
+unsigned ring_rig_foreign_senders(const ring_rig_t *rr, size_t from);
+/* A Data_Exchange request (SRD high, no SAP) from master to slave. */
+bool ring_frame_is_data_exch(const ring_frame_t *f, uint8_t slave, uint8_t master);
+/* Runs in steps of 1 ms until every running master is in the ring with the others in its LAS
+ * and every card is in Data_Exchange with the master at cards_master[i] (0: not checked), at
+ * most max_us. True when reached. */
+bool ring_rig_settle(ring_rig_t *rr, const uint8_t *cards_master, uint64_t max_us);
 
 #endif

@@ -241,6 +241,9 @@ static void take_token(fdl_active_t *s, uint8_t from, hal_time_us_t t)
     }
     s->ps = from;
     s->foreign_ps = NO_ADDRESS;
+    /* NS is the next station of the LAS: the LAS changed since we last held the token (a station
+     * entered the ring after us, or one was skipped). */
+    s->ns = las_next(s, ts(s));
     s->gap_asked_this_visit = false;
     if (++s->gap_rotations >= s->cfg.bus.gap_factor) {
         s->gap_rotations = 0;
@@ -260,6 +263,19 @@ static void take_token(fdl_active_t *s, uint8_t from, hal_time_us_t t)
 static void token_seen(fdl_active_t *s, uint8_t sa, uint8_t da, hal_time_us_t t)
 {
     las_put(s, sa, true, t);
+    if (sa == da) {
+        /* A station alone (after its claim): its ring is itself, so this station is out of it
+         * and enters again through sa's GAP ("ready", not "in ring"). */
+        for (unsigned a = 0; a <= FDL_ACTIVE_HSA_MAX; a++) {
+            if (a != sa && a != ts(s)) {
+                las_put(s, (uint8_t)a, false, t);
+            }
+        }
+        if (s->in_ring && s->state == FDL_MAC_ACTIVE_IDLE) {
+            s->in_ring = false;
+        }
+        return;
+    }
     for (uint8_t a = sa == FDL_ACTIVE_HSA_MAX ? 0u : (uint8_t)(sa + 1u); a != da;
          a = a >= FDL_ACTIVE_HSA_MAX ? 0u : (uint8_t)(a + 1u)) {
         if (a == ts(s)) {
@@ -269,9 +285,6 @@ static void token_seen(fdl_active_t *s, uint8_t sa, uint8_t da, hal_time_us_t t)
             continue;
         }
         las_put(s, a, false, t);
-        if (sa == da) {
-            break; /* a lone station: the addresses around it say nothing */
-        }
     }
 }
 
@@ -356,6 +369,7 @@ static void status_answer(fdl_active_t *s, uint8_t sa, uint8_t fc, hal_time_us_t
     live_put(s, sa, k, t);
     if (k == FDL_STATION_READY) {
         s->ns = sa; /* it enters the ring: the token goes to it now */
+        s->pass_to = sa;
         emit(s, (fdl_active_event_t){.type = FDL_EV_NEW_SUCCESSOR, .t = t, .state = s->state,
                                      .address = sa});
     }
