@@ -397,16 +397,16 @@ static void print_figures(const line_run_t *r)
     for (unsigned s = 0; s < n; s++) {
         const line_station_stats_t *st = &r->line.st[s];
         char name[16];
-        printf("  %-6s sent %llu octets in %llu writes%s, received %llu, dropped %llu, "
+        printf("  %-6s sent %llu octets in %llu writes, received %llu, dropped %llu, "
                "collisions %llu\n", station_name(r, s, name, sizeof name),
                (unsigned long long)st->tx_octets, (unsigned long long)st->tx_writes,
-               s >= r->n_ports ? " (characters)" : "", (unsigned long long)st->rx_octets,
+               (unsigned long long)(s < r->n_ports ? st->rx_octets : r->bridge.frames_to_bus),
                (unsigned long long)(st->rx_dropped + st->tx_dropped),
                (unsigned long long)st->collisions);
     }
     if (r->cards) {
-        printf("  bus    %llu telegrams passed on to the cards\n",
-               (unsigned long long)r->bridge.frames_to_bus);
+        printf("  (bus: the in-memory bus; it writes character by character and receives "
+               "the ports' writes whole)\n");
     }
 }
 
@@ -429,11 +429,11 @@ static int line_session(line_run_t *r, const line_opts_t *o)
         }
         r->capturing = true;
     }
+    print_start(r, o);
     r->t0_ns = host_clock_mono_ns();
     if (o->n_cards > 0u && bus_open(r, o) != 0) {
         return 1;
     }
-    print_start(r, o);
     int rc = line_loop(r);
     log_collisions(r);
     print_figures(r);
