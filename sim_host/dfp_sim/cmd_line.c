@@ -236,7 +236,7 @@ static int bus_open(line_run_t *r, const line_opts_t *o)
     return 0;
 }
 
-/* ---- the ports ------------------------------------------------------------------------------ */
+/* ---- the ports ---------------------------------------------------------------------------- */
 
 /* Takes what the line delivers to a port: as much as the PTY takes now, never waiting (a port
  * nobody reads drops the rest, and the line counts it). */

@@ -5,6 +5,8 @@ usage: line_probe.py exact DIR       port1 writes 64 octets; prints what port1..
        line_probe.py collide DIR     port1 writes 100 octets, port2 writes 20 octets 20 ms later
                                      (inside port1's transmission at 9600 bit/s); then port1
                                      writes 8 octets alone; prints what port3 read each time
+       line_probe.py flood DIR       port1 writes 200000 octets (port3 is never opened); prints
+                                     how many port2 read
        line_probe.py spread DIR      port1 writes 100 octets; prints the ms from the write to
                                      port2's first and last octet, and how many arrived
 """
@@ -62,6 +64,18 @@ def collide(d):
     print("port3 %s" % collect(fds, 0.3)[2].hex())
 
 
+def flood(d):
+    fds = open_ports(d, 2)
+    data = bytes((i * 7) & 0xFF for i in range(200000))
+    got = b""
+    for i in range(0, len(data), 1000):
+        os.write(fds[0], data[i:i + 1000])
+        time.sleep(0.001)
+        got += drain(fds[1])
+    got += collect(fds, 0.5)[1]
+    print("port2 %d %s" % (len(got), "same" if got == data else "different"))
+
+
 def spread(d):
     fds = open_ports(d, 2)
     drain(fds[1])
@@ -84,4 +98,4 @@ def spread(d):
 
 
 if __name__ == "__main__":
-    {"exact": exact, "collide": collide, "spread": spread}[sys.argv[1]](sys.argv[2])
+    {"exact": exact, "collide": collide, "flood": flood, "spread": spread}[sys.argv[1]](sys.argv[2])

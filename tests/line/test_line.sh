@@ -39,6 +39,14 @@ stop_line
 expect_in "figures: port1 sent" "port1  sent 64 octets in 1 writes, received 0, dropped 0, collisions 0" "$(cat "$tmp/a.out")"
 expect_in "figures: port3 received" "port3  sent 0 octets in 0 writes, received 64" "$(cat "$tmp/a.out")"
 
+# Never blocking: port3, which nobody opens, drops what does not fit in its PTY (counted), while
+# port2 reads all of a long stream.
+start_line "$tmp/f.out" --ports 3 || exit 1
+expect_in "port2 reads all 200000 octets" "port2 200000 same" "$("$py" "$here/line_probe.py" flood "$tmp/l")"
+stop_line
+dropped=$(sed -n 's/^  port3 .* dropped \([0-9]*\),.*/\1/p' "$tmp/f.out")
+[ "${dropped:-0}" -gt 0 ] && ok || bad "port3 (never opened) dropped ${dropped:-nothing}: $(cat "$tmp/f.out")"
+
 # 2. A collision: port2 talks 20 ms into port1's 100 octets (115 ms at 9600 bit/s). port3 gets
 # 100 octets with 20 garbled ones (0x68 AND 0x10 = 0x00) where they overlapped; port2 hears the
 # 80 of port1's that came after its own, and the 8 of the next write, which comes through
