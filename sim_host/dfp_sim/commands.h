@@ -5,7 +5,7 @@
 
 /* Each command's option table (cli_table.h), beside the command. */
 extern const cli_command_t cli_demo, cli_slave, cli_master, cli_inverter, cli_param, cli_convert,
-    cli_replay, cli_record;
+    cli_replay, cli_record, cli_line;
 
 int cmd_demo(int argc, char **argv);
 int cmd_slave(int argc, char **argv);
@@ -15,5 +15,6 @@ int cmd_param(int argc, char **argv);
 int cmd_convert(int argc, char **argv);
 int cmd_replay(int argc, char **argv);
 int cmd_record(int argc, char **argv);
+int cmd_line(int argc, char **argv);
 
 #endif

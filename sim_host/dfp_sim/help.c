@@ -163,6 +163,21 @@ static const help_cmd_t commands[] = {
      "into FILE: --dpv1 adds data set 47 (class 1) and a class-2 connection, --faults a\n"
      "watchdog expiry and a wrong configuration, --foreign a second slave and master",
      NOTE_RATE | NOTE_CAPTURE},
+    {"line",
+     "--dir DIR [--ports N] [--baud RATE] [--timing] [--card ADDR]... [--quiet]\n"
+     "[--capture FILE]",
+     "a virtual RS-485 segment any program joins: N PTY ports (default 2, up to 16)\n"
+     "with links DIR/port1..DIR/portN (an old link there is replaced, anything else\n"
+     "refused; removed at exit), until SIGINT/SIGTERM. What one port writes every\n"
+     "other port reads, the writer does not (half duplex); each character takes 11 bit\n"
+     "times at --baud (default 19200); --timing paces delivery to the characters' ends\n"
+     "and keeps the idle gaps. Two talkers at once come out garbled to the listeners,\n"
+     "and each collision is counted and told on stderr. --card ADDR (repeatable): an\n"
+     "emulated DFP21B with its MOVIDRIVE on the in-memory bus, joined to the line;\n"
+     "--quiet: only the cards' warnings. A port nobody reads drops what it would get\n"
+     "(counted). At the end: per port octets, writes, drops and collisions.\n"
+     "sim_host/line/README.md",
+     NOTE_RATE | NOTE_CAPTURE},
     {"check-cfg", "HEX", "would the card accept this Chk_Cfg configuration?", 0u},
 };
 

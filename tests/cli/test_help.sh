@@ -7,12 +7,12 @@ manpage=$2
 . "$(dirname "$0")/lib.sh"
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 
-commands=(demo slave master inverter param convert replay record check-cfg)
+commands=(demo slave master inverter param convert replay record line check-cfg)
 with_log=" demo slave master "
 
 expect_exit 2 "unknown command" -- "$sim" fly
 expect_in "the unknown-command message lists the commands of the help" \
-  "(commands: demo, slave, master, inverter, param, convert, replay, record, check-cfg; see --help)" "$out"
+  "(commands: demo, slave, master, inverter, param, convert, replay, record, line, check-cfg; see --help)" "$out"
 
 expect_exit 0 "--help" -- "$sim" --help
 full=$out
