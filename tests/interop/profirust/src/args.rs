@@ -98,7 +98,11 @@ pub fn baud(v: &str) -> Result<Baudrate, String> {
         "12000000" | "12m" => {
             return Err("--baud 12M: the DFP21B does not support it (GSD 12M_supp = 0)".into())
         }
-        _ => return Err(format!("--baud '{v}': not a PROFIBUS rate the DFP21B supports")),
+        _ => {
+            return Err(format!(
+                "--baud '{v}': not a PROFIBUS rate the DFP21B supports"
+            ))
+        }
     })
 }
 
@@ -167,7 +171,9 @@ pub fn io_sizes(cfg: &[u8]) -> Result<(usize, usize), String> {
         }
     }
     if inp > 244 || out > 244 {
-        return Err(format!("--cfg: {inp} input / {out} output bytes, at most 244 each"));
+        return Err(format!(
+            "--cfg: {inp} input / {out} output bytes, at most 244 each"
+        ));
     }
     Ok((inp, out))
 }
@@ -206,7 +212,10 @@ pub fn parse(argv: &[String]) -> Result<Parsed, String> {
         if !opt.starts_with("--") {
             return Err(format!("unexpected argument '{opt}' (see --help)"));
         }
-        let v = it.next().ok_or_else(|| format!("{opt} needs a value"))?.as_str();
+        let v = it
+            .next()
+            .ok_or_else(|| format!("{opt} needs a value"))?
+            .as_str();
         match opt {
             "--port" => port = Some(v.to_string()),
             "--address" => a.address = number(opt, v, 0, 125)? as u8,
@@ -231,9 +240,9 @@ pub fn parse(argv: &[String]) -> Result<Parsed, String> {
             "--json" => a.json = Some(v.to_string()),
             "--capture" => a.capture = Some(v.to_string()),
             "--log" => {
-                a.log_level = v
-                    .parse()
-                    .map_err(|_| format!("--log '{v}': not one of off, error, warn, info, debug, trace"))?
+                a.log_level = v.parse().map_err(|_| {
+                    format!("--log '{v}': not one of off, error, warn, info, debug, trace")
+                })?
             }
             _ => return Err(format!("unknown option '{opt}' (see --help)")),
         }
@@ -241,7 +250,10 @@ pub fn parse(argv: &[String]) -> Result<Parsed, String> {
     a.port = port.ok_or("--port DEV is required")?;
     a.slave = slave.ok_or("--slave ADDR is required")?;
     if a.slave == a.address {
-        return Err(format!("--slave {} is this master's own --address", a.slave));
+        return Err(format!(
+            "--slave {} is this master's own --address",
+            a.slave
+        ));
     }
     if a.cfg.is_empty() {
         return Err("--cfg: at least one identifier byte".into());
@@ -258,7 +270,10 @@ pub fn parse(argv: &[String]) -> Result<Parsed, String> {
     }
     if let Some(h) = a.hsa {
         if h <= a.address {
-            return Err(format!("--hsa {h}: must be above this master's address {}", a.address));
+            return Err(format!(
+                "--hsa {h}: must be above this master's address {}",
+                a.address
+            ));
         }
     }
     Ok(Parsed::Run(a))

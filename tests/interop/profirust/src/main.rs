@@ -41,7 +41,12 @@ impl log::Log for Logger {
             }
         }
         if r.level() <= self.level {
-            eprintln!("dfp-profirust-peer: {} {}: {}", r.level(), r.target(), r.args());
+            eprintln!(
+                "dfp-profirust-peer: {} {}: {}",
+                r.level(),
+                r.target(),
+                r.args()
+            );
         }
     }
     fn flush(&self) {}
@@ -65,9 +70,7 @@ impl FdlApplication for Throttled {
         tx: fdl::TelegramTx,
         high_prio_only: bool,
     ) -> Option<fdl::TelegramTxResponse> {
-        if !self.busy
-            && (high_prio_only || self.last.is_some_and(|l| now - l < self.interval))
-        {
+        if !self.busy && (high_prio_only || self.last.is_some_and(|l| now - l < self.interval)) {
             return None;
         }
         let r = self.inner.transmit_telegram(now, fdl, tx, high_prio_only);
@@ -86,7 +89,12 @@ impl FdlApplication for Throttled {
     ) {
         self.inner.receive_reply(now, fdl, addr, t)
     }
-    fn handle_timeout(&mut self, now: profirust::time::Instant, fdl: &fdl::FdlActiveStation, addr: u8) {
+    fn handle_timeout(
+        &mut self,
+        now: profirust::time::Instant,
+        fdl: &fdl::FdlActiveStation,
+        addr: u8,
+    ) {
         self.inner.handle_timeout(now, fdl, addr)
     }
 }
@@ -197,7 +205,21 @@ fn open_port(port: &str, baud: profirust::Baudrate) -> (Phy, &'static str) {
         (Phy::Pty(p), "pty (the peer's own)")
     } else {
         drop(f);
-        (Phy::Tty(profirust::phy::LinuxRs485Phy::new(port, baud)), "profirust LinuxRs485Phy")
+        // LinuxRs485Phy reports a tty it cannot set up (termios2, 8E1, the rate) by panicking.
+        std::panic::set_hook(Box::new(|_| {}));
+        let phy = std::panic::catch_unwind(|| profirust::phy::LinuxRs485Phy::new(port, baud));
+        let _ = std::panic::take_hook();
+        let phy = phy.unwrap_or_else(|e| {
+            let why = e
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| e.downcast_ref::<&str>().copied())
+                .unwrap_or("unknown");
+            fail(&format!(
+                "--port {port}: profirust's LinuxRs485Phy refused it: {why}"
+            ))
+        });
+        (Phy::Tty(phy), "profirust LinuxRs485Phy")
     }
 }
 
@@ -211,14 +233,17 @@ fn main() {
         }
         Err(e) => fail_usage(&e),
     };
-    let logger: &'static Logger =
-        Box::leak(Box::new(Logger { level: a.log_level, kept: Mutex::new((0, Vec::new())) }));
+    let logger: &'static Logger = Box::leak(Box::new(Logger {
+        level: a.log_level,
+        kept: Mutex::new((0, Vec::new())),
+    }));
     log::set_logger(logger).unwrap();
     log::set_max_level(a.log_level.max(log::LevelFilter::Warn));
 
-    let capture = a.capture.as_ref().map(|p| {
-        std::fs::File::create(p).unwrap_or_else(|e| fail(&format!("--capture {p}: {e}")))
-    });
+    let capture = a
+        .capture
+        .as_ref()
+        .map(|p| std::fs::File::create(p).unwrap_or_else(|e| fail(&format!("--capture {p}: {e}"))));
     unsafe {
         libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
         libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
@@ -302,7 +327,9 @@ fn main() {
             match e {
                 dp::PeripheralEvent::DataExchanged => {
                     slave.dx_cycles += 1;
-                    slave.first_dx_us.get_or_insert((t - t0).total_micros() as i64);
+                    slave
+                        .first_dx_us
+                        .get_or_insert((t - t0).total_micros() as i64);
                 }
                 dp::PeripheralEvent::Offline
                 | dp::PeripheralEvent::ConfigError
@@ -346,7 +373,11 @@ fn main() {
         "offline"
     };
     let diag_flags = periph.last_diagnostics().map(|d| format!("{:?}", d.flags));
-    let inputs = periph.pi_i().iter().map(|b| format!("{b:02X}")).collect::<String>();
+    let inputs = periph
+        .pi_i()
+        .iter()
+        .map(|b| format!("{b:02X}"))
+        .collect::<String>();
 
     // The live list as profirust reports it: LiveList's answers (its Request FDL Status sweep
     // over 0..125) with the station type they give, and the stations of the token ring's LAS,
@@ -354,12 +385,23 @@ fn main() {
     let mut live_all: BTreeMap<u8, (String, Vec<&str>)> = BTreeMap::new();
     for (addr, st) in &seen {
         let kind = if *st == "slave" { "passive" } else { "active" };
-        live_all.insert(*addr, (format!("{{\"address\": {addr}, \"type\": \"{kind}\", \"fdl_status\": \"{st}\""), vec!["live_list"]));
+        live_all.insert(
+            *addr,
+            (
+                format!("{{\"address\": {addr}, \"type\": \"{kind}\", \"fdl_status\": \"{st}\""),
+                vec!["live_list"],
+            ),
+        );
     }
     for addr in &las {
         live_all
             .entry(*addr)
-            .or_insert_with(|| (format!("{{\"address\": {addr}, \"type\": \"active\", \"fdl_status\": null"), vec![]))
+            .or_insert_with(|| {
+                (
+                    format!("{{\"address\": {addr}, \"type\": \"active\", \"fdl_status\": null"),
+                    vec![],
+                )
+            })
             .1
             .push("las");
     }
@@ -374,13 +416,22 @@ fn main() {
     let mut errors: Vec<String> = Vec::new();
     let panicked = run.is_err();
     if panicked {
-        let m = panic_msg.lock().unwrap().clone().unwrap_or_else(|| "unknown".into());
+        let m = panic_msg
+            .lock()
+            .unwrap()
+            .clone()
+            .unwrap_or_else(|| "unknown".into());
         errors.push(format!("profirust stopped (panic): {m}"));
     }
     if let Some(e) = &phy.wire.first_error {
         errors.push(e.clone());
     }
-    errors.extend(slave.left_dx.iter().map(|s| format!("the slave left Data_Exchange: {s}")));
+    errors.extend(
+        slave
+            .left_dx
+            .iter()
+            .map(|s| format!("the slave left Data_Exchange: {s}")),
+    );
     let (warnings, kept) = {
         let k = logger.kept.lock().unwrap();
         (k.0, k.1.clone())
@@ -389,7 +440,11 @@ fn main() {
     let ok = !panicked && running && slave.first_dx_us.is_some() && slave.left_dx.is_empty();
 
     let w = &phy.wire;
-    let ev: Vec<String> = slave.events.iter().map(|(k, v)| format!("{}: {v}", js(k))).collect();
+    let ev: Vec<String> = slave
+        .events
+        .iter()
+        .map(|(k, v)| format!("{}: {v}", js(k)))
+        .collect();
     let err: Vec<String> = errors.iter().map(|e| js(e)).collect();
     let las_s: Vec<String> = las.iter().map(|x| x.to_string()).collect();
     let holders: Vec<String> = w.token_holders.iter().map(|x| x.to_string()).collect();

@@ -46,8 +46,16 @@ impl PtyPhy {
         unsafe { libc::cfmakeraw(&mut t) };
         t.c_cc[libc::VMIN] = 0;
         t.c_cc[libc::VTIME] = 0;
-        check("tcsetattr", unsafe { libc::tcsetattr(fd, libc::TCSANOW, &t) })?;
-        Ok(PtyPhy { fd, rx: vec![0; BUFFER], rx_len: 0, tx: Vec::new(), tx_done: 0 })
+        check("tcsetattr", unsafe {
+            libc::tcsetattr(fd, libc::TCSANOW, &t)
+        })?;
+        Ok(PtyPhy {
+            fd,
+            rx: vec![0; BUFFER],
+            rx_len: 0,
+            tx: Vec::new(),
+            tx_done: 0,
+        })
     }
 
     /// Bytes written, 0 when the PTY is full; a hang-up (EIO) or other error stops the peer.

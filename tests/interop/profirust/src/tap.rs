@@ -111,8 +111,12 @@ fn describe(b: &[u8]) -> String {
                     f => format!("request {f}"),
                 }
             } else {
-                let st = ["slave", "master not ready", "master ready to enter the ring",
-                          "master in the ring"][((fc >> 4) & 3) as usize];
+                let st = [
+                    "slave",
+                    "master not ready",
+                    "master ready to enter the ring",
+                    "master in the ring",
+                ][((fc >> 4) & 3) as usize];
                 format!("response ({st}, status {})", fc & 0x0F)
             };
             format!("{} -> {} FC {:02X} {what}{saps}", sa & 0x7F, da & 0x7F, fc)
@@ -130,7 +134,13 @@ pub struct Tap<P: ProfibusPhy> {
 
 impl<P: ProfibusPhy> Tap<P> {
     pub fn new(inner: P, own: u8, t0: Instant, capture: Option<std::fs::File>) -> Self {
-        Tap { inner, own, t0, wire: Wire::default(), capture: capture.map(std::io::BufWriter::new) }
+        Tap {
+            inner,
+            own,
+            t0,
+            wire: Wire::default(),
+            capture: capture.map(std::io::BufWriter::new),
+        }
     }
 
     pub fn flush(&mut self) {
@@ -142,8 +152,12 @@ impl<P: ProfibusPhy> Tap<P> {
     fn log(&mut self, now: Instant, dir: &str, b: &[u8], note: &str) {
         if let Some(c) = self.capture.as_mut() {
             let hex: Vec<String> = b.iter().map(|x| format!("{x:02X}")).collect();
-            let _ = writeln!(c, "{:>10} {dir} {:<24} {note}",
-                             (now - self.t0).total_micros(), hex.join(" "), );
+            let _ = writeln!(
+                c,
+                "{:>10} {dir} {:<24} {note}",
+                (now - self.t0).total_micros(),
+                hex.join(" "),
+            );
         }
     }
 
