@@ -148,7 +148,8 @@ static void tap(void *ctx, uint64_t t_ns, const uint8_t *f, size_t len, bool loc
     uint8_t fc = 0;
     kind_t k = kind_of(f, len, &da, &fc);
     uint64_t end_ns = t_ns + (uint64_t)hal_uart_char_ns(b->bus.baud) * len;
-    uint64_t gap_ns = b->prev_kind == K_NONE || t_ns < b->prev_end_ns ? 0u : t_ns - b->prev_end_ns;
+    bool after = b->prev_kind != K_NONE && t_ns >= b->prev_end_ns;
+    uint64_t gap_ns = after ? t_ns - b->prev_end_ns : 0u;
     b->rule_ns += rule_idle_ns(b, b->prev_kind, k, gap_ns) + (double)len * 11.0 * b->bit_ns;
     b->prev_kind = k;
     b->prev_end_ns = end_ns;
@@ -381,14 +382,15 @@ static void print_rotations(const ring_bench_t *b)
                (unsigned)fdl_bus_tid2_bits(&b->bus), (unsigned)b->bus.tsl_bits);
     }
     if (b->tid1_bits.n > 0u) {
-        printf("  idle where the rules put TID1 (%u bit times), on the line: mean %.1f, min %.1f, "
-               "max %.1f bit times\n", (unsigned)fdl_bus_tid1_bits(&b->bus),
+        printf("  idle where the rules put TID1 (%u bit times), on the line: mean %.1f, "
+               "min %.1f, max %.1f bit times\n", (unsigned)fdl_bus_tid1_bits(&b->bus),
                mm_mean(&b->tid1_bits), b->tid1_bits.min, b->tid1_bits.max);
     }
 }
 
-/* The measured run. Returns 0, or 1 when a collision or a lost token showed something wrong. */
-static int measure(ring_bench_t *b, const bench_args_t *a)
+/* The measured run. Returns 0, or 1 when a collision or a lost token showed something wrong.
+ * noinline: callgrind --toggle-collect=measure profiles the steady state alone. */
+__attribute__((noinline)) static int measure(ring_bench_t *b, const bench_args_t *a)
 {
     uint64_t frames0 = b->rig.bus.frames_sent;
     uint64_t coll0 = b->rig.bus.collisions;
@@ -507,8 +509,11 @@ static bool parse_option(const char *opt, const char *val, bench_args_t *a)
         return false;
     }
     if (!ok) {
-        fprintf(stderr, "dfp-ring-bench: %s: %s '%s' (%s)\n", opt,
-                val == NULL ? "needs a value" : "bad value", val == NULL ? "" : val, want);
+        if (val == NULL) {
+            fprintf(stderr, "dfp-ring-bench: %s needs a value (%s)\n", opt, want);
+        } else {
+            fprintf(stderr, "dfp-ring-bench: %s: bad value '%s' (%s)\n", opt, val, want);
+        }
     }
     return ok;
 }
