@@ -228,7 +228,8 @@ static double instructions_for(const char *self, unsigned idx)
 
 /* ---- 2. in-memory bus --------------------------------------------------------------------- */
 
-/* Large (a bus with its event queue, room for 32 cards): static storage, as rig.h asks. */
+/* Large (a bus with its event queue, room for a whole segment of cards): static storage, as
+ * rig.h asks. */
 static rig_t brig;
 static dp_master_t *bmaster;
 

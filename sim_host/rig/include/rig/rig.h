@@ -10,8 +10,8 @@
  * the hardware: pull a card's bus cable, power-cycle a card, set its DIP switches, set a drive's
  * digital inputs or raise a drive fault.
  *
- * Structs are caller-owned and large (a membus with its event queue, 32 cards): keep a rig in
- * static storage. One thread runs it. */
+ * Structs are caller-owned and large (a membus with its event queue, room for a card at every
+ * address a DP slave can have, 11 MB): keep a rig in static storage. One thread runs it. */
 #ifndef RIG_RIG_H
 #define RIG_RIG_H
 
@@ -25,7 +25,7 @@
 #include "sim_stations/stations.h"
 
 #ifndef RIG_MAX_CARDS
-#define RIG_MAX_CARDS 32u
+#define RIG_MAX_CARDS 126u /* addresses 0..125: a whole segment of cards */
 #endif
 #define RIG_MAX_TAPS 8u
 

@@ -21,7 +21,7 @@
 #include "sim_hal/sim_station.h"
 
 #ifndef MEMBUS_MAX_STATIONS
-#define MEMBUS_MAX_STATIONS 40u
+#define MEMBUS_MAX_STATIONS 128u /* every address 0..126, and a probe */
 #endif
 #ifndef MEMBUS_MAX_INFLIGHT
 #define MEMBUS_MAX_INFLIGHT 2048u
