@@ -1,4 +1,5 @@
 #include "dp_master/dp_master.h"
+#include "dp_master_internal.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -11,72 +12,6 @@
 #include "dp_slave/fdl_frame.h"
 #include "dp_slave/fdl_wire.h"
 
-/* A phase that sends a DDLM service is named by the service table (dp_services.h); the phases
- * around them are the master's own. */
-const char *dp_master_phase_name(dp_master_phase_t p)
-{
-    switch (p) {
-    case DP_MASTER_PHASE_BACKOFF: return "back-off";
-    case DP_MASTER_PHASE_FDL_STATUS: return "FDL status";
-    case DP_MASTER_PHASE_DIAG_1: return dp_service_label(DDLM_SLAVE_DIAG);
-    case DP_MASTER_PHASE_SET_PRM: return dp_service_label(DDLM_SET_PRM);
-    case DP_MASTER_PHASE_CHK_CFG: return dp_service_label(DDLM_CHK_CFG);
-    case DP_MASTER_PHASE_DATA_EXCH: return dp_service_label(DDLM_DATA_EXCHANGE);
-    case DP_MASTER_PHASE_DIAG_2: return DP_SERVICE_LABEL_SLAVE_DIAG " (check)";
-    case DP_MASTER_PHASE_DIAG_DX: return DP_SERVICE_LABEL_SLAVE_DIAG " (DH)";
-    }
-    return "?";
-}
-
-size_t dp_master_build_prm(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
-                     size_t user_len)
-{
-    uint32_t units = (wd_ms + 9u) / 10u; /* 10 ms base */
-    uint8_t f1 = 1;
-    uint8_t f2 = 1;
-    bool wd = wd_ms > 0u;
-    if (wd) {
-        if (units < 2u) units = 2u; /* 1 x 1 is not allowed */
-        if (units > 255u * 255u) units = 255u * 255u;
-        f1 = (uint8_t)((units + 254u) / 255u);
-        if (f1 < 1u) f1 = 1u;
-        f2 = (uint8_t)((units + f1 - 1u) / f1);
-        if (f1 == 1u && f2 == 1u) f2 = 2u;
-    }
-    out[DP_PRM_STATION_STATUS] = (uint8_t)(DP_PRM_LOCK_REQ | (wd ? DP_PRM_WD_ON : 0u));
-    out[DP_PRM_WD_FACT_1] = f1;
-    out[DP_PRM_WD_FACT_2] = f2;
-    out[DP_PRM_MIN_TSDR] = FDL_MIN_TSDR_DEFAULT_BITS;
-    out[DP_PRM_IDENT_HIGH] = (uint8_t)(ident >> 8);
-    out[DP_PRM_IDENT_LOW] = (uint8_t)(ident & 0xFFu);
-    out[DP_PRM_GROUP_IDENT] = 0;
-    if (user_len > DP_MASTER_MAX_PRM - DP_PRM_LEN_STANDARD) {
-        user_len = DP_MASTER_MAX_PRM - DP_PRM_LEN_STANDARD;
-    }
-    memcpy(&out[DP_PRM_LEN_STANDARD], user, user_len);
-    return DP_PRM_LEN_STANDARD + user_len;
-}
-
-size_t dp_master_build_prm_dpv1(uint8_t *out, uint16_t ident, uint32_t wd_ms, const uint8_t *user,
-                          size_t user_len)
-{
-    uint8_t u[DP_MASTER_MAX_PRM - DP_PRM_LEN_STANDARD] = {0};
-    if (user_len > sizeof u) {
-        user_len = sizeof u;
-    }
-    if (user_len > 0u) {
-        memcpy(u, user, user_len);
-    }
-    size_t n = user_len < 3u ? 3u : user_len; /* DPV1_Status_1..3 at least */
-    u[0] |= DP_DPV1_1_ENABLE;
-    return dp_master_build_prm(out, ident, wd_ms, u, n);
-}
-
-bool dp_master_prm_is_dpv1(const uint8_t *prm, size_t len)
-{
-    return len >= DP_PRM_LEN_DPV1 && (prm[DP_PRM_DPV1_STATUS_1] & DP_DPV1_1_ENABLE) != 0u;
-}
-
 static void emit(dp_master_t *m, const dp_master_event_t *ev)
 {
     if (m->cfg.event != NULL) {
@@ -84,7 +19,7 @@ static void emit(dp_master_t *m, const dp_master_event_t *ev)
     }
 }
 
-static void set_phase(dp_master_t *m, unsigned idx, dp_master_phase_t next, hal_time_us_t t)
+void dpm_set_phase(dp_master_t *m, unsigned idx, dp_master_phase_t next, hal_time_us_t t)
 {
     dp_master_slave_t *s = &m->slaves[idx];
     if (s->phase == next) {
@@ -128,35 +63,8 @@ static void restart_slave(dp_master_t *m, unsigned idx, hal_time_us_t t, const c
         s->backoff_us = s->backoff_us * 2u > m->cfg.backoff_max_us ? m->cfg.backoff_max_us
                                                                    : s->backoff_us * 2u;
     }
-    set_phase(m, idx, DP_MASTER_PHASE_BACKOFF, t);
+    dpm_set_phase(m, idx, DP_MASTER_PHASE_BACKOFF, t);
     c1_lost(s, t, why);
-}
-
-static void ring_event(void *ctx, const fdl_active_event_t *ev)
-{
-    dp_master_t *m = ctx;
-    if (m->cfg.ring_event != NULL) {
-        m->cfg.ring_event(m->cfg.event_ctx, ev);
-    }
-}
-
-/* The bus parameters decide the reply deadline (TSL, plus the first character's own time) and
- * the retry limit. */
-static void ring_init(dp_master_t *m, hal_time_us_t now)
-{
-    if (m->cfg.bus.baud == 0u) {
-        fdl_bus_params_default(&m->cfg.bus, m->cfg.baud, FDL_BUS_PROFILE_DP);
-    }
-    m->cfg.bus.baud = m->cfg.baud;
-    m->cfg.slot_time_us = fdl_bus_us(&m->cfg.bus, m->cfg.bus.tsl_bits) +
-                          hal_uart_char_ns(m->cfg.baud) / 1000u + 1u;
-    if (m->cfg.max_retry == 0u) {
-        m->cfg.max_retry = m->cfg.bus.max_retry;
-    }
-    fdl_active_cfg_t ac = {.address = m->cfg.address, .bus = m->cfg.bus, .uart = m->cfg.uart,
-                           .event = ring_event, .event_ctx = m};
-    fdl_active_init(&m->mac, &ac, now);
-    fdl_active_start(&m->mac, now);
 }
 
 void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t now)
@@ -170,7 +78,7 @@ void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t no
         m->cfg.slot_time_us = hal_uart_bits_us(b, bits);
     }
     if (cfg->token_ring) {
-        ring_init(m, now);
+        dpm_ring_init(m, now);
     }
     if (m->cfg.max_retry == 0u) m->cfg.max_retry = 1u;
     if (m->cfg.backoff_min_us == 0u) m->cfg.backoff_min_us = 10000u;
@@ -226,7 +134,7 @@ int dp_master_reconfigure(dp_master_t *m, unsigned idx, const dp_master_slave_cf
     s->due = now;
     s->backoff_us = m->cfg.backoff_min_us;
     memset(s->outputs, 0, sizeof s->outputs);
-    set_phase(m, idx, DP_MASTER_PHASE_FDL_STATUS, now);
+    dpm_set_phase(m, idx, DP_MASTER_PHASE_FDL_STATUS, now);
     c1_lost(s, now, "new parameters");
     return 0;
 }
@@ -275,7 +183,7 @@ void dp_master_start(dp_master_t *m, hal_time_us_t now)
     for (unsigned i = 0; i < m->num_slaves; i++) {
         m->slaves[i].fcb_first = true;
         m->slaves[i].due = now;
-        set_phase(m, i, DP_MASTER_PHASE_FDL_STATUS, now);
+        dpm_set_phase(m, i, DP_MASTER_PHASE_FDL_STATUS, now);
         c1_lost(&m->slaves[i], now, "master restarted");
     }
 }
@@ -468,7 +376,7 @@ static void diag_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, ha
                            (unsigned)d[DP_DIAG_MASTER_ADD]);
             restart_slave(m, idx, t, why);
         } else {
-            set_phase(m, idx, DP_MASTER_PHASE_SET_PRM, t);
+            dpm_set_phase(m, idx, DP_MASTER_PHASE_SET_PRM, t);
         }
         return;
     }
@@ -489,7 +397,7 @@ static void diag_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, ha
     } else {
         s->stat_diag_repeats = 0;
         s->backoff_us = m->cfg.backoff_min_us;
-        set_phase(m, idx, DP_MASTER_PHASE_DATA_EXCH, t);
+        dpm_set_phase(m, idx, DP_MASTER_PHASE_DATA_EXCH, t);
     }
 }
 
@@ -514,7 +422,7 @@ static void data_exchange_received(dp_master_t *m, unsigned idx, const fdl_msg_t
                       .new_phase = s->phase};
     emit(m, &ev);
     if (!sc && (code == FDL_RSP_DH || code == FDL_RSP_RDH)) {
-        set_phase(m, idx, DP_MASTER_PHASE_DIAG_DX, t);
+        dpm_set_phase(m, idx, DP_MASTER_PHASE_DIAG_DX, t);
     }
 }
 
@@ -527,7 +435,7 @@ static void ack_received(dp_master_t *m, unsigned idx, bool sc, hal_time_us_t t)
                                          : "Chk_Cfg not acknowledged");
         return;
     }
-    set_phase(m, idx, set_prm ? DP_MASTER_PHASE_CHK_CFG : DP_MASTER_PHASE_DIAG_2, t);
+    dpm_set_phase(m, idx, set_prm ? DP_MASTER_PHASE_CHK_CFG : DP_MASTER_PHASE_DIAG_2, t);
 }
 
 static void reply_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, bool sc,
@@ -544,7 +452,7 @@ static void reply_received(dp_master_t *m, unsigned idx, const fdl_msg_t *msg, b
             restart_slave(m, idx, t, "unexpected answer to FDL status");
             return;
         }
-        set_phase(m, idx, DP_MASTER_PHASE_DIAG_1, t);
+        dpm_set_phase(m, idx, DP_MASTER_PHASE_DIAG_1, t);
         return;
     case DP_MASTER_PHASE_DIAG_1:
     case DP_MASTER_PHASE_DIAG_2:
@@ -681,7 +589,7 @@ static int pick_slave(dp_master_t *m, hal_time_us_t now, bool *c1)
         }
         *c1 = false;
         if (s->phase == DP_MASTER_PHASE_BACKOFF) {
-            set_phase(m, idx, DP_MASTER_PHASE_FDL_STATUS, now);
+            dpm_set_phase(m, idx, DP_MASTER_PHASE_FDL_STATUS, now);
         }
         m->next_slave = (uint8_t)((idx + 1u) % m->num_slaves);
         return (int)idx;
@@ -690,7 +598,7 @@ static int pick_slave(dp_master_t *m, hal_time_us_t now, bool *c1)
 }
 
 /* One telegram of an attached class-2 connection that has something to send, round robin. */
-static bool send_c2(dp_master_t *m, hal_time_us_t now)
+bool dpm_send_c2(dp_master_t *m, hal_time_us_t now)
 {
     for (unsigned k = 0; k < m->num_c2; k++) {
         unsigned i = (m->next_c2 + k) % m->num_c2;
@@ -757,7 +665,7 @@ static bool reply_timed_out(dp_master_t *m, hal_time_us_t now)
 }
 
 /* A pending Global_Control goes out as a broadcast SDN (no answer). */
-static void send_global_control(dp_master_t *m, hal_time_us_t now)
+void dpm_send_global_control(dp_master_t *m, hal_time_us_t now)
 {
     m->gc_pending = false;
     uint8_t du[2] = {m->gc_command, m->gc_group};
@@ -771,7 +679,7 @@ static void send_global_control(dp_master_t *m, hal_time_us_t now)
 }
 
 /* Nothing to send now: the earliest instant something will be. */
-static hal_time_us_t idle_until(dp_master_t *m, hal_time_us_t now)
+hal_time_us_t dpm_idle_until(dp_master_t *m, hal_time_us_t now)
 {
     hal_time_us_t next = now + HAL_TIME_NO_DEADLINE_US;
     for (unsigned i = 0; i < m->num_slaves; i++) {
@@ -787,7 +695,7 @@ static hal_time_us_t idle_until(dp_master_t *m, hal_time_us_t now)
 }
 
 /* The slave's next telegram: a class-1 acyclic one (c1) or its phase's cyclic one. */
-static void send_to_slave(dp_master_t *m, unsigned idx, bool c1, hal_time_us_t now)
+void dpm_send_to_slave(dp_master_t *m, unsigned idx, bool c1, hal_time_us_t now)
 {
     dp_master_slave_t *s = &m->slaves[idx];
     m->expect_da = m->cfg.address;
@@ -812,108 +720,6 @@ static void send_to_slave(dp_master_t *m, unsigned idx, bool c1, hal_time_us_t n
     send(m, now, true, idx);
 }
 
-/* ---- as an FDL active station ----------------------------------------------------------- */
-
-/* The next slave for this token visit: each slave at most one cyclic telegram per visit, and
- * only what the token's time allows. Data_Exchange is high priority; start-up, diagnosis and
- * acyclic telegrams are low priority and wait for an early token. */
-static int pick_slave_ring(dp_master_t *m, hal_time_us_t now, bool *c1, bool *high)
-{
-    bool low_ok = fdl_active_may_start(&m->mac, now, false);
-    bool high_ok = fdl_active_may_start(&m->mac, now, true);
-    for (unsigned k = 0; k < m->num_slaves; k++) {
-        unsigned idx = (m->next_slave + k) % m->num_slaves;
-        dp_master_slave_t *s = &m->slaves[idx];
-        if (low_ok && s->phase == DP_MASTER_PHASE_DATA_EXCH && s->c1_turn &&
-            dp_master_xfer_busy(&s->c1)) {
-            *c1 = true;
-            *high = false;
-            m->next_slave = (uint8_t)((idx + 1u) % m->num_slaves);
-            return (int)idx;
-        }
-        if (!hal_time_reached(now, s->due) || s->served_visit == m->mac.visit) {
-            continue;
-        }
-        *high = s->phase == DP_MASTER_PHASE_DATA_EXCH;
-        if (!(*high ? high_ok : low_ok)) {
-            continue;
-        }
-        *c1 = false;
-        s->served_visit = m->mac.visit;
-        if (s->phase == DP_MASTER_PHASE_BACKOFF) {
-            set_phase(m, idx, DP_MASTER_PHASE_FDL_STATUS, now);
-        }
-        m->next_slave = (uint8_t)((idx + 1u) % m->num_slaves);
-        return (int)idx;
-    }
-    return -1;
-}
-
-/* A master alone in its ring with nothing due keeps the token on an idle line until its next
- * slave is due, but never for 3 slot times: a station listening to join must not take the
- * silence for a lost token (its TTO is at least 6 slot times). Passing the token to itself at
- * once would fill the line with tokens between two cycles (e.g. 40 per 2 ms at 1.5 Mbit/s)
- * that say nothing another station could use. */
-static hal_time_us_t alone_hold_until(dp_master_t *m, hal_time_us_t now)
-{
-    if (m->mac.ns != m->cfg.address || m->mac.gap_due) {
-        return now;
-    }
-    for (unsigned i = 0; i < m->num_slaves; i++) {
-        if (hal_time_reached(now, m->slaves[i].due)) {
-            return now; /* served in this visit, due again: the next visit is for it */
-        }
-    }
-    hal_time_us_t limit = m->mac.last_activity +
-                          3u * fdl_bus_us(&m->cfg.bus, m->cfg.bus.tsl_bits);
-    return hal_time_earlier(idle_until(m, now), limit);
-}
-
-/* Holding the token: Global_Control, then the slaves' telegrams and the class-2 connections'
- * in turn while the token's time lasts; then the token goes on. */
-static hal_time_us_t ring_poll(dp_master_t *m, hal_time_us_t now)
-{
-    for (unsigned i = 0; i < m->num_slaves; i++) {
-        (void)dp_master_xfer_check_timeout(&m->slaves[i].c1, now);
-    }
-    hal_time_us_t mac_next = fdl_active_poll(&m->mac, now);
-    if (!fdl_active_holds_token(&m->mac)) {
-        return mac_next; /* nothing to send before the token comes, and it comes by a telegram */
-    }
-    hal_time_us_t from = m->next_send;
-    if (hal_time_diff(fdl_active_line_free(&m->mac), from) > 0) {
-        from = fdl_active_line_free(&m->mac);
-    }
-    if (!hal_time_reached(now, from)) {
-        return from;
-    }
-    if (m->gc_pending && fdl_active_may_start(&m->mac, now, true)) {
-        fdl_active_cycle(&m->mac, true);
-        send_global_control(m, now);
-        return m->next_send;
-    }
-    if (m->c2_turn && fdl_active_may_start(&m->mac, now, false) && send_c2(m, now)) {
-        return m->reply_deadline;
-    }
-    bool c1 = false;
-    bool high = false;
-    int idx = pick_slave_ring(m, now, &c1, &high);
-    if (idx >= 0) {
-        fdl_active_cycle(&m->mac, high);
-        send_to_slave(m, (unsigned)idx, c1, now);
-        return m->reply_deadline;
-    }
-    if (fdl_active_may_start(&m->mac, now, false) && send_c2(m, now)) {
-        return m->reply_deadline;
-    }
-    hal_time_us_t hold = alone_hold_until(m, now);
-    if (!hal_time_reached(now, hold)) {
-        return hold;
-    }
-    fdl_active_release(&m->mac, now);
-    return fdl_active_poll(&m->mac, now);
-}
-
 hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
 {
     if (!m->running) {
@@ -928,27 +734,27 @@ hal_time_us_t dp_master_poll(dp_master_t *m, hal_time_us_t now)
         }
     }
     if (m->cfg.token_ring) {
-        return ring_poll(m, now);
+        return dpm_ring_poll(m, now);
     }
     if (!hal_time_reached(now, m->next_send)) {
         return m->next_send;
     }
     if (m->gc_pending) {
-        send_global_control(m, now);
+        dpm_send_global_control(m, now);
         return m->next_send;
     }
     /* Class-1 response timers run while their slave is busy with other things. */
     for (unsigned i = 0; i < m->num_slaves; i++) {
         (void)dp_master_xfer_check_timeout(&m->slaves[i].c1, now);
     }
-    if (m->c2_turn && send_c2(m, now)) {
+    if (m->c2_turn && dpm_send_c2(m, now)) {
         return m->reply_deadline;
     }
     bool c1 = false;
     int idx = pick_slave(m, now, &c1);
     if (idx < 0) {
-        return send_c2(m, now) ? m->reply_deadline : idle_until(m, now);
+        return dpm_send_c2(m, now) ? m->reply_deadline : dpm_idle_until(m, now);
     }
-    send_to_slave(m, (unsigned)idx, c1, now);
+    dpm_send_to_slave(m, (unsigned)idx, c1, now);
     return m->reply_deadline;
 }
