@@ -47,6 +47,12 @@ static void on_master_event(void *ctx, const dp_master_event_t *ev)
     FOR_TAPS(r, master_event, ev);
 }
 
+static void on_ring_event(void *ctx, const fdl_active_event_t *ev)
+{
+    rig_t *r = ctx;
+    FOR_TAPS(r, ring_event, ev);
+}
+
 static void drive_event(rig_card_t *c, rig_drive_event_type_t type, uint32_t value)
 {
     const movidrive_t *md = &c->cs.md;
@@ -396,6 +402,7 @@ dp_master_t *rig_add_master(rig_t *r, const dp_master_cfg_t *cfg, hal_time_us_t 
     sim_station_t st = master_station(&r->master);
     dp_master_cfg_t mc = *cfg;
     mc.event = on_master_event;
+    mc.ring_event = on_ring_event;
     mc.event_ctx = r;
     if (wall_clock(r)) {
         if (attach_wall_station(r, &st) != 0) {

@@ -514,9 +514,60 @@ static void log_master_event(void *ctx, const dp_master_event_t *ev)
     }
 }
 
+/* What a commissioning engineer wants to know of the ring: who is in it, who the GAP found,
+ * and every fault; the token's everyday rounds only at debug. */
+static void log_ring_event(void *ctx, const fdl_active_event_t *ev)
+{
+    rig_log_t *l = ctx;
+    switch (ev->type) {
+    case FDL_EV_IN_RING:
+        rig_log(l, RIG_LOG_INFO, "master", "ring", "token ring: master %u is in the ring",
+                ev->address);
+        return;
+    case FDL_EV_LAS:
+        rig_log(l, RIG_LOG_INFO, "master", "ring", "token ring: master %u %s", ev->address,
+                ev->kind == FDL_STATION_IN_RING ? "is in the ring" : "left the ring");
+        return;
+    case FDL_EV_LIVE:
+        rig_log(l, ev->kind >= FDL_STATION_NOT_READY ? RIG_LOG_INFO : RIG_LOG_DEBUG, "master",
+                "ring", "token ring: GAP: station %u answers: %s", ev->address,
+                fdl_station_kind_name(ev->kind));
+        return;
+    case FDL_EV_CLAIM:
+        rig_log(l, RIG_LOG_INFO, "master", "ring",
+                "token ring: bus silent for the lost-token time-out: master %u claims the token",
+                ev->address);
+        return;
+    case FDL_EV_PASS_FAILED:
+        rig_log(l, RIG_LOG_WARN, "master", "ring",
+                "token ring: master %u did not take the token: skipped", ev->address);
+        return;
+    case FDL_EV_DOUBLE_TOKEN:
+        rig_log(l, RIG_LOG_WARN, "master", "ring",
+                "token ring: station %u transmitted while we held the token: ours dropped",
+                ev->address);
+        return;
+    case FDL_EV_DUPLICATE_ADDRESS:
+        rig_log(l, RIG_LOG_ERROR, "master", "ring",
+                "token ring: another station uses our address %u: off the bus", ev->address);
+        return;
+    case FDL_EV_NEW_SUCCESSOR:
+        rig_log(l, RIG_LOG_DEBUG, "master", "ring", "token ring: next station %u", ev->address);
+        return;
+    case FDL_EV_LATE_TOKEN:
+        rig_log(l, RIG_LOG_DEBUG, "master", "ring", "token ring: late token (rotation %u us)",
+                ev->trr_us);
+        return;
+    case FDL_EV_STATE:
+        rig_log(l, RIG_LOG_DEBUG, "master", "ring", "token ring: %s -> %s",
+                fdl_mac_state_name(ev->old_state), fdl_mac_state_name(ev->state));
+        return;
+    }
+}
+
 rig_tap_t rig_log_tap(rig_log_t *l)
 {
     return (rig_tap_t){.ctx = l, .card_event = log_card_event, .led = log_led,
                        .param = log_param, .drive = log_drive, .action = log_action,
-                       .master_event = log_master_event};
+                       .master_event = log_master_event, .ring_event = log_ring_event};
 }

@@ -74,6 +74,8 @@ typedef struct rig_tap {
     void (*drive)(void *ctx, unsigned card, const rig_drive_event_t *ev);
     void (*action)(void *ctx, unsigned card, rig_action_type_t type, uint32_t value);
     void (*master_event)(void *ctx, const dp_master_event_t *ev);
+    /* The built-in master's token ring (fdl_active.h). */
+    void (*ring_event)(void *ctx, const fdl_active_event_t *ev);
 } rig_tap_t;
 
 typedef struct rig rig_t;
