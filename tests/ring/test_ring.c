@@ -1,7 +1,7 @@
 /* The token ring on the in-memory bus: rings of 1, 2 and 5 masters with their cards (GAP
- * maintenance and the rotation time: test_ring_gap.c; faults: test_ring_faults.c). Every expectation comes
- * from the token procedure (IEC 61158-4-3 as fdl_active.h states it): telegram bytes, who
- * holds the token, idle times in bit times. */
+ * maintenance and the rotation time: test_ring_gap.c; faults: test_ring_faults.c). Every
+ * expectation comes from the token procedure (IEC 61158-4-3 as fdl_active.h states it):
+ * telegram bytes, who holds the token, idle times in bit times. */
 #include <stdio.h>
 #include <string.h>
 
@@ -51,7 +51,7 @@ static unsigned trace_differs(const char *const *expected, size_t n)
     return bad;
 }
 
-/* ---- 1: a lone master ----------------------------------------------------------------------- */
+/* ---- 1: a lone master ---------------------------------------------------------------------- */
 
 /* The claim (two tokens to itself), then per visit: the slave's next start-up telegram and its
  * answer, the token to itself. GAP maintenance asks one address every G = 10 rotations, the
@@ -124,7 +124,7 @@ static void test_ring_of_one(void)
     ring_of_one_at(19200u);
 }
 
-/* ---- 2: rings of 2 and 5 -------------------------------------------------------------------- */
+/* ---- 2: rings of 2 and 5 ------------------------------------------------------------------- */
 
 static void ring_of_at(unsigned masters, uint32_t baud)
 {

@@ -131,7 +131,7 @@ static void test_switched_off(void)
     }
 }
 
-/* ---- 6: the token holder dies ---------------------------------------------------------------- */
+/* ---- 6: the token holder dies -------------------------------------------------------------- */
 
 /* Master 3 stops after its first request of a visit: 2 saw the token taken, the bus goes silent
  * after the card's answer, and 2 (the lowest address, the shortest TTO = 6 TSL + 2 x 2 TSL)
@@ -195,7 +195,7 @@ static void test_holder_dies(void)
     }
 }
 
-/* ---- 7: duplicate address ------------------------------------------------------------------- */
+/* ---- 7: duplicate address ------------------------------------------------------------------ */
 
 /* A second master 3 comes up while the ring 2, 3, 4 runs: it hears a token or a request from
  * its own address and goes off the bus; the ring keeps its three masters. */

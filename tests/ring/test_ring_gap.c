@@ -53,7 +53,7 @@ static void add_slave(dp_master_t *m, uint8_t address)
     CHECK(dp_master_add_slave(m, &sc) >= 0);
 }
 
-/* ---- 3: GAP maintenance --------------------------------------------------------------------- */
+/* ---- 3: GAP maintenance -------------------------------------------------------------------- */
 
 /* Master 2 alone with HSA 6 and G 1 asks 3, 4, 5, 6, 0, 1 in turn, one per rotation. Master 3
  * comes up just before its turn: listening, it answers "not ready" (FC 0x10); one GAP round
@@ -167,7 +167,7 @@ static void test_gap_new_slave(void)
     }
 }
 
-/* ---- 4: rotation time ----------------------------------------------------------------------- */
+/* ---- 4: rotation time ---------------------------------------------------------------------- */
 
 static bool is_request(const ring_frame_t *f)
 {
