@@ -220,11 +220,13 @@ static void report_missing(const dp_master_t *m, uint32_t cycles, const char *wh
 {
     if (m->num_slaves == 1u) {
         const dp_master_slave_t *sl = &m->slaves[0];
-        bool fault = sl->phase == DP_MASTER_PHASE_BACKOFF && sl->fault[0] != '\0';
+        /* as param's timeout: the last attempt's reason, whatever phase the next one is in */
+        bool fault = sl->phase != DP_MASTER_PHASE_FDL_STATUS && sl->fault[0] != '\0';
+        bool backoff = sl->phase == DP_MASTER_PHASE_BACKOFF;
         cli_error("master: slave %u did not complete %u Data_Exchange cycles (%s; reached %u, "
                   "phase %s%s%s)",
                   sl->cfg.address, cycles, why, sl->cycles, dp_master_phase_name(sl->phase),
-                  fault ? ": " : "", fault ? sl->fault : "");
+                  !fault ? "" : backoff ? ": " : " again after: ", fault ? sl->fault : "");
         return;
     }
     char list[1024];

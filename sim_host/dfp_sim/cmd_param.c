@@ -256,10 +256,14 @@ static void timeout_text(uint32_t timeout_s)
 {
     dp_master_slave_t *s = master->num_slaves > 0u ? &master->slaves[0] : NULL;
     if (run.stage == ST_START && s != NULL) {
-        bool why = s->phase == DP_MASTER_PHASE_BACKOFF && s->fault[0] != '\0';
+        /* In a token ring the start-up moves one telegram per token visit, so the timeout may
+         * find the slave anywhere in its next attempt: the reason of the last one still holds. */
+        bool why = s->phase != DP_MASTER_PHASE_FDL_STATUS && s->fault[0] != '\0';
+        bool backoff = s->phase == DP_MASTER_PHASE_BACKOFF;
         set_result_error("timeout", "no result within %u s: slave %u did not reach data "
                          "exchange (phase %s%s%s)", timeout_s, s->cfg.address,
-                         dp_master_phase_name(s->phase), why ? ": " : "", why ? s->fault : "");
+                         dp_master_phase_name(s->phase),
+                         !why ? "" : backoff ? ": " : " again after: ", why ? s->fault : "");
     } else if (run.stage == ST_START) {
         set_result_error("timeout", "no result within %u s: the class-2 connection did not "
                          "open (%s)", timeout_s,

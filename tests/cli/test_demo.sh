@@ -23,11 +23,14 @@ expect_in "cfg fault" "Chk_Cfg refused -> Cfg_Fault; P090 = 0PD" "$out"
 expect_in "master sees Cfg_Fault" "diagnosis: Station_Not_Ready Cfg_Fault Prm_Req" "$out"
 expect_in "monitor 0PD" "P090 PD configuration  0PD" "$out"
 expect_in "verdict" "result: every scene behaved as the manual describes" "$out"
-# pcap: global header with link type 257, first record = the master's first FDL status request.
+# pcap: global header with link type 257, first record = the master's claim of the token (a
+# token to itself, DC 02 02: 3 octets), the third its first FDL status request.
 hdr=$(od -An -tx1 -N24 "$tmp/demo.pcap" | tr -d ' \n')
 if [ "$hdr" = "d4c3b2a1020004000000000000000000ffff000001010000" ]; then ok; else bad "pcap header $hdr"; fi
-first=$(od -An -tx1 -j40 -N6 "$tmp/demo.pcap" | tr -d ' \n')
-if [ "$first" = "100402494f16" ]; then ok; else bad "first telegram $first"; fi
+first=$(od -An -tx1 -j40 -N3 "$tmp/demo.pcap" | tr -d ' \n')
+if [ "$first" = "dc0202" ]; then ok; else bad "first telegram $first"; fi
+third=$(od -An -tx1 -j$((40 + 3 + 16 + 3 + 16)) -N6 "$tmp/demo.pcap" | tr -d ' \n')
+if [ "$third" = "100402494f16" ]; then ok; else bad "third telegram $third"; fi
 count=$(grep -o "capture: [0-9]* telegrams" <<<"$out" | grep -o "[0-9]*")
 if [ "${count:-0}" -gt 100 ]; then ok; else bad "telegram count $count"; fi
 finish

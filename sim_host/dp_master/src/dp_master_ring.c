@@ -93,6 +93,12 @@ hal_time_us_t dpm_ring_poll(dp_master_t *m, hal_time_us_t now)
     for (unsigned i = 0; i < m->num_slaves; i++) {
         (void)dp_master_xfer_check_timeout(&m->slaves[i].c1, now);
     }
+    if (m->leaving) {
+        if (m->mac.state != FDL_MAC_OFFLINE && !m->mac.leaving) {
+            fdl_active_leave(&m->mac, now);
+        }
+        return fdl_active_poll(&m->mac, now);
+    }
     hal_time_us_t mac_next = fdl_active_poll(&m->mac, now);
     if (!fdl_active_holds_token(&m->mac)) {
         return mac_next; /* nothing to send before the token comes, and it comes by a telegram */
@@ -129,4 +135,14 @@ hal_time_us_t dpm_ring_poll(dp_master_t *m, hal_time_us_t now)
     }
     fdl_active_release(&m->mac, now);
     return fdl_active_poll(&m->mac, now);
+}
+
+void dp_master_leave(dp_master_t *m)
+{
+    m->leaving = m->cfg.token_ring && m->running;
+}
+
+bool dp_master_left(const dp_master_t *m)
+{
+    return !m->leaving || m->mac.state == FDL_MAC_OFFLINE;
 }

@@ -154,12 +154,27 @@ void fdl_active_start(fdl_active_t *s, hal_time_us_t now)
     s->listen_first = NO_ADDRESS;
     s->listen_rotations = 0;
     s->in_ring = false;
+    s->leaving = false;
     s->have_token_t = false;
     s->ns = ts(s);
     s->ps = ts(s);
     s->last_activity = now;
     s->line_free = now;
     set_state(s, FDL_MAC_LISTEN_TOKEN, now);
+}
+
+void fdl_active_leave(fdl_active_t *s, hal_time_us_t now)
+{
+    s->leaving = true;
+    s->gap_pending = false;
+    s->answer_pending = false;
+    if (s->state == FDL_MAC_USE_TOKEN) {
+        s->pass_to = s->ns;
+        s->pass_tries = 0;
+        set_state(s, FDL_MAC_PASS_TOKEN, now);
+    } else if (s->state != FDL_MAC_PASS_TOKEN && s->state != FDL_MAC_AWAIT_STATUS_RESPONSE) {
+        fdl_active_stop(s, now);
+    }
 }
 
 void fdl_active_stop(fdl_active_t *s, hal_time_us_t now)
@@ -516,13 +531,22 @@ static hal_time_us_t pass_token(fdl_active_t *s, hal_time_us_t now)
     if (!hal_time_reached(now, s->line_free)) {
         return s->line_free;
     }
-    if (s->gap_pending) {
+    if (s->gap_pending && !s->leaving) {
         s->gap_pending = false;
         send_status_request(s, now);
         return s->deadline;
     }
     uint8_t to = s->pass_to;
+    if (s->leaving && to == ts(s)) {
+        fdl_active_stop(s, now); /* alone: nobody to hand the token to */
+        return now + HAL_TIME_NO_DEADLINE_US;
+    }
     send_token(s, to, now);
+    if (s->leaving) {
+        s->stats.tokens_passed++;
+        fdl_active_stop(s, s->last_activity);
+        return now + HAL_TIME_NO_DEADLINE_US;
+    }
     if (to == ts(s)) {
         s->stats.tokens_to_self++;
         take_token(s, ts(s), s->last_activity);

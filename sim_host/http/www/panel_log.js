@@ -4,7 +4,7 @@
 
 const LOG_MAX = 500;
 const LOG_KINDS = ['dp_state', 'baud', 'watchdog', 'prm', 'cfg', 'diag', 'led', 'param', 'drive',
-  'fault', 'speed', 'master', 'action', 'audit', 'nvm', 'lost'];
+  'fault', 'speed', 'master', 'ring', 'action', 'audit', 'nvm', 'lost'];
 const LEVEL_RANK = { error: 0, warn: 1, info: 2, debug: 3 };
 let logEntries = [];       /* newest first */
 const logSeqs = new Set();

@@ -303,11 +303,31 @@ int rig_open(rig_t *r, char *err, size_t errlen)
     return 0;
 }
 
+/* A master in a token ring hands the token on before its medium closes (dp_master_leave), so the
+ * other masters do not wait for the lost-token time-out; bounded by three slot times (a reply
+ * still on its way, the token's own pass). */
+static void master_leave(rig_t *r)
+{
+    if (!r->has_master || !wall_clock(r) || !r->master.cfg.token_ring) {
+        return;
+    }
+    static const volatile int never = 0;
+    dp_master_leave(&r->master);
+    rig_wake(r);
+    hal_time_us_t end = rig_now_us(r) + 3u * r->master.cfg.slot_time_us;
+    while (!dp_master_left(&r->master) && hal_time_diff(end, rig_now_us(r)) > 0) {
+        if (rig_run_until(r, rig_now_us(r) + 2000u, &never) < 0) {
+            return;
+        }
+    }
+}
+
 void rig_close(rig_t *r)
 {
     if (!r->open) {
         return;
     }
+    master_leave(r);
     r->open = false;
     if (r->cfg.medium == RIG_MEDIUM_TTY) {
         tty_port_close(&r->port);

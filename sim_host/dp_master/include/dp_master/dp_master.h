@@ -179,6 +179,7 @@ typedef struct dp_master {
     uint32_t acyclic_telegrams;
     /* Medium access (cfg.token_ring). */
     fdl_active_t mac;
+    bool leaving; /* dp_master_leave */
 } dp_master_t;
 
 void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t now);
@@ -194,6 +195,11 @@ void dp_master_global_control(dp_master_t *m, uint8_t command, uint8_t group_sel
  * slave up again from the beginning. */
 void dp_master_stop(dp_master_t *m);
 void dp_master_start(dp_master_t *m, hal_time_us_t now);
+/* The program ends: in a token ring the master finishes the message cycle on the wire, passes
+ * the token on if it holds it and goes off the bus (fdl_active_leave), so the others need not
+ * wait for the lost-token time-out. dp_master_left() says when that is done. */
+void dp_master_leave(dp_master_t *m);
+bool dp_master_left(const dp_master_t *m);
 
 void dp_master_rx_char(dp_master_t *m, uint8_t byte, uint8_t flags, hal_time_us_t t);
 /* Instead of rx_char for each character: a whole telegram for which dp_master_whole_clean() said

@@ -169,6 +169,7 @@ typedef struct fdl_active {
     uint8_t gap_asked;         /* the address in AWAIT_STATUS_RESPONSE */
     /* Passing. */
     bool gap_pending;          /* released: one GAP request before the token goes */
+    bool leaving;              /* fdl_active_leave: Offline once the token is passed on */
     uint8_t pass_to;
     uint8_t pass_tries;
     uint8_t claim_tokens;      /* tokens to itself sent in Claim_Token */
@@ -189,6 +190,10 @@ void fdl_active_init(fdl_active_t *s, const fdl_active_cfg_t *cfg, hal_time_us_t
 void fdl_active_start(fdl_active_t *s, hal_time_us_t now);
 /* Leaves the ring at once (it stops taking tokens; its PS skips it): Offline. */
 void fdl_active_stop(fdl_active_t *s, hal_time_us_t now);
+/* Leaves the ring as a program that ends should: a station holding the token passes it on to
+ * its NS first (no GAP request, no more message cycles), then goes Offline; one that does not
+ * hold it goes Offline at once (its PS skips it after its retries). */
+void fdl_active_leave(fdl_active_t *s, hal_time_us_t now);
 
 /* A character was heard; t: its stop bit's end. */
 void fdl_active_activity(fdl_active_t *s, hal_time_us_t t);
