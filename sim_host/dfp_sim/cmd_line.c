@@ -11,6 +11,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bus_opts.h"
 #include "cli.h"
 #include "commands.h"
 #include "pty_link.h"
@@ -35,6 +36,14 @@ typedef struct line_opts {
     const char *card_text[LINE_MAX_CARDS];
     size_t n_cards;
     uint8_t cards[LINE_MAX_CARDS]; /* from card_text */
+    uint32_t master;
+    bool master_seen;
+    const char *master_slaves;
+    bus_opts_t bus;
+    /* from the above */
+    fdl_bus_params_t ring;
+    uint8_t slave_addr[DP_MASTER_MAX_SLAVES];
+    size_t num_slaves;
 } line_opts_t;
 
 #define LINE_OPT(field) offsetof(line_opts_t, field)
@@ -47,10 +56,14 @@ static const cli_opt_t line_options[] = {
     {CLI_OPT("--card", "ADDR", CLI_LIST, LINE_OPT(card_text)), .aux = LINE_OPT(n_cards),
      .max = LINE_MAX_CARDS},
     {CLI_OPT("--quiet", NULL, CLI_FLAG, LINE_OPT(quiet))},
+    {CLI_OPT("--master", "ADDR", CLI_U32, LINE_OPT(master)), .min = 0, .max = 126,
+     .seen = CLI_SEEN(line_opts_t, master_seen)},
+    {CLI_OPT("--master-slaves", "N|N-M,...", CLI_TEXT, LINE_OPT(master_slaves))},
 };
 
 static const cli_group_t line_groups[] = {
     {line_options, CLI_COUNT(line_options), 0},
+    {bus_options, CLI_COUNT(bus_options), LINE_OPT(bus)},
     {capture_options, CLI_COUNT(capture_options), LINE_OPT(capture)},
 };
 
@@ -69,7 +82,7 @@ typedef struct line_run {
     line_port_t ports[LINE_MAX_PORTS];
     unsigned n_ports;
     uint64_t t0_ns; /* the line's time 0 on the monotonic clock; the bus's time is the same */
-    bool cards;
+    bool cards; /* the in-memory bus is on the line: cards, the master, or both */
     rig_t rig;
     rig_log_t log;
     line_bridge_t bridge;
@@ -96,6 +109,55 @@ static bool line_cards(line_opts_t *o)
         o->cards[i] = (uint8_t)a;
     }
     return true;
+}
+
+/* --master ADDR with its slaves, and the bus parameters of its token ring (the usb profile by
+ * default: the other stations of the line are programs on PTYs). */
+static bool line_master(line_opts_t *o)
+{
+    if (!o->master_seen) {
+        if (o->master_slaves != NULL) {
+            cli_error("line: --master-slaves belongs to --master ADDR");
+            return false;
+        }
+        return true;
+    }
+    if (o->master_slaves == NULL) {
+        cli_error("line: --master ADDR needs --master-slaves N|N-M,... (the slaves it owns)");
+        return false;
+    }
+    if (!cli_address_list(o->master_slaves, o->slave_addr, DP_MASTER_MAX_SLAVES,
+                          &o->num_slaves)) {
+        return false;
+    }
+    for (size_t i = 0; i < o->num_slaves; i++) {
+        if (o->slave_addr[i] == o->master) {
+            cli_error("line: --master %u is also one of its slaves", o->master);
+            return false;
+        }
+    }
+    return bus_opts_apply(&o->bus, "line", o->baud, true, &o->ring);
+}
+
+/* The master inside the line, in the ring with every other master of the line: each slave a
+ * DFP21B with Param + 3 PD, watchdog 1 s. 0, or 1 after reporting. */
+static int bus_master(line_run_t *r, const line_opts_t *o)
+{
+    dp_master_cfg_t mc = {.address = (uint8_t)o->master, .baud = o->baud, .token_ring = true,
+                          .bus = o->ring};
+    dp_master_t *m = rig_add_master(&r->rig, &mc, rig_now_us(&r->rig));
+    if (m == NULL) {
+        cli_error("line: cannot add master %u", o->master);
+        return 1;
+    }
+    dp_master_slave_cfg_t sc = {.cfg = {0xF3, 0xF2}, .cfg_len = 2};
+    sc.prm_len = (uint8_t)dp_master_build_prm(sc.prm, DFP21B_IDENT, 1000, dfp21b_user_prm_default,
+                                              sizeof dfp21b_user_prm_default);
+    for (size_t i = 0; i < o->num_slaves; i++) {
+        sc.address = o->slave_addr[i];
+        (void)dp_master_add_slave(m, &sc);
+    }
+    return 0;
 }
 
 /* DIR is a directory the line may make its links in, and no DIR/portK is anything but an old
@@ -126,6 +188,7 @@ static bool line_dir_usable(const line_opts_t *o)
 static int line_parse(line_opts_t *o, int argc, char **argv)
 {
     *o = (line_opts_t){.ports = 2u, .baud = 19200u};
+    bus_opts_defaults(&o->bus);
     if (cli_parse(&cli_line, argc, argv, o) != 0) {
         return EXIT_USAGE;
     }
@@ -137,7 +200,7 @@ static int line_parse(line_opts_t *o, int argc, char **argv)
         cli_error("line: --dir: the path is longer than 500 octets");
         return EXIT_USAGE;
     }
-    if (!line_cards(o) || !line_dir_usable(o)) {
+    if (!line_cards(o) || !line_master(o) || !line_dir_usable(o)) {
         return EXIT_USAGE;
     }
     const cli_file_t files[] = {{"--capture", o->capture.path, false}};
@@ -223,6 +286,9 @@ static int bus_open(line_run_t *r, const line_opts_t *o)
             cli_error("line: cannot add card %u", o->cards[i]);
             return 1;
         }
+    }
+    if (o->master_seen && bus_master(r, o) != 0) {
+        return 1;
     }
     line_bridge_init(&r->bridge, &r->line, r->n_ports);
     sim_station_t st = line_bridge_station(&r->bridge);
@@ -385,6 +451,9 @@ static void print_start(const line_run_t *r, const line_opts_t *o)
     for (size_t i = 0; i < o->n_cards; i++) {
         printf("%s%u", i == 0u ? "; cards on the in-memory bus: " : ", ", o->cards[i]);
     }
+    if (o->master_seen) {
+        printf("; master %u on the in-memory bus, slaves %s", o->master, o->master_slaves);
+    }
     printf("; Ctrl-C ends it\n");
     (void)fflush(stdout);
 }
@@ -412,7 +481,8 @@ static void print_figures(const line_run_t *r)
 
 static int line_session(line_run_t *r, const line_opts_t *o)
 {
-    line_init(&r->line, o->ports + (o->n_cards > 0u ? 1u : 0u), o->baud, o->timing);
+    bool bus = o->n_cards > 0u || o->master_seen;
+    line_init(&r->line, o->ports + (bus ? 1u : 0u), o->baud, o->timing);
     if (ports_open(r, o) != 0) {
         return 1;
     }
@@ -431,7 +501,7 @@ static int line_session(line_run_t *r, const line_opts_t *o)
     }
     print_start(r, o);
     r->t0_ns = host_clock_mono_ns();
-    if (o->n_cards > 0u && bus_open(r, o) != 0) {
+    if (bus && bus_open(r, o) != 0) {
         return 1;
     }
     int rc = line_loop(r);

@@ -165,7 +165,7 @@ static const help_cmd_t commands[] = {
      NOTE_RATE | NOTE_CAPTURE},
     {"line",
      "--dir DIR [--ports N] [--baud RATE] [--timing] [--card ADDR]... [--quiet]\n"
-     "[--capture FILE]",
+     "[--master ADDR --master-slaves N|N-M,...] [BUS OPTIONS] [--capture FILE]",
      "a virtual RS-485 segment any program joins: N PTY ports (default 2, up to 16)\n"
      "with links DIR/port1..DIR/portN (an old link there is replaced, anything else\n"
      "refused; removed at exit), until SIGINT/SIGTERM. What one port writes every\n"
@@ -174,10 +174,13 @@ static const help_cmd_t commands[] = {
      "and keeps the idle gaps. Two talkers at once come out garbled to the listeners,\n"
      "and each collision is counted and told on stderr. --card ADDR (repeatable): an\n"
      "emulated DFP21B with its MOVIDRIVE on the in-memory bus, joined to the line;\n"
-     "--quiet: only the cards' warnings. A port nobody reads drops what it would get\n"
-     "(counted). At the end: per port octets, writes, drops and collisions.\n"
+     "--master ADDR: the built-in master there too, owning --master-slaves (each a\n"
+     "DFP21B with Param + 3 PD), in the token ring with the line's other masters (BUS\n"
+     "OPTIONS); --quiet: only the cards' and the master's warnings. A port nobody reads\n"
+     "drops what it would get (counted). At the end: per port octets, writes, drops and\n"
+     "collisions.\n"
      "sim_host/line/README.md",
-     NOTE_RATE | NOTE_CAPTURE},
+     NOTE_RATE | NOTE_CAPTURE | NOTE_BUS},
     {"check-cfg", "HEX", "would the card accept this Chk_Cfg configuration?", 0u},
 };
 

@@ -3,7 +3,8 @@
 # back to the writer; two talkers at once garbled, counted and told, and the line fine after it;
 # --timing spreads a write over its characters' time; dfp-sim master and slave on two ports
 # reach Data_Exchange; an emulated card inside the line (--card) serves a master on a port; the
-# capture has both directions; bad command lines exit 2 with one line.
+# capture has both directions; the line's own master and one on a port share the token ring;
+# bad command lines exit 2 with one line.
 sim=$1
 py=${2:-python3}
 here=$(dirname "$0")
@@ -103,11 +104,41 @@ req=$(grep -c "RX 68 11 11 68 05 02 " "$tmp/k.txt"); rsp=$(grep -c "TX 68 11 11 
 # The replay engine reads it and the card it runs answers every request as the line's card did.
 expect_exit 0 "the card's capture replays" -- "$sim" replay --check "$tmp/k.txt"
 
+# 8. One line, two external programs and the in-memory bus at once, in one token ring: the
+# line's own master 3 (inside, on the in-memory bus) owns dfp-sim slave 7 on port2; dfp-sim
+# master 2 on port1 owns the line's card 5. Same bus parameters everywhere (HSA 7, G 1: short
+# GAP rounds).
+ring=(--hsa 7 --gap-factor 1)
+start_line "$tmp/r.out" --ports 2 --card 5 --master 3 --master-slaves 7 "${ring[@]}" \
+  --capture "$tmp/r.txt" || exit 1
+"$sim" slave --port "$tmp/l/port2" --address 7 --baud 19200 --inverter none >"$tmp/s7.out" 2>&1 &
+s7=$!; pids+=($s7)
+expect_exit 0 "master 2 in the ring with the line's master 3" -- timeout 60 "$sim" master \
+  --port "$tmp/l/port1" --address 5 --config F3F2 --baud 19200 --cycles 100 --timeout 50 "${ring[@]}"
+expect_in "master 2 done" "slave 5 in data exchange, 100 cycles" "$out"
+expect_in "master 2 saw master 3 in the ring" "token ring: master 3 is in the ring" "$out"
+kill -INT "$s7"; wait "$s7"
+stop_line
+# Whoever times out first (TTO: 1 s for 2, 1.2 s for 3, from each one's start) claims the token
+# and lets the other in through its GAP.
+if grep -q "token ring: GAP: station 2 answers: master ready" "$tmp/r.out" ||
+   grep -q "token ring: GAP: station 3 answers: master ready" <<<"$out"; then ok
+else bad "neither master let the other in: $out $(cat "$tmp/r.out")"; fi
+expect_in "the line's master saw master 2 in the ring" "token ring: master 2 is in the ring" "$(cat "$tmp/r.out")"
+expect_in "the line's master had 7 in data exchange" "slave 7 is in data exchange" "$(cat "$tmp/r.out")"
+expect_in "no collision in the ring" "dfp-sim line: 0 collisions" "$(cat "$tmp/r.out")"
+expect_in "slave 7 in data exchange with master 3" "Set_Prm from master 3 accepted" "$(cat "$tmp/s7.out")"
+# The token went both ways: 3 to 2 and 2 to 3.
+t32=$(grep -c " DC 02 03$" "$tmp/r.txt"); t23=$(grep -c " DC 03 02$" "$tmp/r.txt")
+[ "$t32" -ge 100 ] && [ "$t23" -ge 100 ] && ok || bad "tokens 3->2: $t32, 2->3: $t23"
+
 # 7. Bad command lines: exit 2, one line.
 mkdir -p "$tmp/bad"; touch "$tmp/bad/port1"
 for args in "" "--dir $tmp/nodir" "--dir $tmp/bad" "--dir $tmp/l --ports 0" \
             "--dir $tmp/l --ports 17" "--dir $tmp/l --baud 1234" "--dir $tmp/l --card 126" \
-            "--dir $tmp/l --card 5 --card 5" "--dir $tmp/l --bogus"; do
+            "--dir $tmp/l --card 5 --card 5" "--dir $tmp/l --bogus" \
+            "--dir $tmp/l --master 3" "--dir $tmp/l --master-slaves 5" \
+            "--dir $tmp/l --master 3 --master-slaves 3" "--dir $tmp/l --master 3 --master-slaves 5 --tsl 5"; do
   # shellcheck disable=SC2086
   expect_exit 2 "line $args" -- "$sim" line $args
   [ "$(wc -l <<<"$out")" = 1 ] && ok || bad "line $args: not one line: $out"

@@ -311,7 +311,12 @@ static void listen_token(fdl_active_t *s, uint8_t sa, hal_time_us_t t)
     } else if (sa == s->listen_first) {
         bool same = memcmp(s->listen_set, s->listen_prev, sizeof s->listen_set) == 0;
         if (s->listen_rotations >= 1u && same) {
-            memcpy(s->las, s->listen_set, sizeof s->las);
+            memset(s->las, 0, sizeof s->las);
+            for (unsigned a = 0; a <= FDL_ACTIVE_HSA_MAX; a++) {
+                if (bit_get(s->listen_set, (uint8_t)a)) {
+                    las_put(s, (uint8_t)a, true, t); /* each one told: the ring as found */
+                }
+            }
             s->ns = las_next(s, ts(s));
             set_state(s, FDL_MAC_ACTIVE_IDLE, t);
             return;
