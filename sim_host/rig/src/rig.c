@@ -4,6 +4,7 @@
 #include <string.h>
 #include <sys/prctl.h>
 #include <time.h>
+#include "dp_slave/fdl_wire.h"
 #include "sim_hal/host_clock.h"
 
 /* ---- fan-out to the taps ------------------------------------------------------------------ */
@@ -143,11 +144,54 @@ static bool card_hears(const rig_card_t *c)
     return c->cable && c->cs.card.on_bus;
 }
 
+/* The octets' check (shape, FCS) is the same for every listener: the first one asked keeps
+ * it in the telegram's memo (1 good, 2 bad) for the others. */
+static bool octets_ok(const membus_telegram_t *tg, const dp_master_whole_t *w)
+{
+    if (*tg->memo == 0u) {
+        *tg->memo = dp_master_whole_octets_ok(w) ? 1u : 2u;
+    }
+    return *tg->memo == 1u;
+}
+
 static bool card_takes_whole(void *ctx, const membus_telegram_t *tg)
 {
     rig_card_t *c = ctx;
     dp_master_whole_t w = whole_of(tg);
-    return !card_hears(c) || dp_master_whole_clean(&c->cs.card.dp.rx, &w);
+    return !card_hears(c) || (dp_master_whole_fits(&c->cs.card.dp.rx, &w) && octets_ok(tg, &w));
+}
+
+/* A clean telegram leaves a card that is not its addressee (fdl_station_frame: a token, a
+ * short acknowledgement, a response, a request to another address) only its receiver's record
+ * of the line (the last character's time, the frame served). Its poll would then find what it
+ * found at its last one, except where that record or the line's activity is what it reads:
+ * the rate still searched (the activity ends the search and sets the baud-control deadline),
+ * the first error-free telegram since power-up or a baud loss (line_active: the BUS FAULT LED),
+ * the first telegram after a second's silence (fdl_rx_poll's deadline to forget the last
+ * character appears). With the emulated drive it is polled anyway: the drive's time advances
+ * in steps from poll to poll, and their rounding follows the steps. */
+static bool card_quiet(void *ctx, const membus_telegram_t *tg)
+{
+    const rig_card_t *c = ctx;
+    const dp_slave_t *s = &c->cs.card.dp;
+    if (!card_hears(c) || c->cs.inverter != CARD_INVERTER_NONE || !s->rx.have_last ||
+        s->baud_state == DP_BAUD_SEARCH) {
+        return false;
+    }
+    size_t da_at = 0;
+    if (tg->data[0] == FDL_SD1 || tg->data[0] == FDL_SD3) {
+        da_at = FDL_SD1_SD3_HEADER_LEN;
+    } else if (tg->data[0] == FDL_SD2) {
+        da_at = FDL_SD2_HEADER_LEN;
+    } else {
+        return true; /* SD4, SC: not data, not line activity */
+    }
+    if (!s->line_active) {
+        return false;
+    }
+    uint8_t da = tg->data[da_at] & FDL_ADDR_MASK;
+    uint8_t fc = tg->data[da_at + FDL_FC_FROM_DA];
+    return (fc & FDL_FC_REQUEST) == 0u || (da != s->cfg.address && da != FDL_ADDR_BROADCAST);
 }
 
 static void card_rx_whole(void *ctx, const membus_telegram_t *tg)
@@ -164,7 +208,7 @@ static bool master_takes_whole(void *ctx, const membus_telegram_t *tg)
 {
     dp_master_t *m = ctx;
     dp_master_whole_t w = whole_of(tg);
-    return dp_master_whole_clean(&m->rx, &w);
+    return dp_master_whole_fits(&m->rx, &w) && octets_ok(tg, &w);
 }
 
 static void master_rx_whole(void *ctx, const membus_telegram_t *tg)
@@ -377,7 +421,8 @@ rig_card_t *rig_add_card(rig_t *r, const card_options_t *opt, hal_time_us_t now)
             return NULL;
         }
         if (r->cfg.wrap_card_station == NULL) { /* a wrapper wants the characters */
-            membus_whole_rx_t whole = {.ctx = c, .takes = card_takes_whole, .rx = card_rx_whole};
+            membus_whole_rx_t whole = {.ctx = c, .takes = card_takes_whole, .rx = card_rx_whole,
+                                       .quiet = card_quiet};
             membus_set_whole_rx(port, &whole);
         }
     }
