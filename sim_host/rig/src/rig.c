@@ -170,9 +170,8 @@ static bool card_takes_whole(void *ctx, const membus_telegram_t *tg)
  * the first telegram after a second's silence (fdl_rx_poll's deadline to forget the last
  * character appears). With the emulated drive it is polled anyway: the drive's time advances
  * in steps from poll to poll, and their rounding follows the steps. */
-static bool card_quiet(void *ctx, const membus_telegram_t *tg)
+static bool card_quiet(const rig_card_t *c, const membus_telegram_t *tg)
 {
-    const rig_card_t *c = ctx;
     const dp_slave_t *s = &c->cs.card.dp;
     if (!card_hears(c) || c->cs.inverter != CARD_INVERTER_NONE || !s->rx.have_last ||
         s->baud_state == DP_BAUD_SEARCH) {
@@ -194,14 +193,36 @@ static bool card_quiet(void *ctx, const membus_telegram_t *tg)
     return (fc & FDL_FC_REQUEST) == 0u || (da != s->cfg.address && da != FDL_ADDR_BROADCAST);
 }
 
-static void card_rx_whole(void *ctx, const membus_telegram_t *tg)
+
+/* A quiet telegram (card_quiet) reaches dp_slave_rx_telegram's station layer only to be
+ * dropped there: fdl_station_frame notes line activity the card has already noted and finds
+ * no request for it before touching anything. The receiver still takes it and the card frames
+ * what it frames after any telegram, as dp_slave_rx_telegram does. */
+static void card_rx_quiet(rig_card_t *c, const fdl_rx_telegram_t *t)
+{
+    dp_slave_t *s = &c->cs.card.dp;
+    if (fdl_rx_telegram(&s->rx, t) == FDL_RX_FRAME) {
+        dp_slave_prepare(s);
+    } else { /* not reached: the octets were checked; the full path reports the error */
+        dfp21b_rx_telegram(&c->cs.card, t);
+    }
+}
+
+static bool card_rx_whole(void *ctx, const membus_telegram_t *tg)
 {
     rig_card_t *c = ctx;
-    if (card_hears(c)) {
-        dp_master_whole_t w = whole_of(tg);
-        fdl_rx_telegram_t t = dp_master_whole_take(&c->cs.card.dp.rx, &w);
+    if (!card_hears(c)) {
+        return true;
+    }
+    bool quiet = card_quiet(c, tg);
+    dp_master_whole_t w = whole_of(tg);
+    fdl_rx_telegram_t t = dp_master_whole_take(&c->cs.card.dp.rx, &w);
+    if (quiet) {
+        card_rx_quiet(c, &t);
+    } else {
         dfp21b_rx_telegram(&c->cs.card, &t);
     }
+    return !quiet;
 }
 
 static bool master_takes_whole(void *ctx, const membus_telegram_t *tg)
@@ -211,10 +232,11 @@ static bool master_takes_whole(void *ctx, const membus_telegram_t *tg)
     return dp_master_whole_fits(&m->rx, &w) && octets_ok(tg, &w);
 }
 
-static void master_rx_whole(void *ctx, const membus_telegram_t *tg)
+static bool master_rx_whole(void *ctx, const membus_telegram_t *tg)
 {
     dp_master_whole_t w = whole_of(tg);
     dp_master_rx_telegram(ctx, &w);
+    return true;
 }
 
 static hal_time_us_t card_poll(void *ctx, hal_time_us_t now)
@@ -421,8 +443,7 @@ rig_card_t *rig_add_card(rig_t *r, const card_options_t *opt, hal_time_us_t now)
             return NULL;
         }
         if (r->cfg.wrap_card_station == NULL) { /* a wrapper wants the characters */
-            membus_whole_rx_t whole = {.ctx = c, .takes = card_takes_whole, .rx = card_rx_whole,
-                                       .quiet = card_quiet};
+            membus_whole_rx_t whole = {.ctx = c, .takes = card_takes_whole, .rx = card_rx_whole};
             membus_set_whole_rx(port, &whole);
         }
     }

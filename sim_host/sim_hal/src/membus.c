@@ -231,10 +231,9 @@ static void deliver_whole(membus_t *bus, membus_whole_t *w)
         if (!listens(p, w->sender)) {
             continue;
         }
-        bool quiet = p->whole.quiet != NULL && p->whole.quiet(p->whole.ctx, &tg);
-        p->whole.rx(p->whole.ctx, &tg);
+        bool poll = p->whole.rx(p->whole.ctx, &tg);
         bus->chars_delivered += w->len;
-        if (!quiet) {
+        if (poll) {
             p->deadline_ns = bus->now_ns; /* let it work on the telegram at once */
         }
     }

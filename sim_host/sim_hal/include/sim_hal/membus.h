@@ -54,15 +54,14 @@ static inline hal_time_us_t membus_char_us(const membus_telegram_t *tg, size_t k
 
 /* What a station needs to take telegrams whole. takes: asked when the first character ends;
  * true only if rx() at the last character's end leaves the station exactly as rx_char for each
- * character would. quiet (optional): asked just before rx(); true only if the telegram gives
- * the station's poll nothing to do (it is for another station and changes nothing the poll
- * reads), so the deadline its last poll returned stands and it is not polled after this
- * telegram. NULL: polled after every telegram, as after the last character of one. */
+ * character would. rx returns whether the station is to be polled now, as after the last
+ * character of a telegram; false only if the telegram gave its poll nothing to do (it is for
+ * another station and changes nothing the poll reads), so the deadline its last poll returned
+ * stands. */
 typedef struct membus_whole_rx {
     void *ctx;
     bool (*takes)(void *ctx, const membus_telegram_t *tg);
-    void (*rx)(void *ctx, const membus_telegram_t *tg);
-    bool (*quiet)(void *ctx, const membus_telegram_t *tg);
+    bool (*rx)(void *ctx, const membus_telegram_t *tg);
 } membus_whole_rx_t;
 
 typedef struct membus_port {
