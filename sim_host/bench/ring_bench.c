@@ -193,10 +193,11 @@ static bool master_takes(void *ctx, const membus_telegram_t *tg)
     return dp_master_whole_clean(&m->rx, &w);
 }
 
-static void master_rx(void *ctx, const membus_telegram_t *tg)
+static bool master_rx(void *ctx, const membus_telegram_t *tg)
 {
     dp_master_whole_t w = whole_of(tg);
     dp_master_rx_telegram(ctx, &w);
+    return true;
 }
 
 typedef struct bench_args {

@@ -63,13 +63,14 @@ static bool takes(void *ctx, const membus_telegram_t *tg)
     return dp_master_whole_clean(&m->rx, &w);
 }
 
-static void rx_whole(void *ctx, const membus_telegram_t *tg)
+static bool rx_whole(void *ctx, const membus_telegram_t *tg)
 {
     dp_master_whole_t w = {.data = tg->data, .len = (uint16_t)tg->len, .char_ns = tg->char_ns,
                            .first_t = membus_char_us(tg, 1),
                            .before_last_t = membus_char_us(tg, tg->len > 1 ? tg->len - 1 : 1),
                            .end_t = membus_char_us(tg, tg->len)};
     dp_master_rx_telegram(ctx, &w);
+    return true;
 }
 
 dp_master_t *ring_rig_add_master(ring_rig_t *rr, uint8_t address, const fdl_bus_params_t *bus,

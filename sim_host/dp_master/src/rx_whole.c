@@ -13,6 +13,11 @@ static fdl_gap_t gap_before(const fdl_rx_t *rx, hal_time_us_t first_t)
 
 bool dp_master_whole_clean(const fdl_rx_t *rx, const dp_master_whole_t *w)
 {
+    return dp_master_whole_fits(rx, w) && dp_master_whole_octets_ok(w);
+}
+
+bool dp_master_whole_fits(const fdl_rx_t *rx, const dp_master_whole_t *w)
+{
     if (rx->collecting || w->len == 0u) {
         return false;
     }
@@ -21,9 +26,12 @@ bool dp_master_whole_clean(const fdl_rx_t *rx, const dp_master_whole_t *w)
     }
     /* Microsecond timestamps of back-to-back characters are at most this far apart. */
     uint32_t inner_us = (w->char_ns + 999u) / 1000u;
-    if (w->len > 1u && inner_us > fdl_gap_pause_us(rx->strict, rx->char_ns, rx->relaxed_gap_us)) {
-        return false;
-    }
+    return w->len <= 1u ||
+           inner_us <= fdl_gap_pause_us(rx->strict, rx->char_ns, rx->relaxed_gap_us);
+}
+
+bool dp_master_whole_octets_ok(const dp_master_whole_t *w)
+{
     return fdl_check(w->data, w->len, NULL, NULL) == FDL_CHECK_OK;
 }
 

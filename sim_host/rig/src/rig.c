@@ -4,6 +4,7 @@
 #include <string.h>
 #include <sys/prctl.h>
 #include <time.h>
+#include "dp_slave/fdl_wire.h"
 #include "sim_hal/host_clock.h"
 
 /* ---- fan-out to the taps ------------------------------------------------------------------ */
@@ -143,34 +144,99 @@ static bool card_hears(const rig_card_t *c)
     return c->cable && c->cs.card.on_bus;
 }
 
+/* The octets' check (shape, FCS) is the same for every listener: the first one asked keeps
+ * it in the telegram's memo (1 good, 2 bad) for the others. */
+static bool octets_ok(const membus_telegram_t *tg, const dp_master_whole_t *w)
+{
+    if (*tg->memo == 0u) {
+        *tg->memo = dp_master_whole_octets_ok(w) ? 1u : 2u;
+    }
+    return *tg->memo == 1u;
+}
+
 static bool card_takes_whole(void *ctx, const membus_telegram_t *tg)
 {
     rig_card_t *c = ctx;
     dp_master_whole_t w = whole_of(tg);
-    return !card_hears(c) || dp_master_whole_clean(&c->cs.card.dp.rx, &w);
+    return !card_hears(c) || (dp_master_whole_fits(&c->cs.card.dp.rx, &w) && octets_ok(tg, &w));
 }
 
-static void card_rx_whole(void *ctx, const membus_telegram_t *tg)
+/* A clean telegram leaves a card that is not its addressee (fdl_station_frame: a token, a
+ * short acknowledgement, a response, a request to another address) only its receiver's record
+ * of the line (the last character's time, the frame served). Its poll would then find what it
+ * found at its last one, except where that record or the line's activity is what it reads:
+ * the rate still searched (the activity ends the search and sets the baud-control deadline),
+ * the first error-free telegram since power-up or a baud loss (line_active: the BUS FAULT LED),
+ * the first telegram after a second's silence (fdl_rx_poll's deadline to forget the last
+ * character appears). With the emulated drive it is polled anyway: the drive's time advances
+ * in steps from poll to poll, and their rounding follows the steps. */
+static bool card_quiet(const rig_card_t *c, const membus_telegram_t *tg)
+{
+    const dp_slave_t *s = &c->cs.card.dp;
+    if (!card_hears(c) || c->cs.inverter != CARD_INVERTER_NONE || !s->rx.have_last ||
+        s->baud_state == DP_BAUD_SEARCH) {
+        return false;
+    }
+    size_t da_at = 0;
+    if (tg->data[0] == FDL_SD1 || tg->data[0] == FDL_SD3) {
+        da_at = FDL_SD1_SD3_HEADER_LEN;
+    } else if (tg->data[0] == FDL_SD2) {
+        da_at = FDL_SD2_HEADER_LEN;
+    } else {
+        return true; /* SD4, SC: not data, not line activity */
+    }
+    if (!s->line_active) {
+        return false;
+    }
+    uint8_t da = tg->data[da_at] & FDL_ADDR_MASK;
+    uint8_t fc = tg->data[da_at + FDL_FC_FROM_DA];
+    return (fc & FDL_FC_REQUEST) == 0u || (da != s->cfg.address && da != FDL_ADDR_BROADCAST);
+}
+
+
+/* A quiet telegram (card_quiet) reaches dp_slave_rx_telegram's station layer only to be
+ * dropped there: fdl_station_frame notes line activity the card has already noted and finds
+ * no request for it before touching anything. The receiver still takes it and the card frames
+ * what it frames after any telegram, as dp_slave_rx_telegram does. */
+static void card_rx_quiet(rig_card_t *c, const fdl_rx_telegram_t *t)
+{
+    dp_slave_t *s = &c->cs.card.dp;
+    if (fdl_rx_telegram(&s->rx, t) == FDL_RX_FRAME) {
+        dp_slave_prepare(s);
+    } else { /* not reached: the octets were checked; the full path reports the error */
+        dfp21b_rx_telegram(&c->cs.card, t);
+    }
+}
+
+static bool card_rx_whole(void *ctx, const membus_telegram_t *tg)
 {
     rig_card_t *c = ctx;
-    if (card_hears(c)) {
-        dp_master_whole_t w = whole_of(tg);
-        fdl_rx_telegram_t t = dp_master_whole_take(&c->cs.card.dp.rx, &w);
+    if (!card_hears(c)) {
+        return true;
+    }
+    bool quiet = card_quiet(c, tg);
+    dp_master_whole_t w = whole_of(tg);
+    fdl_rx_telegram_t t = dp_master_whole_take(&c->cs.card.dp.rx, &w);
+    if (quiet) {
+        card_rx_quiet(c, &t);
+    } else {
         dfp21b_rx_telegram(&c->cs.card, &t);
     }
+    return !quiet;
 }
 
 static bool master_takes_whole(void *ctx, const membus_telegram_t *tg)
 {
     dp_master_t *m = ctx;
     dp_master_whole_t w = whole_of(tg);
-    return dp_master_whole_clean(&m->rx, &w);
+    return dp_master_whole_fits(&m->rx, &w) && octets_ok(tg, &w);
 }
 
-static void master_rx_whole(void *ctx, const membus_telegram_t *tg)
+static bool master_rx_whole(void *ctx, const membus_telegram_t *tg)
 {
     dp_master_whole_t w = whole_of(tg);
     dp_master_rx_telegram(ctx, &w);
+    return true;
 }
 
 static hal_time_us_t card_poll(void *ctx, hal_time_us_t now)

@@ -85,6 +85,7 @@ static void put_whole(membus_t *bus, const membus_port_t *p, const uint8_t *fram
     w->char_ns = hal_uart_char_ns(p->baud);
     w->start_ns = start;
     w->len = (uint16_t)len;
+    w->memo = 0;
     memcpy(w->data, frame, len);
 }
 
@@ -197,10 +198,10 @@ static bool listens(const membus_port_t *p, uint8_t sender)
     return p->index != sender && !p->silenced && p->station.rx_char != NULL;
 }
 
-static membus_telegram_t view_of(const membus_whole_t *w)
+static membus_telegram_t view_of(membus_whole_t *w)
 {
     return (membus_telegram_t){.data = w->data, .len = w->len, .start_ns = w->start_ns,
-                               .char_ns = w->char_ns, .baud = w->baud};
+                               .char_ns = w->char_ns, .baud = w->baud, .memo = &w->memo};
 }
 
 /* The end of the first character: every listener takes the telegram whole, or it is split. */
@@ -230,9 +231,11 @@ static void deliver_whole(membus_t *bus, membus_whole_t *w)
         if (!listens(p, w->sender)) {
             continue;
         }
-        p->whole.rx(p->whole.ctx, &tg);
+        bool poll = p->whole.rx(p->whole.ctx, &tg);
         bus->chars_delivered += w->len;
-        p->deadline_ns = bus->now_ns; /* let it work on the telegram at once */
+        if (poll) {
+            p->deadline_ns = bus->now_ns; /* let it work on the telegram at once */
+        }
     }
 }
 

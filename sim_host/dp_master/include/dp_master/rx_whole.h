@@ -26,6 +26,11 @@ typedef struct dp_master_whole {
 /* True when fdl_rx_char for each character would accept exactly this telegram: the assembler
  * is between telegrams and may start one, no pause inside, and the octets are one telegram. */
 bool dp_master_whole_clean(const fdl_rx_t *rx, const dp_master_whole_t *w);
+/* dp_master_whole_clean's two halves: what depends on the receiver (its assembler, the gaps at
+ * its rate), and what the octets alone decide (the same for every listener, so a bus with many
+ * of them may work it out once per telegram). */
+bool dp_master_whole_fits(const fdl_rx_t *rx, const dp_master_whole_t *w);
+bool dp_master_whole_octets_ok(const dp_master_whole_t *w);
 
 /* The telegram for fdl_rx_telegram (or dp_slave_rx_telegram) with the idle before it, and the
  * assembler's record of the last character updated as fdl_rx_char updates it. Only after

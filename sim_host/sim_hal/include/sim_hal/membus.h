@@ -33,13 +33,17 @@
 
 typedef struct membus membus_t;
 
-/* A telegram on its way as a whole: character k (1..len) ends at start_ns + k * char_ns. */
+/* A telegram on its way as a whole: character k (1..len) ends at start_ns + k * char_ns.
+ * memo: one octet that is 0 when the telegram goes on the line and stays with it until it is
+ * delivered; what every listener would work out alike from the octets alone (their check
+ * sum) the first one asked may keep there for the others. */
 typedef struct membus_telegram {
     const uint8_t *data;
     size_t len;
     uint64_t start_ns;
     uint32_t char_ns;
     uint32_t baud;
+    uint8_t *memo;
 } membus_telegram_t;
 
 /* The timestamp rx_char would have been given for character k (1..len). */
@@ -50,11 +54,14 @@ static inline hal_time_us_t membus_char_us(const membus_telegram_t *tg, size_t k
 
 /* What a station needs to take telegrams whole. takes: asked when the first character ends;
  * true only if rx() at the last character's end leaves the station exactly as rx_char for each
- * character would. */
+ * character would. rx returns whether the station is to be polled now, as after the last
+ * character of a telegram; false only if the telegram gave its poll nothing to do (it is for
+ * another station and changes nothing the poll reads), so the deadline its last poll returned
+ * stands. */
 typedef struct membus_whole_rx {
     void *ctx;
     bool (*takes)(void *ctx, const membus_telegram_t *tg);
-    void (*rx)(void *ctx, const membus_telegram_t *tg);
+    bool (*rx)(void *ctx, const membus_telegram_t *tg);
 } membus_whole_rx_t;
 
 typedef struct membus_port {
@@ -85,6 +92,7 @@ typedef struct membus_whole {
     uint32_t char_ns;
     uint64_t start_ns;
     uint16_t len;
+    uint8_t memo;
     uint8_t data[MEMBUS_TELEGRAM_MAX];
 } membus_whole_t;
 
