@@ -53,22 +53,22 @@ static unsigned trace_differs(const char *const *expected, size_t n)
 
 /* ---- 1: a lone master ---------------------------------------------------------------------- */
 
-/* The claim (two tokens to itself), then per visit: the slave's next start-up telegram and its
- * answer, the token to itself. GAP maintenance asks one address every G = 10 rotations, the
- * first at once after the claim (3, in the claim's visit), the next in the 10th visit (4): nobody
- * answers. The Slave_Diag after Chk_Cfg names master 2; Data_Exchange toggles FCB. */
+/* The claim (two tokens to itself), which starts a GAP sweep, then per visit: the slave's next
+ * start-up telegram and its answer, one GAP address (3, 4, ...: nobody answers), the token to
+ * itself. The Slave_Diag after
+ * Chk_Cfg names master 2; Data_Exchange toggles FCB. */
 static const char *const ring1_start[] = {
     "DC 02 02", "DC 02 02",
     "10 0A 02 49 55 16", "10 02 0A 00 0C 16", "10 03 02 49 4E 16", "DC 02 02",
-    "68 05 05 68 8A 82 6D 3C 3E", "A2 82 8A 08 3E 3C", "DC 02 02",
-    "68 15 15 68 8A 82 5D 3D 3E", "E5", "DC 02 02",
-    "68 07 07 68 8A 82 7D 3E 3E F3 F2", "E5", "DC 02 02",
-    "68 05 05 68 8A 82 5D 3C 3E", "A2 82 8A 08 3E 3C 00 0C 00 02", "DC 02 02",
-    "68 11 11 68 0A 02 7D", "68 11 11 68 02 0A 08", "DC 02 02",
-    "68 11 11 68 0A 02 5D", "68 11 11 68 02 0A 08", "DC 02 02",
-    "68 11 11 68 0A 02 7D", "68 11 11 68 02 0A 08", "DC 02 02",
-    "68 11 11 68 0A 02 5D", "68 11 11 68 02 0A 08", "DC 02 02",
-    "68 11 11 68 0A 02 7D", "68 11 11 68 02 0A 08", "10 04 02 49 4F 16", "DC 02 02",
+    "68 05 05 68 8A 82 6D 3C 3E", "A2 82 8A 08 3E 3C", "10 04 02 49 4F 16", "DC 02 02",
+    "68 15 15 68 8A 82 5D 3D 3E", "E5", "10 05 02 49 50 16", "DC 02 02",
+    "68 07 07 68 8A 82 7D 3E 3E F3 F2", "E5", "10 06 02 49 51 16", "DC 02 02",
+    "68 05 05 68 8A 82 5D 3C 3E", "A2 82 8A 08 3E 3C 00 0C 00 02", "10 07 02 49 52 16",
+    "DC 02 02",
+    "68 11 11 68 0A 02 7D", "68 11 11 68 02 0A 08", "10 08 02 49 53 16", "DC 02 02",
+    "68 11 11 68 0A 02 5D", "68 11 11 68 02 0A 08", "10 09 02 49 54 16", "DC 02 02",
+    "68 11 11 68 0A 02 7D", "68 11 11 68 02 0A 08", "10 0A 02 49 55 16", "10 02 0A 00 0C 16",
+    "DC 02 02",
 };
 
 static void ring_of_one_at(uint32_t baud)
@@ -77,8 +77,8 @@ static void ring_of_one_at(uint32_t baud)
     setup(baud, 1, NULL);
     uint64_t start_ns = rr.rig.bus.now_ns;
     const fdl_bus_params_t *bp = &mac(0)->cfg.bus;
-    /* long enough for the start-up and one GAP round of 124 addresses, one every 10 visits */
-    ring_rig_run_us(&rr, 1500u * (uint64_t)fdl_bus_us(bp, 2000u) + 20000u);
+    /* long enough for the start-up and one GAP sweep of 124 addresses, one per visit */
+    ring_rig_run_us(&rr, 200u * (uint64_t)fdl_bus_us(bp, 2000u) + 20000u);
     size_t n = sizeof ring1_start / sizeof ring1_start[0];
     CHECK(rr.trace_len > n);
     CHECK_EQ(trace_differs(ring1_start, n), 0);

@@ -233,6 +233,16 @@ fdl_station_kind_t fdl_active_station(const fdl_active_t *s, uint8_t address)
 
 /* ---- the token arrives ------------------------------------------------------------------ */
 
+/* A GAP sweep: the addresses after TS, one per token visit (the Siemens and IEC reading of the
+ * GAP update factor: G rotations without, then one address each time the token comes until the
+ * whole GAP has been asked). */
+static void gap_sweep_start(fdl_active_t *s)
+{
+    s->gap_sweep = true;
+    s->gap_rotations = 0;
+    s->gap_next = next_address(s, ts(s));
+}
+
 /* Token receipt: TRR from the last receipt, TTH = TTR - TRR, one more rotation towards G. */
 static void take_token(fdl_active_t *s, uint8_t from, hal_time_us_t t)
 {
@@ -260,9 +270,8 @@ static void take_token(fdl_active_t *s, uint8_t from, hal_time_us_t t)
      * entered the ring after us, or one was skipped). */
     s->ns = las_next(s, ts(s));
     s->gap_asked_this_visit = false;
-    if (++s->gap_rotations >= s->cfg.bus.gap_factor) {
-        s->gap_rotations = 0;
-        s->gap_due = true;
+    if (!s->gap_sweep && ++s->gap_rotations >= s->cfg.bus.gap_factor) {
+        gap_sweep_start(s);
     }
     s->line_free = t + us(s, fdl_bus_tid1_bits(&s->cfg.bus));
     if (!s->in_ring) {
@@ -475,19 +484,21 @@ void fdl_active_release(fdl_active_t *s, hal_time_us_t now)
     if (s->state != FDL_MAC_USE_TOKEN) {
         return;
     }
-    /* GAP maintenance only with time left on the token (TTH > 0): one address every G
-     * rotations, the first at once after a claim. */
+    /* GAP maintenance, only with time left on the token (TTH > 0): in a sweep one address per
+     * visit; past the GAP's end (NS, or HSA round to TS) the sweep is over and the next starts
+     * G rotations later. */
     s->gap_pending = false;
-    if (s->gap_due && !s->late && !hal_time_reached(now, s->tth_end)) {
-        s->gap_due = false;
-        if (!in_gap(s, s->gap_next)) {
-            /* past NS (or round HSA): the GAP starts again after TS */
-            s->gap_next = next_address(s, ts(s));
-            while (!in_gap(s, s->gap_next) && s->gap_next != s->ns && s->gap_next != ts(s)) {
-                s->gap_next = next_address(s, s->gap_next);
-            }
+    if (s->gap_sweep && !s->late && !hal_time_reached(now, s->tth_end)) {
+        while (!in_gap(s, s->gap_next) && s->gap_next > s->cfg.bus.hsa &&
+               s->gap_next != ts(s)) {
+            s->gap_next = next_address(s, s->gap_next); /* above HSA: round to 0 */
         }
-        s->gap_pending = in_gap(s, s->gap_next);
+        if (in_gap(s, s->gap_next)) {
+            s->gap_pending = true;
+        } else {
+            s->gap_sweep = false;
+            s->gap_rotations = 0;
+        }
     }
     s->pass_to = s->ns;
     s->pass_tries = 0;
@@ -598,9 +609,7 @@ static hal_time_us_t claim_token(fdl_active_t *s, hal_time_us_t now)
     if (++s->claim_tokens < 2u) {
         return s->line_free;
     }
-    s->gap_due = true; /* the ring is rebuilt by GAP maintenance, from TS+1 on */
-    s->gap_rotations = 0;
-    s->gap_next = next_address(s, ts(s));
+    gap_sweep_start(s); /* the ring is rebuilt by GAP maintenance at once */
     s->have_token_t = false;
     take_token(s, ts(s), s->last_activity);
     return s->line_free;

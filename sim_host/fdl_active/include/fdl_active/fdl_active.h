@@ -8,8 +8,9 @@
  *   - the real rotation time TRR is measured from one token receipt to the next; the token
  *     holding time TTH = TTR - TRR allows high-priority message cycles, then low-priority ones,
  *     while the token is early; a late token (TTH <= 0) allows exactly one high-priority cycle;
- *   - GAP maintenance: every G rotations one address between TS and NS (up to HSA) is asked
- *     with Request FDL Status, in turn from TS+1 on (the first at once after a claim); a master answering "ready to enter the ring"
+ *   - GAP maintenance: G rotations after the last sweep, a sweep asks the addresses between TS
+ *     and NS (up to HSA) with Request FDL Status, one per token visit, from TS+1 on (a claim
+ *     starts one at once); a master answering "ready to enter the ring"
  *     becomes the new NS; what every address answered is the live list;
  *   - FDL status requests to this station are answered: master not ready / ready to enter the
  *     ring / in the ring (FC 0x10 / 0x20 / 0x30);
@@ -163,7 +164,7 @@ typedef struct fdl_active {
     uint32_t visit;            /* counts token receipts; the user serves each slave once */
     /* GAP maintenance. */
     uint8_t gap_rotations;
-    bool gap_due;              /* G rotations passed: one address at the next visit */
+    bool gap_sweep;            /* G rotations passed: one address per visit until the GAP ends */
     uint8_t gap_next;
     bool gap_asked_this_visit;
     uint8_t gap_asked;         /* the address in AWAIT_STATUS_RESPONSE */
