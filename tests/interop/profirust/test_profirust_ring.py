@@ -53,6 +53,8 @@ STARTUP = re.compile(r"token ring: master [23] is in the ring$|slave 6: (Slave_D
 PARAM_RING = re.compile(r"token ring: (GAP: station [14] answers: master ready|master [14] is "
                         r"in the ring|master [14] did not take the token: skipped|master [14] "
                         r"left the ring)$")
+MASTER_FAULT = re.compile(r"retry|lost|skipped|dropped|claims|in the ring|not answer|fault|"
+                          r"restart", re.I)
 LOG_LINE = re.compile(r"\s*[\d.]+ ms\s+(\S+)\s+(.*)$")
 
 
@@ -350,7 +352,7 @@ def scenario_pyprofibus(c, args, tmp):
             s["slave"]["events"]))
     mlog = run.text("master", "out") + run.text("master", "err")
     for line in mlog.splitlines():
-        if re.search(r"retry|lost|skipped|dropped|claims|in the ring|not answer|fault|restart", line, re.I):
+        if MASTER_FAULT.search(line):
             print("     master 3: " + line.strip())
     check_line(c, run, rcs, True)
     if c.failed or args.verbose:
