@@ -18,7 +18,7 @@ url="udpm://239.255.76.72:7672?ttl=0"
 
 # ---- demo --lcm, recorded by lcm-logger ----
 # lcm-logger says "Opening log file" before it subscribes; the exact counts below need every
-# message, so give it a generous moment on a loaded machine. The demo publishes its 3 145
+# message, so give it a generous moment on a loaded machine. The demo publishes its 3 924
 # messages in a burst: with the default socket buffer (rmem_default, ~200 datagrams) a logger
 # that the other tests' load holds off loses datagrams in the kernel, so it asks for 4 MB
 # (LCM's recv_buf_size, capped by net.core.rmem_max).
@@ -30,13 +30,13 @@ start_logger() { # start_logger LOG OUT
 }
 start_logger "$tmp/demo.lcm" "$tmp/logger.out"
 expect_exit 0 "demo --lcm" -- "$sim" demo --lcm "$url" --capture "$tmp/demo.pcap"
-expect_in "demo reports what it published" "3145 messages published to $url" "$out"
+expect_in "demo reports what it published" "3924 messages published to $url" "$out"
 sleep 0.3
 kill -INT "$logger"; wait "$logger"
 if [ -s "$tmp/demo.lcm" ]; then ok; else bad "lcm-logger wrote nothing"; fi
 
 expect_exit 0 "the log converts as a capture" -- "$sim" convert "$tmp/demo.lcm" "$tmp/lcm.txt"
-expect_in "every telegram is in the log" "(lcm) -> $tmp/lcm.txt (text): 3105 records" "$out"
+expect_in "every telegram is in the log" "(lcm) -> $tmp/lcm.txt (text): 3884 records" "$out"
 expect_exit 0 "the pcap converts" -- "$sim" convert "$tmp/demo.pcap" "$tmp/pcap.txt"
 # Same octets in the same order, same times relative to the first telegram (µs).
 rel() { awk '{split($1, t, "."); if (NR == 1) {s0 = t[1]; f0 = t[2]}
@@ -51,12 +51,12 @@ tx_req=$(grep -c ' TX 10 04 02 ' "$tmp/lcm.txt")
 if [ "$tx_sc" -gt 0 ] && [ "$rx_sc" = 0 ] && [ "$rx_req" -gt 0 ] && [ "$tx_req" = 0 ]; then ok; else
   bad "directions: SC $tx_sc TX / $rx_sc RX, requests to 4 $rx_req RX / $tx_req TX"; fi
 expect_exit 0 "replay --check of the LCM log" -- "$sim" replay "$tmp/demo.lcm" --check
-expect_in "every reply matches" "MATCH: all 667 replies match" "$out"
+expect_in "every reply matches" "MATCH: all 647 replies match" "$out"
 # Card state and parameter services went to their own channels. The demo runs in simulated
 # time, so the counts are the same every run: 5 services of its own plus the card's status
 # polls (diagnostic alarm on), and the state at most every 100 ms of simulated time.
 expect_exit 0 "channels of the demo log" -- "$channels" "$tmp/demo.lcm"
-expect_in "every telegram" "DFP_TELEGRAM 3105" "$out"
+expect_in "every telegram" "DFP_TELEGRAM 3884" "$out"
 expect_in "parameter services" "DFP_PARAM 24" "$out"
 expect_in "card states" "DFP_CARD_STATE 16" "$out"
 

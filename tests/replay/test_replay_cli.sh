@@ -61,8 +61,8 @@ expect_exit 0 "multimaster.pcap, the other DFP21B" -- "$sim" replay "$golden/mul
 expect_rows "multimaster.pcap --address 5" "$out" "Data_Exchange 99 99 0 0 0" "total 126 126 0 22 22"
 
 expect_exit 0 "demo.pcap" -- "$sim" replay "$golden/demo.pcap" --check
-expect_rows demo.pcap "$out" "FDL_Status 30 30 0 23 23" "Data_Exchange 608 608 0 0 0" \
-  "Set_Prm 7 7 0 0 0" "Chk_Cfg 7 7 0 0 0" "Slave_Diag 15 15 0 0 0" "total 667 667 0 23 23"
+expect_rows demo.pcap "$out" "FDL_Status 40 40 0 23 23" "Data_Exchange 578 578 0 0 0" \
+  "Set_Prm 7 7 0 0 0" "Chk_Cfg 7 7 0 0 0" "Slave_Diag 15 15 0 0 0" "total 647 647 0 23 23"
 # The demo ends with the master's token; cut after its last Data_Exchange request, the replay
 # says the answer is missing from the file.
 "$sim" convert "$golden/demo.pcap" "$tmp/demo.txt" >/dev/null

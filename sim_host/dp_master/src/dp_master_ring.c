@@ -73,7 +73,7 @@ static int pick_slave_ring(dp_master_t *m, hal_time_us_t now, bool *c1, bool *hi
  * that say nothing another station could use. */
 static hal_time_us_t alone_hold_until(dp_master_t *m, hal_time_us_t now)
 {
-    if (m->mac.ns != m->cfg.address || m->mac.gap_sweep) {
+    if (m->mac.ns != m->cfg.address) {
         return now;
     }
     for (unsigned i = 0; i < m->num_slaves; i++) {

@@ -7,7 +7,7 @@ usage: test_profirust_ring.py --scenario ring|param|pyprofibus --dfp-sim PATH --
   dfp-sim line --dir D --ports N --card 5 --card 6 [--card 4] --baud B --timing
   port1: dfp-profirust-peer --address 2 --slave 5   (profirust's master)
   port2: dfp-sim master --master-address 3 --address 6 --config F3F2 --cycles 0
-  both with TSL, TTR, G = 10 and HSA = 7 (GAP sweeps of 5 addresses) equal.
+  both with TSL, TTR, HSA = 7 and G equal (G = 100 in the ring scenario, 10 in the others).
 
 ring: at 1.5 Mbit/s with TSL 60000 bit times (40 ms: a PTY's time is the host's, so the slot
   time must cover the scheduling of three processes; the rate only shortens the telegrams) until
@@ -45,6 +45,10 @@ ROTATIONS = 10000
 FAST = {"baud": "1.5M", "tsl": 60000, "ttr": 150000}
 SLOW = {"baud": "19200", "tsl": 1920, "ttr": 20000}
 GAP, HSA = 10, 7
+# The 10 000 rotations: both masters sweep their GAP (each silent address a slot time) only every
+# 100 rotations, so the count is reached in about half the time; the second master still enters
+# through the sweep that follows the first claim.
+GAP_RING = 100
 BURSTS = 5
 P160 = "P160 internal setpoint n11"
 # Lines master 3 writes when its slave comes up and the ring forms (the rest is a fault).
@@ -207,7 +211,11 @@ def check_peer(c, s, rotations):
     c.check(ev.get("online") == 1 and ev.get("configured") == 1 and "offline" not in ev
             and "config_error" not in ev and "parameter_error" not in ev,
             "slave 5 came online and was configured once, never lost", str(ev))
-    c.check(s["slave"]["dx_cycles"] >= 0.9 * tok["receipts"],
+    # Joins and leaves (param's) cost rotations: GAP sweeps over silent addresses, a skipped
+    # successor's three token passes; profirust's late-token visits carry one telegram, not
+    # always its Data_Exchange. Most visits still do.
+    share = 0.9 if rotations else 0.8  # 0: the param scenario
+    c.check(s["slave"]["dx_cycles"] >= share * tok["receipts"],
             "slave 5: a Data_Exchange on (nearly) every token visit",
             "%d cycles for %d receipts" % (s["slave"]["dx_cycles"], tok["receipts"]))
     live = {e["address"]: e for e in s["live_list"]}
@@ -399,6 +407,8 @@ def main():
     t0 = time.monotonic()
     with tempfile.TemporaryDirectory(prefix="dfp-ring-") as tmp:
         if args.scenario == "ring":
+            global GAP  # pylint: disable=global-statement
+            GAP = GAP_RING
             scenario_ring(c, args, tmp)
         elif args.scenario == "param":
             scenario_param(c, args, tmp)
