@@ -470,7 +470,7 @@ static void print_figures(const line_run_t *r)
                "collisions %llu\n", station_name(r, s, name, sizeof name),
                (unsigned long long)st->tx_octets, (unsigned long long)st->tx_writes,
                (unsigned long long)(s < r->n_ports ? st->rx_octets : r->bridge.frames_to_bus),
-               (unsigned long long)(st->rx_dropped + st->tx_dropped),
+               (unsigned long long)st->rx_dropped + (unsigned long long)st->tx_dropped,
                (unsigned long long)st->collisions);
     }
     if (r->cards) {

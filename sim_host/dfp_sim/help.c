@@ -225,11 +225,11 @@ static const help_note_t notes[] = {
      "segment (or passes the token to itself alone) and sends only while it holds the\n"
      "token. Its bus parameters must match every other master's (a PLC's): --bus-profile\n"
      "dp|usb (dp: the DP profile's values for the rate; usb, the default on a tty, PTY or\n"
-     "LCM segment: TSL 100 ms, max TSDR 10 ms, TTR 2 s, for adapters and hosts whose\n"
-     "timing is milliseconds), then in bit times --tsl BITS (slot time), --min-tsdr BITS,\n"
-     "--max-tsdr BITS, --tset BITS, --tqui BITS, --ttr BITS (target rotation time),\n"
-     "--gap-factor G (1..100), --hsa N (highest station address, 1..126), --max-retry N\n"
-     "(0..7). A set that breaks a rule (TSL above max TSDR ...) exits 2."},
+     "LCM segment: TSL 100 ms, max TSDR 10 ms, TTR 2 s, HSA 31, G 100, for adapters and\n"
+     "hosts whose timing is milliseconds), then in bit times --tsl BITS (slot time),\n"
+     "--min-tsdr BITS, --max-tsdr BITS, --tset BITS, --tqui BITS, --ttr BITS (target\n"
+     "rotation time), --gap-factor G (1..100), --hsa N (highest station address, 1..126),\n"
+     "--max-retry N (0..7). A set that breaks a rule (TSL above max TSDR ...) exits 2."},
     {NOTE_LCM, "--lcm URL", " ",
      "publishes the card's telegrams, state and parameter services to LCM (channels\n"
      "DFP_TELEGRAM, DFP_CARD_STATE, DFP_PARAM; sim_host/lcm_bridge/README.md)."},
