@@ -26,7 +26,7 @@ const cli_opt_t bus_options[10] = {
      .seen = CLI_SEEN(bus_opts_t, tset_seen)},
     {CLI_OPT("--tqui", "BITS", CLI_U32, BUS(tqui)), .min = 0, .max = 255,
      .seen = CLI_SEEN(bus_opts_t, tqui_seen)},
-    {CLI_OPT("--ttr", "BITS", CLI_U32, BUS(ttr)), .min = 256, .max = 16777215u,
+    {CLI_OPT("--ttr", "BITS", CLI_U32, BUS(ttr)), .min = 256, .max = UINT32_MAX,
      .seen = CLI_SEEN(bus_opts_t, ttr_seen)},
     {CLI_OPT("--gap-factor", "G", CLI_U32, BUS(gap)), .min = 1, .max = 100,
      .seen = CLI_SEEN(bus_opts_t, gap_seen)},
@@ -63,4 +63,22 @@ bool bus_opts_apply(const bus_opts_t *o, const char *cmd, uint32_t baud, bool wa
         return false;
     }
     return true;
+}
+
+bool bus_opts_own_ok(const fdl_bus_params_t *p, const char *cmd, const char *opt, uint32_t own)
+{
+    if (own > p->hsa) {
+        cli_error("%s: %s %u is above HSA %u: no master's GAP maintenance asks it, so it "
+                  "could join no ring (give --hsa %u or more, as every master of the segment)",
+                  cmd, opt, own, p->hsa, own);
+        return false;
+    }
+    return true;
+}
+
+bool bus_opts_given(const bus_opts_t *o)
+{
+    return o->profile >= 0 || o->tsl_seen || o->min_tsdr_seen || o->max_tsdr_seen ||
+           o->tset_seen || o->tqui_seen || o->ttr_seen || o->gap_seen || o->hsa_seen ||
+           o->retry_seen;
 }

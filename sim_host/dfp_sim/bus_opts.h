@@ -26,5 +26,10 @@ void bus_opts_defaults(bus_opts_t *o);
  * they break (fdl_bus_params_check). */
 bool bus_opts_apply(const bus_opts_t *o, const char *cmd, uint32_t baud, bool wall_clock,
                     fdl_bus_params_t *out);
+/* A master's own address (named by opt) above HSA is never asked by anyone's GAP maintenance,
+ * so it could join no ring it did not start itself. False after reporting. */
+bool bus_opts_own_ok(const fdl_bus_params_t *p, const char *cmd, const char *opt, uint32_t own);
+/* Any bus option given (for commands where they need a master). */
+bool bus_opts_given(const bus_opts_t *o);
 
 #endif

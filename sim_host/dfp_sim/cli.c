@@ -149,7 +149,7 @@ static bool address_range(const char *p, unsigned long *lo, unsigned long *hi, c
     return ok;
 }
 
-bool cli_address_list(const char *text, uint8_t *out, size_t max, size_t *n)
+bool cli_address_list(const char *opt, const char *text, uint8_t *out, size_t max, size_t *n)
 {
     bool seen[126] = {false};
     *n = 0;
@@ -160,17 +160,17 @@ bool cli_address_list(const char *text, uint8_t *out, size_t max, size_t *n)
         unsigned long hi;
         bool ok = address_range(p, &lo, &hi, &end);
         if (!ok || (*end != ',' && *end != '\0') || lo > 125u || hi > 125u || hi < lo) {
-            cli_error("--address '%s': use addresses 0..125 as N, N-M or a comma list "
-                      "(3-34, 3,5,7-9)", text);
+            cli_error("%s '%s': use addresses 0..125 as N, N-M or a comma list "
+                      "(3-34, 3,5,7-9)", opt, text);
             return false;
         }
         for (unsigned long a = lo; a <= hi; a++) {
             if (seen[a]) {
-                cli_error("--address '%s': address %lu is given twice", text, a);
+                cli_error("%s '%s': address %lu is given twice", opt, text, a);
                 return false;
             }
             if (*n >= max) {
-                cli_error("--address '%s': more than %zu slaves", text, max);
+                cli_error("%s '%s': more than %zu slaves", opt, text, max);
                 return false;
             }
             seen[a] = true;

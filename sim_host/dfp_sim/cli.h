@@ -15,8 +15,8 @@ bool cli_hex(const char *opt, const char *text, uint8_t *out, size_t max, size_t
 /* "auto" (0), or one of the ten PROFIBUS rates: 19200, 19.2k, 1.5M, 1500000 ... */
 bool cli_baud(const char *opt, const char *text, bool allow_auto, uint32_t *out);
 /* --address "4", "3-34", "3,5,7-9": distinct slave addresses 0..125, at most max of them.
- * Returns false after reporting. */
-bool cli_address_list(const char *text, uint8_t *out, size_t max, size_t *n);
+ * Returns false after reporting, naming the option opt. */
+bool cli_address_list(const char *opt, const char *text, uint8_t *out, size_t max, size_t *n);
 /* For "--opt VALUE": returns argv[*i + 1] and advances, or reports the missing value. */
 const char *cli_value(int argc, char **argv, int *i);
 void cli_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));

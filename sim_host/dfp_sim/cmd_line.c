@@ -116,17 +116,24 @@ static bool line_cards(line_opts_t *o)
 static bool line_master(line_opts_t *o)
 {
     if (!o->master_seen) {
-        if (o->master_slaves != NULL) {
-            cli_error("line: --master-slaves belongs to --master ADDR");
+        if (o->master_slaves != NULL || bus_opts_given(&o->bus)) {
+            cli_error("line: --master-slaves and the bus options belong to --master ADDR (the "
+                      "programs on the ports have their own)");
             return false;
         }
         return true;
+    }
+    for (size_t i = 0; i < o->n_cards; i++) {
+        if (o->cards[i] == o->master) {
+            cli_error("line: --master %u is also a --card", o->master);
+            return false;
+        }
     }
     if (o->master_slaves == NULL) {
         cli_error("line: --master ADDR needs --master-slaves N|N-M,... (the slaves it owns)");
         return false;
     }
-    if (!cli_address_list(o->master_slaves, o->slave_addr, DP_MASTER_MAX_SLAVES,
+    if (!cli_address_list("--master-slaves", o->master_slaves, o->slave_addr, DP_MASTER_MAX_SLAVES,
                           &o->num_slaves)) {
         return false;
     }
@@ -136,7 +143,8 @@ static bool line_master(line_opts_t *o)
             return false;
         }
     }
-    return bus_opts_apply(&o->bus, "line", o->baud, true, &o->ring);
+    return bus_opts_apply(&o->bus, "line", o->baud, true, &o->ring) &&
+           bus_opts_own_ok(&o->ring, "line", "--master", o->master);
 }
 
 /* The master inside the line, in the ring with every other master of the line: each slave a

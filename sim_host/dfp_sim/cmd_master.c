@@ -35,6 +35,7 @@ typedef struct master_opts {
     bool verbose;
     bool timeout_given;
     bool reset_fault;
+    bool echo;
     /* from the above */
     size_t control_word; /* offset of PO1, the control word, in the outputs */
     uint8_t slave_addr[DP_MASTER_MAX_SLAVES];
@@ -61,6 +62,7 @@ static const cli_opt_t master_options[] = {
      .seen = CLI_SEEN(master_opts_t, timeout_given)},
     {CLI_OPT("--verbose", NULL, CLI_FLAG, MASTER(verbose))},
     {CLI_OPT("--reset-fault", NULL, CLI_FLAG, MASTER(reset_fault))},
+    {CLI_OPT("--echo-suppress", NULL, CLI_FLAG, MASTER(echo))},
 };
 
 static const cli_group_t master_groups[] = {
@@ -93,8 +95,9 @@ static int master_parse(master_opts_t *o, int argc, char **argv)
     }
     const cli_file_t capture = {"--capture", o->capture.path, false};
     if (!medium_check(&o->med, "master") ||
-        !bus_opts_apply(&o->bus, "master", o->baud, true, &o->ring) || !cli_no_links("master", &capture, 1u) ||
-        !cli_address_list(o->addresses, o->slave_addr, DP_MASTER_MAX_SLAVES, &o->num_slaves)) {
+        !bus_opts_apply(&o->bus, "master", o->baud, true, &o->ring) ||
+        !bus_opts_own_ok(&o->ring, "master", "--master-address", o->own) || !cli_no_links("master", &capture, 1u) ||
+        !cli_address_list("--address", o->addresses, o->slave_addr, DP_MASTER_MAX_SLAVES, &o->num_slaves)) {
         return EXIT_USAGE;
     }
     dfp21b_pd_cfg_t pd = {0};
@@ -465,7 +468,7 @@ int cmd_master(int argc, char **argv)
     if (rc != 0) {
         return rc;
     }
-    if (!session_open(&s, &o.med, (int16_t)o.own, o.baud, &o.capture, &o.io, false)) {
+    if (!session_open(&s, &o.med, (int16_t)o.own, o.baud, &o.capture, &o.io, o.echo)) {
         return 1;
     }
     if (master_build(&s, &o) != 0) {

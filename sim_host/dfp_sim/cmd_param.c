@@ -355,6 +355,7 @@ typedef struct param_opts {
     bool volatile_write;
     bool json;
     bool verbose;
+    bool echo;
     const char *pos[1 + DS47_MAX_PARAMS]; /* read and its indices, or write INDEX VALUE */
     int npos;
 } param_opts_t;
@@ -396,6 +397,7 @@ static const cli_opt_t param_options[] = {
     {CLI_OPT("--json", NULL, CLI_FLAG, PARAM(json))},
     {CLI_OPT("--verbose", NULL, CLI_FLAG, PARAM(verbose))},
     {CLI_OPT("--volatile", NULL, CLI_FLAG, PARAM(volatile_write))},
+    {CLI_OPT("--echo-suppress", NULL, CLI_FLAG, PARAM(echo))},
 };
 
 static const cli_group_t param_groups[] = {
@@ -507,7 +509,9 @@ static int param_parse(param_opts_t *o, int argc, char **argv)
     if (run.op == OP_WRITE && !parse_value(run.index[0], o->pos[2], &run.value)) {
         return EXIT_USAGE;
     }
-    return param_combination(o) ? 0 : EXIT_USAGE;
+    return param_combination(o) && bus_opts_own_ok(&o->ring, "param", "--master-address", o->own)
+               ? 0
+               : EXIT_USAGE;
 }
 
 /* A keyed segment's drops and totals, among the command's other lines. */
@@ -527,7 +531,8 @@ static bool param_open(const param_opts_t *o)
                     .lcm_url = m->lcm_url,
                     .lcm_station_address = (int16_t)o->own,
                     .lcm_key = medium_key(m),
-                    .baud = o->baud};
+                    .baud = o->baud,
+                    .echo_suppress = o->echo};
     rig_init(&rig, &rc);
     rig_tap_t tap = {.ctx = &rep, .frame = report_tap,
                      .master_event = o->verbose ? report_master_event : NULL};

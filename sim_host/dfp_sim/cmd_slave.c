@@ -66,7 +66,8 @@ static bool slave_addresses(slave_opts_t *o)
 {
     o->num_cards = 1;
     if (strpbrk(o->address_text, "-,") != NULL) {
-        return cli_address_list(o->address_text, o->addresses, DP_MASTER_MAX_SLAVES, &o->num_cards);
+        return cli_address_list("--address", o->address_text, o->addresses,
+                                DP_MASTER_MAX_SLAVES, &o->num_cards);
     }
     uint32_t single = 0;
     if (!cli_u32("--address", o->address_text, 0, 127, &single)) {

@@ -83,7 +83,8 @@ static const help_cmd_t commands[] = {
      "--config HEX "
      "[--prm HEX] [--cycles N] [--baud RATE] [--ident N] [--watchdog MS]\n"
      "[--master-address N] [--outputs HEX] [--timeout S] [BUS OPTIONS]\n"
-     "[--capture FILE] [--verbose] [--reset-fault] [--http [ADDR:]PORT] [LOG OPTIONS]",
+     "[--capture FILE] [--verbose] [--reset-fault] [--echo-suppress] [--http [ADDR:]PORT]\n"
+     "[LOG OPTIONS]",
      "the built-in class-1 master against one slave or several (up to 32, e.g. 3-34 or\n"
      "3,5,7-9, all with the same configuration); exit 0 once each ran N cycles (default\n"
      "100; 0: run until SIGINT, exit 0) in data exchange. --verbose logs the inputs,\n"
@@ -91,7 +92,9 @@ static const help_cmd_t commands[] = {
      "default for ident 0x6003: 00 00 00 06 81 00 00 01 01. Like a PLC going to STOP, it\n"
      "leaves (after --cycles, or on SIGINT/SIGTERM) with Global_Control Clear_Data and zero\n"
      "outputs for 3 cycles; --reset-fault acknowledges a drive fault at start (control\n"
-     "word bit 6 set, then cleared; the drive needs P101 = FIELDBUS)",
+     "word bit 6 set, then cleared; the drive needs P101 = FIELDBUS); --echo-suppress for\n"
+     "an adapter that hears its own transmissions (the token ring would take its own\n"
+     "telegram heard back for a second station with its address, and leave the bus)",
      NOTE_RATE | NOTE_CAPTURE | NOTE_HTTP | NOTE_LOG | NOTE_SEGMENT | NOTE_BUS},
     {"inverter",
      "--can IFACE [--sbus-address N] [--eeprom FILE] [--duration S] [--channel2]\n"
@@ -103,7 +106,7 @@ static const help_cmd_t commands[] = {
     {"param",
      "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] [--key FILE] --address N\n"
      "[--via channel|movilink|profidrive|c2] [--baud RATE] [--master-address N]\n"
-     "[--timeout S] [--json] [--capture FILE] [--verbose] [BUS OPTIONS]\n"
+     "[--timeout S] [--json] [--capture FILE] [--verbose] [--echo-suppress] [BUS OPTIONS]\n"
      "read PARAM [PARAM ...] | write PARAM VALUE [--volatile] | im0",
      "one parameter service against the card on a tty, or as a master on an LCM segment\n"
      "(--bus, --lcm-url, --key as for slave). PARAM: an index (8461, 0x210D), a P-number\n"
@@ -123,7 +126,7 @@ static const help_cmd_t commands[] = {
      "its diagnosis: the timeout names that master. Exit 0 when every result is positive,\n"
      "1 on a negative one or none within --timeout (default 10 s), 2 on a bad command\n"
      "line or an unknown PARAM; --json: one JSON object per result (p_number, name,\n"
-     "value, text ...)",
+     "value, text ...); --echo-suppress as for master",
      NOTE_RATE | NOTE_CAPTURE | NOTE_SEGMENT | NOTE_BUS},
     {"convert",
      "IN OUT [--format pcap|pcapng|text] [--linktype profibus|user0] [--ns]\n"

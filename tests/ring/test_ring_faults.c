@@ -74,19 +74,20 @@ static void switched_off_at(uint32_t baud)
     rr.trace_len = 0;
     dp_master_stop(rr.m[1]);
     ring_rig_run_us(&rr, 300000u); /* past the card's watchdog of 100 ms */
-    /* 2 passes to 3 and repeats it max_retry times, then skips it: 4 is its NS */
+    /* 2 passes to 3 and repeats it twice (FDL_TOKEN_PASS_REPEATS, whatever the message retry
+     * limit), then skips it: 4 is its NS */
     size_t next = 0;
-    uint8_t max_retry = mac(0)->cfg.bus.max_retry;
-    CHECK_EQ(tokens_in_a_row(0, 3, 2, &next), 1u + max_retry);
+    const unsigned repeats = FDL_TOKEN_PASS_REPEATS;
+    CHECK_EQ(tokens_in_a_row(0, 3, 2, &next), 1u + repeats);
     CHECK(next < rr.trace_len && ring_frame_is_token(&rr.trace[next], 4, 2));
     size_t first = ring_rig_find_token(&rr, 0, 3, 2);
     CHECK(first + 1u < rr.trace_len &&
           (int64_t)(rr.trace[first + 1u].t_ns - ring_frame_end_ns(&rr, &rr.trace[first])) >=
               (int64_t)bits_ns(mac(0)->cfg.bus.tsl_bits));
     CHECK_EQ(rr.ring_events[FDL_EV_PASS_FAILED] - failed_ev0, 1);
-    CHECK_EQ(ring_rig_count(&rr, (const uint8_t[]){FDL_SD4, 3, 2}, 3), 1u + max_retry);
+    CHECK_EQ(ring_rig_count(&rr, (const uint8_t[]){FDL_SD4, 3, 2}, 3), 1u + repeats);
     /* 4 had 3 as its PS: the first token from 2 is refused, the repeat taken */
-    CHECK_EQ(mac(0)->stats.token_retries - retries0, max_retry + 1u);
+    CHECK_EQ(mac(0)->stats.token_retries - retries0, repeats + 1u);
     CHECK(!fdl_active_in_las(mac(0), 3));
     CHECK(!fdl_active_in_las(mac(2), 3));
     CHECK_EQ(mac(0)->ns, 4);

@@ -80,7 +80,7 @@ void dp_master_init(dp_master_t *m, const dp_master_cfg_t *cfg, hal_time_us_t no
     if (cfg->token_ring) {
         dpm_ring_init(m, now);
     }
-    if (m->cfg.max_retry == 0u) m->cfg.max_retry = 1u;
+    if (m->cfg.max_retry == 0u && !cfg->token_ring) m->cfg.max_retry = 1u; /* ring: the bus's */
     if (m->cfg.backoff_min_us == 0u) m->cfg.backoff_min_us = 10000u;
     if (m->cfg.backoff_max_us == 0u) m->cfg.backoff_max_us = 1000000u;
     if (m->cfg.lost_poll_us == 0u) m->cfg.lost_poll_us = 5000u;
@@ -635,7 +635,10 @@ static bool reply_timed_out(dp_master_t *m, hal_time_us_t now)
     m->timeouts++;
     unsigned idx = m->waiting_for;
     m->waiting = false;
-    if (m->retries < m->cfg.max_retry) {
+    /* A repeat is part of the message cycle, but only for a master that still holds the token
+     * (one that found a second holder has given it up). */
+    bool may_repeat = !m->cfg.token_ring || fdl_active_holds_token(&m->mac);
+    if (m->retries < m->cfg.max_retry && may_repeat) {
         m->retries++;
         m->total_retries++;
         if (m->waiting_kind != DP_MASTER_WAIT_C2) {

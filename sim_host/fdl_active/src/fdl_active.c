@@ -135,7 +135,7 @@ void fdl_active_init(fdl_active_t *s, const fdl_active_cfg_t *cfg, hal_time_us_t
     s->ns = ts(s);
     s->ps = ts(s);
     s->foreign_ps = NO_ADDRESS;
-    s->listen_first = NO_ADDRESS;
+    s->listen_started = false;
     s->last_activity = now;
     s->line_free = now;
     s->deadline = now + HAL_TIME_NO_DEADLINE_US;
@@ -151,7 +151,7 @@ void fdl_active_start(fdl_active_t *s, hal_time_us_t now)
     memset(s->las, 0, sizeof s->las);
     memset(s->listen_set, 0, sizeof s->listen_set);
     memset(s->listen_prev, 0, sizeof s->listen_prev);
-    s->listen_first = NO_ADDRESS;
+    s->listen_started = false;
     s->listen_rotations = 0;
     s->in_ring = false;
     s->leaving = false;
@@ -214,7 +214,8 @@ void fdl_active_cycle(fdl_active_t *s, bool high)
 
 void fdl_active_sent(fdl_active_t *s, hal_time_us_t start, hal_time_us_t end, bool reply)
 {
-    (void)start;
+    s->tx_start = start;
+    s->reply_expected = reply;
     s->last_activity = end;
     s->line_free = end + (reply ? 0u : us(s, fdl_bus_tid2_bits(&s->cfg.bus)));
 }
@@ -313,28 +314,35 @@ static void token_seen(fdl_active_t *s, uint8_t sa, uint8_t da, hal_time_us_t t)
 }
 
 /* Listen_Token: the LAS is complete after two identical rotations. */
-static void listen_token(fdl_active_t *s, uint8_t sa, hal_time_us_t t)
+static void listen_token(fdl_active_t *s, uint8_t sa, uint8_t da, hal_time_us_t t)
 {
-    if (s->listen_first == NO_ADDRESS) {
-        s->listen_first = sa;
-    } else if (sa == s->listen_first) {
-        bool same = memcmp(s->listen_set, s->listen_prev, sizeof s->listen_set) == 0;
-        if (s->listen_rotations >= 1u && same) {
-            memset(s->las, 0, sizeof s->las);
-            for (unsigned a = 0; a <= FDL_ACTIVE_HSA_MAX; a++) {
-                if (bit_get(s->listen_set, (uint8_t)a)) {
-                    las_put(s, (uint8_t)a, true, t); /* each one told: the ring as found */
-                }
-            }
-            s->ns = las_next(s, ts(s));
-            set_state(s, FDL_MAC_ACTIVE_IDLE, t);
-            return;
-        }
-        memcpy(s->listen_prev, s->listen_set, sizeof s->listen_prev);
-        memset(s->listen_set, 0, sizeof s->listen_set);
-        s->listen_rotations++;
-    }
     bit_put(s->listen_set, sa, true);
+    if (da > sa) {
+        return;
+    }
+    /* A token to a lower address (or to itself) ends a rotation, whoever passes it, so a
+     * station that leaves while we listen cannot keep us listening. The first such token only
+     * starts the count: what was heard before it is part of a rotation. */
+    if (!s->listen_started) {
+        s->listen_started = true;
+        memset(s->listen_set, 0, sizeof s->listen_set);
+        return;
+    }
+    bool same = memcmp(s->listen_set, s->listen_prev, sizeof s->listen_set) == 0;
+    if (s->listen_rotations >= 1u && same) {
+        memset(s->las, 0, sizeof s->las);
+        for (unsigned a = 0; a <= FDL_ACTIVE_HSA_MAX; a++) {
+            if (bit_get(s->listen_set, (uint8_t)a)) {
+                las_put(s, (uint8_t)a, true, t); /* each one told: the ring as found */
+            }
+        }
+        s->ns = las_next(s, ts(s));
+        set_state(s, FDL_MAC_ACTIVE_IDLE, t);
+        return;
+    }
+    memcpy(s->listen_prev, s->listen_set, sizeof s->listen_prev);
+    memset(s->listen_set, 0, sizeof s->listen_set);
+    s->listen_rotations++;
 }
 
 static bool holding(const fdl_active_t *s)
@@ -359,7 +367,7 @@ static void token_frame(fdl_active_t *s, uint8_t da, uint8_t sa, hal_time_us_t t
         double_token(s, sa, t);
     }
     if (s->state == FDL_MAC_LISTEN_TOKEN) {
-        listen_token(s, sa, t);
+        listen_token(s, sa, da, t);
         return;
     }
     if (s->state == FDL_MAC_OFFLINE) {
@@ -424,6 +432,14 @@ static void duplicate_address(fdl_active_t *s, hal_time_us_t t)
 
 void fdl_active_activity(fdl_active_t *s, hal_time_us_t t)
 {
+    /* Holding the token, a character is only expected as the answer to our request. One that
+     * comes when no answer is due is another station on the line: two holders (after a claim
+     * race, say) whose telegrams collide never hear a valid one from each other, so this is how
+     * they find out. (A character during our own request cannot be told from an early answer
+     * on a PTY or LCM segment, whose line is faster than its nominal rate: not judged.) */
+    if (holding(s) && !s->reply_expected && hal_time_diff(t, s->tx_start) > 0) {
+        double_token(s, NO_ADDRESS, t);
+    }
     s->last_activity = t;
     s->activity_seen = true;
     if (s->state == FDL_MAC_CHECK_TOKEN_PASS) {
@@ -439,6 +455,7 @@ void fdl_active_frame(fdl_active_t *s, const uint8_t *f, size_t len, hal_time_us
     (void)first_t;
     s->last_activity = end_t;
     s->line_free = end_t + us(s, fdl_bus_tid1_bits(&s->cfg.bus));
+    s->reply_expected = false;
     if (len == 0u || f[0] == FDL_SC || s->state == FDL_MAC_OFFLINE) {
         return;
     }
@@ -574,11 +591,12 @@ static hal_time_us_t pass_token(fdl_active_t *s, hal_time_us_t now)
     return s->deadline;
 }
 
-/* No character from the successor within TSL: the token again (max_retry times), then the next
- * station of the LAS; with none left the station passes to itself. */
+/* No character from the successor within TSL: the token again, FDL_TOKEN_PASS_REPEATS times
+ * whatever the message retry limit (a successor that refuses a new PS's first token must get the
+ * second), then the next station of the LAS; with none left the station passes to itself. */
 static hal_time_us_t token_pass_failed(fdl_active_t *s, hal_time_us_t now)
 {
-    if (s->pass_tries < s->cfg.bus.max_retry) {
+    if (s->pass_tries < FDL_TOKEN_PASS_REPEATS) {
         s->pass_tries++;
         s->stats.token_retries++;
     } else {

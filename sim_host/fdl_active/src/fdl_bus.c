@@ -87,6 +87,14 @@ uint32_t fdl_bus_us(const fdl_bus_params_t *p, uint32_t bits)
     return hal_uart_bits_us(p->baud, bits);
 }
 
+/* Station timers are 32-bit microseconds compared by difference: no interval may reach 2^31. */
+#define TIME_LIMIT_S 2147u
+
+static uint64_t bits_s(const fdl_bus_params_t *p, uint64_t bits)
+{
+    return p->baud == 0u ? 0u : bits / p->baud;
+}
+
 bool fdl_bus_params_check(const fdl_bus_params_t *p, char *why, size_t n)
 {
     const char *rule = NULL;
@@ -108,6 +116,10 @@ bool fdl_bus_params_check(const fdl_bus_params_t *p, char *why, size_t n)
         rule = "HSA must be 0..126";
     } else if (p->max_retry > 7u) {
         rule = "the retry limit must be 0..7";
+    } else if (bits_s(p, fdl_bus_tto_bits(p, FDL_ACTIVE_HSA_MAX)) >= TIME_LIMIT_S ||
+               bits_s(p, p->ttr_bits) >= TIME_LIMIT_S) {
+        rule = "TSL x 258 (the lost-token time-out of address 126) and TTR must each stay "
+               "below 2147 s at this rate";
     }
     if (rule != NULL && why != NULL && n > 0u) {
         (void)snprintf(why, n, "%s", rule);

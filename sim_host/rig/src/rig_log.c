@@ -543,6 +543,12 @@ static void log_ring_event(void *ctx, const fdl_active_event_t *ev)
                 "token ring: master %u did not take the token: skipped", ev->address);
         return;
     case FDL_EV_DOUBLE_TOKEN:
+        if (ev->address == FDL_ACTIVE_NO_ADDRESS) {
+            rig_log(l, RIG_LOG_WARN, "master", "ring",
+                    "token ring: another station transmitted while we held the token (a "
+                    "collision): ours dropped");
+            return;
+        }
         rig_log(l, RIG_LOG_WARN, "master", "ring",
                 "token ring: station %u transmitted while we held the token: ours dropped",
                 ev->address);

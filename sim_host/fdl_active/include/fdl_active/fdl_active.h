@@ -14,14 +14,15 @@
  *     becomes the new NS; what every address answered is the live list;
  *   - FDL status requests to this station are answered: master not ready / ready to enter the
  *     ring / in the ring (FC 0x10 / 0x20 / 0x30);
- *   - token-pass retries: no activity within TSL after a token pass repeats it (max_retry
- *     times), then the NS is skipped and the next station of the LAS gets the token;
+ *   - token-pass retries: no activity within TSL after a token pass repeats it (twice), then
+ *     the NS is skipped and the next station of the LAS gets the token;
  *   - lost token: a bus idle for TTO = 6·TSL + 2·TS·TSL (every station a different time-out, the
  *     lowest address first) makes the station claim the token (two tokens to itself) and rebuild
  *     the ring by GAP maintenance;
  *   - joining: after start the station listens (Listen_Token) until it has heard two identical
  *     token rotations, then waits in Active_Idle for its PS to let it in;
- *   - double token: a holder that hears another station's request or token drops its token;
+ *   - double token: a holder that hears another station's request or token, or any character
+ *     when no answer is due (a collision), drops its token;
  *     duplicate address: a telegram from our own address that we did not send takes the
  *     station off the bus (Offline).
  *
@@ -42,6 +43,11 @@
 
 #define FDL_ACTIVE_ADDRESSES 128u
 #define FDL_ACTIVE_HSA_MAX 126u
+/* Repeats of a token pass the successor did not take (three sends in all, as profirust and
+ * PLCs do), independent of the message retry limit. */
+#define FDL_TOKEN_PASS_REPEATS 2u
+/* fdl_active_event_t.address when the other station is not known (a garbled telegram). */
+#define FDL_ACTIVE_NO_ADDRESS 0xFFu
 
 /* The bus parameters every master of a segment must share (a PLC's hardware configuration
  * shows them as "bus parameters"); times in bit times at baud. */
@@ -149,7 +155,7 @@ typedef struct fdl_active {
     uint8_t listen_set[FDL_ACTIVE_ADDRESSES / 8u]; /* tokens heard in this rotation */
     uint8_t listen_prev[FDL_ACTIVE_ADDRESSES / 8u];
     uint8_t live[FDL_ACTIVE_ADDRESSES];           /* fdl_station_kind_t per address */
-    uint8_t listen_first;   /* the SA whose token marks a rotation while listening */
+    bool listen_started;    /* a token to a lower address was heard: rotations count */
     uint8_t listen_rotations;
     bool in_ring;
     uint8_t ns;
@@ -175,6 +181,8 @@ typedef struct fdl_active {
     uint8_t pass_tries;
     uint8_t claim_tokens;      /* tokens to itself sent in Claim_Token */
     /* Time. */
+    hal_time_us_t tx_start;      /* our last transmission's start */
+    bool reply_expected;         /* it asked for an answer that has not ended yet */
     hal_time_us_t last_activity; /* last character heard or sent (its end) */
     hal_time_us_t line_free;     /* the earliest start of our next transmission */
     hal_time_us_t deadline;      /* the state's timer */
