@@ -285,6 +285,7 @@ static void deliver_whole(membus_t *bus, membus_whole_t *w)
         }
         bus->chars_delivered += w->len;
         if (p->asleep) {
+            bus->slept_through++;
             continue; /* asked: it sleeps through this one (ask_listeners woke the others) */
         }
         bool poll = p->whole.rx(p->whole.ctx, &tg);

@@ -138,6 +138,7 @@ struct membus {
     uint64_t chars_delivered;
     uint64_t telegrams_whole; /* delivered as one event */
     uint64_t telegrams_split; /* started whole, went on as characters */
+    uint64_t slept_through;   /* a telegram times a station that slept through it */
     uint64_t frames_sent;
     uint64_t collisions;
     uint64_t dropped_overflow;
