@@ -85,7 +85,9 @@ typedef struct membus_port {
     uint32_t baud;
     uint64_t deadline_ns;
     uint8_t index;
-    bool silenced; /* cut off the bus: transmits nothing, hears nothing (a pulled connector) */
+    /* Cut off the bus: transmits nothing, hears nothing (a pulled connector). Changed between
+     * runs only (no station sleeps then). */
+    bool silenced;
     membus_whole_rx_t whole; /* rx NULL: characters only */
     bool asleep;             /* see membus_sleep */
     uint8_t key;
