@@ -219,10 +219,56 @@ static bool card_rx_whole(void *ctx, const membus_telegram_t *tg)
     fdl_rx_telegram_t t = dp_master_whole_take(&c->cs.card.dp.rx, &w);
     if (quiet) {
         card_rx_quiet(c, &t);
+        /* With the line active, every telegram but a request to its address or to all is
+         * quiet for it (card_quiet), until something else reaches it: it sleeps through them
+         * (telegram_key tells the bus which they are, card_catch_up reproduces them). */
+        if (c->cs.card.dp.line_active && c->port != NULL) {
+            membus_sleep(c->port, c->cs.card.dp.cfg.address);
+        }
     } else {
         dfp21b_rx_telegram(&c->cs.card, &t);
     }
     return !quiet;
+}
+
+/* Quiet telegrams leave the receiver only the record of the last one (its end, its idle before,
+ * the frame served): that one taken as card_rx_whole takes it, after the line's last character
+ * before it (the card heard every telegram since it fell asleep), does all they did. */
+static void card_catch_up(void *ctx, const membus_telegram_t *last,
+                          const membus_telegram_t *before)
+{
+    rig_card_t *c = ctx;
+    fdl_rx_t *rx = &c->cs.card.dp.rx;
+    if (before != NULL) {
+        rx->last_char_t = membus_char_us(before, before->len);
+    }
+    dp_master_whole_t w = whole_of(last);
+    fdl_rx_telegram_t t = dp_master_whole_take(rx, &w);
+    card_rx_quiet(c, &t);
+}
+
+/* Which sleeping card a telegram concerns (card_quiet's rule): a clean request's destination,
+ * every card for a request to all or octets that are not one telegram, none for the rest. */
+static uint8_t telegram_key(void *ctx, const membus_telegram_t *tg)
+{
+    (void)ctx;
+    dp_master_whole_t w = whole_of(tg);
+    if (!octets_ok(tg, &w)) {
+        return MEMBUS_KEY_ALL;
+    }
+    size_t da_at = 0;
+    if (tg->data[0] == FDL_SD1 || tg->data[0] == FDL_SD3) {
+        da_at = FDL_SD1_SD3_HEADER_LEN;
+    } else if (tg->data[0] == FDL_SD2) {
+        da_at = FDL_SD2_HEADER_LEN;
+    } else {
+        return MEMBUS_KEY_NONE;
+    }
+    uint8_t da = tg->data[da_at] & FDL_ADDR_MASK;
+    if ((tg->data[da_at + FDL_FC_FROM_DA] & FDL_FC_REQUEST) == 0u) {
+        return MEMBUS_KEY_NONE;
+    }
+    return da == FDL_ADDR_BROADCAST ? MEMBUS_KEY_ALL : da;
 }
 
 static bool master_takes_whole(void *ctx, const membus_telegram_t *tg)
@@ -339,6 +385,7 @@ int rig_open(rig_t *r, char *err, size_t errlen)
         membus_init(&r->bus);
         r->bus.now_ns = r->cfg.start_ns;
         membus_set_tap(&r->bus, tap_frame, r);
+        membus_set_key(&r->bus, telegram_key, NULL);
         break;
     case RIG_MEDIUM_TTY: {
         int rc = r->cfg.use_fd
@@ -463,8 +510,10 @@ rig_card_t *rig_add_card(rig_t *r, const card_options_t *opt, hal_time_us_t now)
             return NULL;
         }
         if (r->cfg.wrap_card_station == NULL) { /* a wrapper wants the characters */
-            membus_whole_rx_t whole = {.ctx = c, .takes = card_takes_whole, .rx = card_rx_whole};
+            membus_whole_rx_t whole = {.ctx = c, .takes = card_takes_whole, .rx = card_rx_whole,
+                                       .catch_up = card_catch_up};
             membus_set_whole_rx(port, &whole);
+            c->port = port;
         }
     }
     if (r->cfg.wrap_card_uart != NULL) {
@@ -529,6 +578,9 @@ rig_card_t *rig_card_by_address(rig_t *r, uint8_t address)
 
 static void action(rig_card_t *c, rig_action_type_t type, uint32_t value)
 {
+    if (c->port != NULL) {
+        membus_catch_up(c->port); /* the card changes: it must be up to date first */
+    }
     FOR_TAPS(c->rig, action, c->index, type, value);
 }
 

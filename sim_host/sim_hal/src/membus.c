@@ -1,5 +1,6 @@
 #include "sim_hal/membus.h"
 
+#include <stddef.h>
 #include <string.h>
 
 static int membus_set_baud(void *ctx, uint32_t baud)
@@ -171,6 +172,7 @@ void membus_set_tap(membus_t *bus, sim_frame_tap_t tap, void *ctx)
 
 static void poll_port(membus_t *bus, membus_port_t *p)
 {
+    membus_catch_up(p);
     if (p->station.poll == NULL) {
         p->deadline_ns = UINT64_MAX;
         return;
@@ -204,15 +206,65 @@ static membus_telegram_t view_of(membus_whole_t *w)
                                .char_ns = w->char_ns, .baud = w->baud, .memo = &w->memo};
 }
 
+void membus_set_key(membus_t *bus, membus_key_fn key, void *ctx)
+{
+    bus->key = key;
+    bus->key_ctx = ctx;
+}
+
+void membus_sleep(membus_port_t *port, uint8_t key)
+{
+    if (port->whole.catch_up == NULL || port->asleep) {
+        return;
+    }
+    port->asleep = true;
+    port->key = key;
+    /* called while the telegram whole_seq + 1 is delivered, which the station has taken */
+    port->slept_after = port->bus->whole_seq + 1u;
+    port->bus->sleepers++;
+}
+
+void membus_catch_up(membus_port_t *port)
+{
+    if (!port->asleep) {
+        return;
+    }
+    membus_t *bus = port->bus;
+    port->asleep = false;
+    bus->sleepers--;
+    uint64_t missed = bus->whole_seq - port->slept_after;
+    if (missed == 0u) {
+        return;
+    }
+    membus_telegram_t last = view_of(&bus->past[bus->whole_seq % 2u]);
+    membus_telegram_t before = view_of(&bus->past[(bus->whole_seq - 1u) % 2u]);
+    port->whole.catch_up(port->whole.ctx, &last, missed > 1u ? &before : NULL);
+}
+
+static void catch_up_all(membus_t *bus)
+{
+    for (uint8_t i = 0; i < bus->num_ports && bus->sleepers > 0u; i++) {
+        membus_catch_up(&bus->ports[i]);
+    }
+}
+
+/* A sleeper the telegram does not concern (it would take it, at its rate, and stay as it is). */
+static bool sleeps_through(const membus_port_t *p, const membus_whole_t *w)
+{
+    return p->asleep && w->key != MEMBUS_KEY_ALL && w->key != p->key && p->baud == w->baud;
+}
+
 /* The end of the first character: every listener takes the telegram whole, or it is split. */
 static void ask_listeners(membus_t *bus, membus_whole_t *w)
 {
     membus_telegram_t tg = view_of(w);
+    w->key = bus->key != NULL ? bus->key(bus->key_ctx, &tg) : MEMBUS_KEY_ALL;
     for (uint8_t i = 0; i < bus->num_ports; i++) {
         membus_port_t *p = &bus->ports[i];
-        if (!listens(p, w->sender)) {
+        if (!listens(p, w->sender) || sleeps_through(p, w)) {
             continue;
         }
+        membus_catch_up(p);
         if (p->whole.rx == NULL || p->baud != w->baud || !p->whole.takes(p->whole.ctx, &tg)) {
             split(bus, w);
             return;
@@ -231,11 +283,21 @@ static void deliver_whole(membus_t *bus, membus_whole_t *w)
         if (!listens(p, w->sender)) {
             continue;
         }
-        bool poll = p->whole.rx(p->whole.ctx, &tg);
         bus->chars_delivered += w->len;
+        if (p->asleep) {
+            bus->slept_through++;
+            continue; /* asked: it sleeps through this one (ask_listeners woke the others) */
+        }
+        bool poll = p->whole.rx(p->whole.ctx, &tg);
         if (poll) {
             p->deadline_ns = bus->now_ns; /* let it work on the telegram at once */
         }
+    }
+    /* kept for the sleepers' catch-up; the slot itself is written again two telegrams on */
+    bus->whole_seq++;
+    if (bus->sleepers > 0u) {
+        membus_whole_t *past = &bus->past[bus->whole_seq % 2u];
+        memcpy(past, w, offsetof(membus_whole_t, data) + w->len);
     }
 }
 
@@ -250,6 +312,7 @@ static void deliver_char(membus_t *bus)
         if (i == c.sender || p->silenced || p->station.rx_char == NULL) {
             continue;
         }
+        membus_catch_up(p);
         bool garbled = c.corrupt || p->baud != c.baud;
         p->station.rx_char(p->station.ctx, garbled ? (uint8_t)0xFFu : c.byte,
                            garbled ? HAL_UART_RX_FRAMING_ERR : 0u, t_us);
@@ -328,4 +391,5 @@ void membus_run_until_ns(membus_t *bus, uint64_t t_ns)
 {
     while (step(bus, t_ns)) {
     }
+    catch_up_all(bus); /* the caller may look at any station now */
 }

@@ -86,6 +86,7 @@ typedef struct rig_card {
     card_station_t cs;
     card_options_t opt;     /* as given; event/led/param hooks point at the rig */
     hal_uart_t medium_uart; /* what the medium gave this card */
+    membus_port_t *port;    /* on the in-memory bus, taking telegrams whole; else NULL */
     bool cable;             /* bus connector plugged in */
     uint8_t next_address;   /* DIP switches as set now: read at the next power-up */
     char nvm_note[320];     /* why the drive's EEPROM or the card's NVM was not used as is */

@@ -14,7 +14,13 @@
  * a station polled or the caller's run ending inside the telegram, a listener that wants
  * characters (baud search, a receiver inside garbage, a damaged telegram) — splits it into
  * characters before that moment, which then go one by one as before. characters_only turns
- * the telegram path off (the reference the tests compare it with). */
+ * the telegram path off (the reference the tests compare it with).
+ *
+ * A station that takes telegrams whole may also sleep through the ones that do not concern it
+ * (membus_sleep): the bus then neither asks it nor hands it those telegrams, and brings it up to
+ * date (its catch_up) before anything else reaches it — a telegram that concerns it, a
+ * character, its poll — and when membus_run_until_ns returns. Which telegrams concern a
+ * sleeper the caller's key function says, once per telegram (membus_set_key). */
 #ifndef SIM_HAL_MEMBUS_H
 #define SIM_HAL_MEMBUS_H
 
@@ -62,7 +68,16 @@ typedef struct membus_whole_rx {
     void *ctx;
     bool (*takes)(void *ctx, const membus_telegram_t *tg);
     bool (*rx)(void *ctx, const membus_telegram_t *tg);
+    /* For a station that sleeps: the telegrams it slept through leave it as rx() would have,
+     * given the last of them and the one before (NULL when it slept through one only; the one
+     * before is then the last it took itself). NULL: the station never sleeps. */
+    void (*catch_up)(void *ctx, const membus_telegram_t *last, const membus_telegram_t *before);
 } membus_whole_rx_t;
+
+/* What a telegram's key function answers besides a sleeper's own key. */
+#define MEMBUS_KEY_NONE 0xFEu /* concerns no sleeper */
+#define MEMBUS_KEY_ALL 0xFFu  /* wakes every sleeper */
+typedef uint8_t (*membus_key_fn)(void *ctx, const membus_telegram_t *tg);
 
 typedef struct membus_port {
     membus_t *bus;
@@ -70,8 +85,13 @@ typedef struct membus_port {
     uint32_t baud;
     uint64_t deadline_ns;
     uint8_t index;
-    bool silenced; /* cut off the bus: transmits nothing, hears nothing (a pulled connector) */
+    /* Cut off the bus: transmits nothing, hears nothing (a pulled connector). Changed between
+     * runs only (no station sleeps then). */
+    bool silenced;
     membus_whole_rx_t whole; /* rx NULL: characters only */
+    bool asleep;             /* see membus_sleep */
+    uint8_t key;
+    uint64_t slept_after;    /* the bus's whole_seq when it fell asleep */
 } membus_port_t;
 
 typedef struct membus_char {
@@ -93,6 +113,7 @@ typedef struct membus_whole {
     uint64_t start_ns;
     uint16_t len;
     uint8_t memo;
+    uint8_t key; /* the key function's answer, when asked */
     uint8_t data[MEMBUS_TELEGRAM_MAX];
 } membus_whole_t;
 
@@ -107,12 +128,19 @@ struct membus {
     /* Two slots: a listener may answer from inside the delivery of the other. */
     membus_whole_t whole[2];
     uint8_t whole_slot;
+    /* The last two telegrams delivered whole (whole_seq counts them), for the sleepers. */
+    membus_whole_t past[2];
+    uint64_t whole_seq;
+    unsigned sleepers;
+    membus_key_fn key;
+    void *key_ctx;
     bool characters_only;
     sim_frame_tap_t tap;
     void *tap_ctx;
     uint64_t chars_delivered;
     uint64_t telegrams_whole; /* delivered as one event */
     uint64_t telegrams_split; /* started whole, went on as characters */
+    uint64_t slept_through;   /* a telegram times a station that slept through it */
     uint64_t frames_sent;
     uint64_t collisions;
     uint64_t dropped_overflow;
@@ -126,6 +154,16 @@ static inline void membus_wake(membus_port_t *port) { port->deadline_ns = port->
 void membus_set_tap(membus_t *bus, sim_frame_tap_t tap, void *ctx);
 /* The port's station takes telegrams whole (see above). */
 void membus_set_whole_rx(membus_port_t *port, const membus_whole_rx_t *whole);
+/* Telegrams concern a sleeper when key answers its key or MEMBUS_KEY_ALL. Without a key
+ * function every telegram concerns every sleeper. */
+void membus_set_key(membus_t *bus, membus_key_fn key, void *ctx);
+/* From inside the port's whole rx, which returned or will return false: the station sleeps
+ * through the telegrams that follow until one concerns it (key), as long as the caller
+ * guarantees that each of them would leave it just as rx with that answer does, and that its
+ * catch_up reproduces them. */
+void membus_sleep(membus_port_t *port, uint8_t key);
+/* Brings a sleeping port's station up to date and wakes it (before touching it from outside). */
+void membus_catch_up(membus_port_t *port);
 /* Runs every station until simulated time t_ns (absolute, from bus start). */
 void membus_run_until_ns(membus_t *bus, uint64_t t_ns);
 static inline void membus_run_for_us(membus_t *bus, uint64_t us)
