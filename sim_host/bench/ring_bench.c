@@ -213,9 +213,9 @@ typedef struct bench_args {
 static uint64_t estimate_bits(const fdl_bus_params_t *p, unsigned masters, unsigned cards)
 {
     uint64_t tid1 = fdl_bus_tid1_bits(p);
-    uint64_t cycle = 2u * DX_LEN * 11u + tid1 + p->max_tsdr_bits;
-    uint64_t token = FDL_SD4_LEN * 11u + tid1;
-    uint64_t gap = 2u * STATUS_LEN * 11u + tid1 + p->max_tsdr_bits;
+    uint64_t cycle = 2u * (uint64_t)DX_LEN * 11u + tid1 + p->max_tsdr_bits;
+    uint64_t token = (uint64_t)FDL_SD4_LEN * 11u + tid1;
+    uint64_t gap = 2u * (uint64_t)STATUS_LEN * 11u + tid1 + p->max_tsdr_bits;
     return cards * cycle + masters * token + gap;
 }
 
@@ -522,7 +522,7 @@ static bool parse_option(const char *opt, const char *val, bench_args_t *a)
 /* Returns -1 to go on, else the exit status. */
 static int parse_args(int argc, char **argv, bench_args_t *a)
 {
-    for (int i = 1; i < argc; i++) {
+    for (int i = 1; i < argc; i += 2) { /* each option takes one value */
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
             fputs(usage, stdout);
             return 0;
@@ -531,7 +531,6 @@ static int parse_args(int argc, char **argv, bench_args_t *a)
         if (!parse_option(argv[i], val, a)) {
             return 2;
         }
-        i++;
     }
     if (a->masters + a->cards > RIG_MAX_CARDS) {
         fprintf(stderr, "dfp-ring-bench: %u masters and %u cards need more than the %u "
