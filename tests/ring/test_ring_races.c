@@ -99,6 +99,39 @@ static void test_listen_first_station_leaves(void)
     CHECK_EQ(rr.rig.bus.collisions, 0);
 }
 
+/* A master that leaves on its first token visit hands the token back to a PS that refuses a
+ * new station's first token: the leaver repeats the pass like any, so nobody waits for the
+ * lost-token time-out. */
+static void test_leave_on_first_visit(void)
+{
+    check_test_name_ = "leave_on_first_visit";
+    const uint8_t cards[] = {10, 11};
+    ring_rig_init(&rr, 1500000u, cards, 2);
+    fdl_bus_params_t bp;
+    fdl_bus_params_default(&bp, 1500000u, FDL_BUS_PROFILE_DP);
+    bp.gap_factor = 1;
+    bp.hsa = 8;
+    (void)ring_rig_add_master(&rr, 2, &bp, &cards[0], 1, 100);
+    const uint8_t one[] = {2, 0};
+    CHECK(ring_rig_settle(&rr, one, 3000000u));
+    dp_master_t *m3 = ring_rig_add_master(&rr, 3, &bp, &cards[1], 1, 100);
+    for (unsigned k = 0; k < 2000000u && !fdl_active_holds_token(&m3->mac); k++) {
+        ring_rig_run_us(&rr, 1);
+    }
+    CHECK(fdl_active_holds_token(&m3->mac));
+    CHECK_EQ(m3->mac.stats.tokens_received, 1);
+    uint32_t claims = mac(0)->stats.claims;
+    dp_master_leave(m3);
+    membus_wake(rr.port[1]);
+    ring_rig_run_us(&rr, 200000u);
+    CHECK(dp_master_left(m3));
+    CHECK_EQ(m3->mac.state, FDL_MAC_OFFLINE);
+    CHECK_EQ(mac(0)->stats.claims, claims); /* the token came back: no claim */
+    CHECK(mac(0)->stats.tokens_to_self > 0u && !fdl_active_in_las(mac(0), 3));
+    CHECK_EQ(rr.rig.cards[0].cs.card.dp.state, DP_STATE_DATA_EXCH);
+    CHECK_EQ(rr.rig.bus.collisions, 0);
+}
+
 /* Every time-out must fit the stations' timers (2^31 us): the lost-token time-out of address
  * 126 is 258 TSL. */
 static void test_times_fit_the_timers(void)
@@ -126,6 +159,7 @@ int main(void)
     test_claim_race();
     test_retry_zero_join();
     test_listen_first_station_leaves();
+    test_leave_on_first_visit();
     test_times_fit_the_timers();
     return check_report();
 }

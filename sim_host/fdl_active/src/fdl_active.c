@@ -443,9 +443,15 @@ void fdl_active_activity(fdl_active_t *s, hal_time_us_t t)
     s->last_activity = t;
     s->activity_seen = true;
     if (s->state == FDL_MAC_CHECK_TOKEN_PASS) {
-        /* The successor's first character within TSL: the token pass worked. */
+        /* The successor's first character within TSL: the token pass worked. A leaving
+         * station waits for this too: a successor that refuses a new PS's first token needs
+         * the repeat. */
         s->stats.tokens_passed++;
-        set_state(s, FDL_MAC_ACTIVE_IDLE, t);
+        if (s->leaving) {
+            fdl_active_stop(s, t);
+        } else {
+            set_state(s, FDL_MAC_ACTIVE_IDLE, t);
+        }
     }
 }
 
@@ -575,11 +581,6 @@ static hal_time_us_t pass_token(fdl_active_t *s, hal_time_us_t now)
         return now + HAL_TIME_NO_DEADLINE_US;
     }
     send_token(s, to, now);
-    if (s->leaving) {
-        s->stats.tokens_passed++;
-        fdl_active_stop(s, s->last_activity);
-        return now + HAL_TIME_NO_DEADLINE_US;
-    }
     if (to == ts(s)) {
         s->stats.tokens_to_self++;
         take_token(s, ts(s), s->last_activity);

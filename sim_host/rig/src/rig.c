@@ -417,8 +417,9 @@ int rig_open(rig_t *r, char *err, size_t errlen)
 }
 
 /* A master in a token ring hands the token on before its medium closes (dp_master_leave), so the
- * other masters do not wait for the lost-token time-out; bounded by three slot times (a reply
- * still on its way, the token's own pass). */
+ * other masters do not wait for the lost-token time-out; bounded by a reply still on its way and
+ * the token's pass with its repeats (a successor refuses a new PS's first token), a slot time
+ * each. */
 static void master_leave(rig_t *r)
 {
     if (!r->has_master || !wall_clock(r) || !r->master.cfg.token_ring) {
@@ -427,7 +428,8 @@ static void master_leave(rig_t *r)
     static const volatile int never = 0;
     dp_master_leave(&r->master);
     rig_wake(r);
-    hal_time_us_t end = rig_now_us(r) + 3u * r->master.cfg.slot_time_us;
+    uint32_t slots = FDL_TOKEN_PASS_REPEATS + 3u;
+    hal_time_us_t end = rig_now_us(r) + slots * r->master.cfg.slot_time_us;
     while (!dp_master_left(&r->master) && hal_time_diff(end, rig_now_us(r)) > 0) {
         if (rig_run_until(r, rig_now_us(r) + 2000u, &never) < 0) {
             return;

@@ -200,8 +200,9 @@ void fdl_active_start(fdl_active_t *s, hal_time_us_t now);
 /* Leaves the ring at once (it stops taking tokens; its PS skips it): Offline. */
 void fdl_active_stop(fdl_active_t *s, hal_time_us_t now);
 /* Leaves the ring as a program that ends should: a station holding the token passes it on to
- * its NS first (no GAP request, no more message cycles), then goes Offline; one that does not
- * hold it goes Offline at once (its PS skips it after its retries). */
+ * its NS first (no GAP request, no more message cycles; the pass checked and repeated as any),
+ * then goes Offline; one that does not hold it goes Offline at once (its PS skips it after its
+ * repeats). */
 void fdl_active_leave(fdl_active_t *s, hal_time_us_t now);
 
 /* A character was heard; t: its stop bit's end. */
