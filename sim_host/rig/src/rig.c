@@ -161,6 +161,15 @@ static bool card_takes_whole(void *ctx, const membus_telegram_t *tg)
     return !card_hears(c) || (dp_master_whole_fits(&c->cs.card.dp.rx, &w) && octets_ok(tg, &w));
 }
 
+/* Where a data telegram (SD1, SD2, SD3) carries DA; 0 for SD4 and SC, which carry none. */
+static size_t data_da_at(uint8_t sd)
+{
+    if (sd == FDL_SD1 || sd == FDL_SD3) {
+        return FDL_SD1_SD3_HEADER_LEN;
+    }
+    return sd == FDL_SD2 ? FDL_SD2_HEADER_LEN : 0u;
+}
+
 /* A clean telegram leaves a card that is not its addressee (fdl_station_frame: a token, a
  * short acknowledgement, a response, a request to another address) only its receiver's record
  * of the line (the last character's time, the frame served). Its poll would then find what it
@@ -177,12 +186,8 @@ static bool card_quiet(const rig_card_t *c, const membus_telegram_t *tg)
         s->baud_state == DP_BAUD_SEARCH) {
         return false;
     }
-    size_t da_at = 0;
-    if (tg->data[0] == FDL_SD1 || tg->data[0] == FDL_SD3) {
-        da_at = FDL_SD1_SD3_HEADER_LEN;
-    } else if (tg->data[0] == FDL_SD2) {
-        da_at = FDL_SD2_HEADER_LEN;
-    } else {
+    size_t da_at = data_da_at(tg->data[0]);
+    if (da_at == 0u) {
         return true; /* SD4, SC: not data, not line activity */
     }
     if (!s->line_active) {
@@ -256,12 +261,8 @@ static uint8_t telegram_key(void *ctx, const membus_telegram_t *tg)
     if (!octets_ok(tg, &w)) {
         return MEMBUS_KEY_ALL;
     }
-    size_t da_at = 0;
-    if (tg->data[0] == FDL_SD1 || tg->data[0] == FDL_SD3) {
-        da_at = FDL_SD1_SD3_HEADER_LEN;
-    } else if (tg->data[0] == FDL_SD2) {
-        da_at = FDL_SD2_HEADER_LEN;
-    } else {
+    size_t da_at = data_da_at(tg->data[0]);
+    if (da_at == 0u) {
         return MEMBUS_KEY_NONE;
     }
     uint8_t da = tg->data[da_at] & FDL_ADDR_MASK;

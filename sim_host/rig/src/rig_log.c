@@ -542,17 +542,16 @@ static void log_ring_event(void *ctx, const fdl_active_event_t *ev)
         rig_log(l, RIG_LOG_WARN, "master", "ring",
                 "token ring: master %u did not take the token: skipped", ev->address);
         return;
-    case FDL_EV_DOUBLE_TOKEN:
-        if (ev->address == FDL_ACTIVE_NO_ADDRESS) {
-            rig_log(l, RIG_LOG_WARN, "master", "ring",
-                    "token ring: another station transmitted while we held the token (a "
-                    "collision): ours dropped");
-            return;
+    case FDL_EV_DOUBLE_TOKEN: {
+        char who[24] = "another station";
+        if (ev->address != FDL_ACTIVE_NO_ADDRESS) {
+            (void)snprintf(who, sizeof who, "station %u", ev->address);
         }
         rig_log(l, RIG_LOG_WARN, "master", "ring",
-                "token ring: station %u transmitted while we held the token: ours dropped",
-                ev->address);
+                "token ring: %s transmitted while we held the token%s: ours dropped", who,
+                ev->address == FDL_ACTIVE_NO_ADDRESS ? " (a collision)" : "");
         return;
+    }
     case FDL_EV_DUPLICATE_ADDRESS:
         rig_log(l, RIG_LOG_ERROR, "master", "ring",
                 "token ring: another station uses our address %u: off the bus", ev->address);
