@@ -67,10 +67,10 @@ bool bus_opts_apply(const bus_opts_t *o, const char *cmd, uint32_t baud, bool wa
 
 bool bus_opts_own_ok(const fdl_bus_params_t *p, const char *cmd, const char *opt, uint32_t own)
 {
-    if (own > p->hsa) {
-        cli_error("%s: %s %u is above HSA %u: no master's GAP maintenance asks it, so it "
-                  "could join no ring (give --hsa %u or more, as every master of the segment)",
-                  cmd, opt, own, p->hsa, own);
+    char why[160]; /* own comes from a table that stops at 126 */
+    if (!fdl_bus_address_ok(p, (uint8_t)own, why, sizeof why)) {
+        cli_error("%s: %s %u: %s (give --hsa %u or more, as every master of the segment)", cmd,
+                  opt, own, why, own);
         return false;
     }
     return true;

@@ -24,6 +24,22 @@ expect_exit 2 "master without config" -- "$sim" master --port /dev/null --addres
 expect_exit 2 "master bad hex" -- "$sim" master --port /dev/null --address 4 --config F3G2
 expect_in "bad hex named" "--config: 'F3G2' is not a sequence of hex octets" "$out"
 expect_exit 2 "master odd hex digits" -- "$sim" master --port /dev/null --address 4 --config F3F
+# Bus parameters of the token ring: the table's ranges, the rules between them, the own address.
+m4=(master --port /dev/null --address 4 --config F3F2)
+expect_exit 2 "unknown bus profile" -- "$sim" "${m4[@]}" --bus-profile fast
+[ "$out" = "dfp-sim: --bus-profile: 'fast' is not dp or usb" ] && ok || bad "profile: $out"
+expect_exit 2 "slot time below range" -- "$sim" "${m4[@]}" --tsl 5
+[ "$out" = "dfp-sim: --tsl: '5' is not a number from 37 to 16777215" ] && ok || bad "tsl: $out"
+expect_exit 2 "min TSDR above max TSDR" -- "$sim" "${m4[@]}" --min-tsdr 70 --max-tsdr 60
+[ "$out" = "dfp-sim: master: bus parameters: min TSDR must not exceed max TSDR" ] && ok ||
+  bad "tsdr: $out"
+expect_exit 2 "time-out beyond the timers" -- "$sim" "${m4[@]}" --baud 9600 --tsl 80000
+expect_in "time-out rule named" "must each stay below 2147 s at this rate" "$out"
+expect_exit 2 "own address above HSA" -- "$sim" "${m4[@]}" --master-address 40
+[ "$out" = "dfp-sim: master: --master-address 40: address 40 is above HSA 31: no master's GAP maintenance asks it, so it could join no ring (give --hsa 40 or more, as every master of the segment)" ] &&
+  ok || bad "hsa: $out"
+expect_exit 2 "param above HSA too" -- "$sim" param --port /dev/null --address 4 --hsa 1 read P100
+expect_in "param's own address named" "--master-address 2: address 2 is above HSA 1" "$out"
 expect_exit 1 "master on a missing device" -- "$sim" master --port /nonexistent/tty --address 4 --config F2
 expect_exit 1 "demo capture into a missing directory" -- "$sim" demo --capture /nonexistent/dir/x.pcap
 expect_in "capture path named" "cannot write capture file /nonexistent/dir/x.pcap" "$out"

@@ -138,7 +138,9 @@ for args in "" "--dir $tmp/nodir" "--dir $tmp/bad" "--dir $tmp/l --ports 0" \
             "--dir $tmp/l --ports 17" "--dir $tmp/l --baud 1234" "--dir $tmp/l --card 126" \
             "--dir $tmp/l --card 5 --card 5" "--dir $tmp/l --bogus" \
             "--dir $tmp/l --master 3" "--dir $tmp/l --master-slaves 5" \
-            "--dir $tmp/l --master 3 --master-slaves 3" "--dir $tmp/l --master 3 --master-slaves 5 --tsl 5"; do
+            "--dir $tmp/l --master 3 --master-slaves 3" "--dir $tmp/l --master 3 --master-slaves 5 --tsl 5" \
+            "--dir $tmp/l --tsl 2000" "--dir $tmp/l --card 5 --master 5 --master-slaves 6" \
+            "--dir $tmp/l --master 40 --master-slaves 5"; do
   # shellcheck disable=SC2086
   expect_exit 2 "line $args" -- "$sim" line $args
   [ "$(wc -l <<<"$out")" = 1 ] && ok || bad "line $args: not one line: $out"

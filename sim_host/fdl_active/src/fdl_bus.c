@@ -126,3 +126,15 @@ bool fdl_bus_params_check(const fdl_bus_params_t *p, char *why, size_t n)
     }
     return rule == NULL;
 }
+
+bool fdl_bus_address_ok(const fdl_bus_params_t *p, uint8_t ts, char *why, size_t n)
+{
+    if (ts <= p->hsa) {
+        return true;
+    }
+    if (why != NULL && n > 0u) {
+        (void)snprintf(why, n, "address %u is above HSA %u: no master's GAP maintenance asks it, "
+                       "so it could join no ring", ts, p->hsa);
+    }
+    return false;
+}

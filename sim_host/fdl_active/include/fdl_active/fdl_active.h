@@ -74,6 +74,9 @@ void fdl_bus_params_default(fdl_bus_params_t *p, uint32_t baud, fdl_bus_profile_
 /* The rules between the parameters (TSL above max TSDR and TID1, HSA <= 126, G >= 1, ...).
  * False with the broken rule in why. */
 bool fdl_bus_params_check(const fdl_bus_params_t *p, char *why, size_t n);
+/* A station above HSA is asked by no master's GAP maintenance: it could join no ring it did not
+ * start itself. False with the reason in why. */
+bool fdl_bus_address_ok(const fdl_bus_params_t *p, uint8_t ts, char *why, size_t n);
 /* Idle before a request: TID1 after a reply or token, TID2 after a telegram no one answers. */
 uint32_t fdl_bus_tid1_bits(const fdl_bus_params_t *p);
 uint32_t fdl_bus_tid2_bits(const fdl_bus_params_t *p);
