@@ -120,10 +120,16 @@ typedef struct mon_station {
     uint32_t storm_count;
     bool storm;
 
-    /* internal: the FCB of the last request to it (FCV set), and from whom */
+    /* internal: the last request to it (FCB when FCV was set, a hash of its octets), from whom,
+     * and whether it went unanswered: a repeat is the same FCB again after no answer, or the
+     * same request octets again */
     uint8_t last_req_sa;
     bool last_fcb_known;
     bool last_fcb;
+    bool last_req_unanswered;
+    uint32_t last_req_hash;
+    uint64_t late_event_ns;   /* the last LATE_ANSWER event (at most one a second) */
+    uint64_t prev_token_ns;   /* the token before last_token_ns */
 } mon_station_t;
 
 typedef enum mon_event_type {
