@@ -36,6 +36,7 @@ void mon_init(mon_t *m, const mon_cfg_t *cfg)
     m->holder = 0xFFu;
     for (unsigned a = 0; a < MON_STATIONS; a++) {
         m->st[a].master = MON_NO_MASTER;
+        m->st[a].owner = MON_NO_MASTER;
     }
 }
 
@@ -424,6 +425,9 @@ void mon_telegram(mon_t *m, const uint8_t *f, size_t len, uint64_t t_start_ns, u
         mon_garbled(m, f, len, t_start_ns);
         return;
     }
+    if (m->cfg.on_frame != NULL) {
+        m->cfg.on_frame(m->cfg.ctx, f, len, t_start_ns, false);
+    }
     if (m->line.telegrams == 0u && m->line.garbled == 0u) {
         m->line.first_ns = t_start_ns;
     }
@@ -444,6 +448,9 @@ void mon_garbled(mon_t *m, const uint8_t *f, size_t len, uint64_t t_ns)
     m->line.garbled++;
     m->line.octets += len;
     m->line.last_ns = t_ns;
+    if (m->cfg.on_frame != NULL && len != 0u) {
+        m->cfg.on_frame(m->cfg.ctx, f, len, t_ns, true);
+    }
     fdl_msg_t msg;
     memset(&msg, 0, sizeof msg);
     if (len > 0u && fdl_parse_damaged(f, len, &msg) && msg.sa < FDL_ADDR_BROADCAST) {
