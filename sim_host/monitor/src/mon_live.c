@@ -9,6 +9,9 @@
 #include "dp_slave/fdl_wire.h"
 
 #define NS_PER_US 1000ull
+/* A tty, a PTY or LCM hands characters on milliseconds after they were on the line: an answer
+ * is taken as missing only this long after its request was read. */
+#define MON_LIVE_ANSWER_WAIT_NS 50000000ull
 
 static uint64_t extend_us(mon_live_t *l, hal_time_us_t t)
 {
@@ -60,6 +63,9 @@ static void live_init(mon_live_t *l, mon_t *m, uint32_t baud)
     l->tick_ctx = tick_ctx;
     l->tick_ms = tick_ms;
     l->mon = m;
+    if (m->cfg.answer_wait_ns == 0u) {
+        m->cfg.answer_wait_ns = MON_LIVE_ANSWER_WAIT_NS;
+    }
     mon_chars_init(&l->chars, m, baud);
     tty_runner_init(&l->runner);
 }

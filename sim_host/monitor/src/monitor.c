@@ -330,7 +330,9 @@ static void token(mon_t *m, uint8_t da, uint8_t sa, uint64_t t0)
         ring_known = m->st[a].in_ring;
     }
     uint64_t silence = t0 > m->last_end_ns ? t0 - m->last_end_ns : 0u;
-    bool lost = ring_known && m->slot_ns != 0u && m->line.telegrams > 1u &&
+    /* A claim comes from a station that did not hold the token (the holder went silent); a
+     * lone master that holds the token through a pause and passes it on claims nothing. */
+    bool lost = ring_known && m->slot_ns != 0u && m->line.telegrams > 1u && sa != m->holder &&
                 silence >= MON_LOST_TOKEN_SLOTS * m->slot_ns;
     if (lost) {
         m->line.lost_tokens++;
@@ -467,7 +469,9 @@ void mon_idle(mon_t *m, uint64_t now_ns)
         return;
     }
     uint64_t wait = m->slot_ns;
-    if (!m->cfg.timing && wait < MON_UNTIMED_ANSWER_NS) {
+    if (m->cfg.answer_wait_ns != 0u) {
+        wait = m->cfg.answer_wait_ns;
+    } else if (!m->cfg.timing && wait < MON_UNTIMED_ANSWER_NS) {
         wait = MON_UNTIMED_ANSWER_NS;
     }
     if (wait != 0u && now_ns > m->pend_end_ns + wait) {

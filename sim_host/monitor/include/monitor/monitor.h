@@ -200,6 +200,9 @@ typedef struct mon_cfg {
      * rotations are not judged). */
     uint32_t tsl_bits;
     uint32_t ttr_bits;
+    /* How long after a request's end its answer may still come (0: the slot time when
+     * timing, else 200 ms). A live source sets it: the kernel and adapters deliver late. */
+    uint64_t answer_wait_ns;
     /* Repeats to one slave within one second that make a retry storm (0: 10). */
     uint32_t storm_repeats;
     /* Called for every event as it happens (may be NULL). */
