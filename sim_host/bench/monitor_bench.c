@@ -197,7 +197,7 @@ static void round_of_data(line_t *l, const bench_args_t *a, unsigned r)
  * so that every slave's FCB goes on alternating when the buffer is fed again. */
 static void build_rounds(line_t *l, const bench_args_t *a)
 {
-    double want_ns = (a->seconds < 1.0 ? a->seconds : 1.0) * 1e9;
+    uint64_t want_ns = (uint64_t)((a->seconds < 1.0 ? a->seconds : 1.0) * 1e9);
     l->n = 0;
     l->bits = 0;
     for (unsigned r = 0; r < 2u || bits_ns(l->bits) < want_ns || r % 2u != 0u; r++) {
@@ -411,7 +411,10 @@ static int run_offline(const bench_args_t *a)
     }
     printf("\noffline: %s, %llu telegrams (dfp-sim record's generator, 12 Mbit/s, Param + 3 "
            "PD)\n", path, (unsigned long long)g.telegrams);
-    double wall_r = 0, cpu_r = 0, wall_m = 0, cpu_m = 0;
+    double wall_r = 0;
+    double cpu_r = 0;
+    double wall_m = 0;
+    double cpu_m = 0;
     uint64_t nr = read_capture(path, false, &wall_r, &cpu_r);
     uint64_t nm = read_capture(path, true, &wall_m, &cpu_m);
     (void)unlink(path);
