@@ -14,7 +14,6 @@
 #include "mon_cmd.h"
 #include "monitor/mon_live.h"
 #include "monitor/monitor.h"
-#include "report.h"
 
 #define MONITOR_OPT(field) offsetof(mon_cmd_opts_t, field)
 
@@ -69,6 +68,7 @@ static const cli_opt_t monitor_options[] = {
      .max = UINT32_MAX},
     {CLI_OPT("--max-missing", "N", CLI_U32, MONITOR_OPT(max_missing)), .min = 0,
      .max = UINT32_MAX},
+    {CLI_OPT("--pcapng", "FILE", CLI_TEXT, MONITOR_OPT(pcapng))},
 };
 
 static bool monitor_operand(void *opts, const char *word)
@@ -85,7 +85,6 @@ static bool monitor_operand(void *opts, const char *word)
 static const cli_group_t monitor_groups[] = {
     {medium_options, CLI_COUNT(medium_options), MONITOR_OPT(med)},
     {monitor_options, CLI_COUNT(monitor_options), 0},
-    {capture_options, CLI_COUNT(capture_options), MONITOR_OPT(capture)},
 };
 
 const cli_command_t cli_monitor = {.name = "monitor", .groups = monitor_groups,
@@ -120,8 +119,8 @@ static bool monitor_check(mon_cmd_opts_t *o)
     if (o->file != NULL) {
         files[n++] = (cli_file_t){"FILE", o->file, true};
     }
-    if (o->capture.path != NULL) {
-        files[n++] = (cli_file_t){"--capture", o->capture.path, false};
+    if (o->pcapng != NULL) {
+        files[n++] = (cli_file_t){"--pcapng", o->pcapng, false};
     }
     for (size_t k = 0; k < o->n_reports; k++) {
         files[n++] = (cli_file_t){o->reports[k].junit ? "--report junit" : "--report json",

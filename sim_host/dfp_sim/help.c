@@ -187,7 +187,7 @@ static const help_cmd_t commands[] = {
     {"monitor",
      "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] [--key FILE]|FILE [--baud RATE]\n"
      "[--timing] [--tsl BITS] [--ttr BITS] [--seconds S] [--view top|log|none] [--report json|junit FILE]...\n"
-     "[--expect N|N-M,...] [--max-repeats N] [--max-missing N] [--capture FILE]",
+     "[--expect N|N-M,...] [--max-repeats N] [--max-missing N] [--pcapng FILE]",
      "a bus monitor: a station that only listens, on a tty or PTY (a USB adapter, a\n"
      "port of dfp-sim line), an LCM segment, or a capture FILE (offline). It keeps the\n"
      "live list: every station heard, active (in the token ring) or passive; for a DP\n"
@@ -204,9 +204,10 @@ static const help_cmd_t commands[] = {
      "(else at SIGINT/SIGTERM or the FILE's end). At the end a summary; --report json\n"
      "the whole live list, --report junit one case per check: every DP slave in\n"
      "Data_Exch (and each --expect N heard), at most --max-repeats N repeats and\n"
-     "--max-missing N missing answers per slave. Exit 1 when a check fails.\n"
-     "docs/monitor.md",
-     NOTE_RATE | NOTE_CAPTURE | NOTE_SEGMENT},
+     "--max-missing N missing answers per slave. Exit 1 when a check fails. --pcapng:\n"
+     "every telegram and garbled run (commented \"garbled\") into FILE as it goes\n"
+     "(flushed every second; link type PROFIBUS_DL, ns times). docs/monitor.md",
+     NOTE_RATE | NOTE_SEGMENT},
     {"check-cfg", "HEX", "would the card accept this Chk_Cfg configuration?", 0u},
 };
 

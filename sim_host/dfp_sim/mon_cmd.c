@@ -24,12 +24,31 @@ static void on_event(void *ctx, const mon_event_t *ev)
     }
 }
 
+static uint64_t wall_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return (uint64_t)ts.tv_sec * NS_PER_S + (uint64_t)ts.tv_nsec;
+}
+
+static void pcapng_told(mon_cmd_t *c)
+{
+    const char *why = pcapng_writer_error(&c->pcapng);
+    if (why != NULL) {
+        fprintf(stderr, "monitor: %s; the monitor goes on without it\n", why);
+    }
+}
+
 static void on_frame(void *ctx, const uint8_t *f, size_t len, uint64_t t_ns, bool garbled)
 {
-    (void)garbled;
     mon_cmd_t *c = ctx;
-    if (c->rep.capturing) {
-        report_tap(&c->rep, t_ns, f, len, false, c->o->baud);
+    if (!c->recording) {
+        return;
+    }
+    int rc = garbled ? pcapng_writer_garbled(&c->pcapng, t_ns, f, len)
+                     : pcapng_writer_telegram(&c->pcapng, t_ns, f, len);
+    if (rc != 0) {
+        pcapng_told(c);
     }
 }
 
@@ -37,13 +56,28 @@ static void tick(void *ctx, uint64_t now_ns)
 {
     mon_cmd_t *c = ctx;
     c->now_ns = now_ns;
+    if (c->recording && pcapng_writer_tick(&c->pcapng, now_ns) != 0) {
+        pcapng_told(c);
+    }
 }
 
-static uint64_t wall_ns(void)
+static bool open_pcapng(mon_cmd_t *c, const char *source)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    return (uint64_t)ts.tv_sec * NS_PER_S + (uint64_t)ts.tv_nsec;
+    if (c->o->pcapng == NULL) {
+        return true;
+    }
+    char desc[64];
+    (void)snprintf(desc, sizeof desc, "PROFIBUS at %u bit/s, heard by dfp-sim monitor",
+                   c->o->baud);
+    pcapng_writer_opt_t opt = {.baud = c->o->baud, .if_name = source, .if_description = desc,
+                               .base_ns = wall_ns()};
+    char err[700];
+    if (pcapng_writer_open(&c->pcapng, c->o->pcapng, &opt, err, sizeof err) != 0) {
+        fprintf(stderr, "monitor: %s\n", err);
+        return false;
+    }
+    c->recording = true;
+    return true;
 }
 
 static int open_source(mon_cmd_t *c)
@@ -99,10 +133,10 @@ int mon_cmd_run(mon_cmd_t *c, const mon_cmd_opts_t *o)
                      .ttr_bits = o->ttr_bits, .on_event = on_event, .on_frame = on_frame,
                      .ctx = c};
     mon_init(&c->mon, &cfg);
-    if (!report_open_capture(&c->rep, &o->capture, wall_ns())) {
+    int rc = 0;
+    if (!open_pcapng(c, o->file != NULL ? o->file : (o->med.dev != NULL ? o->med.dev : o->med.bus))) {
         return EXIT_USAGE;
     }
-    int rc = 0;
     if (o->file != NULL) {
         (void)snprintf(c->source, sizeof c->source, "%s", o->file);
         char err[1100];
@@ -115,7 +149,9 @@ int mon_cmd_run(mon_cmd_t *c, const mon_cmd_opts_t *o)
         c->live.tick_ctx = c;
         c->live.tick_ms = 250u;
         if (open_source(c) != 0) {
-            (void)report_close_capture(&c->rep);
+            if (c->recording) {
+                (void)pcapng_writer_close(&c->pcapng);
+            }
             return 1;
         }
         cli_catch_stop_signals();
@@ -127,7 +163,8 @@ int mon_cmd_run(mon_cmd_t *c, const mon_cmd_opts_t *o)
         mon_live_close(&c->live);
     }
     summary(c);
-    if (report_close_capture(&c->rep) != 0) {
+    if (c->recording && pcapng_writer_close(&c->pcapng) != 0) {
+        pcapng_told(c);
         rc = 1;
     }
     return rc;

@@ -10,7 +10,7 @@
 #include "medium.h"
 #include "monitor/mon_live.h"
 #include "monitor/monitor.h"
-#include "report.h"
+#include "capture/pcapng_writer.h"
 
 #define MON_CMD_MAX_REPORTS 4u
 
@@ -42,14 +42,15 @@ typedef struct mon_cmd_opts {
     size_t n_expect;
     uint32_t max_repeats;
     uint32_t max_missing;
-    capture_opts_t capture;
+    const char *pcapng;
 } mon_cmd_opts_t;
 
 typedef struct mon_cmd {
     const mon_cmd_opts_t *o;
     mon_t mon;
     mon_live_t live;
-    report_t rep;
+    pcapng_writer_t pcapng;
+    bool recording;
     char source[600];
     uint64_t now_ns;
     uint64_t last_flush_ns;
