@@ -309,6 +309,44 @@ static void test_pause_freezes(void)
     CHECK(strncmp(line_of(screen, 80, 1), "tel/s 454  load 0.0%", 20) == 0);
 }
 
+/* Sizes from 1x1 to 40x130: each fills exactly rows * cols characters. */
+static void size_sweep(const mon_t *m, mon_view_t *v)
+{
+    unsigned bad = 0;
+    for (unsigned rows = 1; rows <= 40u; rows += 3u) {
+        for (unsigned cols = 1; cols <= 130u; cols += 7u) {
+            memset(screen, '#', sizeof screen);
+            mon_view_render(m, v, S(5), screen, rows, cols);
+            bad += screen[rows * cols] != '#' || memchr(screen, '#', rows * cols) != NULL;
+        }
+    }
+    CHECK_EQ(bad, 0);
+}
+
+/* Nothing heard yet, and a view whose selection is garbage: both panes say so. */
+static void test_empty_monitor(void)
+{
+    mon_view_t v;
+    view_init(&v);
+    v.source = NULL;
+    v.baud = 0;
+    memset(&mon, 0, sizeof mon);
+    mon.holder = 255;
+    v.selected_known = true;
+    v.selected = 200;
+    mon_view_key(&v, 'd');
+    mon_view_render(&mon, &v, S(5), screen, 24, 80);
+    char want[128];
+    snprintf(want, sizeof want, "%-66s%s", "monitor  rate unknown  up 0:00:00", "? help  q quit");
+    CHECK_STR(line_of(screen, 80, 0), want);
+    CHECK_STR(line_of(screen, 80, 1),
+              "tel/s -  load -  heard 0  garbled 0  events 0  ring -  holder -");
+    CHECK_STR(line_of(screen, 80, 3), "    no station heard yet");
+    CHECK_STR(line_of(screen, 80, 4), "details (e: events)");
+    CHECK_STR(line_of(screen, 80, 5), "no station selected");
+    size_sweep(&mon, &v);
+}
+
 static void test_tiny_screen(void)
 {
     mon_view_t v;
@@ -374,6 +412,10 @@ static void test_128_stations(void)
     mon_view_render(&mon_big, &v, S(63), screen, 600, 10);
     CHECK_STR(line_of(screen, 10, 599), "");
     CHECK_STR(line_of(screen, 10, 0), "pty /dev/p");
+    mon_view_key(&v, 'd');
+    size_sweep(&mon_big, &v);
+    mon_view_key(&v, 'e');
+    size_sweep(&mon_big, &v);
 }
 
 static void test_keys_decoder(void)
@@ -555,6 +597,7 @@ int main(int argc, char **argv)
         RUN_TEST(test_selection_scrolls);
         RUN_TEST(test_pause_freezes);
         RUN_TEST(test_tiny_screen);
+        RUN_TEST(test_empty_monitor);
         RUN_TEST(test_128_stations);
         RUN_TEST(test_keys_decoder);
     }
