@@ -29,16 +29,13 @@ static const char master80[] =
 static const char slave80[] =
     "   5 slave  Data_Exch    1 0x6003    2.0    3.0    100     100     0     0    0";
 
-/* A master (1) holding the token and its DP slave (5, ident 0x6003) in data exchange. Built by
- * hand, as the core's telegram handling would leave it. */
+/* A master (1) holding the token and its DP slave (5, ident 0x6003) in data exchange: the
+ * figures set by hand, as the core's telegram handling would leave them, so that each column
+ * has a known value. */
 static void fixture(mon_t *m)
 {
-    memset(m, 0, sizeof *m);
-    for (unsigned a = 0; a < MON_STATIONS; a++) {
-        m->st[a].master = MON_NO_MASTER;
-    }
-    m->cfg.baud = 1500000;
-    m->cfg.timing = true;
+    mon_cfg_t cfg = {.baud = 1500000, .timing = true};
+    mon_init(m, &cfg);
     m->holder = 1;
     m->line.first_ns = S(1);
     m->line.last_ns = S(60);
@@ -144,6 +141,29 @@ static void test_header_and_rows(void)
     CHECK_EQ(v.attr[4], MON_ATTR_WARNING);
 }
 
+/* The core's own figures from telegrams: two masters passing the token show as a ring. */
+static void test_from_telegrams(void)
+{
+    mon_view_t v;
+    view_init(&v);
+    mon_cfg_t cfg = {.baud = 1500000, .timing = true};
+    mon_init(&mon, &cfg);
+    uint64_t t = S(1);
+    for (unsigned i = 0; i < 20u; i++) {
+        const uint8_t token[3] = {0xDC, i % 2u ? 1u : 2u, i % 2u ? 2u : 1u}; /* SD4 DA SA */
+        mon_telegram(&mon, token, sizeof token, t, t + 22000u);
+        t += MS(1);
+    }
+    mon_view_render(&mon, &v, t, screen, 24, 80);
+    CHECK(strncmp(line_of(screen, 80, 1), "tel/s -  load -  heard 2  garbled 0  events ", 44) ==
+          0);
+    CHECK(strstr(line_of(screen, 80, 1), "  ring 1,2  holder 1") != NULL);
+    CHECK_STR(line_of(screen, 80, 3),
+              "   1 master holder       - -           -      -      -       0     0     0    0");
+    CHECK_STR(line_of(screen, 80, 4),
+              "   2 master in ring      - -           -      -      -       0     0     0    0");
+}
+
 static void test_details_pane(void)
 {
     mon_view_t v;
@@ -231,13 +251,11 @@ static void test_selection_scrolls(void)
 {
     mon_view_t v;
     view_init(&v);
-    fixture(&mon);
-    memset(mon.st, 0, sizeof mon.st);
-    mon.holder = 255;
+    mon_cfg_t cfg = {.baud = 1500000, .timing = true};
+    mon_init(&mon, &cfg);
     for (unsigned a = 10; a < 40u; a++) {
         mon.st[a].seen = true;
         mon.st[a].role = MON_ROLE_PASSIVE;
-        mon.st[a].master = MON_NO_MASTER;
         mon.st[a].requests_received = a;
     }
     mon_view_render(&mon, &v, S(2), screen, 10, 80);
@@ -330,8 +348,8 @@ static void test_empty_monitor(void)
     view_init(&v);
     v.source = NULL;
     v.baud = 0;
-    memset(&mon, 0, sizeof mon);
-    mon.holder = 255;
+    mon_cfg_t cfg = {0};
+    mon_init(&mon, &cfg);
     v.selected_known = true;
     v.selected = 200;
     mon_view_key(&v, 'd');
@@ -592,6 +610,7 @@ int main(int argc, char **argv)
     bool term = argc < 2 || strcmp(argv[1], "term") == 0;
     if (view) {
         RUN_TEST(test_header_and_rows);
+        RUN_TEST(test_from_telegrams);
         RUN_TEST(test_details_pane);
         RUN_TEST(test_events_pane);
         RUN_TEST(test_selection_scrolls);
