@@ -52,10 +52,52 @@ static void on_frame(void *ctx, const uint8_t *f, size_t len, uint64_t t_ns, boo
     }
 }
 
+static void keys_readable(void *ctx, hal_time_us_t now)
+{
+    (void)now;
+    mon_cmd_t *c = ctx;
+    int key;
+    bool changed = false;
+    while ((key = mon_term_poll_key(&c->term)) >= 0) {
+        mon_view_result_t r = mon_view_key(&c->view, key);
+        if (r == MON_VIEW_QUIT) {
+            cli_stop = 1;
+            return;
+        }
+        changed = changed || r == MON_VIEW_CHANGED;
+    }
+    if (changed) {
+        mon_term_draw(&c->term, &c->mon, &c->view, c->now_ns);
+    }
+}
+
+/* The full-screen view, when asked for: keys come through the loop like the line's
+ * characters. False after saying why (not a terminal). */
+static bool open_top(mon_cmd_t *c)
+{
+    char err[200];
+    if (mon_term_open(&c->term, 0, 1, err, sizeof err) != 0) {
+        fprintf(stderr, "monitor: --view top: %s (--view log prints one line per event)\n", err);
+        return false;
+    }
+    c->view.source = c->source;
+    c->view.baud = c->o->baud;
+    if (tty_runner_add_fd(&c->live.runner, 0, keys_readable, c) != 0) {
+        mon_term_close(&c->term);
+        fprintf(stderr, "monitor: --view top: the loop has no room for the keyboard\n");
+        return false;
+    }
+    c->top = true;
+    return true;
+}
+
 static void tick(void *ctx, uint64_t now_ns)
 {
     mon_cmd_t *c = ctx;
     c->now_ns = now_ns;
+    if (c->top) {
+        mon_term_draw(&c->term, &c->mon, &c->view, now_ns);
+    }
     if (c->recording && pcapng_writer_tick(&c->pcapng, now_ns) != 0) {
         pcapng_told(c);
     }
@@ -154,11 +196,23 @@ int mon_cmd_run(mon_cmd_t *c, const mon_cmd_opts_t *o)
             }
             return 1;
         }
+        if (o->view == MON_VIEW_TOP && !open_top(c)) {
+            mon_live_close(&c->live);
+            if (c->recording) {
+                (void)pcapng_writer_close(&c->pcapng);
+            }
+            return EXIT_USAGE;
+        }
         cli_catch_stop_signals();
         char err[300];
         if (mon_live_run(&c->live, o->seconds, &cli_stop, err, sizeof err) != 0) {
             fprintf(stderr, "monitor: %s\n", err);
             rc = 1;
+        }
+        if (c->top) {
+            (void)tty_runner_remove_fd(&c->live.runner, 0);
+            mon_term_close(&c->term);
+            c->top = false;
         }
         mon_live_close(&c->live);
     }

@@ -9,6 +9,8 @@
 
 #include "medium.h"
 #include "monitor/mon_live.h"
+#include "monitor/mon_term.h"
+#include "monitor/mon_view.h"
 #include "monitor/monitor.h"
 #include "capture/pcapng_writer.h"
 
@@ -51,6 +53,9 @@ typedef struct mon_cmd {
     mon_live_t live;
     pcapng_writer_t pcapng;
     bool recording;
+    mon_term_t term;
+    mon_view_t view;
+    bool top; /* the full-screen view is up */
     char source[600];
     uint64_t now_ns;
     uint64_t last_flush_ns;
