@@ -73,8 +73,8 @@ void mon_xml_text(const mon_sink_t *out, const char *s)
 uint64_t mon_first_listed(const mon_t *m, unsigned last_events)
 {
     uint64_t first = m->events_total > last_events ? m->events_total - last_events : 0u;
-    uint64_t held = m->events_total - mon_events_dropped(m);
-    return first > held ? first : held;
+    uint64_t oldest_held = mon_events_dropped(m);
+    return first > oldest_held ? first : oldest_held;
 }
 
 const char *mon_fdl_status_name(uint8_t fdl_status)
