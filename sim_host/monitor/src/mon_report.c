@@ -21,12 +21,12 @@ double mon_rel_s(const mon_report_info_t *info, uint64_t t_ns)
 void mon_hex(const uint8_t *p, size_t len, char *out)
 {
     static const char digits[] = "0123456789ABCDEF";
-    size_t n = len < MON_IO_MAX ? len : MON_IO_MAX;
-    for (size_t i = 0; i < n; i++) {
+    size_t i = 0;
+    for (; i < len && i < MON_IO_MAX; i++) {
         out[2u * i] = digits[p[i] >> 4];
         out[2u * i + 1u] = digits[p[i] & 0x0Fu];
     }
-    out[2u * n] = '\0';
+    out[2u * i] = '\0';
 }
 
 /* Escapes go out in runs: plain text in one put, each escape in its own. */
