@@ -1,12 +1,15 @@
 /* dfp-sim monitor's run (mon_cmd.h). */
 #include "mon_cmd.h"
 
+#include <errno.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
 
 #include "cli.h"
 #include "lcm_bridge/lcm_segment.h"
+#include "monitor/mon_report.h"
+#include "sim_hal/path.h"
 
 #define NS_PER_S 1000000000ull
 
@@ -144,27 +147,62 @@ static int open_source(mon_cmd_t *c)
     return 0;
 }
 
-static void summary(const mon_cmd_t *c)
+static void file_put(void *ctx, const char *text, size_t n)
 {
-    const mon_line_t *l = &c->mon.line;
-    printf("monitor: %s: %llu telegrams, %llu garbled, %llu unanswered, %llu events\n",
-           c->source, (unsigned long long)l->telegrams, (unsigned long long)l->garbled,
-           (unsigned long long)l->unanswered, (unsigned long long)c->mon.events_total);
-    for (unsigned a = 0; a < MON_STATIONS; a++) {
-        const mon_station_t *s = &c->mon.st[a];
-        if (!s->seen) {
+    if (fwrite(text, 1, n, ctx) != n) {
+        return; /* ferror() is looked at when the file is closed */
+    }
+}
+
+static mon_report_info_t report_info(const mon_cmd_t *c)
+{
+    uint64_t now = c->o->file != NULL ? c->mon.line.last_ns : c->now_ns;
+    mon_report_info_t info = {.source = c->source, .t_start_ns = 0u, .t_now_ns = now,
+                              .last_events = 50u};
+    return info;
+}
+
+/* The --report files; false after saying which could not be written. */
+static bool write_reports(const mon_cmd_t *c, const mon_report_opts_t *ropt)
+{
+    mon_report_info_t info = report_info(c);
+    bool ok = true;
+    for (size_t k = 0; k < c->o->n_reports; k++) {
+        const mon_cmd_report_t *r = &c->o->reports[k];
+        char why[300];
+        FILE *f = sim_fopen_write(r->path, why, sizeof why);
+        if (f == NULL) {
+            fprintf(stderr, "monitor: %s\n", why);
+            ok = false;
             continue;
         }
-        printf("  %3u %-7s %-9s", a, mon_role_name(s->role),
-               s->dp ? mon_dp_state_name(s->dp_state) : (s->in_ring ? "in ring" : "-"));
-        if (s->dp && s->master != MON_NO_MASTER) {
-            printf(" master %u", s->master);
+        mon_sink_t out = {file_put, f};
+        if (r->junit) {
+            mon_report_junit(&c->mon, &info, ropt, &out);
+        } else {
+            mon_report_json(&c->mon, &info, &out);
         }
-        if (s->ident_known) {
-            printf(" ident 0x%04X", s->ident);
+        bool bad = ferror(f) != 0;
+        if (fclose(f) != 0 || bad) {
+            fprintf(stderr, "monitor: cannot write %s: %s\n", r->path, strerror(errno));
+            ok = false;
         }
-        printf("\n");
     }
+    return ok;
+}
+
+/* The summary, the reports and the exit status: 0 when every check passes, 1 otherwise. */
+static int finish(const mon_cmd_t *c)
+{
+    const mon_cmd_opts_t *o = c->o;
+    mon_report_opts_t ropt = {.max_repeats = o->max_repeats, .max_missing = o->max_missing,
+                              .expect = o->expect, .n_expect = o->n_expect};
+    mon_report_info_t info = report_info(c);
+    mon_sink_t out = {file_put, stdout};
+    mon_report_text(&c->mon, &info, &out);
+    fflush(stdout);
+    bool written = write_reports(c, &ropt);
+    return written && mon_report_ok(&c->mon, &ropt) ? 0 : 1;
 }
 
 int mon_cmd_run(mon_cmd_t *c, const mon_cmd_opts_t *o)
@@ -216,7 +254,8 @@ int mon_cmd_run(mon_cmd_t *c, const mon_cmd_opts_t *o)
         }
         mon_live_close(&c->live);
     }
-    summary(c);
+    int checks = finish(c);
+    rc = rc != 0 ? rc : checks;
     if (c->recording && pcapng_writer_close(&c->pcapng) != 0) {
         pcapng_told(c);
         rc = 1;

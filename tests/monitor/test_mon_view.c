@@ -183,18 +183,20 @@ static void test_details_pane(void)
     CHECK_EQ(v.attr[3], MON_ATTR_PLAIN);
     CHECK_STR(line_of(screen, 120, 5), "station 5: slave, Data_Exch (e: events)");
     CHECK_STR(line_of(screen, 120, 6), "heard first at 0:00:01.005, last at 0:00:59.000");
-    CHECK_STR(line_of(screen, 120, 7), "diag (6): 00 0C 00 01 60 03");
-    CHECK_STR(line_of(screen, 120, 8), "prm (7): 88 01 0B 0B 60 03 00");
-    CHECK_STR(line_of(screen, 120, 9), "cfg (2): F3 F3");
-    CHECK_STR(line_of(screen, 120, 10), "out (0): -");
-    CHECK_STR(line_of(screen, 120, 11), "in (0): -");
-    CHECK_STR(line_of(screen, 120, 12),
+    CHECK_STR(line_of(screen, 120, 7), "diag: WD_On | Master_Add 1, ident 0x6003");
+    CHECK_STR(line_of(screen, 120, 8), "diag (6): 00 0C 00 01 60 03");
+    CHECK_STR(line_of(screen, 120, 9), "DFP21B: 4PD + PARAM");
+    CHECK_STR(line_of(screen, 120, 10), "prm (7): 88 01 0B 0B 60 03 00");
+    CHECK_STR(line_of(screen, 120, 11), "cfg (2): F3 F3");
+    CHECK_STR(line_of(screen, 120, 12), "out (0): -");
+    CHECK_STR(line_of(screen, 120, 13), "in (0): -");
+    CHECK_STR(line_of(screen, 120, 14),
               "data exchange 11, cycle min/mean/max 1.0/2.0/3.0 ms, diag changes 0, "
               "Stat_Diag 0, watchdog 0 ms");
-    CHECK_STR(line_of(screen, 120, 13),
+    CHECK_STR(line_of(screen, 120, 15),
               "TSDR min/mean/max 90/100/150 us (10 answers), below min 0, over max 0, over "
               "slot 0");
-    CHECK_STR(line_of(screen, 120, 14),
+    CHECK_STR(line_of(screen, 120, 16),
               "requests sent 0 (repeats 0, unanswered 0), received 100 (repeats 0, missing 0), "
               "answers 100, RS 0, RR 0, UE 0, garbled 0");
     CHECK_EQ(mon_view_key(&v, 'e'), MON_VIEW_CHANGED);

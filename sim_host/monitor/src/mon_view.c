@@ -3,6 +3,8 @@
  * is built whole in a local buffer first and then clipped. */
 #include "monitor/mon_view.h"
 
+#include "monitor/mon_decode.h"
+
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -405,9 +407,27 @@ static void details_dp(const mon_t *m, const mon_station_t *s, pane_t *p)
     char mean[16];
     char min[16];
     char max[16];
-    /* The diagnosis's names belong here (mon_decode, written in parallel): until it lands the
-     * octets are shown in hex. MON_DECODE_CALL_SITE */
+    char text[TEXT_MAX];
+    if (s->diag_len != 0u) {
+        (void)mon_decode_diag(s->diag, s->diag_len, mon_prm_dpv1(s->prm, s->prm_len), text,
+                              sizeof text);
+        pane_line(p, "diag: %s", text);
+    }
     pane_hex(p, "diag", s->diag, s->diag_len);
+    if (mon_is_dfp21b(s)) {
+        mon_dfp21b_t d;
+        mon_decode_dfp21b_station(s, &d);
+        pane_line(p, "DFP21B: %s%s", d.pd_config, d.cfg_valid ? "" : " (not accepted)");
+        if (d.has_control) {
+            pane_line(p, "PO1 control 0x%04X: %s", d.control_word, d.control_text);
+        }
+        if (d.has_status) {
+            pane_line(p, "PI1 status 0x%04X: %s", d.status_word, d.status_text);
+        }
+        if (d.param_request[0] != '\0') {
+            pane_line(p, "channel: %s -> %s", d.param_request, d.param_answer);
+        }
+    }
     pane_hex(p, "prm", s->prm, s->prm_len);
     pane_hex(p, "cfg", s->cfg, s->cfg_len);
     pane_hex(p, "out", s->outputs, s->out_len);
