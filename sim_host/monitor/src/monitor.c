@@ -200,6 +200,9 @@ static bool expects_answer(const fdl_msg_t *msg)
 static void request(mon_t *m, const fdl_msg_t *msg, const uint8_t *f, size_t len, uint64_t t0,
                     uint64_t t1)
 {
+    /* A request while another waits for its answer: that one got none (a master's retry after
+     * the slot time comes before any mon_idle need say so). */
+    unanswered(m, t0);
     m->line.requests++;
     mon_heard(m, msg->sa, MON_ROLE_ACTIVE, t0);
     m->st[msg->sa].requests_sent++;
