@@ -250,11 +250,35 @@ static void test_drive_fault(void)
     }
 }
 
+/* 2d: the master switched off: the line falls silent and each card's watchdog (100 ms) takes it
+ * out of data exchange. The monitor hears nothing more, but knows the watchdog from Set_Prm. */
+static void test_watchdog(void)
+{
+    int failed0 = check_failed_;
+    one_master();
+    size_t ev0 = r.num_ev;
+    dp_master_stop(master());
+    mon_rig_run_ms(&r, WD_MS / 2u);
+    CHECK_EQ(r.num_ev, ev0); /* not yet */
+    mon_rig_run_ms(&r, WD_MS);
+    for (unsigned i = 0; i < 3u; i++) {
+        CHECK_EQ(dp_slave_state(&card(i)->cs.card.dp), DP_STATE_WAIT_PRM);
+        CHECK_EQ(st(cards[i])->dp_state, MON_DP_WAIT_PRM);
+        CHECK_EQ(mon_rig_count(&r, ev0, MON_EV_DX_LEAVE, cards[i]), 1);
+        CHECK_EQ(st(cards[i])->missing, 0);
+    }
+    CHECK_EQ(r.num_ev, ev0 + 3u);
+    if (check_failed_ > failed0) {
+        mon_rig_dump_events(&r, ev0);
+    }
+}
+
 int main(void)
 {
     RUN_TEST(test_settled);
     RUN_TEST(test_cable);
     RUN_TEST(test_power_cycle);
     RUN_TEST(test_drive_fault);
+    RUN_TEST(test_watchdog);
     return check_report();
 }

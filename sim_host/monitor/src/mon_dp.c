@@ -244,3 +244,20 @@ void mon_dp_gone(mon_t *m, uint8_t a, uint64_t t_ns)
         set_state(m, a, MON_DP_UNKNOWN, t_ns, "no answer to its master");
     }
 }
+
+void mon_dp_idle(mon_t *m, uint64_t now_ns)
+{
+    for (unsigned a = 0; a < FDL_ADDR_BROADCAST; a++) {
+        mon_station_t *s = &m->st[a];
+        if (s->dp_state != MON_DP_DATA_EXCH || s->watchdog_ms == 0u) {
+            continue;
+        }
+        /* Its last answer: a request reached it then and restarted its watchdog. */
+        uint64_t expiry = s->last_ns + (uint64_t)s->watchdog_ms * 1000000u;
+        if (now_ns > expiry) {
+            char why[64];
+            (void)snprintf(why, sizeof why, "its watchdog (%u ms) expired", s->watchdog_ms);
+            set_state(m, (uint8_t)a, MON_DP_WAIT_PRM, expiry, why);
+        }
+    }
+}

@@ -459,16 +459,14 @@ void mon_garbled(mon_t *m, const uint8_t *f, size_t len, uint64_t t_ns)
 
 void mon_idle(mon_t *m, uint64_t now_ns)
 {
-    if (!m->pending) {
-        return;
-    }
     uint64_t wait = m->slot_ns;
     if (!m->cfg.timing && wait < MON_UNTIMED_ANSWER_NS) {
         wait = MON_UNTIMED_ANSWER_NS;
     }
-    if (wait != 0u && now_ns > m->pend_end_ns + wait) {
+    if (m->pending && wait != 0u && now_ns > m->pend_end_ns + wait) {
         unanswered(m, now_ns);
     }
+    mon_dp_idle(m, now_ns);
 }
 
 const char *mon_role_name(mon_role_t r)

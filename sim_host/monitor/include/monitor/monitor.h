@@ -236,7 +236,9 @@ void mon_init(mon_t *m, const mon_cfg_t *cfg);
 void mon_telegram(mon_t *m, const uint8_t *f, size_t len, uint64_t t_start_ns, uint64_t t_end_ns);
 /* Octets that formed no telegram (a collision, noise, a cut frame). */
 void mon_garbled(mon_t *m, const uint8_t *f, size_t len, uint64_t t_ns);
-/* Time passed without a telegram: a request's answer that is due and did not come. */
+/* Time passed without a telegram: a request's answer that is due and did not come, and a slave
+ * in data exchange whose watchdog ran out (its master fell silent). Call it at least every few
+ * milliseconds, also while telegrams come. */
 void mon_idle(mon_t *m, uint64_t now_ns);
 
 /* The event with this seq, or NULL when it is not held (too old, or not yet). */
