@@ -99,7 +99,7 @@ static void test_settled(void)
     CHECK_EQ(m->next_station, MASTER); /* alone: it passes the token to itself */
     CHECK(m->tokens_sent > 10u);
     CHECK_EQ(m->rotation.n + 1u, m->tokens_sent);
-    CHECK_EQ(m->token_repeats, 1); /* the claim: two tokens to itself */
+    CHECK_EQ(m->token_repeats, 0); /* alone, it passes to itself: never a repeat */
     CHECK_EQ(m->repeats_sent, 0);
     CHECK_EQ(m->unanswered_sent, 0);
     CHECK(!m->dp);

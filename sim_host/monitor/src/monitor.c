@@ -323,7 +323,9 @@ static void token(mon_t *m, uint8_t da, uint8_t sa, uint64_t t0)
     m->line.tokens++;
     unanswered(m, t0);
     mon_station_t *s = &m->st[sa];
-    if (m->last_was_token && m->last_token_sa == sa && m->last_token_da == da) {
+    /* A token to itself is never a repeat: no successor failed to take it (a lone master with
+     * nothing to send passes to itself again and again; a claim is two such tokens). */
+    if (m->last_was_token && m->last_token_sa == sa && m->last_token_da == da && da != sa) {
         s->token_repeats++;
         return;
     }
