@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_wire.h"
 #include "hal/hal_uart.h"
 
@@ -29,6 +30,11 @@ static void tally(mon_rig_t *r, const uint8_t *f, size_t len)
         return;
     }
     r->requests_to[da]++;
+    r->req[sa][da]++;
+    if (rf.b[0] == FDL_SD2 && rf.len > 7u && (rf.b[4] & FDL_ADDR_EXT) != 0u &&
+        rf.b[7] == DP_SAP_SET_PRM) {
+        r->set_prm[sa][da]++;
+    }
     if ((fc & FDL_FC_FCV) == 0u) {
         r->last_req_len[da] = 0; /* FCV 0 starts the FCB sequence again: no repeat */
         return;

@@ -32,6 +32,8 @@ typedef struct mon_rig {
     uint64_t same_octets_to[MON_STATIONS]; /* FCV set, identical to the request before it */
     uint8_t last_req[MON_STATIONS][24];
     uint8_t last_req_len[MON_STATIONS];
+    uint32_t req[MON_STATIONS][MON_STATIONS];     /* requests [from][to] */
+    uint32_t set_prm[MON_STATIONS][MON_STATIONS]; /* Set_Prm requests [from][to] */
 } mon_rig_t;
 
 /* ring_rig_init with cards that each drive an emulated MOVIDRIVE, then the monitor (timing true, the DP profile's slot time) on its tap. */

@@ -302,12 +302,23 @@ static void answer(mon_t *m, const fdl_msg_t *msg, uint64_t t0)
     mon_dp_answer(m, msg, t0);
 }
 
+/* Whether sa's pass closes a rotation that judges the others: since its previous pass the token
+ * went round and came back from another station, or sa kept it for a whole rotation of its own
+ * (alone: two passes to itself). A pass that follows a failed pass (the token never left sa), or
+ * a claim after a lost token (the ring starts afresh), closes none. */
+static bool closes_rotation(const mon_t *m, uint8_t sa, uint8_t da, uint8_t prev_ns)
+{
+    const mon_station_t *s = &m->st[sa];
+    uint64_t since = s->prev_token_ns;
+    if (since == 0u) {
+        return false;
+    }
+    return s->token_received_ns > since || (prev_ns == sa && da == sa && since > m->claim_ns);
+}
+
 static void ring_check_members(mon_t *m, uint8_t sa, uint64_t t0)
 {
     uint64_t since = m->st[sa].prev_token_ns;
-    if (since == 0u) {
-        return;
-    }
     for (unsigned a = 0; a < MON_STATIONS; a++) {
         mon_station_t *s = &m->st[a];
         if (a != sa && s->in_ring && s->last_token_ns < since) {
@@ -345,8 +356,12 @@ static void token(mon_t *m, uint8_t da, uint8_t sa, uint64_t t0)
         mon_emit(m, t0, MON_EV_DUPLICATE_TOKEN, MON_LEVEL_WARN, sa, m->holder, 0,
                  "master %u passed a token while master %u held it", sa, m->holder);
     }
+    if (lost) {
+        m->claim_ns = t0;
+    }
     mon_heard(m, sa, MON_ROLE_ACTIVE, t0);
     s->tokens_sent++;
+    uint8_t prev_ns = s->next_station;
     s->next_station = da;
     if (s->last_token_ns != 0u) {
         uint64_t rot = t0 - s->last_token_ns;
@@ -362,7 +377,12 @@ static void token(mon_t *m, uint8_t da, uint8_t sa, uint64_t t0)
         mon_emit(m, t0, MON_EV_RING_ENTER, MON_LEVEL_INFO, sa, da, 0,
                  "master %u is in the token ring (passes to %u)", sa, da);
     }
-    ring_check_members(m, sa, t0);
+    if (!lost && closes_rotation(m, sa, da, prev_ns)) {
+        ring_check_members(m, sa, t0);
+    }
+    if (!lost && da != sa) {
+        m->st[da].token_received_ns = t0;
+    }
     m->holder = da;
     m->last_token_sa = sa;
     m->last_token_da = da;

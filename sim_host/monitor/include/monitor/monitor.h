@@ -130,6 +130,7 @@ typedef struct mon_station {
     uint32_t last_req_hash;
     uint64_t late_event_ns;   /* the last LATE_ANSWER event (at most one a second) */
     uint64_t prev_token_ns;   /* the token before last_token_ns */
+    uint64_t token_received_ns; /* the last token another station passed to it */
 } mon_station_t;
 
 typedef enum mon_event_type {
@@ -226,6 +227,7 @@ typedef struct mon {
     uint8_t holder;        /* who holds the token (the DA of the last token), 255: nobody known */
     uint8_t last_token_sa, last_token_da;
     bool last_was_token;
+    uint64_t claim_ns;     /* the last claim after a lost token: the ring starts afresh */
     uint64_t last_end_ns;  /* end of the last telegram (or garble) on the line */
 } mon_t;
 
