@@ -73,12 +73,19 @@ static void copy_du(uint8_t *dst, uint8_t *len, const uint8_t *src, size_t n, si
     }
 }
 
+/* The request came from another master than the slave's own: a locked slave refuses it (RS)
+ * and goes on with its owner, so a refusal says nothing about its state. */
+static bool locked_out(const mon_t *m, const mon_station_t *s)
+{
+    return s->master != MON_NO_MASTER && s->master != m->pend_sa;
+}
+
 static void data_exchange(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
 {
     uint8_t a = m->pend_da;
     mon_station_t *s = &m->st[a];
     if (!positive(rsp)) {
-        if (s->dp_state == MON_DP_DATA_EXCH) {
+        if (s->dp_state == MON_DP_DATA_EXCH && !locked_out(m, s)) {
             char why[64];
             (void)snprintf(why, sizeof why, "Data_Exchange answered with %s", refusal_name(rsp));
             set_state(m, a, MON_DP_WAIT_PRM, t_ns, why);
@@ -105,7 +112,9 @@ static void set_prm(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
     uint8_t a = m->pend_da;
     mon_station_t *s = &m->st[a];
     if (!positive(rsp)) {
-        set_state(m, a, MON_DP_WAIT_PRM, t_ns, "Set_Prm refused");
+        if (!locked_out(m, s)) {
+            set_state(m, a, MON_DP_WAIT_PRM, t_ns, "Set_Prm refused");
+        }
         return;
     }
     if (s->dp_state == MON_DP_DATA_EXCH && s->master != MON_NO_MASTER && s->master != m->pend_sa) {
