@@ -36,7 +36,8 @@ typedef struct mon_rig {
     uint32_t set_prm[MON_STATIONS][MON_STATIONS]; /* Set_Prm requests [from][to] */
 } mon_rig_t;
 
-/* ring_rig_init with cards that each drive an emulated MOVIDRIVE, then the monitor (timing true, the DP profile's slot time) on its tap. */
+/* ring_rig_init with cards that each drive an emulated MOVIDRIVE, then the monitor (timing true,
+ * the DP profile's slot time) on its tap. */
 void mon_rig_init(mon_rig_t *r, uint32_t baud, const uint8_t *cards, size_t num_cards);
 /* Runs ms milliseconds in 1 ms steps, telling the monitor the time after each (mon_idle). */
 void mon_rig_run_ms(mon_rig_t *r, unsigned ms);

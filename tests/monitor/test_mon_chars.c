@@ -19,7 +19,7 @@ static mon_t mon; /* large: keep it off the stack */
 static mon_chars_t rx;
 static uint64_t now_ns;
 
-/* ---- what mon_chars hands on ---------------------------------------------------------------- */
+/* ---- what mon_chars hands on --------------------------------------------------------------- */
 
 #define SEEN_MAX 16u
 static uint8_t seen[SEEN_MAX][FDL_FRAME_MAX];
@@ -90,7 +90,7 @@ static void check_seen(size_t i, const uint8_t *f, size_t len)
     }
 }
 
-/* ---- damaged streams ------------------------------------------------------------------------ */
+/* ---- damaged streams ----------------------------------------------------------------------- */
 
 static void test_garbled_run(void)
 {
@@ -219,7 +219,7 @@ static void test_pause_inside(void)
     check_seen(0, b, nb);
 }
 
-/* ---- random streams ------------------------------------------------------------------------- */
+/* ---- random streams ------------------------------------------------------------------------ */
 
 static uint64_t prng = 0x9E3779B97F4A7C15ull;
 

@@ -217,7 +217,8 @@ static void test_power_cycle(void)
     CHECK_EQ(s->master, MASTER);
     CHECK_EQ(mon_rig_count(&r, ev0, MON_EV_DX_LEAVE, 12), 1);
     CHECK_EQ(mon_rig_count(&r, ev0, MON_EV_DX_ENTER, 12), 1);
-    CHECK(mon_rig_find(&r, ev0, MON_EV_DX_LEAVE, 12) < mon_rig_find(&r, ev0, MON_EV_DX_ENTER, 12));
+    size_t leave = mon_rig_find(&r, ev0, MON_EV_DX_LEAVE, 12);
+    CHECK(leave < mon_rig_find(&r, ev0, MON_EV_DX_ENTER, 12));
     CHECK_EQ(s->missing, 0);
     CHECK_EQ(s->repeats_received, r.same_octets_to[12]);
     CHECK_EQ(events_of_others(ev0, 12), 0);
