@@ -94,8 +94,17 @@ static void complete(mon_chars_t *c, uint64_t t_ns)
 
 static void feed_one(mon_chars_t *c, uint8_t b, bool bad, uint64_t t_ns)
 {
+    if (bad) {
+        /* A flagged character belongs to no telegram, though it may look like a delimiter (E5):
+         * it ends the one in progress, whose octets are looked at again without it. */
+        while (c->have != 0u) {
+            resync(c, t_ns);
+        }
+        garble_add(c, b, t_ns);
+        return;
+    }
     if (c->have == 0u) {
-        if (bad || !is_start(b)) {
+        if (!is_start(b)) {
             garble_add(c, b, t_ns);
             return;
         }
@@ -103,10 +112,6 @@ static void feed_one(mon_chars_t *c, uint8_t b, bool bad, uint64_t t_ns)
         c->frame_len = length_of(b);
     }
     c->buf[c->have++] = b;
-    if (bad) {
-        resync(c, t_ns);
-        return;
-    }
     if (c->have < c->frame_len) {
         return;
     }
@@ -122,14 +127,26 @@ static void feed_one(mon_chars_t *c, uint8_t b, bool bad, uint64_t t_ns)
     complete(c, t_ns);
 }
 
+/* A pause: the telegram in progress was cut short (what resync looks at again may start another
+ * unfinished one), and the garbled run ends with it. */
+static void pause_cut(mon_chars_t *c)
+{
+    while (c->have != 0u) {
+        resync(c, c->last_ns);
+    }
+    garble_flush(c);
+}
+
 void mon_chars_feed(mon_chars_t *c, const uint8_t *bytes, const uint8_t *flags, size_t n,
                     uint64_t t_ns)
 {
-    if (n != 0u && c->have != 0u && t_ns - c->last_ns > MON_CHARS_PAUSE_NS) {
-        resync(c, c->last_ns); /* a pause cut the telegram in progress */
+    const uint8_t errors = HAL_UART_RX_PARITY_ERR | HAL_UART_RX_FRAMING_ERR |
+                           HAL_UART_RX_OVERRUN_ERR;
+    if (n != 0u && t_ns - c->last_ns > MON_CHARS_PAUSE_NS) {
+        pause_cut(c);
     }
     for (size_t i = 0; i < n; i++) {
-        bool bad = flags != NULL && (flags[i] & (HAL_UART_RX_PARITY_ERR | HAL_UART_RX_FRAMING_ERR | HAL_UART_RX_OVERRUN_ERR)) != 0u;
+        bool bad = flags != NULL && (flags[i] & errors) != 0u;
         /* Characters of one chunk arrived together; each ended one character time after the
          * one before it, at the latest at t_ns. */
         uint64_t back = (uint64_t)c->char_ns * (n - 1u - i);
@@ -142,15 +159,8 @@ void mon_chars_feed(mon_chars_t *c, const uint8_t *bytes, const uint8_t *flags, 
 
 void mon_chars_idle(mon_chars_t *c, uint64_t now_ns)
 {
-    if (c->have != 0u && now_ns - c->last_ns > MON_CHARS_PAUSE_NS) {
-        resync(c, c->last_ns);
-        /* What resync looked at again may have started another unfinished telegram. */
-        while (c->have != 0u) {
-            resync(c, c->last_ns);
-        }
-    }
-    if (c->garble_len != 0u && now_ns - c->last_ns > MON_CHARS_PAUSE_NS) {
-        garble_flush(c);
+    if (now_ns - c->last_ns > MON_CHARS_PAUSE_NS) {
+        pause_cut(c);
     }
     mon_idle(c->mon, now_ns);
 }

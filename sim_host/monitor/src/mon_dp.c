@@ -78,12 +78,19 @@ static void copy_du(uint8_t *dst, uint8_t *len, const uint8_t *src, size_t n, si
     }
 }
 
+/* The request came from another master than the slave's own: a locked slave refuses it (RS)
+ * and goes on with its owner, so a refusal says nothing about its state. */
+static bool locked_out(const mon_t *m, const mon_station_t *s)
+{
+    return s->master != MON_NO_MASTER && s->master != m->pend_sa;
+}
+
 static void data_exchange(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
 {
     uint8_t a = m->pend_da;
     mon_station_t *s = &m->st[a];
     if (!positive(rsp)) {
-        if (s->dp_state == MON_DP_DATA_EXCH) {
+        if (s->dp_state == MON_DP_DATA_EXCH && !locked_out(m, s)) {
             char why[64];
             (void)snprintf(why, sizeof why, "Data_Exchange answered with %s", refusal_name(rsp));
             set_state(m, a, MON_DP_WAIT_PRM, t_ns, why);
@@ -110,7 +117,9 @@ static void set_prm(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
     uint8_t a = m->pend_da;
     mon_station_t *s = &m->st[a];
     if (!positive(rsp)) {
-        set_state(m, a, MON_DP_WAIT_PRM, t_ns, "Set_Prm refused");
+        if (!locked_out(m, s)) {
+            set_state(m, a, MON_DP_WAIT_PRM, t_ns, "Set_Prm refused");
+        }
         return;
     }
     if (s->dp_state == MON_DP_DATA_EXCH && s->master != MON_NO_MASTER && s->master != m->pend_sa) {
@@ -250,5 +259,22 @@ void mon_dp_gone(mon_t *m, uint8_t a, uint64_t t_ns)
 {
     if (m->st[a].dp_state == MON_DP_DATA_EXCH) {
         set_state(m, a, MON_DP_UNKNOWN, t_ns, "no answer to its master");
+    }
+}
+
+void mon_dp_idle(mon_t *m, uint64_t now_ns)
+{
+    for (unsigned a = 0; a < FDL_ADDR_BROADCAST; a++) {
+        mon_station_t *s = &m->st[a];
+        if (s->dp_state != MON_DP_DATA_EXCH || s->watchdog_ms == 0u) {
+            continue;
+        }
+        /* Its last answer: a request reached it then and restarted its watchdog. */
+        uint64_t expiry = s->last_ns + (uint64_t)s->watchdog_ms * 1000000u;
+        if (now_ns > expiry) {
+            char why[64];
+            (void)snprintf(why, sizeof why, "its watchdog (%u ms) expired", s->watchdog_ms);
+            set_state(m, (uint8_t)a, MON_DP_WAIT_PRM, expiry, why);
+        }
     }
 }

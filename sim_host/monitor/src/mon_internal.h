@@ -18,5 +18,8 @@ void mon_heard(mon_t *m, uint8_t a, mon_role_t role, uint64_t t_ns);
 void mon_dp_request(mon_t *m, const fdl_msg_t *req, uint64_t t_ns);
 void mon_dp_answer(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns);
 void mon_dp_gone(mon_t *m, uint8_t a, uint64_t t_ns);
+/* Time passed: a slave in data exchange that heard nothing from its master for its watchdog
+ * time (Set_Prm) has gone to Wait_Prm, as the slave does, though the line says nothing. */
+void mon_dp_idle(mon_t *m, uint64_t now_ns);
 
 #endif

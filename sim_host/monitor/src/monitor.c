@@ -201,6 +201,9 @@ static bool expects_answer(const fdl_msg_t *msg)
 static void request(mon_t *m, const fdl_msg_t *msg, const uint8_t *f, size_t len, uint64_t t0,
                     uint64_t t1)
 {
+    /* A request while another waits for its answer: that one got none (a master's retry after
+     * the slot time comes before any mon_idle need say so). */
+    unanswered(m, t0);
     m->line.requests++;
     mon_heard(m, msg->sa, MON_ROLE_ACTIVE, t0);
     m->st[msg->sa].requests_sent++;
@@ -300,12 +303,23 @@ static void answer(mon_t *m, const fdl_msg_t *msg, uint64_t t0)
     mon_dp_answer(m, msg, t0);
 }
 
+/* Whether sa's pass closes a rotation that judges the others: since its previous pass the token
+ * went round and came back from another station, or sa kept it for a whole rotation of its own
+ * (alone: two passes to itself). A pass that follows a failed pass (the token never left sa), or
+ * a claim after a lost token (the ring starts afresh), closes none. */
+static bool closes_rotation(const mon_t *m, uint8_t sa, uint8_t da, uint8_t prev_ns)
+{
+    const mon_station_t *s = &m->st[sa];
+    uint64_t since = s->prev_token_ns;
+    if (since == 0u) {
+        return false;
+    }
+    return s->token_received_ns > since || (prev_ns == sa && da == sa && since > m->claim_ns);
+}
+
 static void ring_check_members(mon_t *m, uint8_t sa, uint64_t t0)
 {
     uint64_t since = m->st[sa].prev_token_ns;
-    if (since == 0u) {
-        return;
-    }
     for (unsigned a = 0; a < MON_STATIONS; a++) {
         mon_station_t *s = &m->st[a];
         if (a != sa && s->in_ring && s->last_token_ns < since) {
@@ -321,7 +335,9 @@ static void token(mon_t *m, uint8_t da, uint8_t sa, uint64_t t0)
     m->line.tokens++;
     unanswered(m, t0);
     mon_station_t *s = &m->st[sa];
-    if (m->last_was_token && m->last_token_sa == sa && m->last_token_da == da) {
+    /* A token to itself is never a repeat: no successor failed to take it (a lone master with
+     * nothing to send passes to itself again and again; a claim is two such tokens). */
+    if (m->last_was_token && m->last_token_sa == sa && m->last_token_da == da && da != sa) {
         s->token_repeats++;
         return;
     }
@@ -343,8 +359,12 @@ static void token(mon_t *m, uint8_t da, uint8_t sa, uint64_t t0)
         mon_emit(m, t0, MON_EV_DUPLICATE_TOKEN, MON_LEVEL_WARN, sa, m->holder, 0,
                  "master %u passed a token while master %u held it", sa, m->holder);
     }
+    if (lost) {
+        m->claim_ns = t0;
+    }
     mon_heard(m, sa, MON_ROLE_ACTIVE, t0);
     s->tokens_sent++;
+    uint8_t prev_ns = s->next_station;
     s->next_station = da;
     if (s->last_token_ns != 0u) {
         uint64_t rot = t0 - s->last_token_ns;
@@ -360,7 +380,12 @@ static void token(mon_t *m, uint8_t da, uint8_t sa, uint64_t t0)
         mon_emit(m, t0, MON_EV_RING_ENTER, MON_LEVEL_INFO, sa, da, 0,
                  "master %u is in the token ring (passes to %u)", sa, da);
     }
-    ring_check_members(m, sa, t0);
+    if (!lost && closes_rotation(m, sa, da, prev_ns)) {
+        ring_check_members(m, sa, t0);
+    }
+    if (!lost && da != sa) {
+        m->st[da].token_received_ns = t0;
+    }
     m->holder = da;
     m->last_token_sa = sa;
     m->last_token_da = da;
@@ -465,18 +490,16 @@ void mon_garbled(mon_t *m, const uint8_t *f, size_t len, uint64_t t_ns)
 
 void mon_idle(mon_t *m, uint64_t now_ns)
 {
-    if (!m->pending) {
-        return;
-    }
     uint64_t wait = m->slot_ns;
     if (m->cfg.answer_wait_ns != 0u) {
         wait = m->cfg.answer_wait_ns;
     } else if (!m->cfg.timing && wait < MON_UNTIMED_ANSWER_NS) {
         wait = MON_UNTIMED_ANSWER_NS;
     }
-    if (wait != 0u && now_ns > m->pend_end_ns + wait) {
+    if (m->pending && wait != 0u && now_ns > m->pend_end_ns + wait) {
         unanswered(m, now_ns);
     }
+    mon_dp_idle(m, now_ns);
 }
 
 const char *mon_role_name(mon_role_t r)

@@ -131,6 +131,7 @@ typedef struct mon_station {
     uint32_t last_req_hash;
     uint64_t late_event_ns;   /* the last LATE_ANSWER event (at most one a second) */
     uint64_t prev_token_ns;   /* the token before last_token_ns */
+    uint64_t token_received_ns; /* the last token another station passed to it */
 } mon_station_t;
 
 typedef enum mon_event_type {
@@ -234,6 +235,7 @@ typedef struct mon {
     uint8_t holder;        /* who holds the token (the DA of the last token), 255: nobody known */
     uint8_t last_token_sa, last_token_da;
     bool last_was_token;
+    uint64_t claim_ns;     /* the last claim after a lost token: the ring starts afresh */
     uint64_t last_end_ns;  /* end of the last telegram (or garble) on the line */
 } mon_t;
 
@@ -244,7 +246,9 @@ void mon_init(mon_t *m, const mon_cfg_t *cfg);
 void mon_telegram(mon_t *m, const uint8_t *f, size_t len, uint64_t t_start_ns, uint64_t t_end_ns);
 /* Octets that formed no telegram (a collision, noise, a cut frame). */
 void mon_garbled(mon_t *m, const uint8_t *f, size_t len, uint64_t t_ns);
-/* Time passed without a telegram: a request's answer that is due and did not come. */
+/* Time passed without a telegram: a request's answer that is due and did not come, and a slave
+ * in data exchange whose watchdog ran out (its master fell silent). Call it at least every few
+ * milliseconds, also while telegrams come. */
 void mon_idle(mon_t *m, uint64_t now_ns);
 
 /* The event with this seq, or NULL when it is not held (too old, or not yet). */
