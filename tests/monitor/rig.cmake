@@ -18,7 +18,10 @@ add_test(NAME unit_mon_rig_frames COMMAND test_mon_rig_frames)
 # The receiver with mon_telegram wrapped, so the test sees each telegram it hands on: --wrap
 # only reaches calls between ordinary objects, so the monitor's sources are built into the test
 # without link-time optimisation instead of taken from dfp_monitor.
-file(GLOB mon_chars_core CONFIGURE_DEPENDS ${CMAKE_SOURCE_DIR}/sim_host/monitor/src/*.c)
+set(mon_chars_core)
+foreach(src monitor.c mon_dp.c mon_chars.c mon_sink.c)
+  list(APPEND mon_chars_core ${CMAKE_SOURCE_DIR}/sim_host/monitor/src/${src})
+endforeach()
 add_executable(test_mon_chars ${CMAKE_CURRENT_SOURCE_DIR}/test_mon_chars.c ${mon_chars_core})
 target_include_directories(test_mon_chars PRIVATE ${CMAKE_SOURCE_DIR}/sim_host/monitor/include)
 target_link_libraries(test_mon_chars PRIVATE dfp_dp_slave dfp_fdl_active dfp_replay

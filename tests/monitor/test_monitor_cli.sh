@@ -33,7 +33,8 @@ done
 events=$(json "$tmp/r.json" "'\n'.join(e['type'] + ' ' + str(e['station']) + ' ' + e['text'] for e in d['events']['last'])")
 expect_in "the wrong configuration: 4 leaves data exchange" "dx_leave 4 slave 4 left data exchange: new Set_Prm from master 2" "$events"
 expect_in "the wrong configuration: Cfg_Fault" "prm_fault 4 slave 4 refused its configuration (Cfg_Fault)" "$events"
-expect_in "the watchdog: 5 leaves data exchange" "dx_leave 5 slave 5 left data exchange: diagnosis asks for parameters (Prm_Req)" "$events"
+expect_in "the watchdog: 5 leaves data exchange" "dx_leave 5 slave 5 left data exchange: its watchdog (100 ms) expired" "$events"
+expect_in "the watchdog: 4 too" "dx_leave 4 slave 4 left data exchange: its watchdog (100 ms) expired" "$events"
 expect_in "master 3 joins the ring" "ring_enter 3 master 3 is in the token ring (passes to 2)" "$events"
 expect_in "JUnit: no failure" 'failures="0"' "$(head -3 "$tmp/r.xml")"
 expect_in "JUnit: slave 4's case" 'classname="dfp-sim monitor" name="4 data exchange"' "$(cat "$tmp/r.xml")"

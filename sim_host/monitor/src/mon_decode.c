@@ -215,7 +215,13 @@ static void word_text(int (*fn)(uint16_t, char *, size_t), uint16_t w, char *out
     fn(w, t, sizeof t);
     size_t n = strlen(t);
     const char *s = n >= WORD_PREFIX_LEN ? t + WORD_PREFIX_LEN : t;
-    (void)snprintf(out, max, "%s", s);
+    size_t len = strlen(s);
+    if (max == 0u) {
+        return;
+    }
+    len = len < max - 1u ? len : max - 1u;
+    memcpy(out, s, len);
+    out[len] = '\0';
 }
 
 void mon_decode_dfp21b(const uint8_t *cfg, size_t cfg_len, const uint8_t *outputs,
