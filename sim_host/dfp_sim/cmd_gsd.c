@@ -11,10 +11,15 @@
 
 /* Problems listed; more are counted. */
 #define GSD_CMD_MAX_PROBLEMS 100u
+/* --module given at most this often (Set_Prm could not carry more modules' parameters). */
+#define GSD_CMD_MAX_MODULES 32u
 
 typedef struct gsd_cmd_opts {
     const char *file;
     bool json;
+    const char *module_names[GSD_CMD_MAX_MODULES];
+    size_t n_module_names;
+    size_t modules[GSD_CMD_MAX_MODULES]; /* their indices */
 } gsd_cmd_opts_t;
 
 static bool gsd_operand(void *opts, const char *word)
@@ -30,6 +35,8 @@ static bool gsd_operand(void *opts, const char *word)
 
 static const cli_opt_t gsd_options[] = {
     {CLI_OPT("--json", NULL, CLI_FLAG, offsetof(gsd_cmd_opts_t, json))},
+    {CLI_OPT("--module", "NAME", CLI_LIST, offsetof(gsd_cmd_opts_t, module_names)),
+     .aux = offsetof(gsd_cmd_opts_t, n_module_names), .max = GSD_CMD_MAX_MODULES},
 };
 
 static const cli_group_t gsd_groups[] = {
@@ -170,13 +177,13 @@ static void json_problems(const gsd_problem_t *p, size_t n, size_t shown)
     fputs("\n  ]\n}\n", stdout);
 }
 
-static void print_json(const char *file, const gsd_t *g, const gsd_problem_t *p, size_t n,
-                       size_t shown)
+static void print_json(const gsd_cmd_opts_t *o, const gsd_t *g, const gsd_problem_t *p,
+                       size_t n, size_t shown)
 {
     uint8_t prm[GSD_MAX_USER_PRM];
-    int len = gsd_default_prm(g, NULL, 0, prm, sizeof prm);
+    int len = gsd_default_prm(g, o->modules, o->n_module_names, prm, sizeof prm);
     fputs("{\n  ", stdout);
-    json_key_string("file", file, ",\n  ");
+    json_key_string("file", o->file, ",\n  ");
     json_key_string("vendor", gsd_text(g, GSD_S_VENDOR_NAME), ",\n  ");
     json_key_string("model", gsd_text(g, GSD_S_MODEL_NAME), ",\n  ");
     json_key_string("revision", gsd_text(g, GSD_S_REVISION), ",\n  ");
@@ -290,14 +297,16 @@ static void text_def(const gsd_t *g, const gsd_ref_t *r, const gsd_prm_def_t *d)
     putchar('\n');
 }
 
-static void text_prm(const gsd_t *g)
+static void text_prm(const gsd_cmd_opts_t *o, const gsd_t *g)
 {
     uint8_t prm[GSD_MAX_USER_PRM];
-    int len = gsd_default_prm(g, NULL, 0, prm, sizeof prm);
+    int len = gsd_default_prm(g, o->modules, o->n_module_names, prm, sizeof prm);
     if (len < 0) {
         fputs("user parameters: longer than Set_Prm carries\n", stdout);
     } else {
-        printf("user parameters by default (%d octets):%s", len, len == 0 ? " none" : " ");
+        printf("user parameters by default%s (%d octets):%s",
+               o->n_module_names != 0u ? " with the modules given" : "", len,
+               len == 0 ? " none" : " ");
         hex(prm, (size_t)len, " ");
         putchar('\n');
     }
@@ -319,13 +328,14 @@ static void text_dpv1(const gsd_t *g)
     puts(any ? "" : "DP-V1: no keys (DP-V0)");
 }
 
-static void print_text(const char *file, const gsd_t *g, const gsd_problem_t *p, size_t n,
-                       size_t shown)
+static void print_text(const gsd_cmd_opts_t *o, const gsd_t *g, const gsd_problem_t *p,
+                       size_t n, size_t shown)
 {
+    const char *file = o->file;
     text_header(file, g);
     text_rates(g);
     text_modules(g);
-    text_prm(g);
+    text_prm(o, g);
     text_dpv1(g);
     for (size_t i = 0; i < g->n_notes; i++) {
         if (g->notes[i].kind == GSD_NOTE_IGNORED) {
@@ -348,12 +358,26 @@ static void print_text(const char *file, const gsd_t *g, const gsd_problem_t *p,
     if (shown < n) printf("  ... and %zu more\n", n - shown);
 }
 
+/* The --module names into indices: false after reporting. */
+static bool find_modules(gsd_cmd_opts_t *o, const gsd_t *g)
+{
+    for (size_t i = 0; i < o->n_module_names; i++) {
+        int m = gsd_find_module(g, o->module_names[i]);
+        if (m < 0) {
+            cli_error("gsd: no module \"%s\" in %s", o->module_names[i], o->file);
+            return false;
+        }
+        o->modules[i] = (size_t)m;
+    }
+    return true;
+}
+
 int cmd_gsd(int argc, char **argv)
 {
     gsd_cmd_opts_t o = {0};
     if (cli_parse(&cli_gsd, argc, argv, &o) != 0) return EXIT_USAGE;
     if (o.file == NULL) {
-        cli_error("gsd needs a file: dfp-sim gsd FILE [--json]");
+        cli_error("gsd needs a file: dfp-sim gsd FILE [--json] [--module NAME]...");
         return EXIT_USAGE;
     }
     gsd_t *g = malloc(sizeof *g);
@@ -368,13 +392,13 @@ int cmd_gsd(int argc, char **argv)
     int rc = EXIT_USAGE;
     if (gsd_parse_file(o.file, g, err, sizeof err) != 0) {
         (void)fprintf(stderr, "dfp-sim: %s\n", err);
-    } else {
+    } else if (find_modules(&o, g)) {
         size_t n = gsd_check(g, p, GSD_CMD_MAX_PROBLEMS);
         size_t shown = n < GSD_CMD_MAX_PROBLEMS ? n : GSD_CMD_MAX_PROBLEMS;
         if (o.json) {
-            print_json(o.file, g, p, n, shown);
+            print_json(&o, g, p, n, shown);
         } else {
-            print_text(o.file, g, p, n, shown);
+            print_text(&o, g, p, n, shown);
         }
         rc = n == 0u ? 0 : 1;
     }

@@ -49,10 +49,10 @@ static size_t cut_comment(const char *s, size_t len)
     return len;
 }
 
-static bool append(gsd_parser_t *p, const char *s, size_t len, uint32_t line)
+static bool append(gsd_parser_t *p, const char *s, size_t len)
 {
     if (p->len + len > GSD_MAX_LINE) {
-        return gsd_fail(p, line, "longer than %u characters (with its continuation lines)",
+        return gsd_fail(p, p->first_line, "longer than %u characters (with its continuation lines)",
                         GSD_MAX_LINE);
     }
     memcpy(p->buf + p->len, s, len);
@@ -88,7 +88,7 @@ static bool feed_line(gsd_parser_t *p, const char *s, size_t len, uint32_t line)
     while (len > 0u && is_blank(s[len - 1u])) len--;
     if (!p->continuing) p->first_line = line;
     bool more = len > 0u && s[len - 1u] == '\\';
-    if (!append(p, s, more ? len - 1u : len, line)) return false;
+    if (!append(p, s, more ? len - 1u : len)) return false;
     p->continuing = more;
     return more ? true : logical_line(p);
 }
