@@ -151,6 +151,17 @@ static void json_defs(const gsd_t *g)
         printf("%s{\"module\": %d, \"offset\": %u, \"number\": %u}", i == 0u ? "" : ", ",
                r->module, r->offset, r->number);
     }
+    fputs("],\n  \"prm_texts\": [", stdout);
+    for (size_t i = 0; i < g->n_tables; i++) {
+        const gsd_text_table_t *t = &g->tables[i];
+        printf("%s{\"number\": %u, \"texts\": [", i == 0u ? "" : ", ", t->number);
+        for (size_t j = 0; j < t->count; j++) {
+            printf("%s[%lld, ", j == 0u ? "" : ", ", (long long)g->texts[t->first + j].value);
+            json_string(gsd_chars(g, g->texts[t->first + j].text));
+            putchar(']');
+        }
+        fputs("]}", stdout);
+    }
     fputs("],\n", stdout);
 }
 
@@ -215,7 +226,7 @@ static void print_json(const gsd_cmd_opts_t *o, const gsd_t *g, const gsd_proble
     json_problems(p, n, shown);
 }
 
-/* --- for a person ---------------------------------------------------------------------------- */
+/* --- for a person ------------------------------------------------------------------------ */
 
 static void text_header(const char *file, const gsd_t *g)
 {
@@ -227,7 +238,9 @@ static void text_header(const char *file, const gsd_t *g)
     if (!gsd_key(g, GSD_K_IDENT_NUMBER, NULL)) fputs(" (missing)", stdout);
     bool modular = gsd_key(g, GSD_K_MODULAR_STATION, &v) && v != 0u;
     printf(", %s station", modular ? "modular" : "compact");
-    if (gsd_key(g, GSD_K_MAX_MODULE, &v)) printf(" (at most %u module%s)", (unsigned)v, v == 1u ? "" : "s");
+    if (gsd_key(g, GSD_K_MAX_MODULE, &v)) {
+        printf(" (at most %u module%s)", (unsigned)v, v == 1u ? "" : "s");
+    }
     static const struct {
         gsd_key_t k;
         const char *what;

@@ -52,7 +52,8 @@ static size_t cut_comment(const char *s, size_t len)
 static bool append(gsd_parser_t *p, const char *s, size_t len)
 {
     if (p->len + len > GSD_MAX_LINE) {
-        return gsd_fail(p, p->first_line, "longer than %u characters (with its continuation lines)",
+        return gsd_fail(p, p->first_line,
+                        "longer than %u characters (with its continuation lines)",
                         GSD_MAX_LINE);
     }
     memcpy(p->buf + p->len, s, len);

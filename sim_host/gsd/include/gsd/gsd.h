@@ -3,7 +3,7 @@
  * what the file says against itself. README.md describes the syntax accepted and the checks.
  *
  * No globals, no heap: a gsd_t holds everything in arrays of the sizes below; a file that needs
- * more is refused with an error naming the line and the limit. gsd_t is large (about 150 KiB):
+ * more is refused with an error naming the line and the limit. gsd_t is large (about 250 KiB):
  * give it static storage or allocate it. */
 #ifndef GSD_GSD_H
 #define GSD_GSD_H
