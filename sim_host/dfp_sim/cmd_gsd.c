@@ -284,7 +284,7 @@ static void text_modules(const gsd_t *g)
             fputs(": malformed identifiers", stdout);
         }
         size_t plen = gsd_part_len(g, (int)i);
-        if (plen != 0u) printf(", %zu parameter octets", plen);
+        if (plen != 0u) printf(", %zu parameter octet%s", plen, plen == 1u ? "" : "s");
         putchar('\n');
     }
 }

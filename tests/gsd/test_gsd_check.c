@@ -92,8 +92,11 @@ static void test_prm_lengths(void)
 {
     only("User_Prm_Data_Len = 2\nExt_User_Prm_Data_Const(0) = 1,2,3\n", GSD_P_PRM_LEN, 23,
          "Ext_User_Prm_Data_Const(0) with 3 octets reaches past User_Prm_Data_Len = 2");
-    only("Ext_User_Prm_Data_Const(0) = 1\n", GSD_P_PRM_LEN, 0,
-         "user parameter octets are defined but User_Prm_Data_Len is missing");
+    /* without User_Prm_Data_Len the octets defined give the length */
+    if (parse("Ext_User_Prm_Data_Const(3) = 1\n")) {
+        CHECK_EQ(n, 0);
+        CHECK_EQ(gsd_part_len(&g, GSD_GLOBAL), 4);
+    }
     only("User_Prm_Data_Len = 1\nExt_User_Prm_Data_Ref(0) = 5\nExtUserPrmData = 5 \"w\"\n"
          "Unsigned16 0 0-9\nEndExtUserPrmData\n", GSD_P_PRM_LEN, 23,
          "Ext_User_Prm_Data_Ref(0) (2 octets) reaches past User_Prm_Data_Len = 1");

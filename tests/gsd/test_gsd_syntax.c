@@ -67,6 +67,15 @@ static void test_case_comments_continuation(void)
     CHECK_EQ(g.lines, 14);
 }
 
+/* A UTF-8 byte order mark before the first line is no text before the header. */
+static void test_byte_order_mark(void)
+{
+    CHECK_EQ(parse_str("\xEF\xBB\xBF#Profibus_DP\nIdent_Number = 7\n"), 0);
+    CHECK_EQ(g.key[GSD_K_IDENT_NUMBER], 7);
+    CHECK_EQ(parse_str("#Profibus_DP\n\xEF\xBB\xBFIdent_Number = 7\n"), -1);
+    CHECK_STR(err, "line 2: expected a keyword, found '\xEF\xBB\xBFIdent_Number = 7'");
+}
+
 /* Anything after another #section is not DP's and is not read. */
 static void test_other_section(void)
 {
@@ -314,6 +323,7 @@ int main(int argc, char **argv)
     }
     bad_dir = argv[1];
     RUN_TEST(test_case_comments_continuation);
+    RUN_TEST(test_byte_order_mark);
     RUN_TEST(test_other_section);
     RUN_TEST(test_user_prm);
     RUN_TEST(test_prm_put);

@@ -211,13 +211,9 @@ static void check_refs(const gsd_t *g, sink_t *s, int module)
 static void check_lengths(const gsd_t *g, sink_t *s)
 {
     uint32_t len, max;
+    /* Without User_Prm_Data_Len the octets defined give the length (vendors' files rely on
+     * it): only a length given can be too short or too long. */
     bool has_len = gsd_key(g, GSD_K_USER_PRM_DATA_LEN, &len);
-    bool any_global = g->user_prm_written != 0u;
-    for (size_t i = 0; i < g->n_refs; i++) any_global |= g->refs[i].module == GSD_GLOBAL;
-    if (!has_len && any_global) {
-        add(s, GSD_P_PRM_LEN, 0, "user parameter octets are defined but User_Prm_Data_Len is "
-            "missing");
-    }
     if (has_len && gsd_key(g, GSD_K_MAX_USER_PRM_DATA_LEN, &max) && len > max) {
         add(s, GSD_P_PRM_LEN, g->key_line[GSD_K_USER_PRM_DATA_LEN],
             "User_Prm_Data_Len = %u is more than Max_User_Prm_Data_Len = %u", (unsigned)len,

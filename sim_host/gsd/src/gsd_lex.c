@@ -82,6 +82,11 @@ static bool feed_line(gsd_parser_t *p, const char *s, size_t len, uint32_t line)
 {
     p->last_line = line;
     p->g->lines = line;
+    /* a UTF-8 byte order mark, as some editors write one */
+    if (line == 1u && len >= 3u && memcmp(s, "\xEF\xBB\xBF", 3) == 0) {
+        s += 3;
+        len -= 3u;
+    }
     if (memchr(s, '\0', len) != NULL) {
         return gsd_fail(p, line, "a NUL character: not a text file");
     }

@@ -152,8 +152,8 @@ static size_t part_extent(const gsd_t *g, int module)
     size_t end = 0;
     for (size_t i = 0; i < g->n_refs; i++) {
         const gsd_ref_t *r = &g->refs[i];
-        const gsd_prm_def_t *d = gsd_find_def(g, r->number);
         if (r->module != module) continue;
+        const gsd_prm_def_t *d = gsd_find_def(g, r->number);
         size_t e = (size_t)r->offset + (d != NULL ? gsd_def_octets(d) : 1u);
         if (e > end) end = e;
     }
