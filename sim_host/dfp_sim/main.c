@@ -56,7 +56,8 @@ static const struct {
     {"demo", cmd_demo},         {"slave", cmd_slave},     {"master", cmd_master},
     {"check-cfg", cmd_check_cfg}, {"inverter", cmd_inverter}, {"param", cmd_param},
     {"convert", cmd_convert},   {"replay", cmd_replay},   {"record", cmd_record},
-    {"line", cmd_line},         {"gsd", cmd_gsd},
+    {"line", cmd_line},
+    {"monitor", cmd_monitor},   {"gsd", cmd_gsd},
 };
 
 static bool is_one_of(const char *arg, const char *a, const char *b, const char *c)

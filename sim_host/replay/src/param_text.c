@@ -191,3 +191,13 @@ size_t replay_param_text(const uint8_t *f, size_t len, const replay_dx_layout_t 
     }
     return n;
 }
+
+size_t replay_channel_text(const uint8_t *m, bool reply, char *out, size_t max)
+{
+    if (max == 0u) {
+        return 0;
+    }
+    out[0] = '\0';
+    size_t n = channel_text(m, reply, out, max);
+    return n < max ? n : max - 1u;
+}

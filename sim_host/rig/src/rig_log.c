@@ -130,6 +130,9 @@ void rig_diag_text(const uint8_t *d, size_t len, char *out, size_t max)
             n += (size_t)snprintf(out + n, max - n, "%s ", st2[b]);
         }
     }
+    if ((d[DP_DIAG_STATUS_3] & DP_DIAG3_EXT_DIAG_OVERFLOW) != 0u && n < max) {
+        n += (size_t)snprintf(out + n, max - n, "Ext_Diag_Overflow ");
+    }
     if (n < max) {
         if (d[DP_DIAG_MASTER_ADD] == DP_MASTER_ADD_NONE) {
             n += (size_t)snprintf(out + n, max - n, "| no master");

@@ -1,15 +1,14 @@
 /* The monitor's receiver: characters as a port delivers them (a tty, a PTY, a port of the
- * virtual line), with the time they arrived, cut into telegrams for mon_telegram. The core's
- * collector (dp_slave/fdl_collect.h) finds the telegram ends by delimiter and LE, so a garbled
- * stream resynchronises at the next start delimiter; octets between telegrams and telegrams
- * that fail their check go to mon_garbled. */
+ * virtual line), with the time they arrived, cut into telegrams for mon_telegram. Telegram
+ * ends follow from the delimiter and LE; a garbled stream resynchronises at the next start
+ * delimiter: octets between telegrams and telegrams that fail their check go to mon_garbled,
+ * and the octets of a failed one after its first are looked at again. */
 #ifndef MONITOR_MON_CHARS_H
 #define MONITOR_MON_CHARS_H
 
 #include <stddef.h>
 #include <stdint.h>
 
-#include "dp_slave/fdl_collect.h"
 #include "dp_slave/fdl_wire.h"
 #include "monitor/monitor.h"
 
@@ -17,9 +16,9 @@
 
 typedef struct mon_chars {
     mon_t *mon;
-    fdl_collect_t coll;
-    uint8_t buf[2][FDL_FRAME_MAX];
-    uint8_t which;
+    uint8_t buf[FDL_FRAME_MAX];
+    size_t have;          /* octets of the telegram in progress so far */
+    size_t frame_len;     /* octets it has by its delimiter (and LE) */
     uint32_t char_ns;
     uint64_t first_ns;    /* the telegram in progress: its first character's arrival */
     uint8_t garble[MON_GARBLE_MAX];

@@ -24,5 +24,9 @@ typedef struct replay_param_ctx {
  * none. ctx may be NULL (a data set 47 answer is then not named); lay as for replay_describe. */
 size_t replay_param_text(const uint8_t *f, size_t len, const replay_dx_layout_t *lay,
                          replay_param_ctx_t *ctx, char *out, size_t max);
+/* The cyclic parameter channel alone: the 8 octets m that lead a Data_Exchange DU when the
+ * configuration has one (a request when reply is false). "" (returns 0) when it carries no
+ * service. The monitor names a slave's last outputs and inputs with it. */
+size_t replay_channel_text(const uint8_t *m, bool reply, char *out, size_t max);
 
 #endif

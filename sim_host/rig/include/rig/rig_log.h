@@ -56,7 +56,8 @@ bool rig_card_event_text(const dp_event_t *ev, const dfp21b_t *card, uint32_t *b
                          size_t n, rig_log_level_t *level, const char **kind);
 bool rig_master_event_text(const dp_master_event_t *ev, bool *slave_silent, char *out, size_t n,
                            rig_log_level_t *level, const char **kind);
-/* "Station_Not_Ready Prm_Req | Master_Add 2, ident 0x6003" for a Slave_Diag answer. */
+/* "Station_Not_Ready Prm_Req | Master_Add 2, ident 0x6003" for a Slave_Diag answer: the
+ * standard octets by their names (Ext_Diag_Overflow of octet 3 too), the rest in hex. */
 void rig_diag_text(const uint8_t *d, size_t len, char *out, size_t max);
 const char *rig_baud_text(uint32_t baud);
 /* PO/PI words of a DFP21B image (after the parameter channel), decoded: control word 1, speed
