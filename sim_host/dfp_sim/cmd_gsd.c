@@ -115,7 +115,8 @@ static void json_modules(const gsd_t *g)
     fputs("  \"modules\": [", stdout);
     for (size_t i = 0; i < g->n_modules; i++) {
         const gsd_module_t *m = &g->modules[i];
-        uint16_t in = 0, out = 0;
+        uint16_t in = 0;
+        uint16_t out = 0;
         bool ok = gsd_module_io(g, i, &in, &out);
         printf("%s\n    {", i == 0u ? "" : ",");
         json_key_string("name", gsd_chars(g, m->name), ", \"cfg\": \"");
@@ -275,7 +276,8 @@ static void text_modules(const gsd_t *g)
     printf("modules (%zu):\n", g->n_modules);
     for (size_t i = 0; i < g->n_modules; i++) {
         const gsd_module_t *m = &g->modules[i];
-        uint16_t in, out;
+        uint16_t in = 0;
+        uint16_t out = 0;
         printf("  \"%s\" ", gsd_chars(g, m->name));
         hex(gsd_module_cfg(g, i), m->cfg_len, " ");
         if (gsd_module_io(g, i, &in, &out)) {

@@ -9,7 +9,7 @@ int gsd_read_octets(gsd_parser_t *p, const gsd_stmt_t *st, const char **s, uint8
 {
     *n = 0;
     for (;;) {
-        int64_t v;
+        int64_t v = 0;
         if (!gsd_read_number(p, st, s, 0, 255, &v)) return 0;
         if (*n == cap) return -1;
         dst[(*n)++] = (uint8_t)v;
@@ -43,7 +43,7 @@ static gsd_module_t *open_module(gsd_parser_t *p)
 static bool prm_const(gsd_parser_t *p, const gsd_stmt_t *st, int module)
 {
     gsd_t *g = p->g;
-    int64_t off;
+    int64_t off = 0;
     if (!arg_number(p, st, 0, GSD_MAX_USER_PRM - 1, &off)) return false;
     if (!st->eq) return gsd_fail(p, st->line, "%s needs '= value'", st->kw);
     if (g->n_consts == GSD_MAX_CONSTS) {
@@ -81,7 +81,8 @@ static bool prm_const(gsd_parser_t *p, const gsd_stmt_t *st, int module)
 static bool prm_ref(gsd_parser_t *p, const gsd_stmt_t *st, int module)
 {
     gsd_t *g = p->g;
-    int64_t off, number;
+    int64_t off = 0;
+    int64_t number = 0;
     if (!arg_number(p, st, 0, GSD_MAX_USER_PRM - 1, &off)) return false;
     if (!gsd_plain_number(p, st, 0, 65535, &number)) return false;
     if (g->n_refs == GSD_MAX_REFS) {
@@ -167,7 +168,7 @@ static bool module_opener(gsd_parser_t *p, const gsd_stmt_t *st)
 static bool prmtext_opener(gsd_parser_t *p, const gsd_stmt_t *st)
 {
     gsd_t *g = p->g;
-    int64_t number;
+    int64_t number = 0;
     if (!gsd_plain_number(p, st, 0, 65535, &number)) return false;
     if (g->n_tables == GSD_MAX_TEXT_TABLES) {
         return gsd_fail(p, st->line, "more than %u PrmText (GSD_MAX_TEXT_TABLES)",
@@ -192,7 +193,7 @@ static bool extprm_opener(gsd_parser_t *p, const gsd_stmt_t *st)
     gsd_prm_def_t *d = &g->defs[g->n_defs];
     memset(d, 0, sizeof *d);
     const char *s = st->val;
-    int64_t number;
+    int64_t number = 0;
     if (!gsd_read_number(p, st, &s, 0, 65535, &number)) return false;
     if (!gsd_read_string(p, st, &s, &d->name) || !gsd_expect_end(p, st, s)) return false;
     d->number = (uint16_t)number;
@@ -277,8 +278,8 @@ static bool module_reference(gsd_parser_t *p, const gsd_stmt_t *st)
 {
     gsd_module_t *m = open_module(p);
     const char *s = st->kw;
-    int64_t v;
-    if (!gsd_read_int(&s, &v) || *s != '\0' || v < 0 || v > 0xFFFFFFFFll) {
+    int64_t v = 0;
+    if (!gsd_read_int(&s, &v) || *s != '\0' || v < 0 || v > 0xFFFFFFFFLL) {
         return gsd_fail(p, st->line, "module reference '%s' is no number 0..4294967295",
                         st->kw);
     }
@@ -294,7 +295,7 @@ static bool module_reference(gsd_parser_t *p, const gsd_stmt_t *st)
 bool gsd_module_statement(gsd_parser_t *p, const gsd_stmt_t *st)
 {
     gsd_module_t *m = open_module(p);
-    int64_t v;
+    int64_t v = 0;
     if (gsd_same(st->kw, "EndModule") && bare(st)) return end_module(p, st);
     if (st->kw[0] >= '0' && st->kw[0] <= '9' && bare(st)) return module_reference(p, st);
     if (gsd_same(st->kw, "Ext_Module_Prm_Data_Len")) {
@@ -323,7 +324,7 @@ bool gsd_prmtext_statement(gsd_parser_t *p, const gsd_stmt_t *st)
         return true;
     }
     if (!gsd_same(st->kw, "Text")) return other_in_block(p, st);
-    int64_t v;
+    int64_t v = 0;
     if (!arg_number(p, st, INT32_MIN, UINT32_MAX, &v)) return false;
     if (!st->eq) return gsd_fail(p, st->line, "Text needs '= \"text\"'");
     if (g->n_texts == GSD_MAX_TEXTS) {
@@ -343,22 +344,24 @@ bool gsd_prmtext_statement(gsd_parser_t *p, const gsd_stmt_t *st)
 static const struct {
     const char *name;
     gsd_type_t type;
-    int64_t lo, hi;
+    int64_t lo;
+    int64_t hi;
 } types[] = {
     {"Bit", GSD_T_BIT, 0, 1},
     {"BitArea", GSD_T_BIT_AREA, 0, 255},
     {"Unsigned8", GSD_T_UNSIGNED8, 0, 255},
     {"Unsigned16", GSD_T_UNSIGNED16, 0, 65535},
-    {"Unsigned32", GSD_T_UNSIGNED32, 0, 4294967295ll},
+    {"Unsigned32", GSD_T_UNSIGNED32, 0, 4294967295LL},
     {"Signed8", GSD_T_SIGNED8, -128, 127},
     {"Signed16", GSD_T_SIGNED16, -32768, 32767},
-    {"Signed32", GSD_T_SIGNED32, -2147483648ll, 2147483647ll},
+    {"Signed32", GSD_T_SIGNED32, -2147483648LL, 2147483647LL},
 };
 
 /* Bit(n): n 0..7; BitArea(a-b): 0 <= a <= b <= 7. */
 static bool bit_position(gsd_parser_t *p, const gsd_stmt_t *st, gsd_prm_def_t *d)
 {
-    int64_t a, b;
+    int64_t a = 0;
+    int64_t b = 0;
     if (d->type == GSD_T_BIT) {
         if (!arg_number(p, st, 0, 7, &a)) return false;
         d->bit_first = d->bit_last = (uint8_t)a;
@@ -386,7 +389,7 @@ static bool type_values(gsd_parser_t *p, const gsd_stmt_t *st, gsd_prm_def_t *d,
 {
     gsd_t *g = p->g;
     const char *s = st->val;
-    int64_t v;
+    int64_t v = 0;
     if (!gsd_read_number(p, st, &s, lo, hi, &d->def)) return false;
     if (*s == '\0') {
         return gsd_fail(p, st->line, "%s: a default needs its allowed values after it", st->kw);
@@ -447,7 +450,7 @@ static gsd_outcome_t type_line(gsd_parser_t *p, const gsd_stmt_t *st, gsd_prm_de
 bool gsd_extprm_statement(gsd_parser_t *p, const gsd_stmt_t *st)
 {
     gsd_prm_def_t *d = &p->g->defs[p->g->n_defs - 1u];
-    int64_t v;
+    int64_t v = 0;
     if (gsd_same(st->kw, "EndExtUserPrmData") && bare(st)) {
         if (d->type == GSD_T_NONE) {
             return gsd_fail(p, p->block_line, "ExtUserPrmData %u has no data type line "

@@ -108,7 +108,8 @@ static void check_module(const gsd_t *g, sink_t *s, size_t i)
 {
     const gsd_module_t *m = &g->modules[i];
     const char *name = gsd_chars(g, m->name);
-    uint16_t in, out;
+    uint16_t in = 0;
+    uint16_t out = 0;
     uint32_t max;
     if (!gsd_module_io(g, i, &in, &out)) {
         add(s, GSD_P_MODULE, m->line, "module \"%s\": its identifiers are malformed (a length "
@@ -210,7 +211,8 @@ static void check_refs(const gsd_t *g, sink_t *s, int module)
 
 static void check_lengths(const gsd_t *g, sink_t *s)
 {
-    uint32_t len, max;
+    uint32_t len = 0;
+    uint32_t max = 0;
     /* Without User_Prm_Data_Len the octets defined give the length (vendors' files rely on
      * it): only a length given can be too short or too long. */
     bool has_len = gsd_key(g, GSD_K_USER_PRM_DATA_LEN, &len);
@@ -302,7 +304,8 @@ static void check_dpv1(const gsd_t *g, sink_t *s)
             "3 or later (it is %u)", (unsigned)rev);
     }
     static const struct {
-        gsd_key_t supp, needs;
+        gsd_key_t supp;
+        gsd_key_t needs;
     } needs[] = {
         {GSD_K_C1_READ_WRITE_SUPP, GSD_K_C1_MAX_DATA_LEN},
         {GSD_K_C2_READ_WRITE_SUPP, GSD_K_C2_MAX_DATA_LEN},

@@ -58,12 +58,12 @@ bool gsd_finish(gsd_parser_t *p);
 void gsd_skip_blanks(const char **s);
 bool gsd_read_int(const char **s, int64_t *v);
 bool gsd_same(const char *a, const char *b); /* ASCII case-insensitive equality */
+char gsd_lower(char c);                      /* ASCII only: no locale */
 
 typedef enum gsd_outcome { GSD_NOT_MINE = 0, GSD_DONE, GSD_FAILED } gsd_outcome_t;
 
 void gsd_note(gsd_parser_t *p, gsd_note_kind_t kind, const char *kw, uint32_t line,
               uint32_t first_line);
-const char *gsd_key_name(gsd_key_t k);
 bool gsd_expect_end(gsd_parser_t *p, const gsd_stmt_t *st, const char *s);
 /* A number in lo..hi at *s. */
 bool gsd_read_number(gsd_parser_t *p, const gsd_stmt_t *st, const char **s, int64_t lo,

@@ -5,9 +5,15 @@
 
 #include "gsd_internal.h"
 
+char gsd_lower(char c)
+{
+    if (c < 'A' || c > 'Z') return c;
+    return (char)(unsigned char)((unsigned char)c + ('a' - 'A'));
+}
+
 static char lower(char c)
 {
-    return (c >= 'A' && c <= 'Z') ? (char)(c - 'A' + 'a') : c;
+    return gsd_lower(c);
 }
 
 bool gsd_same(const char *a, const char *b)
@@ -204,7 +210,7 @@ static bool number_keyword(gsd_parser_t *p, const gsd_stmt_t *st, const num_keyw
                                  [KV_FAMILY] = 255};
     if (!st->eq) return gsd_fail(p, st->line, "%s needs '= value'", st->kw);
     const char *s = st->val;
-    int64_t v;
+    int64_t v = 0;
     if (!gsd_read_number(p, st, &s, 0, hi[k->kind], &v)) return false;
     /* Slave_Family = 1@TdF@... : the sub-families after '@' are for configurators' menus */
     if (!(k->kind == KV_FAMILY && *s == '@') && !gsd_expect_end(p, st, s)) return false;
@@ -253,7 +259,7 @@ static bool string_keyword(gsd_parser_t *p, const gsd_stmt_t *st, gsd_str_key_t 
 {
     if (!st->eq) return gsd_fail(p, st->line, "%s needs '= value'", st->kw);
     const char *s = st->val;
-    uint32_t off;
+    uint32_t off = 0;
     if (!gsd_read_string(p, st, &s, &off) || !gsd_expect_end(p, st, s)) return false;
     gsd_t *g = p->g;
     if (g->str_line[k] != 0u) gsd_note(p, GSD_NOTE_REPEATED, st->kw, st->line, g->str_line[k]);
@@ -277,7 +283,7 @@ static gsd_outcome_t rate_keyword(gsd_parser_t *p, const gsd_stmt_t *st)
             (void)snprintf(name, sizeof name, "%s%s", tsdr_prefix, gsd_rate_name(i));
             if (!gsd_same(st->kw, name)) continue;
         }
-        int64_t v;
+        int64_t v = 0;
         if (!gsd_plain_number(p, st, 0, supp ? 1 : 65535, &v)) return GSD_FAILED;
         uint32_t *line = supp ? &r->supp_line : &r->tsdr_line;
         if (*line != 0u) gsd_note(p, GSD_NOTE_REPEATED, st->kw, st->line, *line);

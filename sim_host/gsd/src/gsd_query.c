@@ -4,6 +4,7 @@
 
 #include "dp_slave/dp_cfg.h"
 #include "gsd/gsd.h"
+#include "gsd_internal.h"
 
 static const struct {
     const char *name;
@@ -73,23 +74,13 @@ bool gsd_module_io(const gsd_t *g, size_t module, uint16_t *in_len, uint16_t *ou
     return dp_cfg_io_lengths(g->cfg + m->cfg_first, m->cfg_len, out_len, in_len);
 }
 
-static bool same_ignoring_case(const char *a, const char *b)
-{
-    for (; *a != '\0' && *b != '\0'; a++, b++) {
-        char x = (*a >= 'A' && *a <= 'Z') ? (char)(*a + 32) : *a;
-        char y = (*b >= 'A' && *b <= 'Z') ? (char)(*b + 32) : *b;
-        if (x != y) return false;
-    }
-    return *a == *b;
-}
-
 int gsd_find_module(const gsd_t *g, const char *name)
 {
     for (size_t i = 0; i < g->n_modules; i++) {
         if (strcmp(gsd_chars(g, g->modules[i].name), name) == 0) return (int)i;
     }
     for (size_t i = 0; i < g->n_modules; i++) {
-        if (same_ignoring_case(gsd_chars(g, g->modules[i].name), name)) return (int)i;
+        if (gsd_same(gsd_chars(g, g->modules[i].name), name)) return (int)i;
     }
     return -1;
 }
