@@ -209,6 +209,18 @@ static const help_cmd_t commands[] = {
      "(flushed every second; link type PROFIBUS_DL, ns times). docs/monitor.md",
      NOTE_RATE | NOTE_SEGMENT},
     {"check-cfg", "HEX", "would the card accept this Chk_Cfg configuration?", 0u},
+    {"gsd", "FILE [--json] [--module NAME]...",
+     "what a GSD file says: ident, lengths, the rates with their MaxTsdr, the modules\n"
+     "with their config octets and I/O lengths, the user parameters a master sends by\n"
+     "default with each ExtUserPrmData (type, default, allowed values), the DP-V1 keys,\n"
+     "keywords ignored; then the consistency problems with their lines (a supported rate\n"
+     "without MaxTsdr, a module beyond Max_Input_Len, a default outside its range, DP-V1\n"
+     "keys without DPV1_Slave ...). --module NAME (repeatable, up to 32): the user\n"
+     "parameters with these modules configured, in this order (their own parameter\n"
+     "octets follow the global ones). --json: the same as one JSON object. Exit 0 when\n"
+     "consistent, 1 with problems, 2 for a file that cannot be read or parsed (the error\n"
+     "names its line). sim_host/gsd/README.md",
+     0u},
 };
 
 static const help_note_t notes[] = {
@@ -279,16 +291,17 @@ static const help_item_t exit_codes[] = {
     {"0", "success; also a slave, inverter or master --cycles 0 stopped by SIGINT/SIGTERM, and\n"
           "help and --version"},
     {"1", "failure at run time: a negative or missing answer (param, master, demo), a refused\n"
-          "configuration (check-cfg), a difference or a damaged capture (replay --check,\n"
-          "convert), a device or an output file that cannot be opened or written, results\n"
-          "that could not be written to standard output"},
+          "configuration (check-cfg), an inconsistent GSD file (gsd), a difference or a\n"
+          "damaged capture (replay --check, convert), a device or an output file that cannot\n"
+          "be opened or written, results that could not be written to standard output"},
     {"2", "bad command line: unknown command or option, bad or missing value, unknown PARAM;\n"
-          "an input file that cannot be read or is not a capture (convert, replay), a\n"
-          "--eeprom or --card-nvm path that is no regular file or in no writable directory,\n"
-          "two files of the command line that are one (--capture and --eeprom, FILE and\n"
-          "--report ...), a --pty path that is no symbolic link; an --eeprom or --card-nvm\n"
-          "file in use by another process, a --http port that is taken, a bad token, a\n"
-          "bad --http-cert or --http-key file, --http-no-auth off loopback"},
+          "an input file that cannot be read or is not a capture (convert, replay) or no\n"
+          "GSD file (gsd), a --eeprom or --card-nvm path that is no regular file or in no\n"
+          "writable directory, two files of the command line that are one (--capture and\n"
+          "--eeprom, FILE and --report ...), a --pty path that is no symbolic link; an\n"
+          "--eeprom or --card-nvm file in use by another process, a --http port that is\n"
+          "taken, a bad token, a bad --http-cert or --http-key file, --http-no-auth off\n"
+          "loopback"},
 };
 
 static const help_item_t environment[] = {
