@@ -69,6 +69,8 @@ static const cli_opt_t monitor_options[] = {
     {CLI_OPT("--max-missing", "N", CLI_U32, MONITOR_OPT(max_missing)), .min = 0,
      .max = UINT32_MAX},
     {CLI_OPT("--pcapng", "FILE", CLI_TEXT, MONITOR_OPT(pcapng))},
+    {CLI_OPT("--gsd", "FILE", CLI_LIST, MONITOR_OPT(gsd)), .aux = MONITOR_OPT(n_gsd),
+     .max = MON_MAX_GSD},
 };
 
 static bool monitor_operand(void *opts, const char *word)

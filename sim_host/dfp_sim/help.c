@@ -187,7 +187,8 @@ static const help_cmd_t commands[] = {
     {"monitor",
      "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] [--key FILE]|FILE [--baud RATE]\n"
      "[--timing] [--tsl BITS] [--ttr BITS] [--seconds S] [--view top|log|none] [--report json|junit FILE]...\n"
-     "[--expect N|N-M,...] [--max-repeats N] [--max-missing N] [--pcapng FILE]",
+     "[--expect N|N-M,...] [--max-repeats N] [--max-missing N] [--gsd FILE]...\n"
+     "[--pcapng FILE]",
      "a bus monitor: a station that only listens, on a tty or PTY (a USB adapter, a\n"
      "port of dfp-sim line), an LCM segment, or a capture FILE (offline). It keeps the\n"
      "live list: every station heard, active (in the token ring) or passive; for a DP\n"
@@ -199,7 +200,8 @@ static const help_cmd_t commands[] = {
      "default on a terminal), log: one line per event (the default otherwise), none.\n"
      "--baud: the line's rate (default 1.5M); --timing: the times are the line's own\n"
      "(dfp-sim line --timing, a capture of the simulated bus), so station delays are\n"
-     "judged; --tsl, --ttr: the slot and target rotation times in bit times (default:\n"
+     "judged (against the MaxTsdr at --baud of the --gsd FILE whose Ident_Number the\n"
+     "slave has; up to 16 files); --tsl, --ttr: the slot and target rotation times in bit times (default:\n"
      "the DP profile's slot time, rotations not judged). --seconds: stop after S\n"
      "(else at SIGINT/SIGTERM or the FILE's end). At the end a summary; --report json\n"
      "the whole live list, --report junit one case per check: every DP slave in\n"

@@ -3,10 +3,12 @@
 
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #include "cli.h"
+#include "gsd/gsd.h"
 #include "lcm_bridge/lcm_segment.h"
 #include "monitor/mon_report.h"
 #include "sim_hal/path.h"
@@ -205,6 +207,42 @@ static int finish(const mon_cmd_t *c)
     return written && mon_report_ok(&c->mon, &ropt) ? 0 : 1;
 }
 
+/* --gsd FILE...: each file's ident and its MaxTsdr at the line's rate into cfg. False after
+ * saying which file is unreadable or does not list the rate. */
+static bool read_gsd(const mon_cmd_opts_t *o, mon_cfg_t *cfg)
+{
+    if (o->n_gsd == 0u) {
+        return true;
+    }
+    gsd_t *g = malloc(sizeof *g); /* a quarter of a megabyte: not on the stack */
+    if (g == NULL) {
+        fprintf(stderr, "monitor: out of memory\n");
+        return false;
+    }
+    bool ok = true;
+    for (size_t k = 0; k < o->n_gsd && ok; k++) {
+        char err[600];
+        uint32_t ident = 0;
+        if (gsd_parse_file(o->gsd[k], g, err, sizeof err) != 0) {
+            fprintf(stderr, "monitor: --gsd %s\n", err);
+            ok = false;
+        } else if (!gsd_key(g, GSD_K_IDENT_NUMBER, &ident)) {
+            fprintf(stderr, "monitor: --gsd %s: no Ident_Number\n", o->gsd[k]);
+            ok = false;
+        } else if (gsd_max_tsdr_bits(g, o->baud) == 0u) {
+            fprintf(stderr, "monitor: --gsd %s: the slave does not support %u bit/s (no "
+                    "MaxTsdr for it)\n", o->gsd[k], o->baud);
+            ok = false;
+        } else {
+            cfg->gsd[cfg->n_gsd].ident = (uint16_t)ident;
+            cfg->gsd[cfg->n_gsd].max_tsdr_bits = gsd_max_tsdr_bits(g, o->baud);
+            cfg->n_gsd++;
+        }
+    }
+    free(g);
+    return ok;
+}
+
 int mon_cmd_run(mon_cmd_t *c, const mon_cmd_opts_t *o)
 {
     memset(c, 0, sizeof *c);
@@ -212,6 +250,9 @@ int mon_cmd_run(mon_cmd_t *c, const mon_cmd_opts_t *o)
     mon_cfg_t cfg = {.baud = o->baud, .timing = o->timing, .tsl_bits = o->tsl_bits,
                      .ttr_bits = o->ttr_bits, .on_event = on_event, .on_frame = on_frame,
                      .ctx = c};
+    if (!read_gsd(o, &cfg)) {
+        return EXIT_USAGE;
+    }
     mon_init(&c->mon, &cfg);
     int rc = 0;
     if (!open_pcapng(c, o->file != NULL ? o->file : (o->med.dev != NULL ? o->med.dev : o->med.bus))) {

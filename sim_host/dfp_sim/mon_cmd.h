@@ -45,6 +45,8 @@ typedef struct mon_cmd_opts {
     uint32_t max_repeats;
     uint32_t max_missing;
     const char *pcapng;
+    const char *gsd[MON_MAX_GSD];
+    size_t n_gsd;
 } mon_cmd_opts_t;
 
 typedef struct mon_cmd {

@@ -42,6 +42,14 @@ expect_in "JUnit: slave 4's case" 'classname="dfp-sim monitor" name="4 data exch
 expect_exit 0 "the pcapng record read back" -- "$sim" monitor "$tmp/r.pcapng" --timing --report json "$tmp/p.json"
 same=$(json "$tmp/p.json" "d['line']['telegrams']")
 expect_in "the pcapng record has every telegram" "$(json "$tmp/r.json" "d['line']['telegrams']")" "$same"
+# --gsd: the card's GSD gives the MaxTsdr at 1.5 Mbit/s its answers are judged against.
+gsd="$here/../../firmware/gsd/SEW_6003.GSD"
+want=$(sed -n 's/^MaxTsdr_1\.5M *= *\([0-9]*\).*/\1/Ip' "$gsd" | head -1)
+expect_exit 0 "--gsd" -- "$sim" monitor "$tmp/r.pcap" --timing --gsd "$gsd" --report json "$tmp/g.json"
+expect_in "--gsd: slave 4's max TSDR is the GSD's ($want)" "$want 0" \
+  "$(json "$tmp/g.json" "' '.join(str(x) for x in (($(station 4))['dp']['max_tsdr_bits'], ($(station 4))['tsdr_over_max']))")"
+expect_exit 2 "--gsd: a missing file" -- "$sim" monitor "$tmp/r.pcap" --gsd "$tmp/none.gsd"
+expect_in "--gsd: a missing file: the message" "monitor: --gsd $tmp/none.gsd" "$out"
 # A slave that is expected but never heard fails the check: exit 1, the case says so.
 expect_exit 1 "--expect 9 (never heard)" -- "$sim" monitor "$tmp/r.pcap" --expect 9 --report junit "$tmp/e.xml"
 expect_in "JUnit: 9 never heard" 'classname="dfp-sim monitor" name="9 data exchange"' "$(cat "$tmp/e.xml")"

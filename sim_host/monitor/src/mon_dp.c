@@ -51,6 +51,19 @@ static void set_master(mon_t *m, uint8_t a, uint8_t master, uint64_t t_ns)
     }
 }
 
+/* The slave's ident, from its Set_Prm or diagnosis, and the max TSDR its GSD gives. */
+static void set_ident(mon_t *m, uint8_t a, uint16_t ident)
+{
+    mon_station_t *s = &m->st[a];
+    s->ident_known = true;
+    s->ident = ident;
+    for (size_t k = 0; k < m->cfg.n_gsd && k < MON_MAX_GSD; k++) {
+        if (m->cfg.gsd[k].ident == ident) {
+            s->max_tsdr_bits = m->cfg.gsd[k].max_tsdr_bits;
+        }
+    }
+}
+
 static bool positive(const fdl_msg_t *rsp)
 {
     if (rsp == NULL) {
@@ -128,9 +141,9 @@ static void set_prm(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
     const uint8_t *p = m->pend_du;
     copy_du(s->prm, &s->prm_len, p, m->pend_du_len, MON_PRM_MAX);
     if (m->pend_du_len >= DP_PRM_LEN_STANDARD) {
-        s->min_tsdr_bits = p[DP_PRM_MIN_TSDR] != 0u ? p[DP_PRM_MIN_TSDR] : FDL_MIN_TSDR_DEFAULT_BITS;
-        s->ident_known = true;
-        s->ident = (uint16_t)((p[DP_PRM_IDENT_HIGH] << 8) | p[DP_PRM_IDENT_LOW]);
+        s->min_tsdr_bits =
+            p[DP_PRM_MIN_TSDR] != 0u ? p[DP_PRM_MIN_TSDR] : FDL_MIN_TSDR_DEFAULT_BITS;
+        set_ident(m, a, (uint16_t)((p[DP_PRM_IDENT_HIGH] << 8) | p[DP_PRM_IDENT_LOW]));
         uint32_t base = DP_WD_BASE_MS;
         if (m->pend_du_len >= DP_PRM_LEN_DPV1 &&
             (p[DP_PRM_DPV1_STATUS_1] & DP_DPV1_1_WD_BASE_1MS) != 0u) {
@@ -193,8 +206,7 @@ static void slave_diag(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
     bool changed = n != s->diag_len || memcmp(d, s->diag, n) != 0;
     diag_events(m, a, d, n, changed, t_ns);
     copy_du(s->diag, &s->diag_len, d, n, MON_DIAG_MAX);
-    s->ident_known = true;
-    s->ident = (uint16_t)((d[DP_DIAG_IDENT_HIGH] << 8) | d[DP_DIAG_IDENT_LOW]);
+    set_ident(m, a, (uint16_t)((d[DP_DIAG_IDENT_HIGH] << 8) | d[DP_DIAG_IDENT_LOW]));
     set_master(m, a, d[DP_DIAG_MASTER_ADD], t_ns);
     uint8_t b1 = d[DP_DIAG_STATUS_1];
     if ((d[DP_DIAG_STATUS_2] & DP_DIAG2_PRM_REQ) != 0u) {

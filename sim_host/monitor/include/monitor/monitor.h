@@ -25,7 +25,8 @@
 #define MON_CFG_MAX 244u
 #define MON_DIAG_MAX 244u
 #define MON_IO_MAX 244u
-#define MON_NO_MASTER 255u    /* a slave's master as its diagnosis says: none */
+#define MON_NO_MASTER 255u
+#define MON_MAX_GSD 16u       /* GSD files (one per ident) the caller may give */    /* a slave's master as its diagnosis says: none */
 /* A DP slave whose master gets this many requests in a row unanswered is taken as gone. */
 #define MON_MISSING_IN_A_ROW 3u
 
@@ -204,6 +205,13 @@ typedef struct mon_cfg {
     /* How long after a request's end its answer may still come (0: the slot time when
      * timing, else 200 ms). A live source sets it: the kernel and adapters deliver late. */
     uint64_t answer_wait_ns;
+    /* The max TSDR the GSD files give for the line's rate, by ident: a slave whose ident
+     * becomes known gets it as max_tsdr_bits. */
+    struct {
+        uint16_t ident;
+        uint32_t max_tsdr_bits;
+    } gsd[MON_MAX_GSD];
+    size_t n_gsd;
     /* Repeats to one slave within one second that make a retry storm (0: 10). */
     uint32_t storm_repeats;
     /* Called for every event as it happens (may be NULL). */
