@@ -87,7 +87,11 @@ void mon_live_publish(mon_live_t *l, uint64_t now_ns)
     if (b.overflow != 0) {
         /* The clients keep the last whole document rather than a cut one. */
         rig_doc_abandon(&l->doc);
-        l->doc.too_large++;
+        if (l->doc.too_large++ == 0u) {
+            rig_ctl_event(l->ctl, now_ns / 1000u, RIG_LOG_WARN, "sim", "bus",
+                          "the bus monitor's document is over 1 MiB: GET /api/v1/bus keeps the "
+                          "last one that fitted");
+        }
         return;
     }
     rig_doc_commit(&l->doc, b.len);

@@ -4,8 +4,8 @@
  * GET /api/v1/bus) every MON_LIVE_PUBLISH_NS through a rig_doc_t that HTTP threads copy.
  *
  * Everything runs in the rig's loop thread: the tap, mon_live_service. Nothing here waits on a
- * client. Large (the monitor and RIG_DOC_BUFS documents of RIG_DOC_CAP, about 2.3 MB): static
- * or heap storage, never on a thread's stack. */
+ * client. Large (the monitor, 285 KB, and RIG_DOC_BUFS documents of RIG_DOC_CAP: 4.5 MB):
+ * static or heap storage, never on a thread's stack. */
 #ifndef MONITOR_MON_LIVE_H
 #define MONITOR_MON_LIVE_H
 

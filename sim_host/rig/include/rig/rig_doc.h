@@ -15,10 +15,12 @@
 #include <stdint.h>
 
 #define RIG_DOC_BUFS 4u /* the current one, the one being filled, two being read */
-/* The monitor's JSON with all 126 slaves' details is 2..3 KB per station (cfg, prm, diag and
- * I/O in hex, the DFP21B's names, the figures), about 380 KB in all: room for that and its
- * events. */
-#define RIG_DOC_CAP (512u * 1024u)
+/* The monitor's JSON is 2..3 KB per DP slave as lines have them (cfg, prm, diag and I/O in hex,
+ * the DFP21B's names, the figures), about 380 KB for 126 slaves; a slave whose Set_Prm, Chk_Cfg,
+ * diagnosis, outputs and inputs all have their 244 octets takes 4.2 KB, 540 KB for 128
+ * stations. A buffer has room for that and the events. Pages only count once written: a line
+ * of a few stations keeps a few KB of each resident. */
+#define RIG_DOC_CAP (1024u * 1024u)
 #define RIG_DOC_WRITER 0x80000000u /* in use[i]: the loop is filling that buffer */
 
 typedef struct rig_doc {
