@@ -184,6 +184,30 @@ static const help_cmd_t commands[] = {
      "collisions.\n"
      "sim_host/line/README.md",
      NOTE_RATE | NOTE_CAPTURE | NOTE_BUS},
+    {"monitor",
+     "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] [--key FILE]|FILE [--baud RATE]\n"
+     "[--timing] [--tsl BITS] [--ttr BITS] [--seconds S] [--view top|log|none] [--report json|junit FILE]...\n"
+     "[--expect N|N-M,...] [--max-repeats N] [--max-missing N] [--pcapng FILE]",
+     "a bus monitor: a station that only listens, on a tty or PTY (a USB adapter, a\n"
+     "port of dfp-sim line), an LCM segment, or a capture FILE (offline). It keeps the\n"
+     "live list: every station heard, active (in the token ring) or passive; for a DP\n"
+     "slave its master, ident, DP state (Wait_Prm, Wait_Cfg, Data_Exch), configuration,\n"
+     "parameters and diagnosis; per station requests, FCB repeats, missing answers,\n"
+     "RS/RR/UE, garbled telegrams, Data_Exchange cycle and token rotation times; and\n"
+     "the events (a slave leaving data exchange, a new station, the ring, Stat_Diag, a\n"
+     "retry storm, a lost token, a late answer). --view top: a full-screen view (the\n"
+     "default on a terminal), log: one line per event (the default otherwise), none.\n"
+     "--baud: the line's rate (default 1.5M); --timing: the times are the line's own\n"
+     "(dfp-sim line --timing, a capture of the simulated bus), so station delays are\n"
+     "judged; --tsl, --ttr: the slot and target rotation times in bit times (default:\n"
+     "the DP profile's slot time, rotations not judged). --seconds: stop after S\n"
+     "(else at SIGINT/SIGTERM or the FILE's end). At the end a summary; --report json\n"
+     "the whole live list, --report junit one case per check: every DP slave in\n"
+     "Data_Exch (and each --expect N heard), at most --max-repeats N repeats and\n"
+     "--max-missing N missing answers per slave. Exit 1 when a check fails. --pcapng:\n"
+     "every telegram and garbled run (commented \"garbled\") into FILE as it goes\n"
+     "(flushed every second; link type PROFIBUS_DL, ns times). docs/monitor.md",
+     NOTE_RATE | NOTE_SEGMENT},
     {"check-cfg", "HEX", "would the card accept this Chk_Cfg configuration?", 0u},
 };
 

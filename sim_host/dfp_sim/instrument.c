@@ -153,7 +153,7 @@ static const char *medium_name(const rig_t *r, char *buf, size_t n)
 /* Without a monitor the API answers GET /api/v1/bus with 404 and the rest works as before. */
 static void attach_monitor(instrument_t *in, rig_t *r)
 {
-    mon_live_t *l = malloc(sizeof *l);
+    mon_rig_t *l = malloc(sizeof *l);
     if (l == NULL) {
         rig_log(&in->log, RIG_LOG_WARN, "sim", "action", "no memory for the bus monitor: "
                 "GET /api/v1/bus answers 404");
@@ -163,8 +163,8 @@ static void attach_monitor(instrument_t *in, rig_t *r)
     mon_cfg_t cfg = {.baud = r->has_master ? r->master.cfg.baud : r->cfg.baud,
                      .timing = r->cfg.medium == RIG_MEDIUM_MEMBUS};
     char buf[96];
-    mon_live_init(l, &in->ctl, &cfg, medium_name(r, buf, sizeof buf));
-    rig_tap_t tap = mon_live_tap(l);
+    mon_rig_init(l, &in->ctl, &cfg, medium_name(r, buf, sizeof buf), rig_elapsed_ns(r));
+    rig_tap_t tap = mon_rig_tap(l);
     if (rig_add_tap(r, &tap) != 0) {
         in->ctl.bus = NULL;
         free(l);
@@ -173,7 +173,7 @@ static void attach_monitor(instrument_t *in, rig_t *r)
         return;
     }
     in->mon = l;
-    mon_live_publish(l, rig_elapsed_ns(r));
+    mon_rig_publish(l, rig_elapsed_ns(r));
 }
 
 /* Starts the server itself; 0, or EXIT_USAGE after reporting. */
@@ -289,7 +289,7 @@ void instrument_service(instrument_t *in)
 {
     if (in->ctl_on) {
         if (in->mon != NULL) {
-            mon_live_service(in->mon, rig_elapsed_ns(in->ctl.rig));
+            mon_rig_service(in->mon, rig_elapsed_ns(in->ctl.rig));
         }
         rig_ctl_service(&in->ctl, PUBLISH_EVERY_NS);
         pass_on_api_events(in);

@@ -8,7 +8,7 @@
 
 #include "cli_table.h"
 #include "http/http_server.h"
-#include "monitor/mon_live.h"
+#include "monitor/mon_rig.h"
 #include "rig/rig_ctl.h"
 #include "rig/rig_log.h"
 
@@ -51,7 +51,7 @@ typedef struct instrument {
     /* With --http: the bus monitor of the rig's line (GET /api/v1/bus, the panel's bus page,
      * log kind "bus"). On the heap, and kept until the process ends: the rig's tap points
      * at it as long as the rig runs. NULL: none (out of memory, or no tap left). */
-    mon_live_t *mon;
+    mon_rig_t *mon;
     rig_ctl_event_t batch[INSTRUMENT_EVENT_BATCH];
 } instrument_t;
 
@@ -69,7 +69,7 @@ void instrument_attach_log(instrument_t *in, rig_t *r, const instrument_opts_t *
 int instrument_start_http(instrument_t *in, rig_t *r, const instrument_opts_t *o,
                           const char *mode, bool read_only);
 /* From the loop: carries out queued actions, publishes the state (and the bus monitor's
- * document every MON_LIVE_PUBLISH_NS), and prints the API's own
+ * document every MON_RIG_PUBLISH_NS), and prints the API's own
  * events (source "http": the audit of each action, a connection closed by a limit) on the
  * terminal log and hands them to api_event. */
 void instrument_service(instrument_t *in);

@@ -57,6 +57,7 @@ static const struct {
     {"check-cfg", cmd_check_cfg}, {"inverter", cmd_inverter}, {"param", cmd_param},
     {"convert", cmd_convert},   {"replay", cmd_replay},   {"record", cmd_record},
     {"line", cmd_line},
+    {"monitor", cmd_monitor},
 };
 
 static bool is_one_of(const char *arg, const char *a, const char *b, const char *c)

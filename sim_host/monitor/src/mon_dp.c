@@ -3,7 +3,8 @@
  *
  * The state follows the services the slave accepted: a positive answer to Set_Prm puts it in
  * Wait_Cfg, a diagnosis that asks for parameters (Prm_Req) or reports a fault in Wait_Prm, a
- * diagnosis without Station_Not_Ready or a Data_Exchange answered with data in Data_Exch.
+ * diagnosis without Station_Not_Ready and without Stat_Diag, or a Data_Exchange answered with
+ * data, in Data_Exch.
  * A Set_Prm from another master while the slave exchanges data is refused by a locked slave
  * even where its FDL layer acknowledges it, so it changes nothing here either. */
 #include <stdio.h>
@@ -33,16 +34,20 @@ static void set_state(mon_t *m, uint8_t a, mon_dp_state_t to, uint64_t t_ns, con
 static void set_master(mon_t *m, uint8_t a, uint8_t master, uint64_t t_ns)
 {
     mon_station_t *s = &m->st[a];
-    if (s->master == master) {
+    s->master = master;
+    /* A slave between two parameterisations says "no master" in its diagnosis; only a new
+     * owner is worth an event. */
+    if (master == MON_NO_MASTER || master == s->owner) {
         return;
     }
-    s->master = master;
-    if (master == MON_NO_MASTER) {
-        mon_emit(m, t_ns, MON_EV_MASTER_CHANGE, MON_LEVEL_INFO, a, master, 0,
-                 "slave %u has no master", a);
-    } else {
+    uint8_t before = s->owner;
+    s->owner = master;
+    if (before == MON_NO_MASTER) {
         mon_emit(m, t_ns, MON_EV_MASTER_CHANGE, MON_LEVEL_INFO, a, master, 0,
                  "slave %u belongs to master %u", a, master);
+    } else {
+        mon_emit(m, t_ns, MON_EV_MASTER_CHANGE, MON_LEVEL_WARN, a, master, before,
+                 "slave %u changed master: %u, was %u", a, master, before);
     }
 }
 
@@ -187,7 +192,10 @@ static void slave_diag(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
         set_state(m, a, MON_DP_WAIT_PRM, t_ns, "diagnosis asks for parameters (Prm_Req)");
     } else if ((b1 & (DP_DIAG1_PRM_FAULT | DP_DIAG1_CFG_FAULT)) != 0u) {
         set_state(m, a, MON_DP_WAIT_PRM, t_ns, "diagnosis reports Prm_Fault or Cfg_Fault");
-    } else if ((b1 & DP_DIAG1_STATION_NOT_READY) == 0u) {
+    } else if ((b1 & DP_DIAG1_STATION_NOT_READY) == 0u &&
+               (d[DP_DIAG_STATUS_2] & DP_DIAG2_STAT_DIAG) == 0u) {
+        /* Ready, and not holding its master in diagnosis (Stat_Diag): the master goes on to
+         * Data_Exchange. */
         set_state(m, a, MON_DP_DATA_EXCH, t_ns, "");
     } else if (s->dp_state == MON_DP_DATA_EXCH) {
         set_state(m, a, MON_DP_WAIT_CFG, t_ns, "diagnosis says Station_Not_Ready");

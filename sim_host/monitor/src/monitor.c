@@ -36,6 +36,7 @@ void mon_init(mon_t *m, const mon_cfg_t *cfg)
     m->holder = 0xFFu;
     for (unsigned a = 0; a < MON_STATIONS; a++) {
         m->st[a].master = MON_NO_MASTER;
+        m->st[a].owner = MON_NO_MASTER;
     }
 }
 
@@ -329,7 +330,9 @@ static void token(mon_t *m, uint8_t da, uint8_t sa, uint64_t t0)
         ring_known = m->st[a].in_ring;
     }
     uint64_t silence = t0 > m->last_end_ns ? t0 - m->last_end_ns : 0u;
-    bool lost = ring_known && m->slot_ns != 0u && m->line.telegrams > 1u &&
+    /* A claim comes from a station that did not hold the token (the holder went silent); a
+     * lone master that holds the token through a pause and passes it on claims nothing. */
+    bool lost = ring_known && m->slot_ns != 0u && m->line.telegrams > 1u && sa != m->holder &&
                 silence >= MON_LOST_TOKEN_SLOTS * m->slot_ns;
     if (lost) {
         m->line.lost_tokens++;
@@ -424,6 +427,9 @@ void mon_telegram(mon_t *m, const uint8_t *f, size_t len, uint64_t t_start_ns, u
         mon_garbled(m, f, len, t_start_ns);
         return;
     }
+    if (m->cfg.on_frame != NULL) {
+        m->cfg.on_frame(m->cfg.ctx, f, len, t_start_ns, false);
+    }
     if (m->line.telegrams == 0u && m->line.garbled == 0u) {
         m->line.first_ns = t_start_ns;
     }
@@ -444,6 +450,9 @@ void mon_garbled(mon_t *m, const uint8_t *f, size_t len, uint64_t t_ns)
     m->line.garbled++;
     m->line.octets += len;
     m->line.last_ns = t_ns;
+    if (m->cfg.on_frame != NULL && len != 0u) {
+        m->cfg.on_frame(m->cfg.ctx, f, len, t_ns, true);
+    }
     fdl_msg_t msg;
     memset(&msg, 0, sizeof msg);
     if (len > 0u && fdl_parse_damaged(f, len, &msg) && msg.sa < FDL_ADDR_BROADCAST) {
@@ -460,7 +469,9 @@ void mon_idle(mon_t *m, uint64_t now_ns)
         return;
     }
     uint64_t wait = m->slot_ns;
-    if (!m->cfg.timing && wait < MON_UNTIMED_ANSWER_NS) {
+    if (m->cfg.answer_wait_ns != 0u) {
+        wait = m->cfg.answer_wait_ns;
+    } else if (!m->cfg.timing && wait < MON_UNTIMED_ANSWER_NS) {
         wait = MON_UNTIMED_ANSWER_NS;
     }
     if (wait != 0u && now_ns > m->pend_end_ns + wait) {

@@ -1,46 +1,55 @@
-/* A monitor on a running rig, for the control API: it hears every telegram of the rig's line
- * (a rig tap), logs its events into the rig_ctl event ring (source "station N", kind "bus":
- * GET /api/v1/log and the event stream) and publishes its JSON document (MON_JSON, served as
- * GET /api/v1/bus) every MON_LIVE_PUBLISH_NS through a rig_doc_t that HTTP threads copy.
- *
- * Everything runs in the rig's loop thread: the tap, mon_live_service. Nothing here waits on a
- * client. Large (the monitor, 285 KB, and RIG_DOC_BUFS documents of RIG_DOC_CAP: 4.5 MB):
- * static or heap storage, never on a thread's stack. */
+/* Where the monitor listens: a tty or PTY (a USB/RS-485 adapter, a port of the virtual line),
+ * a virtual segment over LCM, or a capture file. A live source runs the tty_runner loop with a
+ * station that only receives: its UART is never asked to transmit, so the monitor cannot
+ * disturb the line it watches. The times it gives the monitor are nanoseconds since the source
+ * was opened (wall clock), a file's are the records' own. */
 #ifndef MONITOR_MON_LIVE_H
 #define MONITOR_MON_LIVE_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
+#include "lcm_bridge/lcm_segment.h"
+#include "monitor/mon_chars.h"
 #include "monitor/monitor.h"
-#include "rig/rig.h"
-#include "rig/rig_ctl.h"
-#include "rig/rig_doc.h"
-
-#define MON_LIVE_PUBLISH_NS 500000000u /* the panel's bus page refreshes about once a second */
+#include "sim_hal/tty_port.h"
 
 typedef struct mon_live {
-    mon_t mon;
-    rig_doc_t doc;
-    rig_ctl_t *ctl;
-    char source[96];      /* "monitor.source" of the document: what the monitor listens to */
-    uint64_t last_end_ns; /* the end of the newest telegram fed: mon_idle never goes back */
-    uint64_t idle_ns;     /* the last mon_idle: no telegram is fed as older */
-    uint64_t last_publish_ns;
-    bool published;
+    mon_t *mon;
+    mon_chars_t chars;
+    tty_runner_t runner;
+    tty_port_t port;
+    bool port_open;
+    dfp_lcm_segment_t seg;
+    bool lcm_open;
+    /* hal_time_us_t (32 bits, wrapping) extended to 64 bits from the first one seen */
+    bool have_t;
+    uint32_t last_us;
+    uint64_t now_us;
+    /* The caller's turn (view, reports, the API): every tick_ms, with the monitor's time. */
+    void (*tick)(void *ctx, uint64_t now_ns);
+    void *tick_ctx;
+    uint32_t tick_ms;
+    uint64_t chars_in;
+    uint64_t char_errors;
 } mon_live_t;
 
-/* Starts the monitor (cfg's on_event and ctx are replaced: the events go to ctl) and gives ctl
- * its document (ctl->bus). Call after rig_ctl_init and before the HTTP server starts. Times
- * are the rig's clock (rig_elapsed_ns), the one its taps give. */
-void mon_live_init(mon_live_t *l, rig_ctl_t *ctl, const mon_cfg_t *cfg, const char *source);
-/* The tap that feeds it every telegram of the rig's line (rig_add_tap). */
-rig_tap_t mon_live_tap(mon_live_t *l);
-/* From the loop, often: time passes for the monitor (answers that did not come), and the
- * document is published when the last one is MON_LIVE_PUBLISH_NS old. now_ns: the rig's
- * clock. */
-void mon_live_service(mon_live_t *l, uint64_t now_ns);
-/* Publishes the document now (skipped while every buffer is being read). */
-void mon_live_publish(mon_live_t *l, uint64_t now_ns);
+/* A tty or PTY at baud (8E1, raw; a PTY ignores the rate). 0, or -1 with the reason in err. */
+int mon_live_open_port(mon_live_t *l, mon_t *m, const char *dev, uint32_t baud, char *err,
+                       size_t n);
+/* An LCM segment (url NULL: LCM's default); key NULL for a plain one. */
+int mon_live_open_lcm(mon_live_t *l, mon_t *m, const char *url, const char *channel,
+                      const uint8_t *key, uint32_t baud, char *err, size_t n);
+/* Runs until seconds have passed (0: no limit) or *stop becomes non-zero: 0; -1 when the
+ * device fails or its peer hangs up (the message in err). */
+int mon_live_run(mon_live_t *l, uint32_t seconds, volatile const int *stop, char *err, size_t n);
+void mon_live_close(mon_live_t *l);
+
+/* A capture file (any format capture.h reads) through the monitor, offline. baud: the line's
+ * rate when the file does not say (0: unknown). Each record is one telegram (or a garbled
+ * run) that began at its time. Returns the records read, or -1 with the reason in err. */
+int64_t mon_file_run(mon_t *m, const char *path, uint32_t baud, volatile const int *stop,
+                     char *err, size_t n);
 
 #endif

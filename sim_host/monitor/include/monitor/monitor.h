@@ -93,7 +93,8 @@ typedef struct mon_station {
     /* ---- as a DP slave ---- */
     bool dp;                  /* a DP service to it was seen */
     mon_dp_state_t dp_state;
-    uint8_t master;           /* MON_NO_MASTER: none known */
+    uint8_t master;           /* MON_NO_MASTER: none known (or its diagnosis says none) */
+    uint8_t owner;            /* the last master it had (MON_NO_MASTER: never one) */
     bool ident_known;
     uint16_t ident;
     uint8_t prm[MON_PRM_MAX]; /* the last accepted Set_Prm DU */
@@ -139,7 +140,8 @@ typedef enum mon_event_type {
     MON_EV_LOST_TOKEN,      /* station: the one that claimed it; value: the silence in µs */
     MON_EV_DX_ENTER,        /* station: a slave answered Data_Exchange with data; other: master */
     MON_EV_DX_LEAVE,        /* station: left data exchange (the text says why) */
-    MON_EV_MASTER_CHANGE,   /* station: slave; other: its new master (MON_NO_MASTER: none) */
+    MON_EV_MASTER_CHANGE,   /* station: slave; other: its new master; value: the one before
+                             * (MON_NO_MASTER: its first) */
     MON_EV_STAT_DIAG,       /* station: its diagnosis has Stat_Diag set */
     MON_EV_DIAG_CHANGE,     /* station: its diagnosis octets changed */
     MON_EV_PRM_FAULT,       /* station: its diagnosis says Prm_Fault or Cfg_Fault */
@@ -198,10 +200,16 @@ typedef struct mon_cfg {
      * rotations are not judged). */
     uint32_t tsl_bits;
     uint32_t ttr_bits;
+    /* How long after a request's end its answer may still come (0: the slot time when
+     * timing, else 200 ms). A live source sets it: the kernel and adapters deliver late. */
+    uint64_t answer_wait_ns;
     /* Repeats to one slave within one second that make a retry storm (0: 10). */
     uint32_t storm_repeats;
     /* Called for every event as it happens (may be NULL). */
     void (*on_event)(void *ctx, const mon_event_t *ev);
+    /* Called with every telegram and every garbled run as it is taken in (a pcapng file
+     * written as it goes); may be NULL. */
+    void (*on_frame)(void *ctx, const uint8_t *f, size_t len, uint64_t t_start_ns, bool garbled);
     void *ctx;
 } mon_cfg_t;
 

@@ -1,8 +1,8 @@
 /* The monitor on a running rig, for the control API: rig_doc (the published document: nothing
  * before the first publication, the newest one whole to readers copying while the loop
  * publishes, a publication skipped while every other buffer is read, a document too large
- * refused), mon_live on the in-memory bus with the demo's line (card 4, master 2: its events in
- * the rig_ctl ring as kind "bus", its document every MON_LIVE_PUBLISH_NS), and the route GET
+ * refused), mon_rig on the in-memory bus with the demo's line (card 4, master 2: its events in
+ * the rig_ctl ring as kind "bus", its document every MON_RIG_PUBLISH_NS), and the route GET
  * /api/v1/bus: 404 without a monitor, 503 before its first document, then the document as
  * published. */
 #include <arpa/inet.h>
@@ -17,7 +17,7 @@
 
 #include "check.h"
 #include "http/http_server.h"
-#include "monitor/mon_live.h"
+#include "monitor/mon_rig.h"
 #include "rig/rig.h"
 #include "rig/rig_ctl.h"
 #include "rig/rig_doc.h"
@@ -25,7 +25,7 @@
 static rig_doc_t doc;  /* 2 MB each: never on a stack */
 static rig_t rig;
 static rig_ctl_t ctl;
-static mon_live_t live;
+static mon_rig_t live;
 
 /* ---- rig_doc ----------------------------------------------------------------------------- */
 
@@ -154,7 +154,7 @@ static void test_readers_copy_whole_documents(void)
     CHECK_EQ(published + doc.skipped, k);
 }
 
-/* ---- mon_live on the demo's line ----------------------------------------------------------- */
+/* ---- mon_rig on the demo's line ----------------------------------------------------------- */
 
 static void line_setup(void)
 {
@@ -179,13 +179,13 @@ static bool bus_event(const char *source, const char *needle)
     return false;
 }
 
-static void test_mon_live_logs_and_publishes(void)
+static void test_mon_rig_logs_and_publishes(void)
 {
     line_setup();
     mon_cfg_t cfg = {.baud = 1500000u, .timing = true};
-    mon_live_init(&live, &ctl, &cfg, "in-memory bus");
+    mon_rig_init(&live, &ctl, &cfg, "in-memory bus", rig_elapsed_ns(&rig));
     CHECK(ctl.bus == &live.doc);
-    rig_tap_t tap = mon_live_tap(&live);
+    rig_tap_t tap = mon_rig_tap(&live);
     CHECK_EQ(rig_add_tap(&rig, &tap), 0);
     card_options_t co = {.address = 4, .strict_timing = true, .inverter = CARD_INVERTER_SIM};
     CHECK(rig_add_card(&rig, &co, membus_now_us(&rig.bus)) != NULL);
@@ -202,10 +202,10 @@ static void test_mon_live_logs_and_publishes(void)
      * most 3 s) */
     for (unsigned i = 0; i < 3000u && live.mon.st[4].dp_state != MON_DP_DATA_EXCH; i++) {
         membus_run_for_us(&rig.bus, 1000u);
-        mon_live_service(&live, rig_elapsed_ns(&rig));
+        mon_rig_service(&live, rig_elapsed_ns(&rig));
     }
     membus_run_for_us(&rig.bus, 1000u);
-    mon_live_service(&live, rig_elapsed_ns(&rig) + MON_LIVE_PUBLISH_NS);
+    mon_rig_service(&live, rig_elapsed_ns(&rig) + MON_RIG_PUBLISH_NS);
     CHECK_EQ(live.mon.st[4].dp_state, MON_DP_DATA_EXCH);
     CHECK(bus_event("station 4", "data exchange"));
     CHECK(bus_event("station 2", "station 2"));
@@ -213,12 +213,12 @@ static void test_mon_live_logs_and_publishes(void)
     CHECK(c != NULL && len > 0u && c[0] == '{');
     CHECK(c != NULL && strstr(c, "0x6003") != NULL);
     free(c);
-    /* One document per MON_LIVE_PUBLISH_NS: none more before it is over, one once it is. */
+    /* One document per MON_RIG_PUBLISH_NS: none more before it is over, one once it is. */
     unsigned cur = atomic_load(&live.doc.current);
     uint64_t t = live.last_publish_ns;
-    mon_live_service(&live, t + MON_LIVE_PUBLISH_NS - 1u);
+    mon_rig_service(&live, t + MON_RIG_PUBLISH_NS - 1u);
     CHECK_EQ(atomic_load(&live.doc.current), cur);
-    mon_live_service(&live, t + MON_LIVE_PUBLISH_NS);
+    mon_rig_service(&live, t + MON_RIG_PUBLISH_NS);
     CHECK(atomic_load(&live.doc.current) != cur);
     rig_ctl_destroy(&ctl);
     rig_close(&rig);
@@ -293,7 +293,7 @@ int main(void)
     RUN_TEST(test_skipped_while_every_other_buffer_is_read);
     RUN_TEST(test_too_large_and_abandoned_keep_the_last);
     RUN_TEST(test_readers_copy_whole_documents);
-    RUN_TEST(test_mon_live_logs_and_publishes);
+    RUN_TEST(test_mon_rig_logs_and_publishes);
     RUN_TEST(test_route);
     return check_report();
 }
