@@ -161,8 +161,8 @@ function busDetailRows(tb, st) {
   busKv(tb, 'DFP21B (ident 0x6003)');
   busKv(tb, 'PD configuration', d.pd_config);
   busKv(tb, 'parameter channel', d.param_channel ? 'yes (8 octets before the PD)' : 'no');
-  busKv(tb, 'control word', d.control_word + ' ' + (d.control_text || ''), true);
-  busKv(tb, 'status word', d.status_word + ' ' + (d.status_text || ''), true);
+  busKv(tb, 'control word', d.control_word + ' ' + (d.control_text || ''));
+  busKv(tb, 'status word', d.status_word + ' ' + (d.status_text || ''));
   busKv(tb, 'MOVILINK request', d.param_request);
   busKv(tb, 'MOVILINK answer', d.param_answer);
 }
