@@ -224,6 +224,34 @@ static void test_mon_rig_logs_and_publishes(void)
     rig_close(&rig);
 }
 
+/* A station sending an illegal telegram (SA 127) a hundred times in a second: the log takes
+ * MON_RIG_EVENTS_PER_S of them and one line for the rest; the monitor counts all. */
+static void test_an_event_flood_is_bounded_in_the_log(void)
+{
+    line_setup();
+    mon_cfg_t cfg = {.baud = 1500000u, .timing = true};
+    uint64_t t = rig_elapsed_ns(&rig) + 5000000000ull;
+    mon_rig_init(&live, &ctl, &cfg, "in-memory bus", t);
+    rig_tap_t tap = mon_rig_tap(&live);
+    static const uint8_t sa127[] = {0x10, 0x02, 0x7F, 0x49, 0xCA, 0x16};
+    uint64_t before = rig_ctl_next_seq(&ctl);
+    for (unsigned i = 0; i < 100u; i++) {
+        tap.frame(tap.ctx, t + i * 1000000ull, sa127, sizeof sa127, false, 1500000u);
+    }
+    CHECK_EQ(live.mon.line.illegal, 100);
+    CHECK_EQ(rig_ctl_next_seq(&ctl) - before, MON_RIG_EVENTS_PER_S);
+    mon_rig_service(&live, t + 999000000ull); /* the second is not over */
+    CHECK_EQ(rig_ctl_next_seq(&ctl) - before, MON_RIG_EVENTS_PER_S);
+    mon_rig_service(&live, t + 1000000000ull);
+    CHECK_EQ(rig_ctl_next_seq(&ctl) - before, MON_RIG_EVENTS_PER_S + 1u);
+    CHECK(bus_event("sim", "80 more bus events in one second not logged (over 20); GET "
+                           "/api/v1/bus has the monitor's counts"));
+    tap.frame(tap.ctx, t + 1100000000ull, sa127, sizeof sa127, false, 1500000u);
+    CHECK_EQ(rig_ctl_next_seq(&ctl) - before, MON_RIG_EVENTS_PER_S + 2u); /* a new second */
+    rig_ctl_destroy(&ctl);
+    rig_close(&rig);
+}
+
 /* ---- the route ---------------------------------------------------------------------------- */
 
 /* "STATUS BODY" of GET /api/v1/bus (HTTP/1.0: the server closes after the answer). */
@@ -294,6 +322,7 @@ int main(void)
     RUN_TEST(test_too_large_and_abandoned_keep_the_last);
     RUN_TEST(test_readers_copy_whole_documents);
     RUN_TEST(test_mon_rig_logs_and_publishes);
+    RUN_TEST(test_an_event_flood_is_bounded_in_the_log);
     RUN_TEST(test_route);
     return check_report();
 }

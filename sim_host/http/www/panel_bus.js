@@ -1,16 +1,20 @@
 /* DFP21B front panel: the "bus" page, what the bus monitor of dfp-sim sees on the line
  * (docs/api.md, GET /api/v1/bus): the live list, one station's details, the bus events (log
  * kind "bus" from the stream, newest first) and a plot of one slave's Data_Exchange cycle time.
- * It polls the document about once a second while logged in and sends nothing but GETs. A
- * process without a monitor answers 404: the page's tab is then hidden. */
+ * It polls the document about once a second while the page is shown, every BUS_POLL_HIDDEN
+ * turns while a card is (the plot goes on, a large line's document is not fetched for
+ * nothing), and sends nothing but GETs. A process without a monitor answers 404: the page's
+ * tab is then hidden. */
 'use strict';
 
 const BUS_POLL_MS = 1000;
+const BUS_POLL_HIDDEN = 5;
 const BUS_EVENTS_MAX = 200;
 const BUS_PLOT_WINDOW_S = 60;
 let busDoc = null;          /* the last document */
 let busSel = null;          /* address of the station whose details are shown */
 let busTimer = null;
+let busTurn = 0;
 let busEvents = [];         /* log events of kind "bus", newest first */
 const busCycle = new Map(); /* slave address -> [{t, ms}]: mean cycle time between two polls */
 const busLastSpan = new Map(); /* slave address -> the dx_cycle_ms span of the last poll */
@@ -238,7 +242,10 @@ async function pollBus() {
 function busStart() {
   busStop();
   pollBus();
-  busTimer = setInterval(pollBus, BUS_POLL_MS);
+  busTimer = setInterval(() => {
+    busTurn++;
+    if (busShown() || busTurn % BUS_POLL_HIDDEN === 0) pollBus();
+  }, BUS_POLL_MS);
 }
 function busStop() {
   if (busTimer !== null) clearInterval(busTimer);

@@ -18,10 +18,37 @@ static rig_log_level_t log_level(mon_level_t level)
     return RIG_LOG_INFO;
 }
 
+#define NS_PER_S 1000000000ull
+
+/* A new second of events begins at t_ns once the last one is over; the events it did not log
+ * are told in one line. */
+static void next_window(mon_rig_t *l, uint64_t t_ns)
+{
+    if (t_ns < l->window_ns || t_ns - l->window_ns < NS_PER_S) {
+        return;
+    }
+    if (l->not_logged != 0u) {
+        char text[RIG_CTL_TEXT];
+        (void)snprintf(text, sizeof text, "%llu more bus events in one second not logged (over "
+                       "%u); GET /api/v1/bus has the monitor's counts",
+                       (unsigned long long)l->not_logged, MON_RIG_EVENTS_PER_S);
+        rig_ctl_event(l->ctl, t_ns / 1000u, RIG_LOG_WARN, "sim", "bus", text);
+    }
+    l->window_ns = t_ns;
+    l->window_n = 0;
+    l->not_logged = 0;
+}
+
 /* In the loop's thread (inside mon_telegram or mon_idle): rig_ctl_event never waits there. */
 static void log_event(void *ctx, const mon_event_t *ev)
 {
     mon_rig_t *l = ctx;
+    next_window(l, ev->t_ns);
+    if (l->window_n >= MON_RIG_EVENTS_PER_S) {
+        l->not_logged++;
+        return;
+    }
+    l->window_n++;
     char source[16];
     (void)snprintf(source, sizeof source, "station %u", ev->station);
     rig_ctl_event(l->ctl, ev->t_ns / 1000u, log_level(ev->level), source, "bus", ev->text);
@@ -38,6 +65,9 @@ void mon_rig_init(mon_rig_t *l, rig_ctl_t *ctl, const mon_cfg_t *cfg, const char
     l->ctl = ctl;
     (void)snprintf(l->source, sizeof l->source, "%s", source != NULL ? source : "");
     l->t0_ns = now_ns;
+    l->window_ns = now_ns;
+    l->window_n = 0;
+    l->not_logged = 0;
     l->last_end_ns = now_ns;
     l->idle_ns = now_ns;
     l->last_publish_ns = 0;
@@ -108,6 +138,7 @@ void mon_rig_service(mon_rig_t *l, uint64_t now_ns)
     uint64_t t = now_ns > l->last_end_ns ? now_ns : l->last_end_ns;
     mon_idle(&l->mon, t);
     l->idle_ns = t;
+    next_window(l, t);
     if (!l->published || t - l->last_publish_ns >= MON_RIG_PUBLISH_NS) {
         l->last_publish_ns = t;
         mon_rig_publish(l, t);

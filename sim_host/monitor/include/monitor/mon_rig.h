@@ -20,6 +20,10 @@
 
 #define MON_RIG_PUBLISH_NS 500000000u /* the panel's bus page refreshes about once a second */
 #define MON_RIG_LAST_EVENTS 100u      /* the newest events the document lists */
+/* The monitor's events the log takes in one second: a station sending an illegal telegram in
+ * every cycle must not push every other event out of the API's ring of RIG_CTL_EVENTS, nor
+ * keep the loop publishing. The rest of the second is counted in one line. */
+#define MON_RIG_EVENTS_PER_S 20u
 
 typedef struct mon_rig {
     mon_t mon;
@@ -32,6 +36,9 @@ typedef struct mon_rig {
     uint64_t idle_ns;     /* the last mon_idle: no telegram is fed as older */
     uint64_t last_publish_ns;
     bool published;
+    uint64_t window_ns;   /* start of the second the logged events are counted in */
+    uint32_t window_n;
+    uint64_t not_logged;  /* events of that second beyond MON_RIG_EVENTS_PER_S */
 } mon_rig_t;
 
 /* Starts the monitor (cfg's on_event and ctx are replaced: the events go to ctl) and gives ctl
