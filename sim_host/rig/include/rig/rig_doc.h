@@ -20,7 +20,7 @@
  * diagnosis, outputs and inputs all have their 244 octets takes 4.2 KB, 540 KB for 128
  * stations. A buffer has room for that and the events. Pages only count once written: a line
  * of a few stations keeps a few KB of each resident. */
-#define RIG_DOC_CAP (1024u * 1024u)
+#define RIG_DOC_CAP ((size_t)1024u * 1024u)
 #define RIG_DOC_WRITER 0x80000000u /* in use[i]: the loop is filling that buffer */
 
 typedef struct rig_doc {
