@@ -10,7 +10,7 @@ import pytest
 from dfpsim import ApiError, DfpSimError, ParamError, wait_until
 
 LOG_KINDS = {"dp_state", "baud", "watchdog", "prm", "cfg", "diag", "led", "param", "drive",
-             "fault", "speed", "master", "ring", "action", "audit", "nvm", "lost"}
+             "fault", "speed", "master", "ring", "bus", "action", "audit", "nvm", "lost"}
 
 
 def test_demo_state(demo):

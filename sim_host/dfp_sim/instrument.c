@@ -134,6 +134,48 @@ static void print_urls(const instrument_opts_t *o, const char *host, uint16_t po
     (void)fflush(stderr);
 }
 
+/* ---- the bus monitor (GET /api/v1/bus, the panel's bus page) ---- */
+
+static const char *medium_name(const rig_t *r, char *buf, size_t n)
+{
+    switch (r->cfg.medium) {
+    case RIG_MEDIUM_MEMBUS:
+        return "in-memory bus";
+    case RIG_MEDIUM_TTY:
+        return r->cfg.device != NULL ? r->cfg.device : "tty";
+    case RIG_MEDIUM_LCM:
+        snprintf(buf, n, "LCM segment %s", r->cfg.lcm_channel);
+        return buf;
+    }
+    return "";
+}
+
+/* Without a monitor the API answers GET /api/v1/bus with 404 and the rest works as before. */
+static void attach_monitor(instrument_t *in, rig_t *r)
+{
+    mon_rig_t *l = malloc(sizeof *l);
+    if (l == NULL) {
+        rig_log(&in->log, RIG_LOG_WARN, "sim", "action", "no memory for the bus monitor: "
+                "GET /api/v1/bus answers 404");
+        return;
+    }
+    /* Only the in-memory bus gives the line's own times; a PTY or USB adapter batches. */
+    mon_cfg_t cfg = {.baud = r->has_master ? r->master.cfg.baud : r->cfg.baud,
+                     .timing = r->cfg.medium == RIG_MEDIUM_MEMBUS};
+    char buf[96];
+    mon_rig_init(l, &in->ctl, &cfg, medium_name(r, buf, sizeof buf), rig_elapsed_ns(r));
+    rig_tap_t tap = mon_rig_tap(l);
+    if (rig_add_tap(r, &tap) != 0) {
+        in->ctl.bus = NULL;
+        free(l);
+        rig_log(&in->log, RIG_LOG_WARN, "sim", "action", "no tap left for the bus monitor: "
+                "GET /api/v1/bus answers 404");
+        return;
+    }
+    in->mon = l;
+    mon_rig_publish(l, rig_elapsed_ns(r));
+}
+
 /* Starts the server itself; 0, or EXIT_USAGE after reporting. */
 static int http_begin(instrument_t *in, const instrument_opts_t *o, bool read_only)
 {
@@ -196,6 +238,7 @@ int instrument_start_http(instrument_t *in, rig_t *r, const instrument_opts_t *o
         cli_error("--http: the loop cannot wait on another descriptor");
         return 1;
     }
+    attach_monitor(in, r);
     rig_add_timer(r, service_timer, in);
     rig_ctl_service(&in->ctl, 0);
     return http_begin(in, o, read_only);
@@ -245,6 +288,9 @@ static void pass_on_api_events(instrument_t *in)
 void instrument_service(instrument_t *in)
 {
     if (in->ctl_on) {
+        if (in->mon != NULL) {
+            mon_rig_service(in->mon, rig_elapsed_ns(in->ctl.rig));
+        }
         rig_ctl_service(&in->ctl, PUBLISH_EVERY_NS);
         pass_on_api_events(in);
     }

@@ -8,6 +8,7 @@
 
 #include "cli_table.h"
 #include "http/http_server.h"
+#include "monitor/mon_rig.h"
 #include "rig/rig_ctl.h"
 #include "rig/rig_log.h"
 
@@ -47,6 +48,10 @@ typedef struct instrument {
     instrument_api_event_fn *api_event; /* NULL: only the terminal */
     void *api_event_ctx;
     uint64_t api_seen; /* the bridge's first event not looked at yet */
+    /* With --http: the bus monitor of the rig's line (GET /api/v1/bus, the panel's bus page,
+     * log kind "bus"). On the heap, and kept until the process ends: the rig's tap points
+     * at it as long as the rig runs. NULL: none (out of memory, or no tap left). */
+    mon_rig_t *mon;
     rig_ctl_event_t batch[INSTRUMENT_EVENT_BATCH];
 } instrument_t;
 
@@ -63,7 +68,8 @@ void instrument_attach_log(instrument_t *in, rig_t *r, const instrument_opts_t *
  * --http-no-auth off loopback: usage errors). */
 int instrument_start_http(instrument_t *in, rig_t *r, const instrument_opts_t *o,
                           const char *mode, bool read_only);
-/* From the loop: carries out queued actions, publishes the state, and prints the API's own
+/* From the loop: carries out queued actions, publishes the state (and the bus monitor's
+ * document every MON_RIG_PUBLISH_NS), and prints the API's own
  * events (source "http": the audit of each action, a connection closed by a limit) on the
  * terminal log and hands them to api_event. */
 void instrument_service(instrument_t *in);

@@ -7,8 +7,8 @@ dfp-sim prints) and checks that it shows what GET /api/v1/state says, that its D
 inhibits the drive, that a bad request answers 400 without harming the simulation, the login
 (form, wrong token, the token gone from the address, the HttpOnly cookie, log out, a 401
 bringing the form back, the viewer's disabled controls), that a page of another origin can
-neither act (no-cors fetch, sendBeacon, a form) nor frame the panel, and that SIGINT ends
-dfp-sim with exit status 0. The tool checks and the command-line options are in conftest.py.
+neither act (no-cors fetch, sendBeacon, a form) nor frame the panel, the bus page (the bus
+monitor's live list and a station's details), and that SIGINT ends dfp-sim with exit status 0. The tool checks and the command-line options are in conftest.py.
 """
 import json
 import os
@@ -344,6 +344,73 @@ def test_parameter_service_over_class2(sim, page):
     assert page_text(page, "ps-result") == want
     assert page.find_element(By.ID, "ps-result").get_attribute("data-ok") == "1"
     assert "read P100 via c2: ok" in page_text(page, "status-line")
+
+
+def bus_station(doc, address):
+    return next((st for st in doc["stations"] if st["address"] == address), None)
+
+
+def bus_row(drv, address, cls):
+    return drv.find_element(By.CSS_SELECTOR, "#bus-st-%d .%s" % (address, cls)).text.strip()
+
+
+def bus_detail(drv, key):
+    rows = drv.find_elements(By.CSS_SELECTOR, '#bus-detail tr[data-key="%s"] td' % key)
+    return rows[0].text.strip() if rows else None
+
+
+def test_bus_page_shows_the_live_list_and_a_station(sim, page):
+    """The bus page against GET /api/v1/bus: the demo's master and its card in the live list,
+    the card's details on a click, the bus events from the stream; back to the card after."""
+    card = first_card(get_state(sim.base))["address"]
+    master = get_state(sim.base)["master"]["address"]
+
+    def card_in_dx():
+        status, doc = http(sim.base, "GET", "/api/v1/bus")
+        st = bus_station(doc, card) if status == 200 else None
+        return st is not None and st["dp"] and st["dp"]["state"] == "Data_Exch" and doc
+    doc = wait_for(card_in_dx, PAGE_S, "the monitor's card in Data_Exch")
+    assert bus_station(doc, card)["dp"]["ident"] == "0x6003"
+    assert bus_station(doc, card)["dp"]["master"] == master
+    assert bus_station(doc, master)["role"] == "active"
+    assert master in doc["ring"]["members"]
+    try:
+        page.find_element(By.ID, "tab-bus").click()
+        assert page.execute_script("return document.body.dataset.page") == "bus"
+        assert page.find_element(By.ID, "bus-page").is_displayed()
+        assert not page.find_element(By.ID, "layout").is_displayed()
+
+        def listed():
+            return (bus_row(page, card, "c-state") == "Data_Exch" and
+                    bus_row(page, card, "c-ident") == "0x6003" and
+                    bus_row(page, card, "c-master") == str(master) and
+                    bus_row(page, master, "c-role").startswith("active") and
+                    page.find_element(By.ID, "bus-st-%d" % card).get_attribute("data-warn")
+                    != "now")
+        wait_for(listed, PAGE_S, "the live list with master %d and card %d" % (master, card))
+        page.find_element(By.ID, "bus-st-%d" % master).click()
+        wait_for(lambda: page_text(page, "bus-sel") == str(master), PAGE_S, "the master's details")
+        assert bus_detail(page, "state") is None, "a master has no DP slave details"
+        page.find_element(By.ID, "bus-st-%d" % card).click()
+        wait_for(lambda: page_text(page, "bus-sel") == str(card), PAGE_S, "the card's details")
+        assert bus_detail(page, "state") == "Data_Exch"
+        assert bus_detail(page, "ident") == "0x6003"
+        assert bus_detail(page, "master") == str(master)
+        assert bus_detail(page, "configuration (Chk_Cfg)") == bus_station(doc, card)["dp"]["cfg"]
+        assert bus_detail(page, "diagnosis") not in (None, "", "–")
+        assert bus_detail(page, "PD configuration") not in (None, "", "–"), "no DFP21B names"
+        assert page.find_elements(By.CSS_SELECTOR, "#bus-stations tr.sel#bus-st-%d" % card)
+        events = [e.text for e in page.find_elements(By.CSS_SELECTOR, "#bus-events li")]
+        assert any("data exchange" in t for t in events), events
+        assert all(li.get_attribute("data-kind") == "bus"
+                   for li in page.find_elements(By.CSS_SELECTOR, "#bus-events li"))
+        assert page.execute_script("return location.hash") == "#bus"
+        assert not js_errors(page), js_errors(page)
+    finally:
+        page.find_element(By.ID, "tab-card-%d" % card).click()
+    assert page.execute_script("return document.body.dataset.page") == "cards"
+    assert page.find_element(By.ID, "layout").is_displayed()
+    assert page.execute_script("return location.hash") == ""
 
 
 def test_bad_input_answers_400_and_demo_runs_on(sim):

@@ -175,6 +175,23 @@ static enum MHD_Result serve_log(http_server_t *srv, struct MHD_Connection *conn
     return http_send_json(conn, 200, a);
 }
 
+/* The monitor's document as the loop last published it, sent as it is (it is JSON already). */
+static enum MHD_Result serve_bus(http_server_t *srv, struct MHD_Connection *conn)
+{
+    if (srv->ctl->bus == NULL) {
+        return http_send_error(conn, 404, "this process has no bus monitor");
+    }
+    size_t len = 0;
+    char *doc = rig_doc_copy(srv->ctl->bus, &len);
+    if (doc == NULL) {
+        return http_send_error(conn, 503, "the bus monitor has published nothing yet; try "
+                               "again");
+    }
+    enum MHD_Result rc = http_send_text(conn, 200, "application/json", doc, len, true);
+    free(doc);
+    return rc;
+}
+
 static enum MHD_Result serve_params(struct MHD_Connection *conn)
 {
     const char *q = MHD_lookup_connection_value(conn, MHD_GET_ARGUMENT_KIND, "q");
@@ -195,7 +212,8 @@ enum MHD_Result http_route_api(http_server_t *srv, struct MHD_Connection *conn,
                                const char *path, const char *method, const request_t *req)
 {
     bool read = strcmp(path, "state") == 0 || strcmp(path, "log") == 0 ||
-                strcmp(path, "events") == 0 || strcmp(path, "params") == 0;
+                strcmp(path, "events") == 0 || strcmp(path, "params") == 0 ||
+                strcmp(path, "bus") == 0;
     if (read && strcmp(method, "GET") != 0) {
         return http_send_error(conn, 405, "use GET");
     }
@@ -210,6 +228,9 @@ enum MHD_Result http_route_api(http_server_t *srv, struct MHD_Connection *conn,
     }
     if (strcmp(path, "params") == 0) {
         return serve_params(conn);
+    }
+    if (strcmp(path, "bus") == 0) {
+        return serve_bus(srv, conn);
     }
     if (strcmp(path, "session") == 0) {
         return strcmp(method, "GET") == 0 ? http_session_info(srv, conn, req)

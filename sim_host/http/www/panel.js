@@ -2,8 +2,9 @@
  * API of docs/api.md (GET /api/v1/state once, then the SSE stream /api/v1/events) and sends the
  * actions the API offers. URLs are relative so the panel also works behind a path prefix.
  * Classic scripts sharing one global scope, loaded in this order by index.html: panel_util.js,
- * panel_auth.js, panel_plot.js, panel_log.js, panel_params.js, then this file (state, rendering,
- * controls). panel_auth.js decides between its login form and the panel (panelStart). */
+ * panel_auth.js, panel_plot.js, panel_log.js, panel_params.js, panel_bus.js (the bus page), then
+ * this file (state, rendering, controls). panel_auth.js decides between its login form and the
+ * panel (panelStart). */
 'use strict';
 
 const STALE_MS = 3000; /* no state event for this long: the stream is considered dropped */
@@ -94,21 +95,22 @@ function buildCwBits() {
 
 function renderTabs() {
   const cards = (state && state.cards) || [];
-  const key = cards.map((c) => c.address).join(',') + '|' + selected;
+  const onCards = !busShown();
+  const key = cards.map((c) => c.address).join(',') + '|' + selected + '|' + onCards;
   const nav = $('card-tabs');
   if (key !== tabsKey) {
     tabsKey = key;
     nav.textContent = '';
     cards.forEach((c) => {
       const b = document.createElement('button');
-      b.className = 'tab' + (c.address === selected ? ' active' : '');
+      b.className = 'tab' + (onCards && c.address === selected ? ' active' : '');
       b.id = 'tab-card-' + c.address;
       b.dataset.address = String(c.address);
       const dot = document.createElement('i');
       dot.className = 'tabdot';
       b.appendChild(dot);
       b.appendChild(document.createTextNode('card ' + c.address));
-      b.addEventListener('click', () => { selected = c.address; render(); });
+      b.addEventListener('click', () => { selected = c.address; showBusPage(false); });
       nav.appendChild(b);
     });
     if (!cards.length) {
@@ -326,6 +328,7 @@ function restarted() {
   logEntries = [];
   logSeqs.clear();
   renderLog();
+  busClearEvents();
   shownCard = null;
   setStatus('dfp-sim restarted: plot and log begin again', 'info');
   api('GET', 'log?since=0&limit=' + LOG_MAX).then(addLogs).catch(() => {});
@@ -488,6 +491,7 @@ function wire() {
 
   wireParams();
   wireLog();
+  wireBus();
 
   window.addEventListener('resize', drawPlot);
 }
@@ -510,6 +514,7 @@ async function panelStart() {
     setStatus('cannot read the state: ' + e.message, 'error');
   }
   connect();
+  busStart();
   try {
     addLogs(await api('GET', 'log?since=' + since + '&limit=' + LOG_MAX));
   } catch (e) {
@@ -522,6 +527,7 @@ async function panelStart() {
 function panelStop() {
   if (es) es.close();
   es = null;
+  busStop();
   setConn('disconnected', 'logged out');
 }
 

@@ -1,10 +1,11 @@
 /* DFP21B front panel: the log list (newest first, at most LOG_MAX lines) with its kind, level
- * and text filters, fed from GET /api/v1/log and the stream's log events. */
+ * and text filters, fed from GET /api/v1/log and the stream's log events (those of kind "bus"
+ * also go to the bus page, panel_bus.js). */
 'use strict';
 
 const LOG_MAX = 500;
 const LOG_KINDS = ['dp_state', 'baud', 'watchdog', 'prm', 'cfg', 'diag', 'led', 'param', 'drive',
-  'fault', 'speed', 'master', 'ring', 'action', 'audit', 'nvm', 'lost'];
+  'fault', 'speed', 'master', 'ring', 'bus', 'action', 'audit', 'nvm', 'lost'];
 const LEVEL_RANK = { error: 0, warn: 1, info: 2, debug: 3 };
 let logEntries = [];       /* newest first */
 const logSeqs = new Set();
@@ -68,6 +69,7 @@ function addLog(e) {
   if (!e || typeof e.seq !== 'number' || logSeqs.has(e.seq)) return;
   logSeqs.add(e.seq);
   noteKind(e.kind);
+  busNoteLog(e);
   if (logEntries.length && e.seq < logEntries[0].seq) {
     logEntries.push(e);
     logEntries.sort((a, b) => b.seq - a.seq);
@@ -94,6 +96,7 @@ function addLogs(arr) {
       logSeqs.add(e.seq);
       logEntries.push(e);
       noteKind(e.kind);
+      busNoteLog(e);
     }
   });
   logEntries.sort((a, b) => b.seq - a.seq);

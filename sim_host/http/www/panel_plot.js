@@ -26,9 +26,10 @@ function niceStep(range, n) {
   return (f <= 1 ? 1 : f <= 2 ? 2 : f <= 5 ? 5 : 10) * p;
 }
 
-/* The canvas at the device's pixel ratio; returns its size in CSS pixels and the context. */
-function plotCanvas() {
-  const cv = $('plot');
+/* The canvas (id, default the drive's plot) at the device's pixel ratio; returns its size in CSS
+ * pixels and the context. The bus page draws its cycle times with it too. */
+function plotCanvas(id) {
+  const cv = $(id || 'plot');
   const dpr = window.devicePixelRatio || 1;
   const w = Math.max(200, cv.clientWidth);
   const h = Math.max(120, cv.clientHeight);

@@ -30,6 +30,7 @@
 #include "dp_master/dpv1_ds47.h"
 #include "dp_master/param_channel.h"
 #include "rig/rig.h"
+#include "rig/rig_doc.h"
 
 #define RIG_CTL_EVENTS 4096u
 #define RIG_CTL_CMDS 16u
@@ -245,6 +246,9 @@ typedef struct rig_ctl {
     bool c2_abort_done;
     /* loop side */
     uint64_t last_publish_ns;
+    /* The bus monitor's JSON (GET /api/v1/bus), published by whoever runs a monitor on this
+     * rig; NULL: this process has none. Set before the HTTP server starts, never changed. */
+    rig_doc_t *bus;
 } rig_ctl_t;
 
 int rig_ctl_init(rig_ctl_t *c, rig_t *r, const char *mode, bool read_only);
