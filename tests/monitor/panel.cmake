@@ -1,7 +1,6 @@
 # The monitor for the control API and the panel's bus page: rig_doc, mon_rig on the in-memory
 # bus and the route GET /api/v1/bus (test_mon_bus_doc.c); the route's access rules, its document
-and
-# the "bus" log events against `dfp-sim demo --http` (test_bus_api.sh). The page itself is
+# and the "bus" log events against `dfp-sim demo --http` (test_bus_api.sh). The page itself is
 # checked in tests/panel (panel_browser).
 add_executable(test_mon_bus_doc ${CMAKE_CURRENT_LIST_DIR}/test_mon_bus_doc.c)
 target_link_libraries(test_mon_bus_doc PRIVATE dfp_monitor dfp_rig dfp_http dfp_test_support)
