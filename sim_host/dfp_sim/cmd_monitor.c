@@ -87,6 +87,8 @@ static bool monitor_operand(void *opts, const char *word)
 static const cli_group_t monitor_groups[] = {
     {medium_options, CLI_COUNT(medium_options), MONITOR_OPT(med)},
     {monitor_options, CLI_COUNT(monitor_options), 0},
+    {instrument_options, CLI_COUNT(instrument_options), MONITOR_OPT(io)},
+    {instrument_http_options, CLI_COUNT(instrument_http_options), MONITOR_OPT(io.web)},
 };
 
 const cli_command_t cli_monitor = {.name = "monitor", .groups = monitor_groups,
@@ -106,6 +108,10 @@ static bool monitor_check(mon_cmd_opts_t *o)
     }
     if (o->expect_text != NULL &&
         !cli_address_list("--expect", o->expect_text, o->expect, MON_STATIONS, &o->n_expect)) {
+        return false;
+    }
+    if (o->file != NULL && (o->io.http != NULL || o->io.web.given)) {
+        cli_error("monitor: --http is for a live source; a FILE gives its reports at the end");
         return false;
     }
     if (o->file != NULL && o->seconds != 0u) {
@@ -137,6 +143,7 @@ int cmd_monitor(int argc, char **argv)
     static mon_cmd_t run;
     memset(&o, 0, sizeof o);
     o.baud = 1500000u;
+    instrument_defaults(&o.io, RIG_LOG_TIME_BUS);
     o.view = isatty(STDOUT_FILENO) ? MON_VIEW_TOP : MON_VIEW_LOG;
     o.max_repeats = UINT32_MAX;
     o.max_missing = UINT32_MAX;

@@ -188,7 +188,7 @@ static const help_cmd_t commands[] = {
      "--port DEV|--bus lcm:CHANNEL [--lcm-url URL] [--key FILE]|FILE [--baud RATE]\n"
      "[--timing] [--tsl BITS] [--ttr BITS] [--seconds S] [--view top|log|none] [--report json|junit FILE]...\n"
      "[--expect N|N-M,...] [--max-repeats N] [--max-missing N] [--gsd FILE]...\n"
-     "[--pcapng FILE]",
+     "[--pcapng FILE] [--http [ADDR:]PORT] [LOG OPTIONS]",
      "a bus monitor: a station that only listens, on a tty or PTY (a USB adapter, a\n"
      "port of dfp-sim line), an LCM segment, or a capture FILE (offline). It keeps the\n"
      "live list: every station heard, active (in the token ring) or passive; for a DP\n"
@@ -208,8 +208,10 @@ static const help_cmd_t commands[] = {
      "Data_Exch (and each --expect N heard), at most --max-repeats N repeats and\n"
      "--max-missing N missing answers per slave. Exit 1 when a check fails. --pcapng:\n"
      "every telegram and garbled run (commented \"garbled\") into FILE as it goes\n"
-     "(flushed every second; link type PROFIBUS_DL, ns times). docs/monitor.md",
-     NOTE_RATE | NOTE_SEGMENT},
+     "(flushed every second; link type PROFIBUS_DL, ns times). --http (a live source):\n"
+     "the panel's bus page and GET /api/v1/bus show this monitor; the API takes no\n"
+     "action. --quiet and --log-level filter the event lines. docs/monitor.md",
+     NOTE_RATE | NOTE_SEGMENT | NOTE_HTTP | NOTE_LOG},
     {"check-cfg", "HEX", "would the card accept this Chk_Cfg configuration?", 0u},
     {"gsd", "FILE [--json] [--module NAME]...",
      "what a GSD file says: ident, lengths, the rates with their MaxTsdr, the modules\n"

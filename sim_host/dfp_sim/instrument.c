@@ -238,7 +238,9 @@ int instrument_start_http(instrument_t *in, rig_t *r, const instrument_opts_t *o
         cli_error("--http: the loop cannot wait on another descriptor");
         return 1;
     }
-    attach_monitor(in, r);
+    if (!in->no_bus_monitor) {
+        attach_monitor(in, r);
+    }
     rig_add_timer(r, service_timer, in);
     rig_ctl_service(&in->ctl, 0);
     return http_begin(in, o, read_only);

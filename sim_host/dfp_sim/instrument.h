@@ -52,6 +52,9 @@ typedef struct instrument {
      * log kind "bus"). On the heap, and kept until the process ends: the rig's tap points
      * at it as long as the rig runs. NULL: none (out of memory, or no tap left). */
     mon_rig_t *mon;
+    /* Set before instrument_start_http by a command that brings its own monitor (dfp-sim
+     * monitor): no monitor is attached to the rig's telegrams. */
+    bool no_bus_monitor;
     rig_ctl_event_t batch[INSTRUMENT_EVENT_BATCH];
 } instrument_t;
 

@@ -9,7 +9,6 @@
 
 #include "cli.h"
 #include "gsd/gsd.h"
-#include "lcm_bridge/lcm_segment.h"
 #include "monitor/mon_report.h"
 #include "sim_hal/path.h"
 
@@ -20,12 +19,21 @@ static const char *level_word(mon_level_t l)
     return l == MON_LEVEL_ERROR ? "error" : l == MON_LEVEL_WARN ? "warn" : "info";
 }
 
-static void on_event(void *ctx, const mon_event_t *ev)
+/* The log's levels (rig_log_level_t: error 0, warn 1, info 2) for --quiet and --log-level. */
+static int level_rank(mon_level_t l)
+{
+    return l == MON_LEVEL_ERROR ? 0 : l == MON_LEVEL_WARN ? 1 : 2;
+}
+
+void mon_cmd_event(void *ctx, const mon_event_t *ev)
 {
     mon_cmd_t *c = ctx;
-    if (c->o->view == MON_VIEW_LOG) {
+    if (c->o->view == MON_VIEW_LOG && level_rank(ev->level) <= (int)c->o->io.level) {
         printf("%11.6f %-5s %s\n", (double)ev->t_ns / 1e9, level_word(ev->level), ev->text);
         fflush(stdout);
+    }
+    if (c->api_event != NULL) {
+        c->api_event(c->api_ctx, ev);
     }
 }
 
@@ -44,7 +52,7 @@ static void pcapng_told(mon_cmd_t *c)
     }
 }
 
-static void on_frame(void *ctx, const uint8_t *f, size_t len, uint64_t t_ns, bool garbled)
+void mon_cmd_frame(void *ctx, const uint8_t *f, size_t len, uint64_t t_ns, bool garbled)
 {
     mon_cmd_t *c = ctx;
     if (!c->recording) {
@@ -57,52 +65,8 @@ static void on_frame(void *ctx, const uint8_t *f, size_t len, uint64_t t_ns, boo
     }
 }
 
-static void keys_readable(void *ctx, hal_time_us_t now)
+void mon_cmd_pcapng_tick(mon_cmd_t *c, uint64_t now_ns)
 {
-    (void)now;
-    mon_cmd_t *c = ctx;
-    int key;
-    bool changed = false;
-    while ((key = mon_term_poll_key(&c->term)) >= 0) {
-        mon_view_result_t r = mon_view_key(&c->view, key);
-        if (r == MON_VIEW_QUIT) {
-            cli_stop = 1;
-            return;
-        }
-        changed = changed || r == MON_VIEW_CHANGED;
-    }
-    if (changed) {
-        mon_term_draw(&c->term, &c->mon, &c->view, c->now_ns);
-    }
-}
-
-/* The full-screen view, when asked for: keys come through the loop like the line's
- * characters. False after saying why (not a terminal). */
-static bool open_top(mon_cmd_t *c)
-{
-    char err[200];
-    if (mon_term_open(&c->term, 0, 1, err, sizeof err) != 0) {
-        fprintf(stderr, "monitor: --view top: %s (--view log prints one line per event)\n", err);
-        return false;
-    }
-    c->view.source = c->source;
-    c->view.baud = c->o->baud;
-    if (tty_runner_add_fd(&c->live.runner, 0, keys_readable, c) != 0) {
-        mon_term_close(&c->term);
-        fprintf(stderr, "monitor: --view top: the loop has no room for the keyboard\n");
-        return false;
-    }
-    c->top = true;
-    return true;
-}
-
-static void tick(void *ctx, uint64_t now_ns)
-{
-    mon_cmd_t *c = ctx;
-    c->now_ns = now_ns;
-    if (c->top) {
-        mon_term_draw(&c->term, &c->mon, &c->view, now_ns);
-    }
     if (c->recording && pcapng_writer_tick(&c->pcapng, now_ns) != 0) {
         pcapng_told(c);
     }
@@ -127,28 +91,6 @@ static bool open_pcapng(mon_cmd_t *c, const char *source)
     return true;
 }
 
-static int open_source(mon_cmd_t *c)
-{
-    const mon_cmd_opts_t *o = c->o;
-    char err[300];
-    int rc;
-    if (o->med.dev != NULL) {
-        rc = mon_live_open_port(&c->live, &c->mon, o->med.dev, o->baud, err, sizeof err);
-        (void)snprintf(c->source, sizeof c->source, "%s", o->med.dev);
-    } else {
-        const char *channel = dfp_lcm_segment_channel(o->med.bus);
-        rc = mon_live_open_lcm(&c->live, &c->mon, o->med.lcm_url, channel, medium_key(&o->med),
-                               o->baud, err, sizeof err);
-        (void)snprintf(c->source, sizeof c->source, "LCM segment %s", channel);
-    }
-    if (rc != 0) {
-        fprintf(stderr, "monitor: %s\n", err);
-        mon_live_close(&c->live);
-        return 1;
-    }
-    return 0;
-}
-
 static void file_put(void *ctx, const char *text, size_t n)
 {
     if (fwrite(text, 1, n, ctx) != n) {
@@ -158,7 +100,7 @@ static void file_put(void *ctx, const char *text, size_t n)
 
 static mon_report_info_t report_info(const mon_cmd_t *c)
 {
-    uint64_t now = c->o->file != NULL ? c->mon.line.last_ns : c->now_ns;
+    uint64_t now = c->o->file != NULL ? c->mon->line.last_ns : c->now_ns;
     mon_report_info_t info = {.source = c->source, .t_start_ns = 0u, .t_now_ns = now,
                               .last_events = 50u};
     return info;
@@ -180,9 +122,9 @@ static bool write_reports(const mon_cmd_t *c, const mon_report_opts_t *ropt)
         }
         mon_sink_t out = {file_put, f};
         if (r->junit) {
-            mon_report_junit(&c->mon, &info, ropt, &out);
+            mon_report_junit(c->mon, &info, ropt, &out);
         } else {
-            mon_report_json(&c->mon, &info, &out);
+            mon_report_json(c->mon, &info, &out);
         }
         bool bad = ferror(f) != 0;
         if (fclose(f) != 0 || bad) {
@@ -201,10 +143,10 @@ static int finish(const mon_cmd_t *c)
                               .expect = o->expect, .n_expect = o->n_expect};
     mon_report_info_t info = report_info(c);
     mon_sink_t out = {file_put, stdout};
-    mon_report_text(&c->mon, &info, &out);
+    mon_report_text(c->mon, &info, &out);
     fflush(stdout);
     bool written = write_reports(c, &ropt);
-    return written && mon_report_ok(&c->mon, &ropt) ? 0 : 1;
+    return written && mon_report_ok(c->mon, &ropt) ? 0 : 1;
 }
 
 /* --gsd FILE...: each file's ident and its MaxTsdr at the line's rate into cfg. False after
@@ -247,53 +189,34 @@ int mon_cmd_run(mon_cmd_t *c, const mon_cmd_opts_t *o)
 {
     memset(c, 0, sizeof *c);
     c->o = o;
+    c->mon = &c->own;
     mon_cfg_t cfg = {.baud = o->baud, .timing = o->timing, .tsl_bits = o->tsl_bits,
-                     .ttr_bits = o->ttr_bits, .on_event = on_event, .on_frame = on_frame,
-                     .ctx = c};
+                     .ttr_bits = o->ttr_bits, .on_event = mon_cmd_event,
+                     .on_frame = mon_cmd_frame, .ctx = c};
     if (!read_gsd(o, &cfg)) {
         return EXIT_USAGE;
     }
-    mon_init(&c->mon, &cfg);
-    int rc = 0;
-    if (!open_pcapng(c, o->file != NULL ? o->file : (o->med.dev != NULL ? o->med.dev : o->med.bus))) {
+    mon_init(&c->own, &cfg);
+    const char *source = o->file != NULL ? o->file : (o->med.dev != NULL ? o->med.dev : o->med.bus);
+    (void)snprintf(c->source, sizeof c->source, "%s", source);
+    if (!open_pcapng(c, source)) {
         return EXIT_USAGE;
     }
+    int rc = 0;
     if (o->file != NULL) {
-        (void)snprintf(c->source, sizeof c->source, "%s", o->file);
         char err[1100];
-        if (mon_file_run(&c->mon, o->file, o->baud, &cli_stop, err, sizeof err) < 0) {
+        if (mon_file_run(c->mon, o->file, o->baud, &cli_stop, err, sizeof err) < 0) {
             fprintf(stderr, "monitor: %s\n", err);
             rc = 1;
         }
     } else {
-        c->live.tick = tick;
-        c->live.tick_ctx = c;
-        c->live.tick_ms = 250u;
-        if (open_source(c) != 0) {
+        rc = mon_cmd_live(c);
+        if (rc == EXIT_USAGE) {
             if (c->recording) {
                 (void)pcapng_writer_close(&c->pcapng);
             }
-            return 1;
+            return rc;
         }
-        if (o->view == MON_VIEW_TOP && !open_top(c)) {
-            mon_live_close(&c->live);
-            if (c->recording) {
-                (void)pcapng_writer_close(&c->pcapng);
-            }
-            return EXIT_USAGE;
-        }
-        cli_catch_stop_signals();
-        char err[300];
-        if (mon_live_run(&c->live, o->seconds, &cli_stop, err, sizeof err) != 0) {
-            fprintf(stderr, "monitor: %s\n", err);
-            rc = 1;
-        }
-        if (c->top) {
-            (void)tty_runner_remove_fd(&c->live.runner, 0);
-            mon_term_close(&c->term);
-            c->top = false;
-        }
-        mon_live_close(&c->live);
     }
     int checks = finish(c);
     rc = rc != 0 ? rc : checks;

@@ -80,6 +80,29 @@ expect_in "live: telegrams after the garbage" "True" \
   "$(json "$tmp/live.json" "($(station 5))['last_s'] > 3.0")"
 expect_in "live: TSDR not measurable without --timing" "None" "$(json "$tmp/live.json" "($(station 5))['tsdr_us']")"
 
+# --http on the live source: GET /api/v1/bus is this monitor's document (with the token only),
+# its events are in the API's log as kind "bus".
+token=abcdefghijklmnop0123
+port=$((20000 + RANDOM % 20000))
+DFP_SIM_TOKEN=$token "$sim" monitor --port "$tmp/l/port1" --baud 187500 --seconds 6 --view none \
+  --http "$port" >"$tmp/http.out" 2>&1 &
+mon=$!
+got=
+for _ in $(seq 40); do
+  sleep 0.25
+  got=$(curl -s -H "Authorization: Bearer $token" "http://127.0.0.1:$port/api/v1/bus") || continue
+  "$py" -c 'import json,sys; d=json.loads(sys.argv[1]); sys.exit(0 if any(s["address"] == 5 and s["dp"] and s["dp"]["state"] == "Data_Exch" for s in d["stations"]) else 1)' "$got" 2>/dev/null && break
+done
+"$py" -c 'import json,sys; d=json.loads(sys.argv[1]); print(d["monitor"]["source"], d["ring"]["members"], [(s["address"], s["dp"]["state"]) for s in d["stations"] if s["dp"]])' "$got" >"$tmp/http.doc" 2>&1
+expect_in "--http: the bus document" "$tmp/l/port1 [2] [(5, 'Data_Exch'), (6, 'Data_Exch')]" "$(cat "$tmp/http.doc")"
+expect_in "--http: no token, no document" "401" "$(curl -s -o /dev/null -w '%{http_code}' "http://127.0.0.1:$port/api/v1/bus")"
+expect_in "--http: the bus events in the log" '"source":"station 5","level":"info","kind":"bus","text":"station 5 heard for the first time (passive)"' \
+  "$(curl -s -H "Authorization: Bearer $token" "http://127.0.0.1:$port/api/v1/log")"
+expect_in "--http: read-only" "403" "$(curl -s -o /dev/null -w '%{http_code}' -X POST -H "Authorization: Bearer $token" -H 'Content-Type: application/json' -d '{"running":false}' "http://127.0.0.1:$port/api/v1/master/run")"
+wait "$mon"
+expect_in "--http: the run ends by itself" "monitor $tmp/l/port1:" "$(cat "$tmp/http.out")"
+expect_exit 2 "--http with a file" -- "$sim" monitor "$tmp/r.pcap" --http 0
+
 # 3. Bad command lines: exit 2 with one line; a missing file: exit 1.
 expect_exit 2 "no source" -- "$sim" monitor
 expect_in "no source: the message" "monitor: where does it listen? (--port DEV, --bus lcm:CHANNEL or a capture FILE)" "$out"

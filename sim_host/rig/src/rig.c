@@ -472,7 +472,7 @@ static int attach_wall_station(rig_t *r, const sim_station_t *st)
 
 rig_card_t *rig_add_card(rig_t *r, const card_options_t *opt, hal_time_us_t now)
 {
-    if (r->num_cards >= RIG_MAX_CARDS || (wall_clock(r) && r->has_master)) {
+    if (r->num_cards >= RIG_MAX_CARDS || (wall_clock(r) && (r->has_master || r->has_listener))) {
         return NULL;
     }
     rig_card_t *c = &r->cards[r->num_cards];
@@ -532,9 +532,21 @@ rig_card_t *rig_add_card(rig_t *r, const card_options_t *opt, hal_time_us_t now)
     return c;
 }
 
+int rig_attach_listener(rig_t *r, const sim_station_t *st)
+{
+    if (!wall_clock(r) || !r->open || r->num_cards > 0u || r->has_master || r->has_listener) {
+        return -1;
+    }
+    if (attach_wall_station(r, st) != 0) {
+        return -1;
+    }
+    r->has_listener = true;
+    return 0;
+}
+
 dp_master_t *rig_add_master(rig_t *r, const dp_master_cfg_t *cfg, hal_time_us_t now)
 {
-    if (r->has_master || (wall_clock(r) && r->num_cards > 0u)) {
+    if (r->has_master || (wall_clock(r) && (r->num_cards > 0u || r->has_listener))) {
         return NULL;
     }
     sim_station_t st = master_station(&r->master);

@@ -1,8 +1,8 @@
-/* Where the monitor listens: a tty or PTY (a USB/RS-485 adapter, a port of the virtual line),
- * a virtual segment over LCM, or a capture file. A live source runs the tty_runner loop with a
- * station that only receives: its UART is never asked to transmit, so the monitor cannot
- * disturb the line it watches. The times it gives the monitor are nanoseconds since the source
- * was opened (wall clock), a file's are the records' own. */
+/* Where the monitor listens: a tty or PTY (a USB/RS-485 adapter, a port of the virtual line) or
+ * a virtual segment over LCM, through a station that only receives (its UART is never asked to
+ * transmit, so the monitor cannot disturb the line it watches), or a capture file. The times a
+ * live source gives the monitor are nanoseconds since its first character or poll (wall
+ * clock), a file's are the records' own from its first. */
 #ifndef MONITOR_MON_LIVE_H
 #define MONITOR_MON_LIVE_H
 
@@ -10,19 +10,13 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "lcm_bridge/lcm_segment.h"
 #include "monitor/mon_chars.h"
 #include "monitor/monitor.h"
-#include "sim_hal/tty_port.h"
+#include "sim_hal/sim_station.h"
 
 typedef struct mon_live {
     mon_t *mon;
     mon_chars_t chars;
-    tty_runner_t runner;
-    tty_port_t port;
-    bool port_open;
-    dfp_lcm_segment_t seg;
-    bool lcm_open;
     /* hal_time_us_t (32 bits, wrapping) extended to 64 bits from the first one seen */
     bool have_t;
     uint32_t last_us;
@@ -35,16 +29,12 @@ typedef struct mon_live {
     uint64_t char_errors;
 } mon_live_t;
 
-/* A tty or PTY at baud (8E1, raw; a PTY ignores the rate). 0, or -1 with the reason in err. */
-int mon_live_open_port(mon_live_t *l, mon_t *m, const char *dev, uint32_t baud, char *err,
-                       size_t n);
-/* An LCM segment (url NULL: LCM's default); key NULL for a plain one. */
-int mon_live_open_lcm(mon_live_t *l, mon_t *m, const char *url, const char *channel,
-                      const uint8_t *key, uint32_t baud, char *err, size_t n);
-/* Runs until seconds have passed (0: no limit) or *stop becomes non-zero: 0; -1 when the
- * device fails or its peer hangs up (the message in err). */
-int mon_live_run(mon_live_t *l, uint32_t seconds, volatile const int *stop, char *err, size_t n);
-void mon_live_close(mon_live_t *l);
+/* The receiver for m on a line at baud; tick, tick_ctx and tick_ms are the caller's to set. */
+void mon_live_init(mon_live_t *l, mon_t *m, uint32_t baud);
+/* The station that listens for it: rx_char feeds the receiver, poll runs the monitor's idle
+ * time and the caller's tick; nothing ever transmits. Give it to the medium (the rig's
+ * rig_attach_listener, a tty_runner). */
+sim_station_t mon_live_station(mon_live_t *l);
 
 /* A capture file (any format capture.h reads) through the monitor, offline. baud: the line's
  * rate when the file does not say (0: unknown). Each record is one telegram (or a garbled

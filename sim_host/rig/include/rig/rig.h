@@ -141,6 +141,7 @@ struct rig {
     unsigned num_cards;
     dp_master_t master;
     bool has_master;
+    bool has_listener; /* a wall-clock medium's one station only listens (rig_attach_listener) */
     membus_port_t *master_port;
     hal_uart_t master_uart;
     rig_tap_t taps[RIG_MAX_TAPS];
@@ -166,6 +167,12 @@ dp_master_t *rig_add_master(rig_t *r, const dp_master_cfg_t *cfg, hal_time_us_t 
  * after those attached before it. Returns its port, or NULL on a wall-clock medium or when the
  * bus is full. */
 membus_port_t *rig_attach_station(rig_t *r, const sim_station_t *st, hal_uart_t *uart);
+
+/* A station that only listens (the bus monitor) as a wall-clock medium's one station: it gets
+ * every character with its arrival time and is polled at its deadlines; no card or master can
+ * join after it, nor it after them. Returns 0, or -1 on the in-memory bus (rig_attach_station
+ * is the way there), before rig_open, or when the medium has its station. */
+int rig_attach_listener(rig_t *r, const sim_station_t *st);
 
 /* The card by bus address (the DIP address at its last power-up), NULL if none. */
 rig_card_t *rig_card_by_address(rig_t *r, uint8_t address);
