@@ -89,7 +89,9 @@ static int start_api(mon_cmd_t *c)
     return 0;
 }
 
-static int run(mon_cmd_t *c)
+/* Until the end of the run: 0, or 1 with the reason in why (told by the caller once the
+ * terminal is back: written on the alternate screen, it would vanish with it). */
+static int run(mon_cmd_t *c, char *why, size_t n)
 {
     const mon_cmd_opts_t *o = c->o;
     uint64_t limit_us = (uint64_t)o->seconds * 1000000u;
@@ -99,7 +101,7 @@ static int run(mon_cmd_t *c)
         uint64_t left = o->seconds == 0u ? 200000u : limit_us - spent_us;
         uint32_t slice = (uint32_t)(left < 200000u ? left : 200000u);
         if (rig_run_until(&c->session.rig, tty_now_us() + slice, &cli_stop) < 0) {
-            fprintf(stderr, "monitor: %s\n", tty_runner_error(c->session.rig.runner));
+            (void)snprintf(why, n, "%s", tty_runner_error(c->session.rig.runner));
             return 1;
         }
         spent_us = (uint32_t)(tty_now_us() - start);
@@ -134,11 +136,15 @@ int mon_cmd_live(mon_cmd_t *c)
         session_close(&c->session);
         return EXIT_USAGE;
     }
-    rc = run(c);
+    char why[300] = "";
+    rc = run(c, why, sizeof why);
     if (c->top) {
         (void)tty_runner_remove_fd(c->session.rig.runner, 0);
         mon_term_close(&c->term);
         c->top = false;
+    }
+    if (rc != 0) {
+        fprintf(stderr, "monitor: %s\n", why);
     }
     session_close(&c->session);
     return rc;

@@ -1,0 +1,17 @@
+# dfp-sim monitor as a person uses it, end to end: the full-screen view on a PTY against a port
+# of dfp-sim line (monitor_top), the panel's bus page in headless chromium against the monitor's
+# --http (monitor_panel_browser), and the monitor on an LCM segment, plain and keyed
+# (monitor_lcm).
+if(TARGET dfp-sim)
+  if(DFP_PYTHON)
+    set(mon_e2e_python "${DFP_PYTHON}")
+  else()
+    find_package(Python3 COMPONENTS Interpreter)
+    set(mon_e2e_python "${Python3_EXECUTABLE}")
+  endif()
+
+  add_test(NAME monitor_top
+           COMMAND ${mon_e2e_python} -B ${CMAKE_CURRENT_LIST_DIR}/test_monitor_top.py
+                   $<TARGET_FILE:dfp-sim>)
+  set_tests_properties(monitor_top PROPERTIES TIMEOUT 120)
+endif()
