@@ -15,3 +15,19 @@ if(TARGET dfp-sim)
                    $<TARGET_FILE:dfp-sim>)
   set_tests_properties(monitor_top PROPERTIES TIMEOUT 120)
 endif()
+
+# chromium and selenium: skipped (77) where they are missing, unless DFP_REQUIRE_INTEROP, as
+# panel_browser (tests/panel/CMakeLists.txt, whose conftest.py finds the tools).
+if(TARGET dfp-sim AND DFP_PYTHON)
+  set(mon_e2e_require "")
+  if(DFP_REQUIRE_INTEROP)
+    set(mon_e2e_require --require-tools)
+  endif()
+  add_test(NAME monitor_panel_browser
+           COMMAND ${DFP_PYTHON} -B ${CMAKE_CURRENT_LIST_DIR}/test_monitor_panel.py
+                   $<TARGET_FILE:dfp-sim> ${mon_e2e_require})
+  set_tests_properties(monitor_panel_browser PROPERTIES TIMEOUT 180 RUN_SERIAL TRUE)
+  if(NOT DFP_REQUIRE_INTEROP)
+    set_tests_properties(monitor_panel_browser PROPERTIES SKIP_RETURN_CODE 77)
+  endif()
+endif()
