@@ -7,6 +7,7 @@
 
 #include "cli.h"
 #include "mon_cmd.h"
+#include "report.h"
 #include "sim_hal/tty_port.h"
 
 #define MON_CMD_TICK_MS 250u
@@ -109,6 +110,27 @@ static int run(mon_cmd_t *c, char *why, size_t n)
     return 0;
 }
 
+/* An LCM segment hands a telegram sent at another rate on as framing errors, as a line does to
+ * a receiver at the wrong rate: without this line a live list that stays empty says nothing of
+ * why. */
+static void tell_other_rate(const mon_cmd_t *c)
+{
+    const rig_t *r = &c->session.rig;
+    uint64_t other = r->segment.frames_other_baud;
+    if (r->cfg.medium != RIG_MEDIUM_LCM || other == 0u) {
+        return;
+    }
+    char how_many[64] = "every telegram heard was";
+    if (other != r->segment.frames_received) {
+        (void)snprintf(how_many, sizeof how_many, "%llu of %llu telegrams heard were",
+                       (unsigned long long)other,
+                       (unsigned long long)r->segment.frames_received);
+    }
+    fprintf(stderr, "monitor: segment %s: %s sent at a rate other than --baud %s (heard "
+            "garbled): give the segment's rate\n", r->cfg.lcm_channel, how_many,
+            report_baud_text(c->o->baud));
+}
+
 int mon_cmd_live(mon_cmd_t *c)
 {
     const mon_cmd_opts_t *o = c->o;
@@ -146,6 +168,7 @@ int mon_cmd_live(mon_cmd_t *c)
     if (rc != 0) {
         fprintf(stderr, "monitor: %s\n", why);
     }
+    tell_other_rate(c);
     session_close(&c->session);
     return rc;
 }
