@@ -15,14 +15,24 @@ here=$(dirname "$0")
 . "$here/../cli/lib.sh"
 tmp=$(mktemp -d)
 pids=()
-cleanup() { for p in "${pids[@]}"; do kill -KILL "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$tmp"; }
+cleanup() {
+  for p in "${pids[@]}"; do kill -KILL "$p" 2>/dev/null; done
+  wait 2>/dev/null
+  rm -rf "$tmp"
+}
 trap cleanup EXIT
 trap 'exit 1' INT TERM
 url="udpm://239.255.76.90:7690?ttl=0"
 
-# json FILE EXPR: the Python expression over the document d, printed.
-json() { "$py" -c 'import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))' "$@"; }
-station() { echo "[s for s in d['stations'] if s['address'] == $1][0]"; }
+# json FILE EXPR: the Python expression over the report d (s(A): station A), printed; a tuple's
+# items separated by spaces.
+json() {
+  "$py" -c 'import json,sys
+d = json.load(open(sys.argv[1]))
+s = lambda a: next(x for x in d["stations"] if x["address"] == a)
+v = eval(sys.argv[2])
+print(" ".join(str(x) for x in v) if isinstance(v, tuple) else v)' "$@"
+}
 
 # monitor NAME ARGS...: a monitor for 6 s in the background, its report NAME.json.
 mons=()
@@ -60,19 +70,20 @@ wait_monitors() {
 # sees_the_line NAME: its report has the ring and the card in data exchange.
 sees_the_line() {
   local f="$tmp/$1.json"
-  expect_in "$1: the source" "lcm:SEG 19200" "$(json "$f" "d['monitor']['source'], d['monitor']['baud']" | tr -d "(),'")"
+  expect_in "$1: the source" "lcm:SEG 19200" \
+    "$(json "$f" "d['monitor']['source'], d['monitor']['baud']")"
   expect_in "$1: ring of master 2" "[2] active True" \
-    "$(json "$f" "' '.join(str(x) for x in (d['ring']['members'], ($(station 2))['role'], ($(station 2))['in_ring']))")"
+    "$(json "$f" "d['ring']['members'], s(2)['role'], s(2)['in_ring']")"
   expect_in "$1: slave 5 in Data_Exch with master 2, ident 0x6003" "passive Data_Exch 2 0x6003" \
-    "$(json "$f" "' '.join(str(x) for x in (($(station 5))['role'], *(($(station 5))['dp'][k] for k in ('state','master','ident'))))")"
+    "$(json "$f" "s(5)['role'], s(5)['dp']['state'], s(5)['dp']['master'], s(5)['dp']['ident']")"
   expect_in "$1: slave 5's diagnosis" "WD_On | Master_Add 2, ident 0x6003" \
-    "$(json "$f" "($(station 5))['dp']['diag_text']")"
+    "$(json "$f" "s(5)['dp']['diag_text']")"
   expect_in "$1: the DFP21B's PD configuration" "3PD + PARAM True" \
-    "$(json "$f" "' '.join(str(($(station 5))['dp']['dfp21b'][k]) for k in ('pd_config','param_channel'))")"
+    "$(json "$f" "s(5)['dp']['dfp21b']['pd_config'], s(5)['dp']['dfp21b']['param_channel']")"
   expect_in "$1: nothing garbled, nothing missing" "0 0 0" \
-    "$(json "$f" "' '.join(str(x) for x in (d['line']['garbled'], d['line']['unanswered'], ($(station 5))['missing']))")"
+    "$(json "$f" "d['line']['garbled'], d['line']['unanswered'], s(5)['missing']")"
   expect_in "$1: no TSDR measured on LCM" "None False" \
-    "$(json "$f" "' '.join(str(x) for x in (($(station 5))['tsdr_us'], d['monitor']['timing']))")"
+    "$(json "$f" "s(5)['tsdr_us'], d['monitor']['timing']")"
   expect_in "$1: the event" "slave 5 in data exchange with master 2" "$(cat "$tmp/$1.out")"
 }
 
@@ -84,10 +95,9 @@ wait_monitors
 sees_the_line plain
 expect_in "master: in data exchange" "slave 5 is in data exchange" "$(cat "$tmp/master.out")"
 expect_in "at 1.5M: nothing but garbled octets" "0 [] True" \
-  "$(json "$tmp/default_rate.json" "' '.join(str(x) for x in (d['line']['telegrams'], d['stations'], d['line']['garbled'] > 0))")"
-expect_in "at 1.5M: says why" \
-  "monitor: segment SEG: every telegram heard was sent at a rate other than --baud 1.5 Mbit/s (heard garbled): give the segment's rate" \
-  "$(cat "$tmp/default_rate.out")"
+  "$(json "$tmp/default_rate.json" "d['line']['telegrams'], d['stations'], d['line']['garbled']>0")"
+expect_in "at 1.5M: says why" "monitor: segment SEG: every telegram heard was sent at a rate other\
+ than --baud 1.5 Mbit/s (heard garbled): give the segment's rate" "$(cat "$tmp/default_rate.out")"
 if grep -q "other than --baud" "$tmp/plain.out"; then bad "plain: told of another rate"; else ok; fi
 
 # ---- a keyed segment: the monitor with the key hears it, the one without it nothing ----
@@ -98,14 +108,15 @@ stations --key "$tmp/k1"
 wait_monitors
 sees_the_line keyed
 expect_in "keyed: the segment's totals" "segment SEG (keyed): " "$(cat "$tmp/keyed.out")"
-expect_in "keyed: nothing dropped" "dropped (unsigned 0, signed 0, bad signature 0, stale 0, replayed 0, senders full 0, malformed 0)" \
-  "$(cat "$tmp/keyed.out")"
+expect_in "keyed: nothing dropped" "dropped (unsigned 0, signed 0, bad signature 0, stale 0,\
+ replayed 0, senders full 0, malformed 0)" "$(cat "$tmp/keyed.out")"
 expect_in "without the key: 0 telegrams, no station" "0 0 []" \
-  "$(json "$tmp/nokey.json" "' '.join(str(x) for x in (d['line']['telegrams'], d['line']['garbled'], d['stations']))")"
-expect_in "without the key: the summary" "monitor lcm:SEG: " "$(grep -F ' 0 telegrams, 0 tokens, 0 garbled' "$tmp/nokey.out")"
-expect_in "without the key: says it dropped signed telegrams" "segment SEG: dropped a telegram: signed" \
-  "$(cat "$tmp/nokey.out")"
-n=$(sed -n 's/.*segment SEG: 0 telegrams taken, [0-9]* dropped (unsigned 0, signed \([0-9]*\),.*/\1/p' \
+  "$(json "$tmp/nokey.json" "d['line']['telegrams'], d['line']['garbled'], d['stations']")"
+expect_in "without the key: the summary" "monitor lcm:SEG: " \
+  "$(grep -F ' 0 telegrams, 0 tokens, 0 garbled' "$tmp/nokey.out")"
+expect_in "without the key: says it dropped signed telegrams" \
+  "segment SEG: dropped a telegram: signed" "$(cat "$tmp/nokey.out")"
+n=$(sed -n 's/.*SEG: 0 telegrams taken, [0-9]* dropped (unsigned 0, signed \([0-9]*\),.*/\1/p' \
   "$tmp/nokey.out")
 if [ -n "$n" ] && [ "$n" -gt 0 ]; then ok; else
   bad "without the key: its totals do not count signed drops:"$'\n'"$(cat "$tmp/nokey.out")"; fi

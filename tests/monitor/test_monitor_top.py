@@ -4,9 +4,9 @@ it in a terminal, its output read through a small terminal model (cursor positio
 attributes, the alternate screen, scrolling) so the test sees the screen the person sees:
 the header with the source and the rate, the ring, one row per station with its state and
 master; Down Down Enter: station 6's details; e: the events; q: exit 0 with the terminal
-given back (main screen, the PTY's settings as before). Then the line ends under a running
-monitor: it says the port hung up, on the main screen where it stays readable, and exits 1
-with the terminal given back as well.
+given back (main screen, the PTY's settings as before); Ctrl-C the same. Then the line ends
+under a running monitor: it says the port hung up, on the main screen where it stays
+readable, and exits 1 with the terminal given back as well.
 
 Usage: test_monitor_top.py DFP_SIM   (the last line is "N passed, M failed")
 """
@@ -315,6 +315,19 @@ def test_keys_and_quit(sim, tmp):
         check(mon.settings_restored(), "the PTY's settings are what they were before")
         check(re.search(r"^monitor %s: [0-9.]+ s, \d+ telegrams" % re.escape(port), s.text(),
                         re.M), "the summary on the main screen", s)
+    finally:
+        mon.close()
+
+    # Ctrl-C on the terminal (SIGINT from the PTY's line discipline) ends it the same way.
+    mon = Monitor(sim, ["--port", port, "--baud", "187500"])
+    try:
+        s = mon.screen
+        check(mon.until(line_and_cards_shown, SHOW_S), "a second view shows the line", s)
+        mon.key(b"\x03")
+        rc = mon.wait(EXIT_S)
+        check(rc == 0, "Ctrl-C: the monitor exits 0 (exit %s)" % rc, s)
+        check(not s.alt and s.cursor_shown, "Ctrl-C: main screen and cursor back", s)
+        check(mon.settings_restored(), "Ctrl-C: the PTY's settings are what they were before")
     finally:
         mon.close()
         line.send_signal(signal.SIGINT)
