@@ -1,12 +1,12 @@
 # The monitor on the in-memory bus (rings of masters with DFP21B cards, the rig's faults), and
 # the character receiver on damaged and random streams.
-add_library(dfp_mon_rig STATIC ${CMAKE_CURRENT_SOURCE_DIR}/mon_rig.c)
-target_include_directories(dfp_mon_rig PUBLIC ${CMAKE_CURRENT_SOURCE_DIR})
-target_link_libraries(dfp_mon_rig PUBLIC dfp_ring_rig dfp_monitor)
-target_compile_options(dfp_mon_rig PRIVATE ${DFP_WARNINGS})
+add_library(dfp_ring_mon STATIC ${CMAKE_CURRENT_SOURCE_DIR}/ring_mon.c)
+target_include_directories(dfp_ring_mon PUBLIC ${CMAKE_CURRENT_SOURCE_DIR})
+target_link_libraries(dfp_ring_mon PUBLIC dfp_ring_rig dfp_monitor)
+target_compile_options(dfp_ring_mon PRIVATE ${DFP_WARNINGS})
 foreach(t mon_rig mon_rig_ring)
   add_executable(test_${t} ${CMAKE_CURRENT_SOURCE_DIR}/test_${t}.c)
-  target_link_libraries(test_${t} PRIVATE dfp_mon_rig)
+  target_link_libraries(test_${t} PRIVATE dfp_ring_mon)
   target_compile_options(test_${t} PRIVATE ${DFP_WARNINGS})
 endforeach()
 add_test(NAME unit_mon_rig COMMAND test_mon_rig)

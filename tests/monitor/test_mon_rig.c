@@ -9,9 +9,9 @@
 #include "dfp21b/dfp21b.h"
 #include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_wire.h"
-#include "mon_rig.h"
+#include "ring_mon.h"
 
-static mon_rig_t r; /* large: keep it off the stack */
+static ring_mon_t r; /* large: keep it off the stack */
 
 static const uint8_t cards[] = {10, 11, 12};
 static const uint8_t owner[] = {2, 2, 2};
@@ -36,10 +36,10 @@ static rig_card_t *card(unsigned i)
 /* One master, three cards, in data exchange, and 100 ms more of it. */
 static void one_master(void)
 {
-    mon_rig_init(&r, 1500000u, cards, 3);
+    ring_mon_init(&r, 1500000u, cards, 3);
     (void)ring_rig_add_master(&r.rr, MASTER, NULL, cards, 3, WD_MS);
     CHECK(ring_rig_settle(&r.rr, owner, 3000000u));
-    mon_rig_run_ms(&r, 100);
+    ring_mon_run_ms(&r, 100);
 }
 
 static void check_slave_settled(unsigned i)
@@ -91,7 +91,7 @@ static void test_settled(void)
     int failed0 = check_failed_;
     one_master();
     uint8_t live[MON_STATIONS];
-    size_t n = mon_rig_live(&r, live, sizeof live);
+    size_t n = ring_mon_live(&r, live, sizeof live);
     CHECK_BYTES(live, n, MASTER, 10, 11, 12);
     const mon_station_t *m = st(MASTER);
     CHECK_EQ(m->role, MON_ROLE_ACTIVE);
@@ -117,14 +117,14 @@ static void test_settled(void)
     CHECK_EQ(l->lost_tokens, 0);
     /* events: the master first and in the ring, then per slave heard and in data exchange */
     CHECK(r.num_ev > 0u && r.ev[0].type == MON_EV_NEW_STATION && r.ev[0].station == MASTER);
-    size_t enter = mon_rig_find(&r, 0, MON_EV_RING_ENTER, MASTER);
+    size_t enter = ring_mon_find(&r, 0, MON_EV_RING_ENTER, MASTER);
     CHECK(enter < r.num_ev);
-    CHECK_EQ(mon_rig_count(&r, 0, MON_EV_RING_ENTER, MASTER), 1);
+    CHECK_EQ(ring_mon_count(&r, 0, MON_EV_RING_ENTER, MASTER), 1);
     for (unsigned i = 0; i < 3u; i++) {
-        size_t heard = mon_rig_find(&r, 0, MON_EV_NEW_STATION, cards[i]);
-        size_t dx = mon_rig_find(&r, 0, MON_EV_DX_ENTER, cards[i]);
+        size_t heard = ring_mon_find(&r, 0, MON_EV_NEW_STATION, cards[i]);
+        size_t dx = ring_mon_find(&r, 0, MON_EV_DX_ENTER, cards[i]);
         CHECK(enter < heard && heard < dx && dx < r.num_ev);
-        CHECK_EQ(mon_rig_count(&r, 0, MON_EV_DX_ENTER, cards[i]), 1);
+        CHECK_EQ(ring_mon_count(&r, 0, MON_EV_DX_ENTER, cards[i]), 1);
         CHECK_EQ(r.ev[dx].other, MASTER);
     }
     const mon_event_type_t never[] = {MON_EV_DX_LEAVE, MON_EV_NO_ANSWER, MON_EV_LOST_TOKEN,
@@ -132,10 +132,10 @@ static void test_settled(void)
                                       MON_EV_RETRY_STORM, MON_EV_DUPLICATE_TOKEN,
                                       MON_EV_PRM_FAULT, MON_EV_STAT_DIAG};
     for (size_t k = 0; k < sizeof never / sizeof never[0]; k++) {
-        CHECK_EQ(mon_rig_count_type(&r, 0, never[k]), 0);
+        CHECK_EQ(ring_mon_count_type(&r, 0, never[k]), 0);
     }
     if (check_failed_ > failed0) {
-        mon_rig_dump_events(&r, 0);
+        ring_mon_dump_events(&r, 0);
     }
 }
 
@@ -177,7 +177,7 @@ static void test_cable(void)
     uint64_t diag0 = s->diag_changes;
     size_t ev0 = r.num_ev;
     rig_card_set_cable(card(1), false);
-    mon_rig_run_ms(&r, 300);
+    ring_mon_run_ms(&r, 300);
     uint64_t sent = r.requests_to[11] - req0;
     CHECK(sent >= MON_MISSING_IN_A_ROW);
     /* every request while it was off the bus went unanswered, and each is counted once */
@@ -189,12 +189,12 @@ static void test_cable(void)
     CHECK_EQ(s->repeats_received, r.same_octets_to[11] - same0);
     CHECK(s->repeats_received >= 1u);
     CHECK_EQ(st(MASTER)->repeats_sent, s->repeats_received);
-    size_t quiet = mon_rig_find(&r, ev0, MON_EV_NO_ANSWER, 11);
-    size_t leave = mon_rig_find(&r, ev0, MON_EV_DX_LEAVE, 11);
+    size_t quiet = ring_mon_find(&r, ev0, MON_EV_NO_ANSWER, 11);
+    size_t leave = ring_mon_find(&r, ev0, MON_EV_DX_LEAVE, 11);
     CHECK_EQ(quiet, ev0);
     CHECK_EQ(leave, ev0 + 1u);
-    CHECK_EQ(mon_rig_count(&r, ev0, MON_EV_NO_ANSWER, 11), 1);
-    CHECK_EQ(mon_rig_count(&r, ev0, MON_EV_DX_LEAVE, 11), 1);
+    CHECK_EQ(ring_mon_count(&r, ev0, MON_EV_NO_ANSWER, 11), 1);
+    CHECK_EQ(ring_mon_count(&r, ev0, MON_EV_DX_LEAVE, 11), 1);
     CHECK(quiet < r.num_ev && r.ev[quiet].other == MASTER);
     CHECK_EQ(s->dp_state, MON_DP_UNKNOWN);
     CHECK_EQ(events_of_others(ev0, 11), 0);
@@ -202,7 +202,7 @@ static void test_cable(void)
     size_t ev1 = r.num_ev;
     rig_card_set_cable(card(1), true);
     CHECK(ring_rig_settle(&r.rr, owner, 3000000u));
-    mon_rig_run_ms(&r, 50);
+    ring_mon_run_ms(&r, 50);
     CHECK_EQ(s->dp_state, MON_DP_DATA_EXCH);
     CHECK_EQ(s->master, MASTER);
     CHECK_EQ(s->missing_in_a_row, 0);
@@ -214,7 +214,7 @@ static void test_cable(void)
     CHECK_EQ(st(10)->dp_state, MON_DP_DATA_EXCH);
     CHECK_EQ(st(12)->dp_state, MON_DP_DATA_EXCH);
     if (check_failed_ > failed0) {
-        mon_rig_dump_events(&r, ev0);
+        ring_mon_dump_events(&r, ev0);
     }
 }
 
@@ -226,7 +226,7 @@ static void test_power_cycle(void)
     const mon_station_t *s = st(12);
     size_t ev0 = r.num_ev;
     rig_card_power_cycle(card(2), rig_now_us(&r.rr.rig));
-    mon_rig_run_ms(&r, 200);
+    ring_mon_run_ms(&r, 200);
     CHECK_EQ(s->dp_state, MON_DP_DATA_EXCH);
     CHECK_EQ(s->master, MASTER);
     /* its first Data_Exchange after the restart is refused (RS): it left, then the start-up */
@@ -237,7 +237,7 @@ static void test_power_cycle(void)
     CHECK_EQ(s->missing, 0);
     CHECK_EQ(s->repeats_received, r.same_octets_to[12]);
     if (check_failed_ > failed0) {
-        mon_rig_dump_events(&r, ev0);
+        ring_mon_dump_events(&r, ev0);
     }
 }
 
@@ -253,7 +253,7 @@ static void test_drive_fault(void)
     uint64_t diag0 = s->diag_changes;
     size_t ev0 = r.num_ev;
     rig_card_inject_fault(card(0), 14);
-    mon_rig_run_ms(&r, 100);
+    ring_mon_run_ms(&r, 100);
     CHECK_EQ(s->in_len, 14);
     CHECK_EQ(s->inputs[8], 14);
     CHECK_EQ(s->inputs[9] & 0x20u, 0x20);
@@ -261,7 +261,7 @@ static void test_drive_fault(void)
     CHECK_EQ(s->diag_changes, diag0);
     CHECK_EQ(r.num_ev, ev0);
     if (check_failed_ > failed0) {
-        mon_rig_dump_events(&r, ev0);
+        ring_mon_dump_events(&r, ev0);
     }
 }
 
@@ -273,18 +273,18 @@ static void test_watchdog(void)
     one_master();
     size_t ev0 = r.num_ev;
     dp_master_stop(master());
-    mon_rig_run_ms(&r, WD_MS / 2u);
+    ring_mon_run_ms(&r, WD_MS / 2u);
     CHECK_EQ(r.num_ev, ev0); /* not yet */
-    mon_rig_run_ms(&r, WD_MS);
+    ring_mon_run_ms(&r, WD_MS);
     for (unsigned i = 0; i < 3u; i++) {
         CHECK_EQ(dp_slave_state(&card(i)->cs.card.dp), DP_STATE_WAIT_PRM);
         CHECK_EQ(st(cards[i])->dp_state, MON_DP_WAIT_PRM);
-        CHECK_EQ(mon_rig_count(&r, ev0, MON_EV_DX_LEAVE, cards[i]), 1);
+        CHECK_EQ(ring_mon_count(&r, ev0, MON_EV_DX_LEAVE, cards[i]), 1);
         CHECK_EQ(st(cards[i])->missing, 0);
     }
     CHECK_EQ(r.num_ev, ev0 + 3u);
     if (check_failed_ > failed0) {
-        mon_rig_dump_events(&r, ev0);
+        ring_mon_dump_events(&r, ev0);
     }
 }
 

@@ -61,35 +61,69 @@ static void garble_add(mon_chars_t *c, uint8_t b, uint64_t t_ns)
     c->garble_len++;
 }
 
-static void feed_one(mon_chars_t *c, uint8_t b, bool bad, uint64_t t_ns);
+/* One clean octet into the telegram in progress: a finished telegram goes to the monitor. True
+ * when the telegram in progress turned out to be none (its octets are to be looked at again). */
+static bool take(mon_chars_t *c, uint8_t b, uint64_t t_ns)
+{
+    if (c->have == 0u) {
+        if (!is_start(b)) {
+            garble_add(c, b, t_ns);
+            return false;
+        }
+        c->first_ns = t_ns;
+        c->frame_len = length_of(b);
+    }
+    c->buf[c->have++] = b;
+    if (c->have < c->frame_len) {
+        return false;
+    }
+    if (c->buf[0] == FDL_SD2 && c->frame_len == FDL_SD2_HEADER_LEN) {
+        uint8_t le = c->buf[1];
+        if (le != c->buf[2] || le < FDL_LE_MIN || le > FDL_LE_MAX || c->buf[3] != FDL_SD2) {
+            return true;
+        }
+        c->frame_len = (size_t)le + FDL_SD2_OVERHEAD;
+        return false;
+    }
+    if (fdl_check(c->buf, c->have, NULL, NULL) != FDL_CHECK_OK) {
+        return true;
+    }
+    garble_flush(c);
+    uint64_t start_ns = c->first_ns >= c->char_ns ? c->first_ns - c->char_ns : 0u;
+    uint64_t end_ns = t_ns;
+    mon_telegram(c->mon, c->buf, c->have, start_ns, end_ns);
+    c->have = 0u;
+    c->frame_len = 0u;
+    return false;
+}
 
-/* The telegram in progress is no telegram: its first octet is garbage, the rest is looked at
- * again from the start. */
+/* The telegram in progress is no telegram: its first octet is garbage and the rest is looked
+ * at again from the start. A telegram found in there may fail too; it always began after the
+ * one before it, so the octets looked at again are a shrinking tail of the same copy and the
+ * loop ends. */
 static void resync(mon_chars_t *c, uint64_t t_ns)
 {
     uint8_t again[FDL_FRAME_MAX];
-    size_t n = c->have; /* octets collected */
-    memcpy(again, c->buf, n);
-    c->have = 0u;
-    c->frame_len = 0u;
-    garble_add(c, again[0], c->first_ns);
-    for (size_t i = 1; i < n; i++) {
-        feed_one(c, again[i], false, t_ns);
-    }
-}
-
-static void complete(mon_chars_t *c, uint64_t t_ns)
-{
     size_t n = c->have;
-    if (fdl_check(c->buf, n, NULL, NULL) != FDL_CHECK_OK) {
-        resync(c, t_ns);
-        return;
+    memcpy(again, c->buf, n);
+    size_t failed_at = 0;
+    for (;;) {
+        garble_add(c, again[failed_at], c->first_ns);
+        c->have = 0u;
+        c->frame_len = 0u;
+        size_t begun = n;
+        bool failed = false;
+        for (size_t i = failed_at + 1u; i < n && !failed; i++) {
+            if (c->have == 0u) {
+                begun = i;
+            }
+            failed = take(c, again[i], t_ns);
+        }
+        if (!failed) {
+            return;
+        }
+        failed_at = begun;
     }
-    garble_flush(c);
-    uint64_t start = c->first_ns >= c->char_ns ? c->first_ns - c->char_ns : 0u;
-    mon_telegram(c->mon, c->buf, n, start, t_ns);
-    c->have = 0u;
-    c->frame_len = 0u;
 }
 
 static void feed_one(mon_chars_t *c, uint8_t b, bool bad, uint64_t t_ns)
@@ -103,28 +137,9 @@ static void feed_one(mon_chars_t *c, uint8_t b, bool bad, uint64_t t_ns)
         garble_add(c, b, t_ns);
         return;
     }
-    if (c->have == 0u) {
-        if (!is_start(b)) {
-            garble_add(c, b, t_ns);
-            return;
-        }
-        c->first_ns = t_ns;
-        c->frame_len = length_of(b);
+    if (take(c, b, t_ns)) {
+        resync(c, t_ns);
     }
-    c->buf[c->have++] = b;
-    if (c->have < c->frame_len) {
-        return;
-    }
-    if (c->buf[0] == FDL_SD2 && c->frame_len == FDL_SD2_HEADER_LEN) {
-        uint8_t le = c->buf[1];
-        if (le != c->buf[2] || le < FDL_LE_MIN || le > FDL_LE_MAX || c->buf[3] != FDL_SD2) {
-            resync(c, t_ns);
-            return;
-        }
-        c->frame_len = (size_t)le + FDL_SD2_OVERHEAD;
-        return;
-    }
-    complete(c, t_ns);
 }
 
 /* A pause: the telegram in progress was cut short (what resync looks at again may start another

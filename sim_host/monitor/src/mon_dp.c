@@ -19,6 +19,9 @@ static void set_state(mon_t *m, uint8_t a, mon_dp_state_t to, uint64_t t_ns, con
     mon_station_t *s = &m->st[a];
     mon_dp_state_t from = s->dp_state;
     s->dp_state = to;
+    if (to == MON_DP_DATA_EXCH) {
+        m->wd_due_ns = 0u; /* a watchdog to watch: the next mon_idle scans again */
+    }
     if (from == to) {
         return;
     }
@@ -276,6 +279,12 @@ void mon_dp_gone(mon_t *m, uint8_t a, uint64_t t_ns)
 
 void mon_dp_idle(mon_t *m, uint64_t now_ns)
 {
+    /* Expiries only move later (each answer restarts a watchdog), so the earliest one found by
+     * the last scan is a safe time for the next: mon_idle may run for every telegram. */
+    if (now_ns <= m->wd_due_ns) {
+        return;
+    }
+    uint64_t next = UINT64_MAX;
     for (unsigned a = 0; a < FDL_ADDR_BROADCAST; a++) {
         mon_station_t *s = &m->st[a];
         if (s->dp_state != MON_DP_DATA_EXCH || s->watchdog_ms == 0u) {
@@ -287,6 +296,9 @@ void mon_dp_idle(mon_t *m, uint64_t now_ns)
             char why[64];
             (void)snprintf(why, sizeof why, "its watchdog (%u ms) expired", s->watchdog_ms);
             set_state(m, (uint8_t)a, MON_DP_WAIT_PRM, expiry, why);
+        } else if (expiry < next) {
+            next = expiry;
         }
     }
+    m->wd_due_ns = next;
 }

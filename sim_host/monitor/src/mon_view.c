@@ -407,8 +407,8 @@ static void details_dp(const mon_t *m, const mon_station_t *s, pane_t *p)
     char mean[16];
     char min[16];
     char max[16];
-    char text[TEXT_MAX];
     if (s->diag_len != 0u) {
+        char text[TEXT_MAX];
         (void)mon_decode_diag(s->diag, s->diag_len, mon_prm_dpv1(s->prm, s->prm_len), text,
                               sizeof text);
         pane_line(p, "diag: %s", text);

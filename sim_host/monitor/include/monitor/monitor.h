@@ -245,6 +245,7 @@ typedef struct mon {
     bool last_was_token;
     uint64_t claim_ns;     /* the last claim after a lost token: the ring starts afresh */
     uint64_t last_end_ns;  /* end of the last telegram (or garble) on the line */
+    uint64_t wd_due_ns;    /* no slave's watchdog can run out before this (mon_idle) */
 } mon_t;
 
 void mon_init(mon_t *m, const mon_cfg_t *cfg);

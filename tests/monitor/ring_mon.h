@@ -2,8 +2,8 @@
  * a mon_t as a receive-only station sees it, and the events it reports are kept in order. The
  * tap also keeps its own tally (requests per address, repeats as identical octets) so the
  * monitor's counts are checked against something it did not compute. */
-#ifndef TESTS_MONITOR_MON_RIG_H
-#define TESTS_MONITOR_MON_RIG_H
+#ifndef TESTS_MONITOR_RING_MON_H
+#define TESTS_MONITOR_RING_MON_H
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -14,18 +14,18 @@
 
 #define MON_RIG_EVENTS 8192u
 
-typedef struct mon_rig_ev {
+typedef struct ring_mon_ev {
     mon_event_type_t type;
     uint8_t station;
     uint8_t other;
     uint32_t value;
     uint64_t t_ns;
-} mon_rig_ev_t;
+} ring_mon_ev_t;
 
-typedef struct mon_rig {
+typedef struct ring_mon {
     ring_rig_t rr;
     mon_t mon;
-    mon_rig_ev_t ev[MON_RIG_EVENTS];
+    ring_mon_ev_t ev[MON_RIG_EVENTS];
     size_t num_ev;
     /* the tap's own tally */
     uint64_t requests_to[MON_STATIONS];
@@ -34,22 +34,22 @@ typedef struct mon_rig {
     uint8_t last_req_len[MON_STATIONS];
     uint32_t req[MON_STATIONS][MON_STATIONS];     /* requests [from][to] */
     uint32_t set_prm[MON_STATIONS][MON_STATIONS]; /* Set_Prm requests [from][to] */
-} mon_rig_t;
+} ring_mon_t;
 
 /* ring_rig_init with cards that each drive an emulated MOVIDRIVE, then the monitor (timing true,
  * the DP profile's slot time) on its tap. */
-void mon_rig_init(mon_rig_t *r, uint32_t baud, const uint8_t *cards, size_t num_cards);
+void ring_mon_init(ring_mon_t *r, uint32_t baud, const uint8_t *cards, size_t num_cards);
 /* Runs ms milliseconds in 1 ms steps, telling the monitor the time after each (mon_idle). */
-void mon_rig_run_ms(mon_rig_t *r, unsigned ms);
+void ring_mon_run_ms(ring_mon_t *r, unsigned ms);
 /* Index of the first event of type for station at or after from (r->num_ev: none). */
-size_t mon_rig_find(const mon_rig_t *r, size_t from, mon_event_type_t type, uint8_t station);
+size_t ring_mon_find(const ring_mon_t *r, size_t from, mon_event_type_t type, uint8_t station);
 /* Events of type for station at or after from. */
-unsigned mon_rig_count(const mon_rig_t *r, size_t from, mon_event_type_t type, uint8_t station);
+unsigned ring_mon_count(const ring_mon_t *r, size_t from, mon_event_type_t type, uint8_t station);
 /* Events of type (any station) at or after from. */
-unsigned mon_rig_count_type(const mon_rig_t *r, size_t from, mon_event_type_t type);
+unsigned ring_mon_count_type(const ring_mon_t *r, size_t from, mon_event_type_t type);
 /* Addresses the monitor has heard (seen), ascending, into out; their number. */
-size_t mon_rig_live(const mon_rig_t *r, uint8_t *out, size_t cap);
+size_t ring_mon_live(const ring_mon_t *r, uint8_t *out, size_t cap);
 /* The events from from on stderr: what a failed check looks at. */
-void mon_rig_dump_events(const mon_rig_t *r, size_t from);
+void ring_mon_dump_events(const ring_mon_t *r, size_t from);
 
 #endif

@@ -1,4 +1,4 @@
-#include "mon_rig.h"
+#include "ring_mon.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -9,9 +9,9 @@
 
 static void on_event(void *ctx, const mon_event_t *ev)
 {
-    mon_rig_t *r = ctx;
+    ring_mon_t *r = ctx;
     if (r->num_ev < MON_RIG_EVENTS) {
-        r->ev[r->num_ev++] = (mon_rig_ev_t){.type = ev->type, .station = ev->station,
+        r->ev[r->num_ev++] = (ring_mon_ev_t){.type = ev->type, .station = ev->station,
                                             .other = ev->other, .value = ev->value,
                                             .t_ns = ev->t_ns};
     }
@@ -19,7 +19,7 @@ static void on_event(void *ctx, const mon_event_t *ev)
 
 /* A request (SD1/SD2/SD3 with the request bit): counted per DA, and whether its octets equal
  * the request before it to that DA. */
-static void tally(mon_rig_t *r, const uint8_t *f, size_t len)
+static void tally(ring_mon_t *r, const uint8_t *f, size_t len)
 {
     ring_frame_t rf = {.len = (uint8_t)(len < 24u ? len : 24u), .full_len = (uint16_t)len};
     memcpy(rf.b, f, rf.len);
@@ -49,13 +49,13 @@ static void tally(mon_rig_t *r, const uint8_t *f, size_t len)
 static void tap(void *ctx, uint64_t t_ns, const uint8_t *f, size_t len, bool local, uint32_t baud)
 {
     (void)local;
-    mon_rig_t *r = ctx;
+    ring_mon_t *r = ctx;
     uint64_t end = t_ns + (uint64_t)hal_uart_char_ns(baud) * len;
     mon_telegram(&r->mon, f, len, t_ns, end);
     tally(r, f, len);
 }
 
-void mon_rig_init(mon_rig_t *r, uint32_t baud, const uint8_t *cards, size_t num_cards)
+void ring_mon_init(ring_mon_t *r, uint32_t baud, const uint8_t *cards, size_t num_cards)
 {
     memset(r, 0, sizeof *r);
     /* the cards as ring_rig_init makes them, each with an emulated MOVIDRIVE (drive faults) */
@@ -75,7 +75,7 @@ void mon_rig_init(mon_rig_t *r, uint32_t baud, const uint8_t *cards, size_t num_
     }
 }
 
-void mon_rig_run_ms(mon_rig_t *r, unsigned ms)
+void ring_mon_run_ms(ring_mon_t *r, unsigned ms)
 {
     for (unsigned i = 0; i < ms; i++) {
         ring_rig_run_us(&r->rr, 1000u);
@@ -86,7 +86,7 @@ void mon_rig_run_ms(mon_rig_t *r, unsigned ms)
     }
 }
 
-size_t mon_rig_find(const mon_rig_t *r, size_t from, mon_event_type_t type, uint8_t station)
+size_t ring_mon_find(const ring_mon_t *r, size_t from, mon_event_type_t type, uint8_t station)
 {
     for (size_t i = from; i < r->num_ev; i++) {
         if (r->ev[i].type == type && r->ev[i].station == station) {
@@ -96,7 +96,7 @@ size_t mon_rig_find(const mon_rig_t *r, size_t from, mon_event_type_t type, uint
     return r->num_ev;
 }
 
-unsigned mon_rig_count(const mon_rig_t *r, size_t from, mon_event_type_t type, uint8_t station)
+unsigned ring_mon_count(const ring_mon_t *r, size_t from, mon_event_type_t type, uint8_t station)
 {
     unsigned n = 0;
     for (size_t i = from; i < r->num_ev; i++) {
@@ -105,7 +105,7 @@ unsigned mon_rig_count(const mon_rig_t *r, size_t from, mon_event_type_t type, u
     return n;
 }
 
-unsigned mon_rig_count_type(const mon_rig_t *r, size_t from, mon_event_type_t type)
+unsigned ring_mon_count_type(const ring_mon_t *r, size_t from, mon_event_type_t type)
 {
     unsigned n = 0;
     for (size_t i = from; i < r->num_ev; i++) {
@@ -114,7 +114,7 @@ unsigned mon_rig_count_type(const mon_rig_t *r, size_t from, mon_event_type_t ty
     return n;
 }
 
-size_t mon_rig_live(const mon_rig_t *r, uint8_t *out, size_t cap)
+size_t ring_mon_live(const ring_mon_t *r, uint8_t *out, size_t cap)
 {
     size_t n = 0;
     for (unsigned a = 0; a < MON_STATIONS && n < cap; a++) {
@@ -125,10 +125,10 @@ size_t mon_rig_live(const mon_rig_t *r, uint8_t *out, size_t cap)
     return n;
 }
 
-void mon_rig_dump_events(const mon_rig_t *r, size_t from)
+void ring_mon_dump_events(const ring_mon_t *r, size_t from)
 {
     for (size_t i = from; i < r->num_ev; i++) {
-        const mon_rig_ev_t *e = &r->ev[i];
+        const ring_mon_ev_t *e = &r->ev[i];
         fprintf(stderr, "    %4zu %12.3f ms %-15s st %3u other %3u value %u\n", i,
                 (double)e->t_ns / 1e6, mon_event_name(e->type), e->station, e->other, e->value);
     }
