@@ -120,7 +120,7 @@ static void tell_other_rate(const mon_cmd_t *c)
     if (r->cfg.medium != RIG_MEDIUM_LCM || other == 0u) {
         return;
     }
-    char how_many[64] = "every telegram heard was";
+    char how_many[80] = "every telegram heard was";
     if (other != r->segment.frames_received) {
         (void)snprintf(how_many, sizeof how_many, "%llu of %llu telegrams heard were",
                        (unsigned long long)other,
