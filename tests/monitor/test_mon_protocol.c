@@ -4,14 +4,19 @@
  *   11) releases the slave to Wait_Prm with no master; 00 changes only the min TSDR and leaves
  *   the slave, its master and its parameters as they were.
  * - Stat_Diag in a diagnosis without Station_Not_Ready: the slave stays in Data_Exch (the bit
- *   asks the master to read diagnosis; it is no state of the slave's machine). */
+ *   asks the master to read diagnosis; it is no state of the slave's machine).
+ * And a capture file whose times go back (merged or hand-made captures): the monitor's times
+ * never do, so no span, rotation or load comes out of an unsigned wrap. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "check.h"
 #include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_frame.h"
 #include "dp_slave/fdl_wire.h"
+#include "monitor/mon_live.h"
 #include "monitor/monitor.h"
 
 #define BAUD 1500000u
@@ -184,6 +189,55 @@ static void test_stat_diag_in_data_exchange(void)
     CHECK_EQ(stats, 1);
 }
 
+static void put32(FILE *f, uint32_t v)
+{
+    const uint8_t b[4] = {(uint8_t)v, (uint8_t)(v >> 8), (uint8_t)(v >> 16), (uint8_t)(v >> 24)};
+    (void)fwrite(b, 1, sizeof b, f);
+}
+
+/* Tokens 2 -> 3 -> 2 ... in a pcap (link type 257) at 10.000, 10.001, ... s, then three more
+ * at 5.000 s and after: the clock of the capture went back five seconds. */
+static void test_file_times_back(void)
+{
+    char path[] = "/tmp/test_mon_protocol_XXXXXX";
+    int fd = mkstemp(path);
+    CHECK(fd >= 0);
+    FILE *f = fd >= 0 ? fdopen(fd, "wb") : NULL;
+    if (f == NULL) {
+        return;
+    }
+    put32(f, 0xA1B2C3D4u);
+    put32(f, 2u | (4u << 16)); /* version 2.4 */
+    put32(f, 0);
+    put32(f, 0);
+    put32(f, 65535u);
+    put32(f, 257u);
+    const uint32_t us[] = {0, 1000, 2000, 3000, 0, 1000, 2000};
+    const uint32_t s[] = {10, 10, 10, 10, 5, 5, 5};
+    for (size_t i = 0; i < sizeof us / sizeof us[0]; i++) {
+        uint8_t tok[3] = {FDL_SD4, (i % 2u) == 0u ? 3u : 2u, (i % 2u) == 0u ? 2u : 3u};
+        put32(f, s[i]);
+        put32(f, us[i]);
+        put32(f, sizeof tok);
+        put32(f, sizeof tok);
+        (void)fwrite(tok, 1, sizeof tok, f);
+    }
+    CHECK_EQ(fclose(f), 0);
+    mon_cfg_t mc = {.baud = BAUD, .timing = true, .ttr_bits = 30000u};
+    mon_init(&mon, &mc);
+    char err[200];
+    CHECK_EQ(mon_file_run(&mon, path, BAUD, NULL, err, sizeof err), 7);
+    (void)unlink(path);
+    for (uint8_t a = 2; a <= 3; a++) {
+        const mon_station_t *st = &mon.st[a];
+        CHECK(st->rotation.n >= 1u);
+        CHECK(st->rotation.max_ns <= 2000000u);
+        CHECK_EQ(st->rotations_over_ttr, 0);
+    }
+    CHECK(mon.line.last_ns >= mon.line.first_ns);
+    CHECK(mon.line.last_ns - mon.line.first_ns >= 3000000u);
+}
+
 int main(void)
 {
     RUN_TEST(test_unlock_01);
@@ -191,5 +245,6 @@ int main(void)
     RUN_TEST(test_min_tsdr_only);
     RUN_TEST(test_min_tsdr_rules);
     RUN_TEST(test_stat_diag_in_data_exchange);
+    RUN_TEST(test_file_times_back);
     return check_report();
 }
