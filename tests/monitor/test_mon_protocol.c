@@ -5,6 +5,8 @@
  *   the slave, its master and its parameters as they were.
  * - Stat_Diag in a diagnosis without Station_Not_Ready: the slave stays in Data_Exch (the bit
  *   asks the master to read diagnosis; it is no state of the slave's machine).
+ * - A token the monitor heard damaged (noise on its stub, a reflection) tells it nothing: the
+ *   next pass is no duplicate token and no master left the ring for it.
  * And a capture file whose times go back (merged or hand-made captures): the monitor's times
  * never do, so no span, rotation or load comes out of an unsigned wrap. */
 #include <stdio.h>
@@ -189,6 +191,51 @@ static void test_stat_diag_in_data_exchange(void)
     CHECK_EQ(stats, 1);
 }
 
+static void token(uint8_t da, uint8_t sa)
+{
+    const uint8_t f[] = {FDL_SD4, da, sa};
+    line(f, sizeof f);
+    now_ns += 100000u; /* the holder's turn: 100 us */
+}
+
+static unsigned count_events(uint64_t from, mon_event_type_t type)
+{
+    unsigned n = 0;
+    for (uint64_t k = from; k < mon.events_total; k++) {
+        n += mon_event(&mon, k)->type == type;
+    }
+    return n;
+}
+
+/* Ring 1 -> 2 -> 3 -> 1; one of 2's tokens reaches the monitor damaged (octets that are no
+ * telegram), while 3 took it as usual. */
+static void test_garbled_token(void)
+{
+    init();
+    for (int r = 0; r < 3; r++) {
+        token(2, 1);
+        token(3, 2);
+        token(1, 3);
+    }
+    uint64_t ev0 = mon.events_total;
+    CHECK(mon.st[1].in_ring && mon.st[2].in_ring && mon.st[3].in_ring);
+    token(2, 1);
+    const uint8_t damaged[] = {FDL_SD4, 0x83, 0x02};
+    mon_garbled(&mon, damaged, sizeof damaged, now_ns);
+    now_ns += 100000u;
+    token(1, 3);
+    for (int r = 0; r < 3; r++) {
+        token(2, 1);
+        token(3, 2);
+        token(1, 3);
+    }
+    CHECK_EQ(count_events(ev0, MON_EV_DUPLICATE_TOKEN), 0);
+    CHECK_EQ(count_events(ev0, MON_EV_RING_LEAVE), 0);
+    CHECK_EQ(count_events(ev0, MON_EV_RING_ENTER), 0);
+    CHECK_EQ(mon.events_total, ev0);
+    CHECK(mon.st[1].in_ring && mon.st[2].in_ring && mon.st[3].in_ring);
+}
+
 static void put32(FILE *f, uint32_t v)
 {
     const uint8_t b[4] = {(uint8_t)v, (uint8_t)(v >> 8), (uint8_t)(v >> 16), (uint8_t)(v >> 24)};
@@ -245,6 +292,7 @@ int main(void)
     RUN_TEST(test_min_tsdr_only);
     RUN_TEST(test_min_tsdr_rules);
     RUN_TEST(test_stat_diag_in_data_exchange);
+    RUN_TEST(test_garbled_token);
     RUN_TEST(test_file_times_back);
     return check_report();
 }

@@ -244,6 +244,7 @@ typedef struct mon {
     uint8_t last_token_sa, last_token_da;
     bool last_was_token;
     uint64_t claim_ns;     /* the last claim after a lost token: the ring starts afresh */
+    uint64_t last_garbled_ns; /* the last garbled run (line.garbled 0: none): maybe a token */
     uint64_t last_end_ns;  /* end of the last telegram (or garble) on the line */
 } mon_t;
 
