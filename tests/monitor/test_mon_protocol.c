@@ -7,8 +7,9 @@
  *   asks the master to read diagnosis; it is no state of the slave's machine).
  * - A token the monitor heard damaged (noise on its stub, a reflection) tells it nothing: the
  *   next pass is no duplicate token and no master left the ring for it.
- * And a capture file whose times go back (merged or hand-made captures): the monitor's times
- * never do, so no span, rotation or load comes out of an unsigned wrap. */
+ * And capture files: one whose times go back (merged or hand-made captures): the monitor's
+ * times never do, so no span, rotation or load comes out of an unsigned wrap; a text line with
+ * no octets in it is garbled, not nothing. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -285,6 +286,25 @@ static void test_file_times_back(void)
     CHECK(mon.line.last_ns - mon.line.first_ns >= 3000000u);
 }
 
+static void test_file_line_without_octets(void)
+{
+    char path[] = "/tmp/test_mon_protocol_XXXXXX";
+    int fd = mkstemp(path);
+    CHECK(fd >= 0);
+    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
+    if (f == NULL) {
+        return;
+    }
+    (void)fputs("68 05 05 68 84 82 6D 3C 3E ED 16\nroot:x:0:0:root:/root:/bin/bash\n", f);
+    CHECK_EQ(fclose(f), 0);
+    init();
+    char err[200];
+    CHECK_EQ(mon_file_run(&mon, path, BAUD, NULL, err, sizeof err), 2);
+    (void)unlink(path);
+    CHECK_EQ(mon.line.telegrams, 1);
+    CHECK_EQ(mon.line.garbled, 1);
+}
+
 int main(void)
 {
     RUN_TEST(test_unlock_01);
@@ -294,5 +314,6 @@ int main(void)
     RUN_TEST(test_stat_diag_in_data_exchange);
     RUN_TEST(test_garbled_token);
     RUN_TEST(test_file_times_back);
+    RUN_TEST(test_file_line_without_octets);
     return check_report();
 }

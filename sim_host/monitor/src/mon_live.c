@@ -102,6 +102,11 @@ int64_t mon_file_run(mon_t *m, const char *path, uint32_t baud, volatile const i
         last = t;
         uint64_t dur = rate != 0u ? (uint64_t)rec.len * FDL_CHAR_BITS * 1000000000ull / rate : 0u;
         mon_idle(m, t);
+        if (rec.len == 0u) {
+            /* a line the reader found no octets in (its problem says why): not a telegram */
+            mon_garbled(m, rec.data, 0u, t);
+            continue;
+        }
         mon_telegram(m, rec.data, rec.len, t, t + dur);
     }
     if (rc < 0) {
