@@ -7,6 +7,9 @@
  *   asks the master to read diagnosis; it is no state of the slave's machine).
  * - A token the monitor heard damaged (noise on its stub, a reflection) tells it nothing: the
  *   next pass is no duplicate token and no master left the ring for it.
+ * - RDL/RDH (response data, the request's data not taken for want of a resource) is an answer
+ *   with data, no refusal: the slave stays in data exchange.
+ * - An illegal SD2 telegram names its source address, as an SD1 one does.
  * And capture files: one whose times go back (merged or hand-made captures): the monitor's
  * times never do, so no span, rotation or load comes out of an unsigned wrap; a text line with
  * no octets in it is garbled, not nothing. */
@@ -237,6 +240,31 @@ static void test_garbled_token(void)
     CHECK(mon.st[1].in_ring && mon.st[2].in_ring && mon.st[3].in_ring);
 }
 
+static void test_rdl_answer(void)
+{
+    init();
+    master_2_owns_10();
+    uint64_t ev0 = mon.events_total;
+    req(10, 2, SRD_HIGH | FCB, false, 0, io, sizeof io);
+    rsp(2, 10, FDL_RSP_RDL, false, io, sizeof io);
+    CHECK_EQ(mon.st[10].dp_state, MON_DP_DATA_EXCH);
+    CHECK_EQ(mon.events_total, ev0);
+}
+
+static void test_illegal_sd2_source(void)
+{
+    init();
+    uint8_t f[FDL_FRAME_MAX];
+    /* a request with the reserved function code 1 and 14 octets of data: an SD2 telegram */
+    size_t n = fdl_encode(f, 10, 33, FDL_FC_REQUEST | 0x1u, false, 0, 0, io, sizeof io);
+    CHECK_EQ(f[0], FDL_SD2);
+    line(f, n);
+    CHECK_EQ(mon.line.illegal, 1);
+    const mon_event_t *e = mon_event(&mon, 0);
+    CHECK(e != NULL && e->type == MON_EV_ILLEGAL);
+    CHECK_EQ(e != NULL ? e->station : 0, 33);
+}
+
 static void put32(FILE *f, uint32_t v)
 {
     const uint8_t b[4] = {(uint8_t)v, (uint8_t)(v >> 8), (uint8_t)(v >> 16), (uint8_t)(v >> 24)};
@@ -313,6 +341,8 @@ int main(void)
     RUN_TEST(test_min_tsdr_rules);
     RUN_TEST(test_stat_diag_in_data_exchange);
     RUN_TEST(test_garbled_token);
+    RUN_TEST(test_rdl_answer);
+    RUN_TEST(test_illegal_sd2_source);
     RUN_TEST(test_file_times_back);
     RUN_TEST(test_file_line_without_octets);
     return check_report();

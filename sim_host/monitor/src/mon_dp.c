@@ -69,8 +69,10 @@ static bool positive(const fdl_msg_t *rsp)
     if (rsp == NULL) {
         return true; /* SC */
     }
+    /* RDL/RDH: data in the answer, only the request's data was not taken (no resource) */
     uint8_t code = rsp->fc & FDL_FC_CODE_MASK;
-    return code == FDL_RSP_OK || code == FDL_RSP_DL || code == FDL_RSP_NR || code == FDL_RSP_DH;
+    return code == FDL_RSP_OK || code == FDL_RSP_DL || code == FDL_RSP_NR || code == FDL_RSP_DH ||
+           code == FDL_RSP_RDL || code == FDL_RSP_RDH;
 }
 
 static const char *refusal_name(const fdl_msg_t *rsp)

@@ -415,8 +415,10 @@ static void illegal(mon_t *m, const uint8_t *f, size_t len, uint64_t t0, const c
     if (len > 12u) {
         (void)snprintf(hex + n, sizeof hex - n, " ...");
     }
-    mon_emit(m, t0, MON_EV_ILLEGAL, MON_LEVEL_WARN, len > 2u ? (uint8_t)(f[2] & 0x7Fu) : 0u, 0, 0,
-             "%s: %s", why, hex);
+    /* the source address: after DA (SD1, SD3, SD4), after LE, LEr, SD2 and DA (SD2) */
+    size_t sa_at = f[0] == FDL_SD2 ? 5u : 2u;
+    uint8_t sa = len > sa_at ? (uint8_t)(f[sa_at] & 0x7Fu) : 0u;
+    mon_emit(m, t0, MON_EV_ILLEGAL, MON_LEVEL_WARN, sa, 0, 0, "%s: %s", why, hex);
 }
 
 /* A valid frame: which kind it is, and whether its addresses and function are legal. */
