@@ -93,7 +93,8 @@ static int run(mon_cmd_t *c)
 {
     const mon_cmd_opts_t *o = c->o;
     uint64_t limit_us = (uint64_t)o->seconds * 1000000u;
-    /* Summed slice by slice: the 32-bit clock wraps every 71 minutes, --seconds goes to a year. */
+    /* Summed slice by slice: the 32-bit clock wraps every 71 minutes; --seconds goes to a
+     * year. */
     hal_time_us_t before = tty_now_us();
     uint64_t spent_us = 0;
     while (cli_stop == 0 && (o->seconds == 0u || spent_us < limit_us)) {

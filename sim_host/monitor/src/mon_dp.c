@@ -2,9 +2,9 @@
  * configuration and diagnosis (IEC 61158-6-3, the DP slave state machine seen from the line).
  *
  * The state follows the services the slave accepted: a positive answer to a locking Set_Prm
- * puts it in Wait_Cfg, one with Unlock_Req in Wait_Prm, a diagnosis that asks for parameters (Prm_Req) or reports a fault in Wait_Prm, a
- * diagnosis without Station_Not_Ready and without Stat_Diag, or a Data_Exchange answered with
- * data, in Data_Exch.
+ * puts it in Wait_Cfg, one with Unlock_Req in Wait_Prm, a diagnosis that asks for parameters
+ * (Prm_Req) or reports a fault in Wait_Prm, a diagnosis without Station_Not_Ready and without
+ * Stat_Diag, or a Data_Exchange answered with data, in Data_Exch.
  * A Set_Prm from another master while the slave exchanges data is refused by a locked slave
  * even where its FDL layer acknowledges it, so it changes nothing here either. */
 #include <stdio.h>
@@ -174,7 +174,7 @@ static void set_prm(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
         }
         return;
     }
-    if (s->dp_state == MON_DP_DATA_EXCH && s->master != MON_NO_MASTER && s->master != m->pend_sa) {
+    if (s->dp_state == MON_DP_DATA_EXCH && locked_out(m, s)) {
         return; /* locked by its master: another master's parameters are not taken */
     }
     const uint8_t *p = m->pend_du;
