@@ -241,6 +241,9 @@ static void test_json_dfp21b(void)
     CHECK_STR(str(dp, "outputs"), "7100206C000000000006" "05DC0000");
     CHECK_NUM(num(dp, "dx_count"), 390);
     CHECK_NUM(num(cJSON_GetObjectItem(dp, "dx_cycle_ms"), "mean"), 2.0);
+    /* the running sum: a client's mean between two documents, exact however long the run */
+    CHECK_NUM(num(cJSON_GetObjectItem(dp, "dx_cycle_ms"), "sum"), 778.0);
+    CHECK_NUM(num(tsdr, "sum"), 15.0 * 399);
     CHECK_NUM(num(dp, "min_tsdr_bits"), 11);
     CHECK_NUM(num(dp, "watchdog_ms"), 100);
     cJSON *d = cJSON_GetObjectItem(dp, "dfp21b");
