@@ -432,6 +432,22 @@ static void test_text_summary(void)
     CHECK_EQ(count(t, "\n"), 9u);
 }
 
+/* A source named in bytes that are no UTF-8 (a Latin-1 file name): JSON and XML must be UTF-8,
+ * so such a byte becomes U+FFFD (JSON) or '?' (XML); real UTF-8 goes through as it is. */
+static void test_not_utf8(void)
+{
+    build(true, 0u);
+    mon_report_info_t latin1 = info;
+    latin1.source = "caf\xe9 \xc3\xa9 \xe2\x82 x";
+    const char *j = render(0, &latin1, NULL);
+    CHECK(strstr(j, "\"source\":\"caf\\ufffd \xc3\xa9 \\ufffd\\ufffd x\"") != NULL);
+    cJSON *doc = cJSON_Parse(j);
+    CHECK(doc != NULL);
+    cJSON_Delete(doc);
+    const char *x = render(1, &latin1, NULL);
+    CHECK(strstr(x, "value=\"caf? \xc3\xa9 ?? x\"") != NULL);
+}
+
 int main(void)
 {
     RUN_TEST(test_json_monitor_line_ring);
@@ -443,5 +459,6 @@ int main(void)
     RUN_TEST(test_junit_tsdr_and_rotation);
     RUN_TEST(test_junit_xml_escaping);
     RUN_TEST(test_text_summary);
+    RUN_TEST(test_not_utf8);
     return check_report();
 }
