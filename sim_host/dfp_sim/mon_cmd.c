@@ -5,7 +5,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "cli.h"
 #include "gsd/gsd.h"
@@ -116,7 +118,7 @@ static bool write_reports(const mon_cmd_t *c, const mon_report_opts_t *ropt)
         char why[300];
         FILE *f = sim_fopen_write(r->path, why, sizeof why);
         if (f == NULL) {
-            fprintf(stderr, "monitor: %s\n", why);
+            fprintf(stderr, "monitor: cannot write %s: %s\n", r->path, why);
             ok = false;
             continue;
         }
@@ -147,6 +149,32 @@ static int finish(const mon_cmd_t *c)
     fflush(stdout);
     bool written = write_reports(c, &ropt);
     return written && mon_report_ok(c->mon, &ropt) ? 0 : 1;
+}
+
+/* The --report files are written at the end: one that cannot be (a directory, no such
+ * directory, no permission) is said at the start, not after a run of hours. */
+static bool reports_writable(const mon_cmd_opts_t *o)
+{
+    for (size_t k = 0; k < o->n_reports; k++) {
+        const char *path = o->reports[k].path;
+        char dir[4096];
+        const char *slash = strrchr(path, '/');
+        size_t n = slash == NULL ? 1u : (slash == path ? 1u : (size_t)(slash - path));
+        (void)snprintf(dir, sizeof dir, "%.*s", (int)n, slash == NULL ? "." : path);
+        struct stat st;
+        const char *why = NULL;
+        if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+            why = "it is a directory";
+        } else if (access(dir, W_OK) != 0) {
+            why = strerror(errno);
+        }
+        if (why != NULL) {
+            fprintf(stderr, "monitor: --report %s %s: cannot write it: %s\n",
+                    o->reports[k].junit ? "junit" : "json", path, why);
+            return false;
+        }
+    }
+    return true;
 }
 
 /* --gsd FILE...: each file's ident and its MaxTsdr at the line's rate into cfg. False after
@@ -193,7 +221,7 @@ int mon_cmd_run(mon_cmd_t *c, const mon_cmd_opts_t *o)
     mon_cfg_t cfg = {.baud = o->baud, .timing = o->timing, .tsl_bits = o->tsl_bits,
                      .ttr_bits = o->ttr_bits, .on_event = mon_cmd_event,
                      .on_frame = mon_cmd_frame, .ctx = c};
-    if (!read_gsd(o, &cfg)) {
+    if (!read_gsd(o, &cfg) || !reports_writable(o)) {
         return EXIT_USAGE;
     }
     mon_init(&c->own, &cfg);

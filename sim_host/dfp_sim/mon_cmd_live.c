@@ -96,7 +96,9 @@ static int run(mon_cmd_t *c, char *why, size_t n)
 {
     const mon_cmd_opts_t *o = c->o;
     uint64_t limit_us = (uint64_t)o->seconds * 1000000u;
-    hal_time_us_t start = tty_now_us();
+    /* Summed slice by slice: the 32-bit clock wraps every 71 minutes; --seconds goes to a
+     * year. */
+    hal_time_us_t before = tty_now_us();
     uint64_t spent_us = 0;
     while (cli_stop == 0 && (o->seconds == 0u || spent_us < limit_us)) {
         uint64_t left = o->seconds == 0u ? 200000u : limit_us - spent_us;
@@ -105,7 +107,9 @@ static int run(mon_cmd_t *c, char *why, size_t n)
             (void)snprintf(why, n, "%s", tty_runner_error(c->session.rig.runner));
             return 1;
         }
-        spent_us = (uint32_t)(tty_now_us() - start);
+        hal_time_us_t now = tty_now_us();
+        spent_us += (uint32_t)(now - before);
+        before = now;
     }
     return 0;
 }

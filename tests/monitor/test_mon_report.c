@@ -241,6 +241,9 @@ static void test_json_dfp21b(void)
     CHECK_STR(str(dp, "outputs"), "7100206C000000000006" "05DC0000");
     CHECK_NUM(num(dp, "dx_count"), 390);
     CHECK_NUM(num(cJSON_GetObjectItem(dp, "dx_cycle_ms"), "mean"), 2.0);
+    /* the running sum: a client's mean between two documents, exact however long the run */
+    CHECK_NUM(num(cJSON_GetObjectItem(dp, "dx_cycle_ms"), "sum"), 778.0);
+    CHECK_NUM(num(tsdr, "sum"), 15.0 * 399);
     CHECK_NUM(num(dp, "min_tsdr_bits"), 11);
     CHECK_NUM(num(dp, "watchdog_ms"), 100);
     cJSON *d = cJSON_GetObjectItem(dp, "dfp21b");
@@ -429,6 +432,22 @@ static void test_text_summary(void)
     CHECK_EQ(count(t, "\n"), 9u);
 }
 
+/* A source named in bytes that are no UTF-8 (a Latin-1 file name): JSON and XML must be UTF-8,
+ * so such a byte becomes U+FFFD (JSON) or '?' (XML); real UTF-8 goes through as it is. */
+static void test_not_utf8(void)
+{
+    build(true, 0u);
+    mon_report_info_t latin1 = info;
+    latin1.source = "caf\xe9 \xc3\xa9 \xe2\x82 x";
+    const char *j = render(0, &latin1, NULL);
+    CHECK(strstr(j, "\"source\":\"caf\\ufffd \xc3\xa9 \\ufffd\\ufffd x\"") != NULL);
+    cJSON *doc = cJSON_Parse(j);
+    CHECK(doc != NULL);
+    cJSON_Delete(doc);
+    const char *x = render(1, &latin1, NULL);
+    CHECK(strstr(x, "value=\"caf? \xc3\xa9 ?? x\"") != NULL);
+}
+
 int main(void)
 {
     RUN_TEST(test_json_monitor_line_ring);
@@ -440,5 +459,6 @@ int main(void)
     RUN_TEST(test_junit_tsdr_and_rotation);
     RUN_TEST(test_junit_xml_escaping);
     RUN_TEST(test_text_summary);
+    RUN_TEST(test_not_utf8);
     return check_report();
 }

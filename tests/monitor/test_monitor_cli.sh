@@ -117,6 +117,10 @@ expect_exit 2 "--report kind" -- "$sim" monitor "$tmp/r.pcap" --report xml "$tmp
 expect_in "--report kind: the message" "monitor: --report 'xml': use json FILE or junit FILE" "$out"
 expect_exit 2 "--report without a file" -- "$sim" monitor "$tmp/r.pcap" --report json
 expect_exit 2 "--report onto the capture" -- "$sim" monitor "$tmp/r.pcap" --report json "$tmp/r.pcap"
+expect_exit 2 "--report into no directory" -- "$sim" monitor "$tmp/r.pcap" --report json "$tmp/none/r.json"
+expect_in "--report into no directory: said at the start, with the file" "monitor: --report json $tmp/none/r.json: cannot write it: No such file or directory" "$out"
+expect_exit 2 "--report onto a directory" -- "$sim" monitor "$tmp/r.pcap" --report junit "$tmp"
+expect_in "--report onto a directory: the message" "monitor: --report junit $tmp: cannot write it: it is a directory" "$out"
 expect_exit 2 "--expect out of range" -- "$sim" monitor "$tmp/r.pcap" --expect 200
 expect_exit 1 "a missing capture" -- "$sim" monitor "$tmp/none.pcap"
 expect_in "a missing capture: the message" "monitor: " "$out"

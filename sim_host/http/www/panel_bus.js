@@ -211,7 +211,8 @@ function noteBusCycles(doc) {
     const prev = busLastSpan.get(st.address);
     busLastSpan.set(st.address, s);
     if (!prev || s.n <= prev.n) return;
-    const ms = (s.mean * s.n - prev.mean * prev.n) / (s.n - prev.n);
+    /* From the sums: the rounded means times n would be off by n times their rounding. */
+    const ms = (s.sum - prev.sum) / (s.n - prev.n);
     let a = busCycle.get(st.address);
     if (!a) { a = []; busCycle.set(st.address, a); }
     a.push({ t: t, ms: ms });

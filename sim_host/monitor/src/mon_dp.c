@@ -1,10 +1,10 @@
 /* What the answers of a DP slave say about it: its master, its state, its parameters,
  * configuration and diagnosis (IEC 61158-6-3, the DP slave state machine seen from the line).
  *
- * The state follows the services the slave accepted: a positive answer to Set_Prm puts it in
- * Wait_Cfg, a diagnosis that asks for parameters (Prm_Req) or reports a fault in Wait_Prm, a
- * diagnosis without Station_Not_Ready and without Stat_Diag, or a Data_Exchange answered with
- * data, in Data_Exch.
+ * The state follows the services the slave accepted: a positive answer to a locking Set_Prm
+ * puts it in Wait_Cfg, one with Unlock_Req in Wait_Prm, a diagnosis that asks for parameters
+ * (Prm_Req) or reports a fault in Wait_Prm, a diagnosis without Station_Not_Ready and without
+ * Stat_Diag, or a Data_Exchange answered with data, in Data_Exch.
  * A Set_Prm from another master while the slave exchanges data is refused by a locked slave
  * even where its FDL layer acknowledges it, so it changes nothing here either. */
 #include <stdio.h>
@@ -72,8 +72,10 @@ static bool positive(const fdl_msg_t *rsp)
     if (rsp == NULL) {
         return true; /* SC */
     }
+    /* RDL/RDH: data in the answer, only the request's data was not taken (no resource) */
     uint8_t code = rsp->fc & FDL_FC_CODE_MASK;
-    return code == FDL_RSP_OK || code == FDL_RSP_DL || code == FDL_RSP_NR || code == FDL_RSP_DH;
+    return code == FDL_RSP_OK || code == FDL_RSP_DL || code == FDL_RSP_NR || code == FDL_RSP_DH ||
+           code == FDL_RSP_RDL || code == FDL_RSP_RDH;
 }
 
 static const char *refusal_name(const fdl_msg_t *rsp)
@@ -128,6 +130,43 @@ static void data_exchange(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
     set_state(m, a, MON_DP_DATA_EXCH, t_ns, "");
 }
 
+/* min TSDR as dp_slave.c adopts it: 0 keeps the one the slave has (the default before any),
+ * less than the default counts as the default. */
+static void take_min_tsdr(mon_station_t *s, uint8_t bits)
+{
+    if (bits != 0u) {
+        s->min_tsdr_bits = bits > FDL_MIN_TSDR_DEFAULT_BITS ? bits : FDL_MIN_TSDR_DEFAULT_BITS;
+    } else if (s->min_tsdr_bits == 0u) {
+        s->min_tsdr_bits = FDL_MIN_TSDR_DEFAULT_BITS;
+    }
+}
+
+/* A locking Set_Prm: the slave takes all of it and the master owns it. */
+static void adopt_prm(mon_t *m, uint8_t a, uint64_t t_ns)
+{
+    mon_station_t *s = &m->st[a];
+    const uint8_t *p = m->pend_du;
+    copy_du(s->prm, &s->prm_len, p, m->pend_du_len, MON_PRM_MAX);
+    take_min_tsdr(s, p[DP_PRM_MIN_TSDR]);
+    set_ident(m, a, (uint16_t)((p[DP_PRM_IDENT_HIGH] << 8) | p[DP_PRM_IDENT_LOW]));
+    uint32_t base = DP_WD_BASE_MS;
+    if (m->pend_du_len >= DP_PRM_LEN_DPV1 &&
+        (p[DP_PRM_DPV1_STATUS_1] & DP_DPV1_1_WD_BASE_1MS) != 0u) {
+        base = DP_WD_BASE_1MS_MS;
+    }
+    s->watchdog_ms = (p[DP_PRM_STATION_STATUS] & DP_PRM_WD_ON) != 0u
+                         ? (uint32_t)p[DP_PRM_WD_FACT_1] * p[DP_PRM_WD_FACT_2] * base
+                         : 0u;
+    set_master(m, a, m->pend_sa, t_ns);
+    char why[48];
+    (void)snprintf(why, sizeof why, "new Set_Prm from master %u", m->pend_sa);
+    set_state(m, a, MON_DP_WAIT_CFG, t_ns, why);
+}
+
+/* Set_Prm answered. The slave acknowledges every Set_Prm it does not refuse for a lock (a fault
+ * shows in its next diagnosis); what it does follows Lock_Req and Unlock_Req (dp_slave.c
+ * svc_set_prm): Unlock (01, 11) releases it to Wait_Prm, 00 changes only the min TSDR, 10
+ * parameterises it. */
 static void set_prm(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
 {
     uint8_t a = m->pend_da;
@@ -138,30 +177,28 @@ static void set_prm(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
         }
         return;
     }
-    if (s->dp_state == MON_DP_DATA_EXCH && s->master != MON_NO_MASTER && s->master != m->pend_sa) {
+    if (s->dp_state == MON_DP_DATA_EXCH && locked_out(m, s)) {
         return; /* locked by its master: another master's parameters are not taken */
     }
     const uint8_t *p = m->pend_du;
-    copy_du(s->prm, &s->prm_len, p, m->pend_du_len, MON_PRM_MAX);
-    if (m->pend_du_len >= DP_PRM_LEN_STANDARD) {
-        s->min_tsdr_bits =
-            p[DP_PRM_MIN_TSDR] != 0u ? p[DP_PRM_MIN_TSDR] : FDL_MIN_TSDR_DEFAULT_BITS;
-        set_ident(m, a, (uint16_t)((p[DP_PRM_IDENT_HIGH] << 8) | p[DP_PRM_IDENT_LOW]));
-        uint32_t base = DP_WD_BASE_MS;
-        if (m->pend_du_len >= DP_PRM_LEN_DPV1 &&
-            (p[DP_PRM_DPV1_STATUS_1] & DP_DPV1_1_WD_BASE_1MS) != 0u) {
-            base = DP_WD_BASE_1MS_MS;
-        }
-        s->watchdog_ms = (p[DP_PRM_STATION_STATUS] & DP_PRM_WD_ON) != 0u
-                             ? (uint32_t)p[DP_PRM_WD_FACT_1] * p[DP_PRM_WD_FACT_2] * base
-                             : 0u;
-        bool unlock = (p[DP_PRM_STATION_STATUS] & (DP_PRM_LOCK_REQ | DP_PRM_UNLOCK_REQ)) ==
-                      DP_PRM_UNLOCK_REQ;
-        set_master(m, a, unlock ? MON_NO_MASTER : m->pend_sa, t_ns);
+    if (m->pend_du_len < DP_PRM_LEN_STANDARD) {
+        set_master(m, a, MON_NO_MASTER, t_ns);
+        set_state(m, a, MON_DP_WAIT_PRM, t_ns, "Set_Prm too short (Prm_Fault)");
+        return;
     }
-    char why[48];
-    (void)snprintf(why, sizeof why, "new Set_Prm from master %u", m->pend_sa);
-    set_state(m, a, MON_DP_WAIT_CFG, t_ns, why);
+    uint8_t status = p[DP_PRM_STATION_STATUS];
+    if ((status & DP_PRM_UNLOCK_REQ) != 0u) {
+        char why[64];
+        (void)snprintf(why, sizeof why, "master %u released it (Unlock_Req)", m->pend_sa);
+        set_master(m, a, MON_NO_MASTER, t_ns);
+        set_state(m, a, MON_DP_WAIT_PRM, t_ns, why);
+        return;
+    }
+    if ((status & DP_PRM_LOCK_REQ) == 0u) {
+        take_min_tsdr(s, p[DP_PRM_MIN_TSDR]);
+        return;
+    }
+    adopt_prm(m, a, t_ns);
 }
 
 static void diag_events(mon_t *m, uint8_t a, const uint8_t *d, size_t n, bool changed,
@@ -221,7 +258,8 @@ static void slave_diag(mon_t *m, const fdl_msg_t *rsp, uint64_t t_ns)
         /* Ready, and not holding its master in diagnosis (Stat_Diag): the master goes on to
          * Data_Exchange. */
         set_state(m, a, MON_DP_DATA_EXCH, t_ns, "");
-    } else if (s->dp_state == MON_DP_DATA_EXCH) {
+    } else if ((b1 & DP_DIAG1_STATION_NOT_READY) != 0u && s->dp_state == MON_DP_DATA_EXCH) {
+        /* Stat_Diag alone is no state of the slave's: one in data exchange stays there. */
         set_state(m, a, MON_DP_WAIT_CFG, t_ns, "diagnosis says Station_Not_Ready");
     }
 }

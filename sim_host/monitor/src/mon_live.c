@@ -79,18 +79,34 @@ int64_t mon_file_run(mon_t *m, const char *path, uint32_t baud, volatile const i
     int64_t count = 0;
     uint64_t t0 = 0;
     bool have_t0 = false;
+    /* The monitor's time never goes back (its spans are differences): a record earlier than
+     * the one before it (a merged or hand-made capture, a clock stepped while recording, a
+     * record without a time among timed ones) is taken at that one's time, and the records
+     * after it keep their spacing. */
+    int64_t shift = 0;
+    uint64_t last = 0;
     int rc;
     while ((rc = cap_reader_next(reader, &rec)) == 1 && (stop == NULL || *stop == 0)) {
         count++;
         uint32_t rate = rec.baud != 0u ? rec.baud : (reader->if_baud != 0u ? reader->if_baud : baud);
-        uint64_t t = rec.has_time ? rec.t_ns : 0u;
         if (!have_t0 && rec.has_time) {
-            t0 = t;
+            t0 = rec.t_ns;
             have_t0 = true;
         }
-        t = t >= t0 ? t - t0 : 0u;
+        int64_t rel = rec.has_time ? (int64_t)(rec.t_ns - t0) + shift : (int64_t)last;
+        if (rel < (int64_t)last) {
+            shift += (int64_t)last - rel;
+            rel = (int64_t)last;
+        }
+        uint64_t t = (uint64_t)rel;
+        last = t;
         uint64_t dur = rate != 0u ? (uint64_t)rec.len * FDL_CHAR_BITS * 1000000000ull / rate : 0u;
         mon_idle(m, t);
+        if (rec.len == 0u) {
+            /* a line the reader found no octets in (its problem says why): not a telegram */
+            mon_garbled(m, rec.data, 0u, t);
+            continue;
+        }
         mon_telegram(m, rec.data, rec.len, t, t + dur);
     }
     if (rc < 0) {

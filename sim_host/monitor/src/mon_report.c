@@ -29,7 +29,30 @@ void mon_hex(const uint8_t *p, size_t len, char *out)
     out[2u * i] = '\0';
 }
 
-/* Escapes go out in runs: plain text in one put, each escape in its own. */
+/* Octets of the well-formed UTF-8 sequence at s (Unicode's table 3-7), 0 when there is none. */
+static size_t utf8_len(const unsigned char *s)
+{
+    unsigned char c = s[0];
+    size_t n = c >= 0xC2u && c <= 0xDFu ? 2u
+             : c >= 0xE0u && c <= 0xEFu ? 3u
+             : c >= 0xF0u && c <= 0xF4u ? 4u : 0u;
+    /* no overlong forms, no surrogates, nothing above U+10FFFF */
+    unsigned char lo = c == 0xE0u ? 0xA0u : c == 0xF0u ? 0x90u : 0x80u;
+    unsigned char hi = c == 0xEDu ? 0x9Fu : c == 0xF4u ? 0x8Fu : 0xBFu;
+    if (n == 0u || s[1] < lo || s[1] > hi) {
+        return 0u;
+    }
+    for (size_t i = 2; i < n; i++) {
+        if ((s[i] & 0xC0u) != 0x80u) {
+            return 0u;
+        }
+    }
+    return n;
+}
+
+/* Escapes go out in runs: plain text in one put, each escape in its own. JSON and XML are
+ * UTF-8: an octet that begins no UTF-8 sequence (a file named in Latin-1) becomes U+FFFD in
+ * JSON, '?' in XML. */
 static void escaped(const mon_sink_t *out, const char *s, bool json)
 {
     const char *run = s;
@@ -37,7 +60,14 @@ static void escaped(const mon_sink_t *out, const char *s, bool json)
         unsigned char c = (unsigned char)*s;
         char esc[8];
         esc[0] = '\0';
-        if (json && (c == '"' || c == '\\')) {
+        if (c >= 0x80u) {
+            size_t n = utf8_len((const unsigned char *)s);
+            if (n != 0u) {
+                s += n - 1u; /* the sequence stays in the run */
+                continue;
+            }
+            (void)snprintf(esc, sizeof esc, "%s", json ? "\\ufffd" : "?");
+        } else if (json && (c == '"' || c == '\\')) {
             (void)snprintf(esc, sizeof esc, "\\%c", c);
         } else if (json && c < 0x20u) {
             (void)snprintf(esc, sizeof esc, "\\u%04x", c);

@@ -50,9 +50,12 @@ static void key_span(const mon_sink_t *out, const char *k, const mon_span_t *s, 
         mon_printf(out, "\"%s\":null,", k);
         return;
     }
-    mon_printf(out, "\"%s\":{\"n\":%llu,\"min\":%.3f,\"mean\":%.3f,\"max\":%.3f},", k,
-               (unsigned long long)s->n, (double)s->min_ns / unit,
-               (double)mon_span_mean(s) / unit, (double)s->max_ns / unit);
+    /* "sum" lets a client take the mean between two documents (sum and n differences): from
+     * the rounded means times n it would be off by n times their rounding. */
+    mon_printf(out, "\"%s\":{\"n\":%llu,\"min\":%.3f,\"mean\":%.3f,\"max\":%.3f,\"sum\":%.3f},",
+               k, (unsigned long long)s->n, (double)s->min_ns / unit,
+               (double)mon_span_mean(s) / unit, (double)s->max_ns / unit,
+               (double)s->sum_ns / unit);
 }
 
 /* A string, or null when there is none. */

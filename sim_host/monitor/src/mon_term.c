@@ -175,10 +175,12 @@ int mon_term_open(mon_term_t *t, int in_fd, int out_fd, char *err, size_t n)
         snprintf(err, n, "out of memory");
         return -1;
     }
-    /* Keys one by one, unechoed, without waiting; ISIG stays so that Ctrl-C still reaches the
-     * caller's SIGINT handler, and OPOST as the draws send no line ends. */
+    /* Keys one by one, unechoed, without waiting; OPOST stays as the draws send no line ends.
+     * ISIG off: Ctrl-C and Ctrl-\ come as keys that quit (mon_view_key), Ctrl-Z as one that
+     * does nothing; as signals, SIGQUIT would kill the process and SIGTSTP stop it with the
+     * terminal raw, on the alternate screen, without its cursor. */
     struct termios raw = t->saved;
-    raw.c_lflag &= ~(tcflag_t)(ICANON | ECHO | IEXTEN);
+    raw.c_lflag &= ~(tcflag_t)(ICANON | ECHO | IEXTEN | ISIG);
     raw.c_iflag &= ~(tcflag_t)(IXON | ICRNL | INLCR | ISTRIP);
     raw.c_cc[VMIN] = 0;
     raw.c_cc[VTIME] = 0;

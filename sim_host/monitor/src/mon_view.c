@@ -640,6 +640,8 @@ mon_view_result_t mon_view_key(mon_view_t *v, int key)
         return MON_VIEW_CHANGED;
     case 'q':
     case 'Q':
+    case MON_KEY_CTRL_C:
+    case MON_KEY_CTRL_BACKSLASH:
         return MON_VIEW_QUIT;
     default:
         return MON_VIEW_IGNORED;

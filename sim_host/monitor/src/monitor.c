@@ -320,9 +320,19 @@ static bool closes_rotation(const mon_t *m, uint8_t sa, uint8_t da, uint8_t prev
     return s->token_received_ns > since || (prev_ns == sa && da == sa && since > m->claim_ns);
 }
 
+/* Whether a garbled run came at or after t_ns: a token the monitor could not read may have
+ * been in it. */
+static bool garbled_since(const mon_t *m, uint64_t t_ns)
+{
+    return m->line.garbled != 0u && m->last_garbled_ns >= t_ns;
+}
+
 static void ring_check_members(mon_t *m, uint8_t sa, uint64_t t0)
 {
     uint64_t since = m->st[sa].prev_token_ns;
+    if (garbled_since(m, since)) {
+        return; /* a member's pass may be among what the monitor could not read */
+    }
     for (unsigned a = 0; a < MON_STATIONS; a++) {
         mon_station_t *s = &m->st[a];
         if (a != sa && s->in_ring && s->last_token_ns < since) {
@@ -358,7 +368,9 @@ static void token(mon_t *m, uint8_t da, uint8_t sa, uint64_t t0)
         mon_emit(m, t0, MON_EV_LOST_TOKEN, MON_LEVEL_WARN, sa, da, (uint32_t)(silence / 1000u),
                  "token lost: the line was silent for %llu us, master %u claimed it",
                  (unsigned long long)(silence / 1000u), sa);
-    } else if (m->holder != 0xFFu && sa != m->holder && sa != m->last_token_sa) {
+    } else if (m->holder != 0xFFu && sa != m->holder && sa != m->last_token_sa &&
+               !garbled_since(m, m->st[m->last_token_sa].last_token_ns)) {
+        /* Not after a garbled run: the holder may have passed a token the monitor missed. */
         mon_emit(m, t0, MON_EV_DUPLICATE_TOKEN, MON_LEVEL_WARN, sa, m->holder, 0,
                  "master %u passed a token while master %u held it", sa, m->holder);
     }
@@ -406,8 +418,10 @@ static void illegal(mon_t *m, const uint8_t *f, size_t len, uint64_t t0, const c
     if (len > 12u) {
         (void)snprintf(hex + n, sizeof hex - n, " ...");
     }
-    mon_emit(m, t0, MON_EV_ILLEGAL, MON_LEVEL_WARN, len > 2u ? (uint8_t)(f[2] & 0x7Fu) : 0u, 0, 0,
-             "%s: %s", why, hex);
+    /* the source address: after DA (SD1, SD3, SD4), after LE, LEr, SD2 and DA (SD2) */
+    size_t sa_at = f[0] == FDL_SD2 ? 5u : 2u;
+    uint8_t sa = len > sa_at ? (uint8_t)(f[sa_at] & 0x7Fu) : 0u;
+    mon_emit(m, t0, MON_EV_ILLEGAL, MON_LEVEL_WARN, sa, 0, 0, "%s: %s", why, hex);
 }
 
 /* A valid frame: which kind it is, and whether its addresses and function are legal. */
@@ -479,6 +493,7 @@ void mon_garbled(mon_t *m, const uint8_t *f, size_t len, uint64_t t_ns)
     m->line.garbled++;
     m->line.octets += len;
     m->line.last_ns = t_ns;
+    m->last_garbled_ns = t_ns;
     if (m->cfg.on_frame != NULL && len != 0u) {
         m->cfg.on_frame(m->cfg.ctx, f, len, t_ns, true);
     }

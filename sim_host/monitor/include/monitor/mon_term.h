@@ -3,8 +3,9 @@
  * ssh. Plain ANSI escapes (any terminal of the last thirty years, a PTY): no curses.
  *
  * The caller's loop: mon_term_open, then poll its input fd, mon_term_poll_key until -1 (each
- * key to mon_view_key), mon_term_draw now and then; mon_term_close at the end. A caller that
- * catches SIGINT/SIGTERM sets a flag and leaves its loop; mon_term_restore gives the terminal
+ * key to mon_view_key), mon_term_draw now and then; mon_term_close at the end. The keyboard
+ * sends no signals while the view is up (Ctrl-C and Ctrl-\ are keys that quit, Ctrl-Z does
+ * nothing). A caller that catches SIGTERM sets a flag and leaves its loop; mon_term_restore gives the terminal
  * back at once and is safe to call twice (and from a signal handler: it only writes and sets
  * the terminal's attributes). */
 #ifndef MONITOR_MON_TERM_H

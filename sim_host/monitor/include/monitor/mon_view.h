@@ -20,8 +20,10 @@
  * figures instead of a rate over a few milliseconds. */
 #define MON_VIEW_RATE_NS 250000000ull
 
-/* Keys beyond ASCII, as mon_term decodes them from escape sequences. */
+/* Control keys, and keys beyond ASCII as mon_term decodes them from escape sequences. */
 enum {
+    MON_KEY_CTRL_C = 0x03,         /* the terminal sends no signals: these come as keys */
+    MON_KEY_CTRL_BACKSLASH = 0x1c,
     MON_KEY_ESC = 0x1b,
     MON_KEY_UP = 0x100,
     MON_KEY_DOWN,
@@ -87,7 +89,7 @@ void mon_view_render(const mon_t *m, mon_view_t *v, uint64_t now_ns, char *scree
                      unsigned rows, unsigned cols);
 
 /* One key (ASCII or MON_KEY_*): up/down/j/k/PgUp/PgDn/Home/End move the selection, Enter/d
- * show details, e events, p pause, ? the help line, q quit. */
+ * show details, e events, p pause, ? the help line, q, Ctrl-C and Ctrl-\ quit. */
 mon_view_result_t mon_view_key(mon_view_t *v, int key);
 
 #endif

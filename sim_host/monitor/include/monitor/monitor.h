@@ -25,8 +25,8 @@
 #define MON_CFG_MAX 244u
 #define MON_DIAG_MAX 244u
 #define MON_IO_MAX 244u
-#define MON_NO_MASTER 255u
-#define MON_MAX_GSD 16u       /* GSD files (one per ident) the caller may give */    /* a slave's master as its diagnosis says: none */
+#define MON_NO_MASTER 255u    /* a slave's master as its diagnosis says: none */
+#define MON_MAX_GSD 16u       /* GSD files (one per ident) the caller may give */
 /* A DP slave whose master gets this many requests in a row unanswered is taken as gone. */
 #define MON_MISSING_IN_A_ROW 3u
 
@@ -82,8 +82,8 @@ typedef struct mon_station {
     uint64_t missing;         /* requests to it that got no answer */
     uint32_t missing_in_a_row;
     uint64_t repeats_received;
-    uint64_t rs;              /* FC "no resource" (RS), "no service activated" (RR counted here too) */
-    uint64_t rr;
+    uint64_t rs;              /* FC RS: service not activated (SAP not served, locked out) */
+    uint64_t rr;              /* FC RR: no resource */
     uint64_t ue;              /* user error */
     uint64_t garbled;         /* damaged telegrams whose SA could still be read as this station */
     mon_span_t tsdr;          /* station delay: the request's last character to the answer's first */
@@ -244,6 +244,7 @@ typedef struct mon {
     uint8_t last_token_sa, last_token_da;
     bool last_was_token;
     uint64_t claim_ns;     /* the last claim after a lost token: the ring starts afresh */
+    uint64_t last_garbled_ns; /* the last garbled run (line.garbled 0: none): maybe a token */
     uint64_t last_end_ns;  /* end of the last telegram (or garble) on the line */
     uint64_t wd_due_ns;    /* no slave's watchdog can run out before this (mon_idle) */
 } mon_t;
