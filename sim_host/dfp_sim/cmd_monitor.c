@@ -21,11 +21,13 @@ static const cli_choice_t view_words[] = {
     {"top", MON_VIEW_TOP, false},
     {"log", MON_VIEW_LOG, false},
     {"none", MON_VIEW_NONE, false},
+    {NULL, 0, false},
 };
 
 static const cli_choice_t report_kinds[] = {
     {"json", 0, false},
     {"junit", 1, false},
+    {NULL, 0, false},
 };
 
 /* --report json|junit FILE: two values. */
@@ -59,7 +61,7 @@ static const cli_opt_t monitor_options[] = {
     {CLI_OPT("--ttr", "BITS", CLI_U32, MONITOR_OPT(ttr_bits)), .min = 256, .max = 16776960},
     {CLI_OPT("--seconds", "S", CLI_U32, MONITOR_OPT(seconds)), .min = 1, .max = 86400u * 365u},
     {CLI_OPT("--view", "top|log|none", CLI_CHOICE, MONITOR_OPT(view)), .choices = view_words,
-     .max = CLI_COUNT(view_words), .bad = "monitor: --view '%s': use top, log or none",
+     .bad = "monitor: --view '%s': use top, log or none",
      .seen = CLI_SEEN(mon_cmd_opts_t, view_given)},
     {CLI_OPT("--report", "json|junit FILE", CLI_CALL, 0), .choices = report_kinds,
      .set = set_report},

@@ -223,6 +223,10 @@ st, dt = state(15)
 print(f"64 idle: state {st} within 10 s {dt < 10}")
 for s in idle:
     s.close()
+# The streams come from addresses the idle connections did not use: on a loaded machine the
+# server may not yet have seen the last idle ones close, and a ninth connection from one
+# address is refused by the per-address limit, not by the stream cap this checks.
+opened = 72
 streams = [stream() for _ in range(32)]
 print("streams open:", sum(recv_all(s, 12) == b"HTTP/1.1 200" for s in streams))
 head, _, body = recv_all(stream()).partition(b"\r\n\r\n")
