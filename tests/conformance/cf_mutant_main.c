@@ -5,7 +5,8 @@
  *
  * usage: cf_mutant_NAME GSD CASE[,CASE...]   (an empty list: the real card, nothing fails)
  * Prints every case that did not do as expected, then "mutant failing: ..." (the cases that
- * failed, for the table in the report); exit 0 when all did as expected, 1 if not, 2 for usage. */
+ * failed, for the table in the report). Exit 0 when all did as expected, 1 if not, 2 for a bad
+ * command line. */
 #include <stdbool.h>
 #include <stdio.h>
 #include <string.h>

@@ -157,6 +157,13 @@ static void test_text(void)
     const char *end = "9.6 kbit/s: 4 cases, 3 PASS, 0 FAIL, 1 NOT APPLICABLE\n\n"
                       "summary: 8 cases, 5 PASS, 1 FAIL, 2 NOT APPLICABLE\n";
     CHECK(strlen(t) > strlen(end) && strcmp(t + strlen(t) - strlen(end), end) == 0);
+    /* a run the medium ended: why, before its counts, a control character made visible */
+    run_b.link_failed = true;
+    (void)snprintf(run_b.link_error, sizeof run_b.link_error, "link: read: \x1b[2J gone");
+    t = written(cf_report_text, two, 2, "cf_report3.txt");
+    CHECK(strstr(t, "the medium has no timing (a PTY)\n"
+                    "the run stopped: link: read: \\x1b[2J gone\n9.6 kbit/s: 4 cases") != NULL);
+    run_b.link_failed = false;
 }
 
 static const char junit_one[] =
@@ -181,7 +188,8 @@ static void test_junit(const char *python, const char *script)
     /* the evidence of fdl.status in its system-out: request, timed answer, silent slot */
     const char *x = slurp("cf_report.xml");
     CHECK(strstr(x, "  DUT       +1.500 ms 37 bits        10 01 05 00 06 16 | ") != NULL);
-    CHECK(strstr(x, "  DUT       +6.000 ms -              - | no answer (silence)\n</system-out>") != NULL);
+    CHECK(strstr(x, "  DUT       +6.000 ms -              - | no answer (silence)\n"
+                    "</system-out>") != NULL);
     CHECK(strstr(x, "info: answered with SD1\ntelegrams: 4:\n  tester    +1.000 ms -    "
                     "          10 05 01 49 4F 16 | FDL_Status 1 -&gt; 5 (FDL status request)\n")
           != NULL);
