@@ -1,12 +1,16 @@
 /* dfp-sim conformance: the conformance suite (sim_host/conformance/README.md) against a slave
  * on a tty/PTY, an LCM segment, or the card in process at one rate or every rate its GSD
  * claims. Terminal report always; JUnit and HTML reports on request. */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "cli.h"
 #include "commands.h"
+#include "dfp_sim_version.h"
 #include "conformance/cf.h"
 #include "conformance/cf_report.h"
 #include "conformance/cf_rig.h"
@@ -155,13 +159,15 @@ static void list_cases(void)
     }
 }
 
+/* On a terminal, a line per case while the suite runs (the report comes at the end). */
 static void progress(void *ctx, const cf_result_t *r, size_t index, size_t total)
 {
     (void)ctx;
-    printf("[%3zu/%3zu] %-4s %s%s%s\n", index + 1u, total,
-           r->verdict == CF_PASS ? "PASS" : r->verdict == CF_FAIL ? "FAIL" : "N/A", r->c->id,
-           r->reason[0] != '\0' ? ": " : "", r->reason);
-    (void)fflush(stdout);
+    fprintf(stderr, "\r[%3zu/%3zu] %-4s %-40s", index + 1u, total,
+            r->verdict == CF_PASS ? "PASS" : r->verdict == CF_FAIL ? "FAIL" : "N/A", r->c->id);
+    if (index + 1u == total) {
+        fputc('\n', stderr);
+    }
 }
 
 /* One run at one rate: results in *cf. Returns 0, or 2 when the medium or the GSD would not. */
@@ -187,7 +193,7 @@ static int run_at(cf_t *cf, const cf_cmd_opts_t *o, const gsd_t *g, uint32_t bau
         cli_error("conformance: %s", err);
         return 1;
     }
-    char name[300];
+    static char name[300]; /* the link and the reports keep pointing at it */
     if (o->card) {
         snprintf(name, sizeof name, "the DFP21B card in process (in-memory bus)");
     } else {
@@ -210,26 +216,32 @@ static int run_at(cf_t *cf, const cf_cmd_opts_t *o, const gsd_t *g, uint32_t bau
         cf_rig_close(&cr);
         return EXIT_USAGE;
     }
-    cf->hooks.case_done = progress;
-    printf("conformance: slave %u on %s at %u bit/s, ident 0x%04X, module %d, %s\n",
-           (unsigned)o->address, name, (unsigned)baud, cf->ident, cf->opt.module,
-           cf->dpv1 ? "DP-V1" : "DP-V0");
+    if (isatty(STDERR_FILENO)) {
+        cf->hooks.case_done = progress;
+    }
     size_t n = cf_all_cases(cases, CF_MAX_CASES);
     cf_run(cf, cases, n);
     cf_rig_close(&cr);
     return 0;
 }
 
-static int write_reports(const cf_cmd_opts_t *o, const cf_run_t *runs, size_t n_runs)
+static int write_reports(const cf_cmd_opts_t *o, const cf_report_run_t *runs, size_t n_runs,
+                         const cf_report_info_t *info)
 {
     int rc = 0;
     for (size_t k = 0; k < o->n_reports; k++) {
-        char err[300];
-        int w = o->reports[k].html
-                    ? cf_report_html_file(o->reports[k].path, runs, n_runs, err, sizeof err)
-                    : cf_report_junit_file(o->reports[k].path, runs, n_runs, err, sizeof err);
+        const char *path = o->reports[k].path;
+        FILE *f = fopen(path, "w");
+        int w = -1;
+        if (f != NULL) {
+            w = o->reports[k].html ? cf_report_html(f, runs, n_runs, info)
+                                   : cf_report_junit(f, runs, n_runs, info);
+            if (fclose(f) != 0) {
+                w = -1;
+            }
+        }
         if (w != 0) {
-            cli_error("conformance: %s", err);
+            cli_error("conformance: cannot write %s: %s", path, strerror(errno));
             rc = 1;
         }
     }
@@ -260,7 +272,7 @@ static int conformance_run(const cf_cmd_opts_t *o)
         rates[n_rates++] = o->baud;
     }
     cf_t *cfs = calloc(n_rates, sizeof *cfs);
-    cf_run_t runs[GSD_RATE_COUNT];
+    cf_report_run_t runs[GSD_RATE_COUNT];
     if (cfs == NULL) {
         cli_error("conformance: out of memory");
         return 1;
@@ -270,12 +282,18 @@ static int conformance_run(const cf_cmd_opts_t *o)
     for (size_t i = 0; i < n_rates && rc == 0; i++) {
         rc = run_at(&cfs[i], o, &g, rates[i]);
         if (rc == 0) {
-            runs[done++] = (cf_run_t){.cf = &cfs[i], .baud = rates[i], .gsd_path = o->gsd_path};
+            runs[done++] = (cf_report_run_t){.cf = &cfs[i], .baud = rates[i]};
         }
     }
     if (done > 0u) {
-        cf_report_text(stdout, runs, done);
-        if (write_reports(o, runs, done) != 0 && rc == 0) {
+        char date[64];
+        time_t now = time(NULL);
+        struct tm tm;
+        strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S UTC", gmtime_r(&now, &tm));
+        cf_report_info_t info = {.gsd_path = o->gsd_path, .date = date,
+                                 .tool = "dfp-sim " DFP_SIM_VERSION};
+        (void)cf_report_text(stdout, runs, done, &info);
+        if (write_reports(o, runs, done, &info) != 0 && rc == 0) {
             rc = 1;
         }
     }
