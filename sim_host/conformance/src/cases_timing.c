@@ -96,9 +96,9 @@ static void case_tsdr_min(cf_t *cf)
         cf_info(cf, "min TSDR %u: %u answers with TSDR %d..%d bit times", RAISED_MIN_TSDR,
                 s.answers, (int)s.seen_lo, (int)s.seen_hi);
     }
-    /* Back to the start-up's min TSDR for the cases after this one. */
+    /* Back to the start-up's min TSDR (Set_Prm with lock) for the cases after this one. */
     if (!cf->link_failed) {
-        (void)cf_reset(cf);
+        (void)cf_start_up(cf);
     }
     cf->link.slot_us = slot;
 }
@@ -125,7 +125,18 @@ static void case_tsdr_max(cf_t *cf)
     }
 }
 
-/* The tester goes to baud; the slave must answer Slave_Diag there within the bound. */
+/* The default slot time TSL at a rate (protocol.md §A2.1), widened to MaxTsdr + 15 where the
+ * GSD asks for more. */
+static uint32_t slot_bits(const cf_t *cf, uint32_t baud)
+{
+    uint32_t tsl = baud <= 187500u ? 100u : baud <= 500000u ? 200u : baud <= 1500000u ? 300u
+                 : baud <= 3000000u ? 400u : baud <= 6000000u ? 600u : 1000u;
+    uint32_t max = gsd_max_tsdr_bits(cf->gsd, baud) + 15u;
+    return max > tsl ? max : tsl;
+}
+
+/* The tester goes to baud (its slot time with it); the slave must answer Slave_Diag there
+ * within the bound. */
 static bool follow(cf_t *cf, uint32_t baud, uint64_t *took_ms)
 {
     uint64_t t0 = cf->link.ops->now_ns(cf->link.ctx);
@@ -135,6 +146,10 @@ static bool follow(cf_t *cf, uint32_t baud, uint64_t *took_ms)
     if (cf->link.ops->set_baud(cf->link.ctx, baud) != 0) {
         return cf_fail(cf, "the link could not switch to %u bit/s", baud);
     }
+    cf->link.baud = baud;
+    cf->link.slot_us = bits_us(slot_bits(cf, baud), baud);
+    /* Between tries at least TSYN of the new rate: the slave only takes a request after it. */
+    uint32_t gap_ms = bits_us(FDL_TSYN_BITS, baud) / 1000u + 1u;
     while (t - t0 < (uint64_t)BAUD_FOLLOW_BOUND_MS * 1000000u) {
         /* FCV=0 each time: requests the slave missed leave no FCB to match. */
         cf_fcb_restart(cf, cf->opt.master);
@@ -145,7 +160,7 @@ static bool follow(cf_t *cf, uint32_t baud, uint64_t *took_ms)
             *took_ms = (t - t0) / 1000000u;
             return true;
         }
-        if (!cf_pause_ms(cf, 1)) {
+        if (!cf_pause_ms(cf, gap_ms)) {
             return false;
         }
         t = cf->link.ops->now_ns(cf->link.ctx);
@@ -160,7 +175,7 @@ static void case_baud_search(cf_t *cf)
     if (!cf->link.has_baud || cf->link.baud == 0u) {
         return (void)cf_na(cf, "%s cannot change its rate", cf->link.name);
     }
-    uint32_t home = cf->link.baud;
+    uint32_t home = cf->link.baud, home_slot = cf->link.slot_us;
     uint64_t took = 0;
     for (size_t i = GSD_RATE_COUNT; i-- > 0u;) {
         uint32_t baud = gsd_rate_baud(i);
@@ -179,6 +194,8 @@ static void case_baud_search(cf_t *cf)
             cf_info(cf, "back to %u bit/s in %u ms", home, (unsigned)took);
         }
     }
+    cf->link.baud = home;
+    cf->link.slot_us = home_slot;
 }
 
 static void case_rates_unclaimed(cf_t *cf)
