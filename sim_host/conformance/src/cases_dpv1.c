@@ -319,19 +319,17 @@ static void case_c1_not_enabled(cf_t *cf)
     if (st == V1_REFUSED && r.fdl_code == FDL_RSP_RS) {
         return;
     }
-    if (st == V1_REFUSED || st == V1_SILENT) {
-        return (void)cf_fail(cf, "MSAC1 in Data_Exch without DPV1_Enable: expected RS (SAP 51 "
-                             "not activated), got %s", st == V1_SILENT ? "silence"
-                                                                      : v1_fdl_code_name(r.fdl_code));
-    }
     if (st != V1_BROKEN) {
+        const char *got = st == V1_SILENT    ? "silence"
+                          : st == V1_REFUSED ? v1_fdl_code_name(r.fdl_code)
+                          : st == V1_TIMEOUT ? "the request taken (SC)"
+                                             : v1_hex(r.pdu, r.len, g, sizeof g);
         (void)cf_fail(cf, "MSAC1 in Data_Exch without DPV1_Enable: expected RS (SAP 51 not "
-                      "activated), got %s", st == V1_TIMEOUT ? "the request taken (SC)"
-                                                             : v1_hex(r.pdu, r.len, g, sizeof g));
+                      "activated), got %s", got);
     }
 }
 
-/* ---- data set 47, PROFIdrive base mode ------------------------------------------------------ */
+/* ---- data set 47, PROFIdrive base mode ---------------------------------------------------- */
 
 /* Octets of one value of a PROFIdrive format (protocol.md §A5.2); 0 for an unknown format. */
 static size_t pd_value_size(uint8_t format)

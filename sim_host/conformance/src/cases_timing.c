@@ -215,7 +215,7 @@ static void case_rates_unclaimed(cf_t *cf)
     }
 }
 
-#define STD_TIMING "IEC 61158-4-3 bus timing (TSDR, min TSDR by Set_Prm; protocol.md §A2.1, §A3.2)"
+#define STD_TIMING "IEC 61158-4-3 bus timing: TSDR, min TSDR (protocol.md §A2.1, §A3.2)"
 
 const cf_case_t cf_cases_timing[] = {
     { "timing.tsdr.min", "Timing", STD_TIMING,
