@@ -19,8 +19,8 @@ const char *cf_gf_hex(const uint8_t *p, size_t len, char *buf, size_t cap)
     if (cap == 0u) return buf;
     buf[0] = '\0';
     for (size_t i = 0; i < len; i++) {
-        if (at + 7u > cap) {
-            (void)snprintf(buf + at, cap - at, "...");
+        if (at + 8u > cap) { /* " XX", then room for " ..." */
+            (void)snprintf(buf + at, cap - at, i == 0u ? "..." : " ...");
             break;
         }
         at += (size_t)snprintf(buf + at, cap - at, i == 0u ? "%02X" : " %02X", p[i]);
