@@ -8,8 +8,10 @@
 #include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_wire.h"
 
-/* Polls of Slave_Diag a slave may need after Chk_Cfg before it reports Data_Exch (Stat_Diag). */
+/* Polls of Slave_Diag a slave may need after Chk_Cfg before it reports Data_Exch without
+ * Stat_Diag (which asks the master to poll the diagnosis again), and the pause between them. */
 #define GF_READY_POLLS 10u
+#define GF_READY_POLL_MS 10u
 
 /* ---- helpers shared with cases_fdl.c ------------------------------------------------------ */
 
@@ -191,10 +193,17 @@ static bool wait_ready(cf_t *cf, cf_gf_trace_t *t, char *why, size_t n)
     cf_gf_trace_t *tr = t;
     for (unsigned i = 0; i < GF_READY_POLLS; i++) {
         if (!trace_diag(cf, tr, "after Chk_Cfg", why, n)) return false;
-        if (cf_gf_in_data_exch(tr->last, tr->last_len)) return true;
+        if (cf_gf_in_data_exch(tr->last, tr->last_len) &&
+            (tr->last[DP_DIAG_STATUS_2] & DP_DIAG2_STAT_DIAG) == 0u) {
+            return true;
+        }
         if ((tr->last[DP_DIAG_STATUS_1] & (DP_DIAG1_CFG_FAULT | DP_DIAG1_PRM_FAULT)) != 0u ||
             (tr->last[DP_DIAG_STATUS_2] & DP_DIAG2_PRM_REQ) != 0u) {
             break; /* refused: polling again changes nothing */
+        }
+        if (!cf_pause_ms(cf, GF_READY_POLL_MS)) {
+            (void)snprintf(why, n, "the link failed");
+            return false;
         }
     }
     char h[64];
