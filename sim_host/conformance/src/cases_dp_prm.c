@@ -203,7 +203,7 @@ static uint32_t line_ms(const cf_t *cf)
 static uint32_t expiry_target_ms(const cf_t *cf)
 {
     if (!cf->link.timing) return 200u;
-    uint32_t want = 8u * line_ms(cf);
+    uint32_t want = 4u * line_ms(cf);
     return want < 100u ? 100u : (want + 9u) / 10u * 10u;
 }
 
