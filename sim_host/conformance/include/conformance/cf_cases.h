@@ -1,0 +1,14 @@
+/* The case tables of the suite's groups (cf_all_cases joins them in this order). */
+#ifndef CONFORMANCE_CF_CASES_H
+#define CONFORMANCE_CF_CASES_H
+
+#include <stddef.h>
+
+#include "conformance/cf.h"
+
+extern const cf_case_t cf_cases_core[];
+extern const size_t cf_cases_core_count;
+
+#define CF_CASE_TABLES {cf_cases_core, &cf_cases_core_count}
+
+#endif
