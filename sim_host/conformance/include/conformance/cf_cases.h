@@ -5,10 +5,11 @@
 #include <stddef.h>
 
 #include "conformance/cf.h"
+#include "conformance/cf_cases_dp.h"
 
 extern const cf_case_t cf_cases_core[];
 extern const size_t cf_cases_core_count;
 
-#define CF_CASE_TABLES {cf_cases_core, &cf_cases_core_count}
+#define CF_CASE_TABLES {cf_cases_core, &cf_cases_core_count}, {cf_cases_dp, &cf_cases_dp_count}
 
 #endif
