@@ -236,7 +236,11 @@ static bool read_as(cf_t *cf, uint8_t sa, uint8_t sap, uint16_t want, const char
     cf_reply_t r;
     cf_answer_t a;
     char t[CF_TEXT_MAX];
-    if (!cf_dp_from(cf, sa, DP_SAP_MASTER, sap, NO_DU, 0, &r)) return false;
+    /* The owner polls between the reads: its watchdog runs on its own telegrams only. */
+    if (!dpx_dx(cf, NULL, NULL, "the owner between the class-2 reads") ||
+        !cf_dp_from(cf, sa, DP_SAP_MASTER, sap, NO_DU, 0, &r)) {
+        return false;
+    }
     bool data = dpx_is_data(&r, &a);
     bool len_ok = data && (want == 0xFFFFu ? a.du_len > 0u : a.du_len == want);
     return cf_check(cf, len_ok,
@@ -285,11 +289,13 @@ void dpc_second_master(cf_t *cf)
                   "Slave_Diag of the second master")) {
         return;
     }
-    if (!cf_dp_from(cf, m2, DP_SAP_MASTER, DP_SAP_CHK_CFG, cf->cfg, cf->cfg_len, &r) ||
+    if (!dpx_dx(cf, NULL, NULL, "the owner between the second master's requests") ||
+        !cf_dp_from(cf, m2, DP_SAP_MASTER, DP_SAP_CHK_CFG, cf->cfg, cf->cfg_len, &r) ||
         !dpx_expect_rs(cf, &r, "Chk_Cfg of the second master while locked")) {
         return;
     }
-    if (!cf_request(cf, m2, FDL_REQ_SRD_HIGH, -1, -1, zeros, cf->out_len, &r) ||
+    if (!dpx_dx(cf, NULL, NULL, "the owner between the second master's requests") ||
+        !cf_request(cf, m2, FDL_REQ_SRD_HIGH, -1, -1, zeros, cf->out_len, &r) ||
         !dpx_expect_rs(cf, &r, "Data_Exchange of the second master while locked")) {
         return;
     }
