@@ -5,6 +5,7 @@
 #include <stddef.h>
 
 #include "conformance/cf.h"
+#include "conformance/cf_cases_dp.h"
 #include "conformance/cf_cases_fdl.h"
 #include "conformance/cf_cases_v1t.h"
 
@@ -13,7 +14,7 @@ extern const size_t cf_cases_core_count;
 
 #define CF_CASE_TABLES                                                                            \
     {cf_cases_gsd, &cf_cases_gsd_count}, {cf_cases_fdl, &cf_cases_fdl_count},                    \
-        {cf_cases_core, &cf_cases_core_count}, {cf_cases_timing, &cf_cases_timing_count},        \
-        {cf_cases_dpv1, &cf_cases_dpv1_count}
+        {cf_cases_core, &cf_cases_core_count}, {cf_cases_dp, &cf_cases_dp_count},                \
+        {cf_cases_timing, &cf_cases_timing_count}, {cf_cases_dpv1, &cf_cases_dpv1_count}
 
 #endif
