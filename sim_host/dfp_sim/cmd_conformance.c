@@ -155,7 +155,8 @@ static void list_cases(void)
     static cf_case_t cases[CF_MAX_CASES];
     size_t n = cf_all_cases(cases, CF_MAX_CASES);
     for (size_t i = 0; i < n; i++) {
-        printf("%-34s %-17s %s\n", cases[i].id, cases[i].group, cases[i].title);
+        printf("%s\t%s\t%s\t%s\n", cases[i].id, cases[i].group, cases[i].clause,
+               cases[i].title);
     }
 }
 
