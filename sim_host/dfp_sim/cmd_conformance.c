@@ -29,7 +29,8 @@ typedef struct cf_cmd_opts {
     uint32_t address;
     bool address_given;
     const char *gsd_path;
-    const char *module;
+    const char *modules[CF_MAX_MODULES];
+    size_t n_modules;
     uint32_t baud;
     bool all_rates;
     const char *only;
@@ -38,6 +39,7 @@ typedef struct cf_cmd_opts {
     bool list;
     cf_cmd_report_t reports[CF_CMD_MAX_REPORTS];
     size_t n_reports;
+    FILE *report_files[CF_CMD_MAX_REPORTS]; /* opened before the run: a bad path costs no run */
 } cf_cmd_opts_t;
 
 #define CF_OPT(field) offsetof(cf_cmd_opts_t, field)
@@ -95,7 +97,8 @@ static const cli_opt_t conformance_options[] = {
     {CLI_OPT("--address", "A", CLI_U32, CF_OPT(address)), .min = 0, .max = 125,
      .seen = CLI_SEEN(cf_cmd_opts_t, address_given)},
     {CLI_OPT("--gsd", "FILE", CLI_TEXT, CF_OPT(gsd_path))},
-    {CLI_OPT("--module", "NAME", CLI_TEXT, CF_OPT(module))},
+    {CLI_OPT("--module", "NAME", CLI_LIST, CF_OPT(modules)), .aux = CF_OPT(n_modules),
+     .max = CF_MAX_MODULES},
     {CLI_OPT("--baud", "RATE|all", CLI_CALL, 0), .choices = baud_words, .set = set_baud},
     {CLI_OPT("--only", "PREFIX", CLI_TEXT, CF_OPT(only))},
     {CLI_OPT("--master-address", "N", CLI_U32, CF_OPT(master)), .min = 0, .max = 125},
@@ -113,6 +116,30 @@ static const cli_group_t conformance_groups[] = {
 const cli_command_t cli_conformance = {.name = "conformance", .groups = conformance_groups,
                                        .n_groups = CLI_COUNT(conformance_groups),
                                        .operands = CLI_NO_OPERANDS};
+
+/* --only must name some case: a typo would otherwise be a green run of nothing. */
+static bool only_matches(const char *only)
+{
+    static cf_case_t cases[CF_MAX_CASES];
+    size_t n = cf_all_cases(cases, CF_MAX_CASES);
+    for (size_t i = 0; i < n; i++) {
+        if (strncmp(cases[i].id, only, strlen(only)) == 0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/* The class-2 master and the second class-1 master: the lowest addresses from 2 up that are
+ * neither the tester's nor the slave's (the slave must never be asked by itself). */
+static uint8_t free_address(uint8_t from, uint8_t a, uint8_t b, uint8_t c)
+{
+    uint8_t x = from;
+    while (x == a || x == b || x == c) {
+        x++;
+    }
+    return x;
+}
 
 static bool conformance_check(cf_cmd_opts_t *o)
 {
@@ -134,6 +161,11 @@ static bool conformance_check(cf_cmd_opts_t *o)
     }
     if (o->all_rates && !o->card) {
         cli_error("conformance: --baud all is for --card (a port or segment runs at one rate)");
+        return false;
+    }
+    if (o->only != NULL && !only_matches(o->only)) {
+        cli_error("conformance: --only '%s' matches no case (dfp-sim conformance --list)",
+                  o->only);
         return false;
     }
     if (o->master == o->address) {
@@ -202,16 +234,18 @@ static int run_at(cf_t *cf, const cf_cmd_opts_t *o, const gsd_t *g, uint32_t bau
     }
     cf_link_t link = cf_rig_link(&cr, name);
     cf_options_t co = {.address = (uint8_t)o->address, .master = (uint8_t)o->master,
-                       .class2 = 2, .master_2 = 3, .module = -1, .only = o->only};
-    if (o->module != NULL && (co.module = gsd_find_module(g, o->module)) < 0) {
-        cli_error("conformance: the GSD file has no module \"%s\"", o->module);
-        cf_rig_close(&cr);
-        return EXIT_USAGE;
+                       .module = -1, .only = o->only};
+    co.class2 = free_address(2u, co.master, co.address, 0xFFu);
+    co.master_2 = free_address((uint8_t)(co.class2 + 1u), co.master, co.address, co.class2);
+    for (size_t k = 0; k < o->n_modules; k++) {
+        co.modules[k] = gsd_find_module(g, o->modules[k]);
+        if (co.modules[k] < 0) {
+            cli_error("conformance: the GSD file has no module \"%s\"", o->modules[k]);
+            cf_rig_close(&cr);
+            return EXIT_USAGE;
+        }
     }
-    if (co.master == co.class2 || co.master == co.master_2) {
-        co.class2 = co.master == 2u ? 4u : 2u;
-        co.master_2 = co.master == 3u ? 5u : 3u;
-    }
+    co.n_modules = o->n_modules;
     if (cf_init(cf, &link, g, &co, err, sizeof err) != 0) {
         cli_error("conformance: %s", err);
         cf_rig_close(&cr);
@@ -226,30 +260,52 @@ static int run_at(cf_t *cf, const cf_cmd_opts_t *o, const gsd_t *g, uint32_t bau
     return 0;
 }
 
-static int write_reports(const cf_cmd_opts_t *o, const cf_report_run_t *runs, size_t n_runs,
+/* The report files, opened (created) before the run. 0, or 1 after reporting. */
+static int open_reports(cf_cmd_opts_t *o)
+{
+    for (size_t k = 0; k < o->n_reports; k++) {
+        o->report_files[k] = fopen(o->reports[k].path, "w");
+        if (o->report_files[k] == NULL) {
+            cli_error("conformance: cannot write %s: %s", o->reports[k].path, strerror(errno));
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static int write_reports(cf_cmd_opts_t *o, const cf_report_run_t *runs, size_t n_runs,
                          const cf_report_info_t *info)
 {
     int rc = 0;
     for (size_t k = 0; k < o->n_reports; k++) {
-        const char *path = o->reports[k].path;
-        FILE *f = fopen(path, "w");
-        int w = -1;
-        if (f != NULL) {
-            w = o->reports[k].html ? cf_report_html(f, runs, n_runs, info)
+        FILE *f = o->report_files[k];
+        o->report_files[k] = NULL;
+        int w = o->reports[k].html ? cf_report_html(f, runs, n_runs, info)
                                    : cf_report_junit(f, runs, n_runs, info);
-            if (fclose(f) != 0) {
-                w = -1;
-            }
+        errno = 0;
+        if (w != 0 || ferror(f) != 0) {
+            w = -1;
         }
-        if (w != 0) {
-            cli_error("conformance: cannot write %s: %s", path, strerror(errno));
+        if (fclose(f) != 0 || w != 0) {
+            cli_error("conformance: cannot write %s%s%s", o->reports[k].path,
+                      errno != 0 ? ": " : "", errno != 0 ? strerror(errno) : "");
             rc = 1;
         }
     }
     return rc;
 }
 
-static int conformance_run(const cf_cmd_opts_t *o)
+static void close_reports(cf_cmd_opts_t *o)
+{
+    for (size_t k = 0; k < o->n_reports; k++) {
+        if (o->report_files[k] != NULL) {
+            (void)fclose(o->report_files[k]);
+            o->report_files[k] = NULL;
+        }
+    }
+}
+
+static int conformance_run(cf_cmd_opts_t *o)
 {
     static gsd_t g;
     char err[400];
@@ -271,6 +327,10 @@ static int conformance_run(const cf_cmd_opts_t *o)
         }
     } else {
         rates[n_rates++] = o->baud;
+    }
+    if (open_reports(o) != 0) {
+        close_reports(o);
+        return 1;
     }
     cf_t *cfs = calloc(n_rates, sizeof *cfs);
     cf_report_run_t runs[GSD_RATE_COUNT];
@@ -303,6 +363,7 @@ static int conformance_run(const cf_cmd_opts_t *o)
         cf_count(&cfs[i], &pass, &fail, &na);
         rc = fail > 0u ? 1 : 0;
     }
+    close_reports(o);
     free(cfs);
     return rc;
 }

@@ -227,7 +227,7 @@ static const help_cmd_t commands[] = {
      0u},
     {"conformance",
      "--port DEV|--bus lcm:CHANNEL|--card [--lcm-url URL] [--key FILE] --address A\n"
-     "--gsd FILE [--module NAME]\n"
+     "--gsd FILE [--module NAME]...\n"
      "[--baud RATE|all] [--only PREFIX] [--master-address N] [--report junit|html FILE]...\n"
      "[--echo-suppress] [--list]",
      "the conformance suite for DP slaves: a test master runs the cases (GSD, FDL, DP\n"
@@ -236,12 +236,14 @@ static const help_cmd_t commands[] = {
      "telegrams that decided it. The slave is on a tty or PTY (--port, no timing), an LCM\n"
      "segment (--bus), or --card: the DFP21B card in process on the in-memory bus, timed\n"
      "to the bit, at --baud RATE or at every rate the GSD claims (--baud all). The tester\n"
-     "holds the line alone (no token): no other master may be on it. --module: the GSD\n"
-     "module start-ups configure (default the first); --only: the cases whose id starts\n"
-     "with PREFIX; --master-address: the tester's class-1 address (default 1; 2 and 3 play\n"
-     "the class-2 and a second class-1 master). --report junit|html FILE (up to two): also\n"
-     "as JUnit XML or a self-contained HTML report. --list: every case (id, group, clause,\n"
-     "title, tab-separated). Exit 0 when no case fails, 1 when one does.\n"
+     "holds the line alone (no token): no other master may be on it. --module NAME\n"
+     "(repeatable, up to 32): the modules start-ups configure, in this order (default the\n"
+     "GSD's first); --only: the cases whose id starts with PREFIX; --master-address: the\n"
+     "tester's class-1 address (default 1; the next free ones from 2 up play the class-2\n"
+     "and a second class-1 master). --report junit|html FILE (up to two): also as JUnit\n"
+     "XML or a self-contained HTML report (the files are created before the run). --list:\n"
+     "every case (id, group, clause, title, tab-separated). Exit 0 when no case fails, 1\n"
+     "when one does or the medium cannot be opened, 2 for a bad command line or GSD file.\n"
      "docs/conformance.md",
      NOTE_RATE | NOTE_SEGMENT},
 };

@@ -98,6 +98,18 @@ expect_exit 2 "the tester at the slave's address" -- "$sim" conformance --card -
   --gsd "$v1"
 expect_exit 1 "a report that cannot be written" -- "$sim" conformance --card --address 4 \
   --gsd "$v1" --only gsd.ident --report html "$tmp/no/such/dir/r.html"
+expect_exit 2 "--only matching no case" -- "$sim" conformance --card --address 4 --gsd "$v1" \
+  --only nothing
+expect_in "--only named" "--only 'nothing' matches no case" "$out"
+expect_exit 1 "a report path that cannot be created, before the run" -- "$sim" conformance \
+  --card --address 4 --gsd "$v1" --report junit "$tmp/no/dir/r.xml"
+[ "$(grep -c '^PASS' <<<"$out")" = 0 ] && ok || bad "the run went ahead of a report it cannot write"
+# the slave at the addresses the tester would otherwise take for its other masters
+out=$(timeout 120 "$sim" conformance --card --address 2 --gsd "$v0" --only dp. 2>&1)
+expect_in "slave at 2: the class-2 master elsewhere" "summary: 24 cases, 24 PASS, 0 FAIL" "$out"
+out=$(timeout 120 "$sim" conformance --card --address 3 --master-address 5 --gsd "$v0" \
+        --only dp. 2>&1)
+expect_in "slave at 3: the second master elsewhere" "summary: 24 cases, 24 PASS, 0 FAIL" "$out"
 expect_exit 0 "--list" -- "$sim" conformance --list
 [ "$(grep -c . <<<"$out")" = 63 ] && ok || bad "--list: $(grep -c . <<<"$out") lines, expected 63"
 finish

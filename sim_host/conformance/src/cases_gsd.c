@@ -363,6 +363,12 @@ static void gsd_modules_case(cf_t *cf)
         return (void)cf_na(cf, "Max_Module = 0: no module may be configured alone");
     }
     if (g->n_modules == 0u) return (void)cf_na(cf, "the GSD has no Module");
+    uint32_t modular = 0;
+    if (gsd_key(g, GSD_K_MODULAR_STATION, &modular) && modular == 1u && max_module > 1u) {
+        return (void)cf_na(cf, "a modular station (Max_Module = %u): its modules need not "
+                               "stand alone; start-ups use the --module list",
+                           (unsigned)max_module);
+    }
     if (!cf_reset(cf)) return;
     char bad[CF_TEXT_MAX] = "";
     size_t at = 0, n_bad = 0;

@@ -31,30 +31,43 @@ static void default_options(cf_options_t *o)
     }
 }
 
-/* The configuration start-ups use: the chosen module's identifiers (the first module when none
- * is chosen). A GSD without modules cannot be configured. */
-static int choose_module(cf_t *cf, char *err, size_t errlen)
+/* The configuration start-ups use: the chosen modules' identifiers one after the other (the
+ * first module when none is chosen). A GSD without modules cannot be configured. */
+static int choose_modules(cf_t *cf, char *err, size_t errlen)
 {
     const gsd_t *g = cf->gsd;
     if (g->n_modules == 0u) {
         snprintf(err, errlen, "the GSD file has no module: no configuration to send");
         return -1;
     }
-    size_t m = cf->opt.module < 0 ? 0u : (size_t)cf->opt.module;
-    if (m >= g->n_modules) {
-        snprintf(err, errlen, "the GSD file has %zu modules: no module %zu", g->n_modules, m);
-        return -1;
+    if (cf->opt.n_modules == 0u) {
+        cf->opt.modules[0] = cf->opt.module < 0 ? 0 : cf->opt.module;
+        cf->opt.n_modules = 1;
     }
-    const gsd_module_t *mod = &g->modules[m];
-    if (mod->cfg_len == 0u || mod->cfg_len > sizeof cf->cfg ||
-        !gsd_module_io(g, m, &cf->in_len, &cf->out_len)) {
-        snprintf(err, errlen, "module \"%s\" has no usable configuration identifiers",
-                 gsd_chars(g, mod->name));
-        return -1;
+    cf->cfg_len = 0;
+    cf->in_len = cf->out_len = 0;
+    for (size_t k = 0; k < cf->opt.n_modules && k < CF_MAX_MODULES; k++) {
+        int m = cf->opt.modules[k];
+        if (m < 0 || (size_t)m >= g->n_modules) {
+            snprintf(err, errlen, "the GSD file has %zu modules: no module %d", g->n_modules, m);
+            return -1;
+        }
+        const gsd_module_t *mod = &g->modules[m];
+        uint16_t in = 0;
+        uint16_t out = 0;
+        if (mod->cfg_len == 0u || cf->cfg_len + mod->cfg_len > sizeof cf->cfg ||
+            !gsd_module_io(g, (size_t)m, &in, &out) || cf->in_len + in > DP_IO_LEN_LIMIT ||
+            cf->out_len + out > DP_IO_LEN_LIMIT) {
+            snprintf(err, errlen, "module \"%s\" has no usable configuration identifiers, or "
+                     "the configuration grows beyond 244 octets", gsd_chars(g, mod->name));
+            return -1;
+        }
+        memcpy(&cf->cfg[cf->cfg_len], gsd_module_cfg(g, (size_t)m), mod->cfg_len);
+        cf->cfg_len = (uint8_t)(cf->cfg_len + mod->cfg_len);
+        cf->in_len = (uint16_t)(cf->in_len + in);
+        cf->out_len = (uint16_t)(cf->out_len + out);
     }
-    memcpy(cf->cfg, gsd_module_cfg(g, m), mod->cfg_len);
-    cf->cfg_len = (uint8_t)mod->cfg_len;
-    cf->opt.module = (int)m;
+    cf->opt.module = cf->opt.modules[0];
     return 0;
 }
 
@@ -73,7 +86,7 @@ int cf_init(cf_t *cf, const cf_link_t *link, const gsd_t *gsd, const cf_options_
     }
     cf->ident = (uint16_t)v;
     cf->dpv1 = gsd_key(gsd, GSD_K_DPV1_SLAVE, &v) && v == 1u;
-    if (choose_module(cf, err, errlen) != 0) {
+    if (choose_modules(cf, err, errlen) != 0) {
         return -1;
     }
     size_t n = cf_default_prm(cf, cf->opt.watchdog_ms, cf->prm, sizeof cf->prm);
@@ -102,7 +115,8 @@ static void find_slave(cf_t *cf)
         if (!cf_dp(cf, DP_SAP_SLAVE_DIAG, NULL, 0, &r)) {
             return;
         }
-        if (r.len > 0u) {
+        cf_answer_t a;
+        if (cf_answer(&r, &a) && a.sa == cf->opt.address && (a.fc & FDL_FC_REQUEST) == 0u) {
             cf->found = true;
             cf->found_after_ns = cf->link.ops->now_ns(cf->link.ctx) - t0;
             return;
@@ -346,7 +360,20 @@ bool cf_request(cf_t *cf, uint8_t sa, uint8_t fc_code, int dsap, int ssap, const
     if (n == 0u) {
         return cf_fail(cf, "tester: a request of %zu octets does not fit in a telegram", du_len);
     }
-    return cf_exchange(cf, frame, n, out);
+    cf_reply_t scratch;
+    cf_reply_t *rp = out != NULL ? out : &scratch;
+    bool sent = cf_exchange(cf, frame, n, rp);
+    if (sent && rp->len == 0u && fc_has_fcb(fc_code)) {
+        /* No answer: the cycle is not complete, the FCB stays as it was, and the next request
+         * is the repetition the responder expects (IEC 61158-4-3, FCB rules). */
+        sa &= FDL_ADDR_MASK;
+        if ((fc & FDL_FC_FCV) == 0u) {
+            cf->fcb_started[sa] = false;
+        } else {
+            cf->fcb[sa] = !cf->fcb[sa];
+        }
+    }
+    return sent;
 }
 
 bool cf_dp_from(cf_t *cf, uint8_t sa, uint8_t ssap, uint8_t dsap, const uint8_t *du,
@@ -393,6 +420,20 @@ bool cf_answer(const cf_reply_t *r, cf_answer_t *a)
 bool cf_is_sc(const cf_reply_t *r)
 {
     return r->len == 1u && !r->garbled && r->octets[0] == FDL_SC;
+}
+
+bool cf_is_ack(const cf_reply_t *r)
+{
+    cf_answer_t a;
+    if (cf_is_sc(r)) {
+        return true;
+    }
+    if (!cf_answer(r, &a) || a.sd != FDL_SD1 || (a.fc & FDL_FC_REQUEST) != 0u) {
+        return false;
+    }
+    int code = a.fc & FDL_FC_CODE_MASK;
+    return code == FDL_RSP_OK || code == FDL_RSP_DL || code == FDL_RSP_DH ||
+           code == FDL_RSP_NR;
 }
 
 int cf_rsp_code(const cf_reply_t *r)
@@ -468,9 +509,15 @@ bool cf_diag(cf_t *cf, uint8_t *diag, size_t *len)
 size_t cf_default_prm(const cf_t *cf, uint32_t watchdog_ms, uint8_t *out, size_t cap)
 {
     uint8_t user[DP_MASTER_MAX_PRM];
-    size_t module = (size_t)(cf->opt.module < 0 ? 0 : cf->opt.module);
-    int n = gsd_default_prm(cf->gsd, &module, cf->gsd->n_modules > 0u ? 1u : 0u, user,
-                            sizeof user);
+    size_t modules[CF_MAX_MODULES];
+    size_t n_modules = 0;
+    for (size_t k = 0; k < cf->opt.n_modules && k < CF_MAX_MODULES; k++) {
+        modules[n_modules++] = (size_t)cf->opt.modules[k];
+    }
+    if (n_modules == 0u && cf->gsd->n_modules > 0u) {
+        modules[n_modules++] = (size_t)(cf->opt.module < 0 ? 0 : cf->opt.module);
+    }
+    int n = gsd_default_prm(cf->gsd, modules, n_modules, user, sizeof user);
     if (n < 0 || (size_t)n + DP_PRM_LEN_STANDARD > cap || cap < DP_MASTER_MAX_PRM) {
         return 0;
     }
@@ -537,15 +584,15 @@ bool cf_start_up(cf_t *cf)
         !cf_dp(cf, DP_SAP_SET_PRM, cf->prm, cf->prm_len, &r)) {
         return false;
     }
-    if (!cf_is_sc(&r)) {
-        return cf_fail(cf, "start-up: Set_Prm answered %s, expected SC",
+    if (!cf_is_ack(&r)) {
+        return cf_fail(cf, "start-up: Set_Prm answered %s, expected SC or SD1 without data",
                        cf_reply_text(&r, t, sizeof t));
     }
     if (!cf_dp(cf, DP_SAP_CHK_CFG, cf->cfg, cf->cfg_len, &r)) {
         return false;
     }
-    if (!cf_is_sc(&r)) {
-        return cf_fail(cf, "start-up: Chk_Cfg answered %s, expected SC",
+    if (!cf_is_ack(&r)) {
+        return cf_fail(cf, "start-up: Chk_Cfg answered %s, expected SC or SD1 without data",
                        cf_reply_text(&r, t, sizeof t));
     }
     if (!wait_ready(cf)) {
@@ -557,7 +604,7 @@ bool cf_start_up(cf_t *cf)
     }
     cf_answer_t a;
     int code = cf_rsp_code(&r);
-    bool ok = (cf->in_len == 0u && (cf_is_sc(&r) || code == FDL_RSP_DL)) ||
+    bool ok = (cf->in_len == 0u && cf_is_ack(&r)) ||
               (cf_answer(&r, &a) && (code == FDL_RSP_DL || code == FDL_RSP_DH));
     if (!ok) {
         return cf_fail(cf, "start-up: the first Data_Exchange answered %s",

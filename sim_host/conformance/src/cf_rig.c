@@ -133,7 +133,8 @@ static void take_reply(cf_rig_t *cr, cf_reply_t *out)
         uint64_t tx_end = cr->tx_start_ns + (uint64_t)cr->tx_len * hal_uart_char_ns(cr->baud);
         if (cr->rx_start_ns >= tx_end) {
             uint64_t ns = cr->rx_start_ns - tx_end;
-            out->tsdr_bits = (int32_t)((ns * cr->baud + 500000000u) / 1000000000u);
+            /* whole bit times, rounded down: an answer a fraction of a bit early is early */
+            out->tsdr_bits = (int32_t)((ns * cr->baud) / 1000000000u);
         }
     }
 }
@@ -215,6 +216,13 @@ static const cf_link_ops_t rig_link_ops = {.exchange = link_exchange,
                                            .now_ns = link_now_ns,
                                            .power_cycle = link_power_cycle};
 
+/* Only the card in process can be switched off and on. */
+static const cf_link_ops_t rig_link_ops_no_card = {.exchange = link_exchange,
+                                                   .pause = link_pause,
+                                                   .set_baud = link_set_baud,
+                                                   .now_ns = link_now_ns,
+                                                   .power_cycle = NULL};
+
 static bool is_pty(const cf_rig_cfg_t *cfg)
 {
     struct stat st;
@@ -239,7 +247,7 @@ cf_link_t cf_rig_link(cf_rig_t *cr, const char *name)
     l.slot_us = cr->cfg.slot_us;
     l.idle_us = cr->cfg.idle_us;
     if (cr->card == NULL) {
-        l.ops = &rig_link_ops; /* power_cycle answers -1 without a card */
+        l.ops = &rig_link_ops_no_card;
     }
     return l;
 }

@@ -29,6 +29,7 @@
 #define CF_MAX_EVIDENCE 16u
 #define CF_TEXT_MAX 256u
 #define CF_MAX_CASES 160u
+#define CF_MAX_MODULES 32u /* modules in one configuration */
 /* How long the run asks for the slave before the first case (it may be searching the rate). */
 #define CF_FIND_SLAVE_MS 10000u
 /* TSDR of a reply the medium cannot time (a PTY, an LCM segment, a tty without --timing). */
@@ -116,6 +117,10 @@ typedef struct cf_options {
     uint8_t master_2;       /* a second class-1 master (default 3) */
     uint8_t class2;         /* the class-2 master (default 2) */
     int module;             /* the GSD module configured in start-ups; -1: the first */
+    /* A modular station's configuration: these modules in this order (n_modules > 0 overrides
+     * module). */
+    int modules[CF_MAX_MODULES];
+    size_t n_modules;
     const char *only;       /* run the cases whose id starts with this (NULL: all) */
     uint32_t watchdog_ms;   /* the watchdog start-ups set (default 200) */
 } cf_options_t;
@@ -221,6 +226,9 @@ typedef struct cf_answer {
 bool cf_answer(const cf_reply_t *r, cf_answer_t *a);
 /* The answer is SC (E5). */
 bool cf_is_sc(const cf_reply_t *r);
+/* A positive acknowledgement without data: SC, or SD1 with OK, DL, DH or NR (IEC 61158-4-3
+ * lets a responder answer an SRD that returns nothing either way). */
+bool cf_is_ack(const cf_reply_t *r);
 /* The response code of the answer (FDL_RSP_*), -1 for SC, silence or garbage. */
 int cf_rsp_code(const cf_reply_t *r);
 /* A text of a reply for a reason: "silence", "SC", "RS (FC 0x03)", "DL 6 octets" ... */
