@@ -17,6 +17,7 @@
 #include "medium.h"
 
 #define CF_CMD_MAX_REPORTS 2u
+#define CF_WALL_CLOCK_WATCHDOG_MS 1000u
 
 typedef struct cf_cmd_report {
     bool html;
@@ -233,8 +234,11 @@ static int run_at(cf_t *cf, const cf_cmd_opts_t *o, const gsd_t *g, uint32_t bau
         snprintf(name, sizeof name, "%s", o->med.bus != NULL ? o->med.bus : o->med.dev);
     }
     cf_link_t link = cf_rig_link(&cr, name);
+    /* A wall-clock medium on a loaded host may keep the tester away longer than 200 ms: its
+     * start-ups give the watchdog a second (dp.watchdog.expiry sets its own). */
     cf_options_t co = {.address = (uint8_t)o->address, .master = (uint8_t)o->master,
-                       .module = -1, .only = o->only};
+                       .module = -1, .only = o->only,
+                       .watchdog_ms = o->card ? 200u : CF_WALL_CLOCK_WATCHDOG_MS};
     co.class2 = free_address(2u, co.master, co.address, 0xFFu);
     co.master_2 = free_address((uint8_t)(co.class2 + 1u), co.master, co.address, co.class2);
     for (size_t k = 0; k < o->n_modules; k++) {
