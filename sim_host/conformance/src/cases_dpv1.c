@@ -98,14 +98,20 @@ static bool im0_read(cf_t *cf, const v1_chan_t *ch, uint8_t *rec)
     const uint8_t w[] = { DPV1_FN_WRITE, 0, DPV1_INDEX_IM, IM_CALL_HEADER_LEN,
                           IM_FN_CALL, 0, IM_INDEX_0 >> 8, IM_INDEX_0 & 0xFFu };
     const uint8_t wres[] = { DPV1_FN_WRITE, 0, DPV1_INDEX_IM, IM_CALL_HEADER_LEN };
-    v1_result_t wr, rr;
+    v1_result_t wr;
+    v1_result_t rr;
     memset(&rr, 0, sizeof rr);
     v1_status_t st = v1_write_read(cf, &ch->p, w, sizeof w, ch->timeout_ms, &wr, &rr);
-    if (wr.len == 0u || rr.len == 0u) {
-        return v1_need_response(cf, st, wr.len == 0u ? &wr : &rr,
-                                wr.len == 0u ? "Write.req index 255" : "Read.req index 255");
+    if (wr.len == 0u) {
+        (void)v1_need_response(cf, st, &wr, "Write.req index 255");
+        return false;
     }
+    /* A negative Write leaves no Read: it is judged here, before rr is looked at. */
     if (!expect_pdu(cf, &wr, wres, sizeof wres, "Write.req of the I&M0 call header")) {
+        return false;
+    }
+    if (rr.len == 0u) {
+        (void)v1_need_response(cf, st, &rr, "Read.req index 255");
         return false;
     }
     const uint8_t head[] = { DPV1_FN_READ, 0, DPV1_INDEX_IM, IM_CALL_HEADER_LEN + IM_RECORD_LEN,
@@ -187,13 +193,17 @@ static void case_im0(cf_t *cf)
         return (void)cf_na(cf, "the GSD does not claim Ident_Maintenance_supp");
     }
     v1_chan_t ch;
-    uint8_t rec[IM_RECORD_LEN], again[IM_RECORD_LEN];
+    uint8_t rec[IM_RECORD_LEN];
+    uint8_t again[IM_RECORD_LEN];
     if (!chan_open(cf, &ch, true)) {
         return;
     }
-    if (im0_read(cf, &ch, rec)) {
-        im0_judge(cf, rec);
+    /* Every failed read has decided the case already; rec is only looked at once read. */
+    if (!im0_read(cf, &ch, rec)) {
+        chan_close(cf, &ch);
+        return;
     }
+    im0_judge(cf, rec);
     if (!cf_decided(cf) && im0_read(cf, &ch, again)) {
         (void)cf_check(cf, memcmp(rec, again, sizeof rec) == 0, "I&M0 read twice with nothing "
                        "written between: expected the same record, got another (REV_COUNTER "
