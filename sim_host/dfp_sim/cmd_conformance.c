@@ -354,7 +354,9 @@ static int conformance_run(cf_cmd_opts_t *o)
         char date[64];
         time_t now = time(NULL);
         struct tm tm;
-        strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S UTC", gmtime_r(&now, &tm));
+        if (strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S UTC", gmtime_r(&now, &tm)) == 0u) {
+            date[0] = '\0';
+        }
         cf_report_info_t info = {.gsd_path = o->gsd_path, .date = date,
                                  .tool = "dfp-sim " DFP_SIM_VERSION};
         (void)cf_report_text(stdout, runs, done, &info);
@@ -363,7 +365,9 @@ static int conformance_run(cf_cmd_opts_t *o)
         }
     }
     for (size_t i = 0; rc == 0 && i < done; i++) {
-        size_t pass, fail, na;
+        size_t pass;
+        size_t fail;
+        size_t na;
         cf_count(&cfs[i], &pass, &fail, &na);
         rc = fail > 0u ? 1 : 0;
     }

@@ -77,8 +77,10 @@ static bool get_cfg_in(cf_t *cf, const char *state, bool lengths)
 {
     cf_reply_t r;
     cf_answer_t a;
-    char t[CF_TEXT_MAX], h[DPX_HEX_MAX];
-    uint16_t in = 0, out = 0;
+    char t[CF_TEXT_MAX];
+    char h[DPX_HEX_MAX];
+    uint16_t in = 0;
+    uint16_t out = 0;
     if (!cf_dp(cf, DP_SAP_GET_CFG, NO_DU, 0, &r)) return false;
     if (!cf_check(cf, dpx_is_data(&r, &a) && a.du_len > 0u,
                   "Get_Cfg in %s: expected DL with the configuration, got %s", state,

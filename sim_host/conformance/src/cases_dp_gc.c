@@ -36,12 +36,12 @@ static bool rd_outp(cf_t *cf, uint8_t *out, bool *served)
 {
     cf_reply_t r;
     cf_answer_t a;
-    char t[CF_TEXT_MAX];
     *served = false;
     if (!cf_dp_from(cf, cf->opt.class2, DP_SAP_MASTER, DP_SAP_RD_OUTP, NO_DU, 0, &r)) {
         return false;
     }
     if (!dpx_is_data(&r, &a) || a.du_len != cf->out_len) {
+        char t[CF_TEXT_MAX];
         cf_na(cf, "Clear_Data shows only through Rd_Outp, which answered %s",
               cf_reply_text(&r, t, sizeof t));
         return false;
@@ -54,7 +54,8 @@ static bool rd_outp(cf_t *cf, uint8_t *out, bool *served)
 static bool outputs_are(cf_t *cf, const uint8_t *want, const char *what)
 {
     uint8_t got[DP_IO_LEN_LIMIT];
-    char h1[DPX_HEX_MAX], h2[DPX_HEX_MAX];
+    char h1[DPX_HEX_MAX];
+    char h2[DPX_HEX_MAX];
     bool served;
     if (!rd_outp(cf, got, &served)) return false;
     return cf_check(cf, memcmp(got, want, cf->out_len) == 0, "%s: Rd_Outp expected %s, got %s",
@@ -65,9 +66,12 @@ static bool outputs_are(cf_t *cf, const uint8_t *want, const char *what)
 /* Outputs p taken (two Data_Exchange) and read back. */
 static bool outputs_set(cf_t *cf, const uint8_t *p)
 {
-    return dpx_dx(cf, p, NULL, "outputs for Clear_Data") &&
-           dpx_dx(cf, p, NULL, "outputs for Clear_Data") &&
-           outputs_are(cf, p, "before Clear_Data");
+    for (int i = 0; i < 2; i++) {
+        if (!dpx_dx(cf, p, NULL, "outputs for Clear_Data")) {
+            return false;
+        }
+    }
+    return outputs_are(cf, p, "before Clear_Data");
 }
 
 void dpc_global_control_clear(cf_t *cf)
@@ -145,7 +149,7 @@ void dpc_global_control_sync(cf_t *cf)
 
 void dpc_global_control_freeze(cf_t *cf)
 {
-    uint8_t prm[sizeof cf->prm], c[DP_IO_LEN_LIMIT];
+    uint8_t prm[sizeof cf->prm];
     if (!supported(cf, GSD_K_FREEZE_MODE_SUPP)) {
         cf_na(cf, "the GSD does not claim Freeze_Mode_supp");
         return;
@@ -161,6 +165,7 @@ void dpc_global_control_freeze(cf_t *cf)
         return;
     }
     if (echo == 1) {
+        uint8_t c[DP_IO_LEN_LIMIT];
         dpx_pattern(c, cf->out_len, 0x13u);
         if (!held(cf, 0x13u, "inputs after Freeze (frozen until the next Freeze)") ||
             !dpx_gc(cf, cf->opt.master, DP_GC_FREEZE, 0)) {

@@ -74,7 +74,8 @@ static size_t allowed_values(const gsd_t *g, const gsd_prm_def_t *d, int64_t *ou
  * the first the list leaves out. */
 static size_t refused_values(const gsd_t *g, const gsd_prm_def_t *d, int64_t *out)
 {
-    int64_t lo, hi;
+    int64_t lo;
+    int64_t hi;
     size_t n = 0;
     type_range(d, &lo, &hi);
     if (!d->changeable || hi < lo) return 0;
@@ -136,7 +137,9 @@ void dpc_set_prm_user_prm(cf_t *cf)
     target_t t[MAX_PARAMS];
     int64_t v[MAX_VALUES];
     uint8_t d[DPX_DIAG_MAX];
-    size_t diag_len, accepted = 0, refused = 0;
+    size_t diag_len;
+    size_t accepted = 0;
+    size_t refused = 0;
     size_t nt = targets(cf, t);
     if (nt == 0u) {
         cf_na(cf, "the GSD defines no user parameter (Ext_User_Prm_Data_Ref) for the configured "

@@ -246,7 +246,8 @@ int dpx_dx_until(cf_t *cf, const uint8_t *out, const uint8_t *want, int tries, c
 
 int dpx_echo_probe(cf_t *cf)
 {
-    uint8_t a[DP_IO_LEN_LIMIT], b[DP_IO_LEN_LIMIT];
+    uint8_t a[DP_IO_LEN_LIMIT];
+    uint8_t b[DP_IO_LEN_LIMIT];
     if (tail_len(cf) == 0u) return 0;
     dpx_pattern(a, cf->out_len, 0x31u);
     dpx_pattern(b, cf->out_len, 0x62u);

@@ -27,7 +27,6 @@ typedef struct v1_chan {
 
 static bool chan_open(cf_t *cf, v1_chan_t *ch, bool prefer_c2)
 {
-    char why[96];
     memset(ch, 0, sizeof *ch);
     if (!cf->dpv1) {
         return cf_na(cf, "the GSD does not claim DPV1_Slave");
@@ -38,6 +37,7 @@ static bool chan_open(cf_t *cf, v1_chan_t *ch, bool prefer_c2)
         return cf_na(cf, "the GSD claims neither C1_Read_Write_supp nor C2_Read_Write_supp");
     }
     if (c2 && (prefer_c2 || !c1)) {
+        char why[96];
         ch->timeout_ms = v1_c2_timeout_ms(cf);
         v1_open_t o = v1_c2_open(cf, v1_c2_master(cf, 0), 300u, &ch->conn, why, sizeof why);
         if (o == V1_OPENED) {
@@ -62,7 +62,8 @@ static void chan_close(cf_t *cf, v1_chan_t *ch)
 static bool expect_pdu(cf_t *cf, const v1_result_t *r, const uint8_t *want, size_t n,
                        const char *what)
 {
-    char w[64], g[64];
+    char w[64];
+    char g[64];
     return cf_check(cf, r->len == n && memcmp(r->pdu, want, n) == 0, "%s: expected %s, got %s",
                     what, v1_hex(want, n, w, sizeof w), v1_hex(r->pdu, r->len, g, sizeof g));
 }
@@ -72,7 +73,6 @@ static bool expect_pdu(cf_t *cf, const v1_result_t *r, const uint8_t *want, size
 static bool expect_negative(cf_t *cf, const v1_result_t *r, uint8_t fn, const uint8_t *codes,
                             size_t n, const char *what)
 {
-    char g[64];
     uint8_t code1 = 0;
     bool neg = v1_negative(r->pdu, r->len, fn, &code1);
     bool listed = false;
@@ -80,6 +80,7 @@ static bool expect_negative(cf_t *cf, const v1_result_t *r, uint8_t fn, const ui
         listed = listed || codes[i] == code1;
     }
     if (!listed) {
+        char g[64];
         return cf_fail(cf, "%s: expected %02X 80 %02X xx (%s)%s, got %s", what,
                        (unsigned)(fn | DPV1_FN_ERROR), codes[0], v1_error_name(codes[0]),
                        n > 1u ? " or another code of the list" : "",
@@ -97,14 +98,20 @@ static bool im0_read(cf_t *cf, const v1_chan_t *ch, uint8_t *rec)
     const uint8_t w[] = { DPV1_FN_WRITE, 0, DPV1_INDEX_IM, IM_CALL_HEADER_LEN,
                           IM_FN_CALL, 0, IM_INDEX_0 >> 8, IM_INDEX_0 & 0xFFu };
     const uint8_t wres[] = { DPV1_FN_WRITE, 0, DPV1_INDEX_IM, IM_CALL_HEADER_LEN };
-    v1_result_t wr, rr;
+    v1_result_t wr;
+    v1_result_t rr;
     memset(&rr, 0, sizeof rr);
     v1_status_t st = v1_write_read(cf, &ch->p, w, sizeof w, ch->timeout_ms, &wr, &rr);
-    if (wr.len == 0u || rr.len == 0u) {
-        return v1_need_response(cf, st, wr.len == 0u ? &wr : &rr,
-                                wr.len == 0u ? "Write.req index 255" : "Read.req index 255");
+    if (wr.len == 0u) {
+        (void)v1_need_response(cf, st, &wr, "Write.req index 255");
+        return false;
     }
+    /* A negative Write leaves no Read: it is judged here, before rr is looked at. */
     if (!expect_pdu(cf, &wr, wres, sizeof wres, "Write.req of the I&M0 call header")) {
+        return false;
+    }
+    if (rr.len == 0u) {
+        (void)v1_need_response(cf, st, &rr, "Read.req index 255");
         return false;
     }
     const uint8_t head[] = { DPV1_FN_READ, 0, DPV1_INDEX_IM, IM_CALL_HEADER_LEN + IM_RECORD_LEN,
@@ -139,12 +146,15 @@ static uint16_t be16(const uint8_t *p)
 /* The I&M0 fields (protocol.md §A7 layout) against the I&M profile's types. */
 static void im0_judge(cf_t *cf, const uint8_t *rec)
 {
-    const uint8_t *order = &rec[12], *serial = &rec[32], *sw = &rec[50], *ver = &rec[60];
+    const uint8_t *order = &rec[12];
+    const uint8_t *serial = &rec[32];
+    const uint8_t *sw = &rec[50];
+    const uint8_t *ver = &rec[60];
     if (!cf_check(cf, visible(order, IM0_ORDER_ID_LEN), "ORDER_ID: expected 20 visible "
                   "characters (blank padded), got a non-printable octet") ||
         !cf_check(cf, visible(serial, IM0_SERIAL_LEN), "SERIAL_NUMBER: expected 16 visible "
                   "characters, got a non-printable octet") ||
-        !cf_check(cf, memchr("VRPUT", sw[0], 5) != NULL && sw[0] != 0u,
+        !cf_check(cf, sw[0] != 0u && strchr("VRPUT", sw[0]) != NULL,
                   "SOFTWARE_REVISION: expected the prefix V, R, P, U or T, got 0x%02X", sw[0]) ||
         !cf_check(cf, ver[0] == IM0_VERSION_MAJOR, "IM_VERSION: expected major version 1, "
                   "got %u.%u", ver[0], ver[1])) {
@@ -183,13 +193,17 @@ static void case_im0(cf_t *cf)
         return (void)cf_na(cf, "the GSD does not claim Ident_Maintenance_supp");
     }
     v1_chan_t ch;
-    uint8_t rec[IM_RECORD_LEN], again[IM_RECORD_LEN];
+    uint8_t rec[IM_RECORD_LEN];
+    uint8_t again[IM_RECORD_LEN];
     if (!chan_open(cf, &ch, true)) {
         return;
     }
-    if (im0_read(cf, &ch, rec)) {
-        im0_judge(cf, rec);
+    /* Every failed read has decided the case already; rec is only looked at once read. */
+    if (!im0_read(cf, &ch, rec)) {
+        chan_close(cf, &ch);
+        return;
     }
+    im0_judge(cf, rec);
     if (!cf_decided(cf) && im0_read(cf, &ch, again)) {
         (void)cf_check(cf, memcmp(rec, again, sizeof rec) == 0, "I&M0 read twice with nothing "
                        "written between: expected the same record, got another (REV_COUNTER "
@@ -314,12 +328,12 @@ static void case_c1_not_enabled(cf_t *cf)
     uint8_t pdu[DPV1_HEADER_LEN];
     v1_result_t r;
     v1_path_t p = v1_c1_path(cf);
-    char g[64];
     v1_status_t st = v1_call(cf, &p, pdu, v1_probe_read(pdu), v1_c1_timeout_ms(cf), &r);
     if (st == V1_REFUSED && r.fdl_code == FDL_RSP_RS) {
         return;
     }
     if (st != V1_BROKEN) {
+        char g[64];
         const char *got = st == V1_SILENT    ? "silence"
                           : st == V1_REFUSED ? v1_fdl_code_name(r.fdl_code)
                           : st == V1_TIMEOUT ? "the request taken (SC)"
@@ -362,8 +376,11 @@ static void pd_judge(cf_t *cf, const uint8_t *d, size_t n)
         return;
     }
     bool negative = d[1] != DS47_ID_REQUEST;
-    uint8_t format = d[4], count = d[5];
-    size_t size = pd_value_size(format), body = size * count, expect = 6u + body + (body & 1u);
+    uint8_t format = d[4];
+    uint8_t count = d[5];
+    size_t size = pd_value_size(format);
+    size_t body = size * count;
+    size_t expect = 6u + body + (body & 1u);
     if (!cf_check(cf, negative == (format == DS47_FORMAT_ERROR) && size > 0u && count > 0u &&
                   (n == expect || n == 6u + body), "data set 47 response: a %s response "
                   "needs a %s block of known format and its values, got %s",
@@ -385,7 +402,8 @@ static void case_ds47(cf_t *cf)
                           DS47_ATTR_VALUE, 0, PD_PNU_PROFILE >> 8, PD_PNU_PROFILE & 0xFFu, 0, 0 };
     const uint8_t wres[] = { DPV1_FN_WRITE, 0, DPV1_INDEX_DS47, 10 };
     v1_chan_t ch;
-    v1_result_t wr, rr;
+    v1_result_t wr;
+    v1_result_t rr;
     uint8_t code1 = 0;
     char g[64];
     memset(&rr, 0, sizeof rr);

@@ -51,7 +51,8 @@ static bool serves(cf_t *cf, const v1_conn_t *c)
 {
     uint8_t pdu[DPV1_HEADER_LEN];
     v1_result_t r;
-    char g[64], what[64];
+    char g[64];
+    char what[64];
     v1_path_t p = v1_conn_path(c);
     snprintf(what, sizeof what, "Read.req on SAP %u from master %u", c->sap, c->sa);
     v1_status_t st = v1_call(cf, &p, pdu, v1_probe_read(pdu), v1_c2_timeout_ms(cf), &r);
@@ -122,7 +123,6 @@ void v1_case_c2_initiate(cf_t *cf)
 void v1_case_c2_abort(cf_t *cf)
 {
     v1_conn_t c[V1_MAX_CONNS];
-    char why[96];
     memset(c, 0, sizeof c);
     if (!v1_c2_claimed(cf)) {
         return;
@@ -132,6 +132,7 @@ void v1_case_c2_abort(cf_t *cf)
     if (open_n(cf, c, n) && v1_c2_abort(cf, &c[0])) {
         v1_path_t p = v1_conn_path(&c[0]);
         if (not_served(cf, &p, "after Abort")) {
+            char why[96];
             v1_open_t o = v1_c2_open(cf, v1_c2_master(cf, n), C2_SEND_TIMEOUT, &c[n], why,
                                      sizeof why);
             if (opened(cf, o, &c[n], why)) {
@@ -195,7 +196,8 @@ static bool connection_silent(cf_t *cf, uint32_t ms)
 static bool kept_alive(cf_t *cf, const v1_conn_t *c, uint32_t t_ms)
 {
     const uint8_t idle[4] = { DPV1_FN_IDLE, 0, 0, 0 };
-    uint32_t gap = t_ms * 6u / 10u, ex = exchange_ms(cf);
+    uint32_t gap = t_ms * 6u / 10u;
+    uint32_t ex = exchange_ms(cf);
     cf_reply_t r;
     cf_answer_t a;
     char g[64];
@@ -222,7 +224,6 @@ void v1_case_c2_idle_timeout(cf_t *cf)
 {
     v1_conn_t c;
     uint32_t t_ms = 0;
-    char why[64];
     memset(&c, 0, sizeof c);
     if (!v1_c2_claimed(cf)) {
         return;
@@ -230,6 +231,7 @@ void v1_case_c2_idle_timeout(cf_t *cf)
     if (open_short(cf, &c, &t_ms) && kept_alive(cf, &c, t_ms) &&
         connection_silent(cf, t_ms + t_ms / 2u + 20u)) {
         v1_path_t p = v1_conn_path(&c);
+        char why[64];
         snprintf(why, sizeof why, "after %u ms of silence (Send_Timeout %u ms)",
                  t_ms + t_ms / 2u + 20u, t_ms);
         if (not_served(cf, &p, why)) {
@@ -266,7 +268,6 @@ void v1_case_c2_two_connections(cf_t *cf)
 void v1_case_c2_third_refused(cf_t *cf)
 {
     v1_conn_t c[V1_MAX_CONNS];
-    char why[96], g[64];
     memset(c, 0, sizeof c);
     if (!v1_c2_claimed(cf)) {
         return;
@@ -277,6 +278,8 @@ void v1_case_c2_third_refused(cf_t *cf)
                            "opens (%u)", (unsigned)v1_key(cf, GSD_K_C2_MAX_COUNT_CHANNELS), n);
     }
     if (open_n(cf, c, n)) {
+        char why[96];
+        char g[64];
         v1_open_t o = v1_c2_open(cf, v1_c2_master(cf, n), C2_SEND_TIMEOUT, &c[n], why,
                                  sizeof why);
         const uint8_t *res = c[n].res;

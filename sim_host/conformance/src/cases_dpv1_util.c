@@ -65,9 +65,12 @@ const char *v1_hex(const uint8_t *p, size_t n, char *buf, size_t cap)
     size_t shown = n > 12u ? 12u : n;
     size_t at = 0;
     buf[0] = '\0';
+    /* cppcheck 2.10 concludes n == 0 from the callers it follows; n is any PDU's length. */
+    // cppcheck-suppress knownConditionTrueFalse
     for (size_t i = 0; i < shown && at + 4u < cap; i++) {
         at += (size_t)snprintf(&buf[at], cap - at, i == 0u ? "%02X" : " %02X", p[i]);
     }
+    // cppcheck-suppress knownConditionTrueFalse
     if (shown < n && at + 5u < cap) {
         snprintf(&buf[at], cap - at, " ...");
     }
@@ -103,7 +106,6 @@ const char *v1_error_name(uint8_t code1)
 static v1_kind_t classify(cf_t *cf, const v1_path_t *p, const cf_reply_t *r, bool poll,
                           v1_result_t *out)
 {
-    char txt[64];
     cf_answer_t a;
     if (r->len == 0u && !r->garbled) {
         return K_SILENT;
@@ -112,11 +114,12 @@ static v1_kind_t classify(cf_t *cf, const v1_path_t *p, const cf_reply_t *r, boo
         return K_PENDING;
     }
     if (!cf_answer(r, &a) || (a.fc & FDL_FC_REQUEST) != 0u) {
+        char txt[64];
         (void)cf_fail(cf, "expected an answer to the SRD on SAP %u, got %s", p->dsap,
                       cf_reply_text(r, txt, sizeof txt));
         return K_BAD;
     }
-    int code = a.fc & FDL_FC_CODE_MASK;
+    int code = (int)(a.fc & FDL_FC_CODE_MASK);
     bool data = code == FDL_RSP_DL || code == FDL_RSP_DH;
     if (code == FDL_RSP_NR || code == FDL_RSP_OK || (data && a.du_len == 0u) ||
         (poll && code == FDL_RSP_RR)) {
@@ -343,7 +346,6 @@ static v1_open_t not_opened(v1_status_t st, const v1_result_t *r, const char *wh
 /* The PDU the connection's SAP gave to the polls after the resource manager's answer. */
 static v1_open_t initiate_answer(cf_t *cf, v1_conn_t *c, const v1_result_t *r)
 {
-    char hex[64];
     keep(c, r);
     if (r->pdu[0] == DPV1_FN_ABORT) {
         return V1_ABORTED;
@@ -352,6 +354,7 @@ static v1_open_t initiate_answer(cf_t *cf, v1_conn_t *c, const v1_result_t *r)
         return V1_NEGATIVE;
     }
     if (r->pdu[0] != DPV1_FN_INITIATE || r->len < DPV1_INITIATE_RES_HEAD_LEN) {
+        char hex[64];
         (void)cf_fail(cf, "expected Initiate.res (57, at least 12 octets) on SAP %u, got %s",
                       c->sap, v1_hex(r->pdu, r->len, hex, sizeof hex));
         return V1_OPEN_BROKEN;

@@ -115,7 +115,8 @@ static bool still_exchanging(cf_t *cf, const char *after)
 {
     uint8_t d[CF_GF_DU_MAX];
     size_t len = 0;
-    char why[CF_TEXT_MAX], h[64];
+    char why[CF_TEXT_MAX];
+    char h[64];
     cf_fcb_restart(cf, tester(cf));
     if (!cf_gf_diag(cf, d, &len, why, sizeof why)) {
         return cf_fail(cf, "after %s: %s", after, why);
@@ -190,7 +191,9 @@ static void bad_ed_run(cf_t *cf)
 
 static void le_mismatch_run(cf_t *cf)
 {
-    frame_t f[3], unused1, unused3;
+    frame_t f[3];
+    frame_t unused1;
+    frame_t unused3;
     good_three(cf, &unused1, &f[0], &unused3);
     f[1] = f[0];
     f[2] = f[0];
@@ -205,7 +208,9 @@ static void le_mismatch_run(cf_t *cf)
 
 static void sd2_repeat_run(cf_t *cf)
 {
-    frame_t f[2], unused1, unused3;
+    frame_t f[2];
+    frame_t unused1;
+    frame_t unused3;
     good_three(cf, &unused1, &f[0], &unused3);
     f[1] = f[0];
     f[0].o[3] = 0x69u;
@@ -217,7 +222,9 @@ static void sd2_repeat_run(cf_t *cf)
 
 static void short_run(cf_t *cf)
 {
-    frame_t f[5], sd1, sd3;
+    frame_t f[5];
+    frame_t sd1;
+    frame_t sd3;
     good_three(cf, &sd1, &f[0], &sd3);
     f[1] = f[0];
     f[0].n--;
@@ -239,7 +246,9 @@ static void short_run(cf_t *cf)
 
 static void unknown_sd_run(cf_t *cf)
 {
-    frame_t f[4], sd2, sd3;
+    frame_t f[4];
+    frame_t sd2;
+    frame_t sd3;
     good_three(cf, &f[0], &sd2, &sd3);
     f[0].o[0] = 0x11u;
     f[1] = sd2;
@@ -261,8 +270,10 @@ static void unknown_sd_run(cf_t *cf)
 
 static bool status_in(cf_t *cf, const char *state)
 {
-    uint8_t o[CF_FRAME_MAX], e[FDL_SD1_LEN];
-    char h1[32], h2[96];
+    uint8_t o[CF_FRAME_MAX];
+    uint8_t e[FDL_SD1_LEN];
+    char h1[32];
+    char h2[96];
     size_t n = status_req(dut(cf), tester(cf), o);
     /* SD1, DA and SA swapped, FC 00: a response, station type 00 (passive), OK */
     size_t en = fdl_encode(e, tester(cf), dut(cf), FDL_RSP_OK, false, 0, 0, NULL, 0);
@@ -381,7 +392,8 @@ static bool sd3_by_dx(cf_t *cf, const cf_gf_setup_t *s, cf_reply_t *r)
 /* Set_Prm, then the 6-octet Chk_Cfg as SD2 (r[0]) or SD3 (r[1]): Data_Exch either way. */
 static bool sd3_by_cfg(cf_t *cf, const cf_gf_setup_t *s, cf_reply_t *r)
 {
-    uint8_t du[CF_GF_DU_MAX], o[CF_FRAME_MAX];
+    uint8_t du[CF_GF_DU_MAX];
+    uint8_t o[CF_FRAME_MAX];
     char t[96];
     if (!cf_reset(cf)) return false;
     du[0] = DP_SAP_CHK_CFG;
@@ -426,7 +438,8 @@ static void sd3_request_run(cf_t *cf)
 static void other_address_run(cf_t *cf)
 {
     if (!start_up_no_wd(cf, 0u)) return;
-    uint8_t other = other_address(cf), du[CF_GF_DU_MAX];
+    uint8_t other = other_address(cf);
+    uint8_t du[CF_GF_DU_MAX];
     uint8_t first = cf_gf_fc(FDL_REQ_SRD_HIGH, false, true);
     frame_t f[4];
     f[0].n = status_req(other, tester(cf), f[0].o);
@@ -447,9 +460,13 @@ static void other_address_run(cf_t *cf)
 
 static void sa_127_run(cf_t *cf)
 {
-    uint8_t before[CF_GF_DU_MAX], after[CF_GF_DU_MAX];
-    size_t lb = 0, la = 0;
-    char why[CF_TEXT_MAX], hb[64], ha[64];
+    uint8_t before[CF_GF_DU_MAX];
+    uint8_t after[CF_GF_DU_MAX];
+    size_t lb = 0;
+    size_t la = 0;
+    char why[CF_TEXT_MAX];
+    char hb[64];
+    char ha[64];
     if (!cf_reset(cf)) return;
     if (!cf_gf_diag(cf, before, &lb, why, sizeof why)) return (void)cf_fail(cf, "%s", why);
     uint8_t first = cf_gf_fc(FDL_REQ_SRD_HIGH, false, true);
@@ -497,9 +514,11 @@ static size_t gc_req(const cf_t *cf, uint8_t da, uint8_t command, uint8_t *o)
 static bool gc_sdn(cf_t *cf, uint8_t da, uint8_t command, uint8_t bit, bool want,
                    const char *what)
 {
-    uint8_t o[CF_FRAME_MAX], d[CF_GF_DU_MAX];
+    uint8_t o[CF_FRAME_MAX];
+    uint8_t d[CF_GF_DU_MAX];
     size_t len = 0;
-    char why[CF_TEXT_MAX], h[64];
+    char why[CF_TEXT_MAX];
+    char h[64];
     size_t n = gc_req(cf, da, command, o);
     if (!silent(cf, o, n, what)) return false;
     if (!cf_gf_diag(cf, d, &len, why, sizeof why)) return cf_fail(cf, "after %s: %s", what, why);
@@ -515,7 +534,8 @@ static bool gc_sdn(cf_t *cf, uint8_t da, uint8_t command, uint8_t bit, bool want
 static void sdn_run(cf_t *cf)
 {
     const gsd_t *g = cf->gsd;
-    uint32_t freeze = 0, sync = 0;
+    uint32_t freeze = 0;
+    uint32_t sync = 0;
     (void)gsd_key(g, GSD_K_FREEZE_MODE_SUPP, &freeze);
     (void)gsd_key(g, GSD_K_SYNC_MODE_SUPP, &sync);
     uint8_t req = freeze ? DP_PRM_FREEZE_REQ : sync ? DP_PRM_SYNC_REQ : 0u;
@@ -523,7 +543,8 @@ static void sdn_run(cf_t *cf)
     uint8_t off = freeze ? DP_GC_UNFREEZE : sync ? DP_GC_UNSYNC : DP_GC_CLEAR_DATA;
     uint8_t bit = freeze ? DP_DIAG2_FREEZE_MODE : sync ? DP_DIAG2_SYNC_MODE : 0u;
     const char *cmd = freeze ? "Freeze" : sync ? "Sync" : "Clear_Data";
-    char w1[64], w2[64];
+    char w1[64];
+    char w2[64];
     if (!start_up_no_wd(cf, req)) return;
     (void)snprintf(w1, sizeof w1, "Global_Control %s as SDN to DA %u", cmd, dut(cf));
     (void)snprintf(w2, sizeof w2, "Global_Control %s as SDN to DA 127",
@@ -554,7 +575,8 @@ static bool served_by(cf_t *cf, const uint8_t *o, size_t n, uint8_t want, const 
 
 static bool same_reply(cf_t *cf, const cf_reply_t *held, const cf_reply_t *r, const char *what)
 {
-    char h1[64], h2[96];
+    char h1[64];
+    char h2[96];
     return cf_check(cf, !r->garbled && r->len == held->len &&
                             memcmp(r->octets, held->octets, held->len) == 0,
                     "%s: expected the held answer %s again, got %s", what,
@@ -567,9 +589,11 @@ static bool same_reply(cf_t *cf, const cf_reply_t *held, const cf_reply_t *r, co
 static void fcb_repeat_run(cf_t *cf)
 {
     if (!cf_start_up(cf)) return;
-    uint8_t o[CF_FRAME_MAX], du[CF_GF_DU_MAX];
+    uint8_t o[CF_FRAME_MAX];
+    uint8_t du[CF_GF_DU_MAX];
     cf_gf_fcb_t seq = {false, false};
-    cf_reply_t r, held;
+    cf_reply_t r;
+    cf_reply_t held;
     size_t n = diag_req(cf, dut(cf), tester(cf), cf_gf_next_fc(&seq, FDL_REQ_SRD_HIGH), o);
     if (!served_by(cf, o, n, DP_SAP_SLAVE_DIAG, "Slave_Diag (FCV 0, FCB 1)", &r)) return;
     uint8_t fc = cf_gf_next_fc(&seq, FDL_REQ_SRD_HIGH);
@@ -623,8 +647,11 @@ static void sap_unknown_run(cf_t *cf)
     static const uint8_t sap[] = {54u, 10u};
     if (!start_up_no_wd(cf, 0u)) return;
     for (size_t i = 0; i < sizeof sap; i++) {
-        uint8_t o[CF_FRAME_MAX], e[FDL_SD1_LEN], du[1] = {0};
-        char h1[32], h2[96];
+        uint8_t o[CF_FRAME_MAX];
+        uint8_t e[FDL_SD1_LEN];
+        uint8_t du[1] = {0};
+        char h1[32];
+        char h2[96];
         cf_fcb_restart(cf, tester(cf));
         size_t n = sap_req(cf, dut(cf), cf_gf_fc(FDL_REQ_SRD_HIGH, false, true), sap[i], du,
                            sizeof du, o);
@@ -649,7 +676,9 @@ static void reserved_fc_run(cf_t *cf)
     char seen[CF_TEXT_MAX] = "";
     size_t at = 0;
     for (size_t i = 0; i < sizeof code; i++) {
-        uint8_t o[CF_FRAME_MAX], du[CF_GF_DU_MAX], fc = cf_gf_fc(code[i], false, false);
+        uint8_t o[CF_FRAME_MAX];
+        uint8_t du[CF_GF_DU_MAX];
+        uint8_t fc = cf_gf_fc(code[i], false, false);
         char t[96];
         size_t n = sap_req(cf, dut(cf), fc, DP_SAP_SET_PRM, du, unlock_prm(cf, du), o);
         cf_reply_t r;

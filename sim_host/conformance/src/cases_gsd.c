@@ -106,7 +106,6 @@ static bool addressed_back(const cf_t *cf, const cf_answer_t *a)
 bool cf_gf_diag(cf_t *cf, uint8_t *diag, size_t *len, char *why, size_t n)
 {
     cf_reply_t r;
-    char t[96];
     if (!cf_dp(cf, DP_SAP_SLAVE_DIAG, NULL, 0, &r)) {
         (void)snprintf(why, n, "the link failed");
         return false;
@@ -116,6 +115,7 @@ bool cf_gf_diag(cf_t *cf, uint8_t *diag, size_t *len, char *why, size_t n)
     if (!cf_answer(&r, &a) || !a.saps || a.dsap != DP_SAP_MASTER ||
         a.ssap != DP_SAP_SLAVE_DIAG || !addressed_back(cf, &a) ||
         (code != (int)FDL_RSP_DL && code != (int)FDL_RSP_DH) || a.du_len < DP_DIAG_STD_LEN) {
+        char t[96];
         (void)snprintf(why, n, "Slave_Diag: expected DL with SAPs 62/60 and 6 or more octets, "
                        "got %s", cf_reply_text(&r, t, sizeof t));
         return false;
@@ -127,7 +127,6 @@ bool cf_gf_diag(cf_t *cf, uint8_t *diag, size_t *len, char *why, size_t n)
 
 bool cf_gf_dx_ok(const cf_t *cf, const cf_reply_t *r, uint16_t in_len, char *why, size_t n)
 {
-    char t[96];
     cf_answer_t a;
     int code = cf_rsp_code(r);
     bool ok;
@@ -140,6 +139,7 @@ bool cf_gf_dx_ok(const cf_t *cf, const cf_reply_t *r, uint16_t in_len, char *why
              (code == (int)FDL_RSP_DL || code == (int)FDL_RSP_DH) && a.du_len == in_len;
     }
     if (!ok) {
+        char t[96];
         (void)snprintf(why, n, "Data_Exchange: expected DL with %u input octets, got %s",
                        (unsigned)in_len, cf_reply_text(r, t, sizeof t));
     }
@@ -176,12 +176,12 @@ static bool acked(cf_t *cf, uint8_t sap, const uint8_t *du, size_t len, const ch
                   char *why, size_t n)
 {
     cf_reply_t r;
-    char t[96];
     if (!cf_dp(cf, sap, du, len, &r)) {
         (void)snprintf(why, n, "the link failed");
         return false;
     }
     if (!cf_gf_ack(&r)) {
+        char t[96];
         (void)snprintf(why, n, "%s: expected SC, got %s", what, cf_reply_text(&r, t, sizeof t));
         return false;
     }
@@ -215,7 +215,6 @@ static bool wait_ready(cf_t *cf, cf_gf_trace_t *t, char *why, size_t n)
 bool cf_gf_bring_up(cf_t *cf, const cf_gf_setup_t *s, bool reset, cf_gf_trace_t *t, char *why,
                     size_t n)
 {
-    char h[64], h2[64];
     cf_gf_trace_t local;
     if (t == NULL) t = &local;
     memset(t, 0, sizeof *t);
@@ -229,6 +228,8 @@ bool cf_gf_bring_up(cf_t *cf, const cf_gf_setup_t *s, bool reset, cf_gf_trace_t 
         return false;
     }
     if ((t->last[DP_DIAG_STATUS_1] & DP_DIAG1_PRM_FAULT) != 0u) {
+        char h[64];
+        char h2[64];
         (void)snprintf(why, n, "Set_Prm %s refused: Prm_Fault in the diagnosis %s",
                        cf_gf_hex(s->prm, s->prm_len, h, sizeof h),
                        cf_gf_hex(t->last, t->last_len, h2, sizeof h2));
@@ -306,7 +307,8 @@ static void gsd_diag_len_case(cf_t *cf)
         }
     }
     if (!up) return (void)cf_fail(cf, "start-up: %s", why);
-    unsigned lo = 255u, hi = 0u;
+    unsigned lo = 255u;
+    unsigned hi = 0u;
     for (uint8_t i = 0; i < t.n_diag; i++) {
         lo = t.diag_len[i] < lo ? t.diag_len[i] : lo;
         hi = t.diag_len[i] > hi ? t.diag_len[i] : hi;
@@ -371,7 +373,8 @@ static void gsd_modules_case(cf_t *cf)
     }
     if (!cf_reset(cf)) return;
     char bad[CF_TEXT_MAX] = "";
-    size_t at = 0, n_bad = 0;
+    size_t at = 0;
+    size_t n_bad = 0;
     for (size_t m = 0; m < g->n_modules && !cf->link_failed; m++) {
         cf_gf_setup_t s;
         char why[CF_TEXT_MAX];

@@ -38,8 +38,8 @@ typedef struct tsdr_span {
 /* One answer's station delay against the span. */
 static bool judge_tsdr(cf_t *cf, const cf_reply_t *r, const char *what, tsdr_span_t *s)
 {
-    char txt[64];
     if (r->len == 0u || r->garbled) {
+        char txt[64];
         return cf_fail(cf, "%s: expected an answer, got %s", what,
                        cf_reply_text(r, txt, sizeof txt));
     }
@@ -83,7 +83,8 @@ static void case_tsdr_min(cf_t *cf)
     if (!timing_claimed(cf)) {
         return;
     }
-    uint32_t baud = cf->link.baud, slot = cf->link.slot_us;
+    uint32_t baud = cf->link.baud;
+    uint32_t slot = cf->link.slot_us;
     uint8_t saved = cf->prm[DP_PRM_MIN_TSDR];
     tsdr_span_t s = { RAISED_MIN_TSDR, 1023u, 0, 0, 0 }; /* 1023: TSDR's largest value */
     /* The tester's slot time grows with the delay it asks for (TSL > max TSDR + 15). */
@@ -176,7 +177,8 @@ static void case_baud_search(cf_t *cf)
     if (!cf->link.has_baud || cf->link.baud == 0u) {
         return (void)cf_na(cf, "%s cannot change its rate", cf->link.name);
     }
-    uint32_t home = cf->link.baud, home_slot = cf->link.slot_us;
+    uint32_t home = cf->link.baud;
+    uint32_t home_slot = cf->link.slot_us;
     uint64_t took = 0;
     for (size_t i = GSD_RATE_COUNT; i-- > 0u;) {
         uint32_t baud = gsd_rate_baud(i);
@@ -202,7 +204,8 @@ static void case_baud_search(cf_t *cf)
 static void case_rates_unclaimed(cf_t *cf)
 {
     char list[96] = "";
-    size_t at = 0, n = 0;
+    size_t at = 0;
+    size_t n = 0;
     for (size_t i = 0; i < GSD_RATE_COUNT; i++) {
         if (!gsd_supports_baud(cf->gsd, gsd_rate_baud(i))) {
             at += (size_t)snprintf(&list[at], sizeof list - at, "%s%s", n++ ? ", " : "",

@@ -274,7 +274,10 @@ bool cf_exchange_wait(cf_t *cf, const uint8_t *octets, size_t len, uint32_t wait
                       cf_reply_t *out)
 {
     cf_reply_t scratch;
-    cf_reply_t *rp = out != NULL ? out : &scratch;
+    cf_reply_t *rp = out;
+    if (rp == NULL) {
+        rp = &scratch;
+    }
     memset(rp, 0, sizeof *rp);
     rp->tsdr_bits = CF_TSDR_UNKNOWN;
     if (cf->link_failed) {
@@ -358,7 +361,8 @@ bool cf_request(cf_t *cf, uint8_t sa, uint8_t fc_code, int dsap, int ssap, const
     size_t n = fdl_encode(frame, cf->opt.address, sa, fc, saps, (uint8_t)(saps ? dsap : 0),
                           (uint8_t)(saps ? ssap : 0), du, du_len);
     if (n == 0u) {
-        return cf_fail(cf, "tester: a request of %zu octets does not fit in a telegram", du_len);
+        (void)cf_fail(cf, "tester: a request of %zu octets does not fit in a telegram", du_len);
+        return false;
     }
     cf_reply_t scratch;
     cf_reply_t *rp = out != NULL ? out : &scratch;
@@ -442,7 +446,7 @@ int cf_rsp_code(const cf_reply_t *r)
     if (!cf_answer(r, &a) || (a.fc & FDL_FC_REQUEST) != 0u) {
         return -1;
     }
-    return a.fc & FDL_FC_CODE_MASK;
+    return (int)(a.fc & FDL_FC_CODE_MASK);
 }
 
 static const char *rsp_name(int code)
@@ -474,8 +478,8 @@ const char *cf_reply_text(const cf_reply_t *r, char *buf, size_t n)
     } else if ((a.fc & FDL_FC_REQUEST) != 0u) {
         snprintf(buf, n, "a request (FC 0x%02X) instead of an answer", a.fc);
     } else {
-        snprintf(buf, n, "%s (FC 0x%02X), %u data octets", rsp_name(a.fc & FDL_FC_CODE_MASK),
-                 a.fc, (unsigned)a.du_len);
+        snprintf(buf, n, "%s (FC 0x%02X), %u data octets",
+                 rsp_name((int)(a.fc & FDL_FC_CODE_MASK)), a.fc, (unsigned)a.du_len);
     }
     return buf;
 }
@@ -491,15 +495,17 @@ bool cf_diag(cf_t *cf, uint8_t *diag, size_t *len)
     cf_answer_t a;
     char t[96];
     if (!cf_answer(&r, &a) || (a.fc & FDL_FC_REQUEST) != 0u) {
-        return cf_fail(cf, "Slave_Diag: expected a diagnosis, got %s",
-                       cf_reply_text(&r, t, sizeof t));
+        (void)cf_fail(cf, "Slave_Diag: expected a diagnosis, got %s",
+                      cf_reply_text(&r, t, sizeof t));
+        return false;
     }
-    int code = a.fc & FDL_FC_CODE_MASK;
+    int code = (int)(a.fc & FDL_FC_CODE_MASK);
     if ((code != FDL_RSP_DL && code != FDL_RSP_DH) || !a.saps || a.dsap != DP_SAP_MASTER ||
         a.ssap != DP_SAP_SLAVE_DIAG || a.du_len < DP_DIAG_STD_LEN) {
-        return cf_fail(cf, "Slave_Diag: expected DL/DH from SAP 60 to SAP 62 with at least 6 "
-                           "octets, got %s, SAPs %u/%u", cf_reply_text(&r, t, sizeof t),
-                       (unsigned)a.dsap, (unsigned)a.ssap);
+        (void)cf_fail(cf, "Slave_Diag: expected DL/DH from SAP 60 to SAP 62 with at least 6 "
+                          "octets, got %s, SAPs %u/%u", cf_reply_text(&r, t, sizeof t),
+                      (unsigned)a.dsap, (unsigned)a.ssap);
+        return false;
     }
     memcpy(diag, a.du, a.du_len);
     *len = a.du_len;

@@ -69,7 +69,7 @@ void cf_rp_xml(FILE *out, const char *s)
             fputc('?', out);
             n = 1;
         } else {
-            fwrite(p, 1, n, out);
+            (void)fwrite(p, 1, n, out);
         }
         p += n;
     }
