@@ -365,7 +365,10 @@ bool cf_request(cf_t *cf, uint8_t sa, uint8_t fc_code, int dsap, int ssap, const
         return false;
     }
     cf_reply_t scratch;
-    cf_reply_t *rp = out != NULL ? out : &scratch;
+    cf_reply_t *rp = &scratch;
+    if (out != NULL) {
+        rp = out;
+    }
     bool sent = cf_exchange(cf, frame, n, rp);
     if (sent && rp->len == 0u && fc_has_fcb(fc_code)) {
         /* No answer: the cycle is not complete, the FCB stays as it was, and the next request
@@ -435,7 +438,7 @@ bool cf_is_ack(const cf_reply_t *r)
     if (!cf_answer(r, &a) || a.sd != FDL_SD1 || (a.fc & FDL_FC_REQUEST) != 0u) {
         return false;
     }
-    int code = a.fc & FDL_FC_CODE_MASK;
+    unsigned code = a.fc & FDL_FC_CODE_MASK;
     return code == FDL_RSP_OK || code == FDL_RSP_DL || code == FDL_RSP_DH ||
            code == FDL_RSP_NR;
 }
