@@ -50,7 +50,7 @@ void dp_slave_emit(dp_slave_t *s, dp_event_type_t type, hal_time_us_t t, uint32_
     s->cfg.hooks.event(s->cfg.hooks.ctx, &ev);
 }
 
-/* Where the requester's address (DA) sits in a framed reply: behind SD1/SD3 or SD2 LE LEr SD2. */
+/* Where the requester's address (DA) sits in a framed reply: behind SD1 or SD2 LE LEr SD2. */
 static size_t reply_da_at(const uint8_t *frame)
 {
     return frame[0] == FDL_SD2 ? FDL_SD2_HEADER_LEN : FDL_SD1_SD3_HEADER_LEN;
@@ -397,10 +397,8 @@ static void frame_diag(dp_slave_t *s, uint32_t status)
     }
     (void)fdl_station_references(s, s->diag[i].buf, true);
     /* Written directly rather than by fdl_frame_in_place(): a watchdog expiry frames it in the
-     * main-loop section that changes the state, which must stay within its budget. Its length
-     * alone decides the delimiter: the six standard octets and the two SAPs make an SD3
-     * telegram, anything more an SD2 one (protocol.md §A1.2). */
-    _Static_assert(DP_DIAG_STD_LEN + FDL_SAPS_LEN == FDL_SD3_DU_LEN, "a bare diagnosis is an SD3 telegram");
+     * main-loop section that changes the state, which must stay within its budget. SD2 at
+     * every length, the bare six octets too (architecture.md, "Data replies are SD2"). */
     dp_diag_buffer_t *d = &s->diag[i];
     uint8_t ext = s->ext_diag_len;
     uint8_t *du = &d->buf[FDL_TX_HEADROOM];
@@ -414,17 +412,11 @@ static void frame_diag(dp_slave_t *s, uint32_t status)
     da[FDL_FC_FROM_DA] = FDL_RSP_DL;
     da[FDL_ADDR_FC_LEN] = 0u;
     da[FDL_ADDR_FC_LEN + 1u] = DP_SAP_SLAVE_DIAG;
-    uint8_t *start;
-    if (ext == 0u) {
-        start = da - FDL_SD1_SD3_HEADER_LEN;
-        start[0] = FDL_SD3;
-    } else {
-        start = da - FDL_SD2_HEADER_LEN;
-        start[0] = FDL_SD2;
-        start[1] = (uint8_t)(FDL_ADDR_FC_LEN + FDL_SAPS_LEN + DP_DIAG_STD_LEN + ext);
-        start[2] = start[1];
-        start[3] = FDL_SD2;
-    }
+    uint8_t *start = da - FDL_SD2_HEADER_LEN;
+    start[0] = FDL_SD2;
+    start[1] = (uint8_t)(FDL_ADDR_FC_LEN + FDL_SAPS_LEN + DP_DIAG_STD_LEN + ext);
+    start[2] = start[1];
+    start[3] = FDL_SD2;
     /* The status word's four octets summed by one multiply (into its top octet). */
     uint32_t sum = ((status * OCTET_SUM_MULTIPLIER) >> OCTET_SUM_SHIFT) + (s->cfg.ident >> 8) +
                    (s->cfg.ident & 0xFFu) + s->ext_diag_sum + da[1] + FDL_RSP_DL +
