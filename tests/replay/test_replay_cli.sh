@@ -74,7 +74,7 @@ expect_in "demo ends after a request" "the capture ends with a request to the ca
 # Over a PTY the line has no rate: 12M keeps the recorded spacing possible.
 expect_exit 0 "dpv1_pty_movilink.pcap" -- "$sim" replay "$golden/dpv1_pty_movilink.pcap" --check --baud 12M
 expect_rows dpv1_pty_movilink.pcap "$out" "MSAC1 read 1 1 0 0 0" "MSAC1 write 1 1 0 0 0" \
-  "MSAC1 poll 2 2 0 0 0" "total 13 13 0 0 0"
+  "MSAC1 poll 2 2 0 0 0" "total 14 14 0 0 0"
 expect_exit 0 "dpv1_pty_c2.pcap" -- "$sim" replay "$golden/dpv1_pty_c2.pcap" --check --baud 12M
 expect_rows dpv1_pty_c2.pcap "$out" "MSAC2 initiate 1 1 0 0 0" "MSAC2 abort 1 1 0 0 0" \
   "total 7 7 0 0 0"
@@ -270,7 +270,7 @@ expect_in "one record 3 ms back: match" "result: MATCH: all 127 replies match" "
 # packed behind the one before (DIFFERENT 48 of 227). Re-anchored at the step, the cycle kept.
 pcap_edit "$golden/param_channel.pcap" "$tmp/step.pcap" "t - 150000 if n >= 301 else t"
 expect_exit 0 "clock step back" -- "$sim" replay "$tmp/step.pcap" --check --baud 1.5M
-expect_in "clock step named" "(first: record 301 (byte 11224); at most 0.148000 s back): 1 clock steps, re-anchored" "$out"
+expect_in "clock step named" "(first: record 301 (byte 11230); at most 0.148000 s back): 1 clock steps, re-anchored" "$out"
 expect_in "clock step: match" "result: MATCH: all 227 replies match" "$out"
 # A 30-day pause: the card woke at every step of its baud search through it (4.5 s). Shortened
 # by whole search cycles once the card has settled; the figures are bus time.
