@@ -225,6 +225,24 @@ static const help_cmd_t commands[] = {
      "consistent, 1 with problems, 2 for a file that cannot be read or parsed (the error\n"
      "names its line). sim_host/gsd/README.md",
      0u},
+    {"conformance",
+     "--port DEV|--bus lcm:CHANNEL|--card [--lcm-url URL] [--key FILE] --address A\n"
+     "--gsd FILE [--module NAME]\n"
+     "[--baud RATE|all] [--only PREFIX] [--master-address N] [--report junit|html FILE]...\n"
+     "[--echo-suppress] [--list]",
+     "the conformance suite for DP slaves: a test master runs the cases (GSD, FDL, DP state\n"
+     "machine, timing, DP-V1; --list names them) against the slave at address A that FILE\n"
+     "describes, and gives each PASS, FAIL or NOT APPLICABLE with the clause it checks and\n"
+     "the telegrams that decided it. The slave is on a tty or PTY (--port, no timing), an\n"
+     "LCM segment (--bus), or --card: the DFP21B card in process on the in-memory bus,\n"
+     "timed to the bit, at --baud RATE or at every rate the GSD claims (--baud all). The\n"
+     "tester holds the line alone (no token): no other master may be on it. --module: the\n"
+     "GSD module start-ups configure (default the first); --only: the cases whose id starts\n"
+     "with PREFIX; --master-address: the tester's class-1 address (default 1; 2 and 3 play\n"
+     "the class-2 and a second class-1 master). --report junit|html FILE (up to two): also\n"
+     "as JUnit XML or a self-contained HTML report. Exit 0 when no case fails, 1 when one\n"
+     "does. docs/conformance.md",
+     NOTE_RATE | NOTE_SEGMENT},
 };
 
 static const help_note_t notes[] = {

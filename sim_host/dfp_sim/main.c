@@ -58,6 +58,7 @@ static const struct {
     {"convert", cmd_convert},   {"replay", cmd_replay},   {"record", cmd_record},
     {"line", cmd_line},
     {"monitor", cmd_monitor},   {"gsd", cmd_gsd},
+    {"conformance", cmd_conformance},
 };
 
 static bool is_one_of(const char *arg, const char *a, const char *b, const char *c)

@@ -38,7 +38,7 @@ expect_comp() { # expect_comp LINE WANTED
   got=$(comp "$1")
   if [ "$got" = "$2" ]; then ok; else bad "bash: '$1<TAB>' gives '$got', expected '$2'"; fi
 }
-commands="check-cfg convert demo gsd help inverter line master monitor param record replay slave"
+commands="check-cfg conformance convert demo gsd help inverter line master monitor param record replay slave"
 expect_comp "dfp-sim sl" "slave"
 expect_comp "dfp-sim master --co" "--config"
 expect_comp "dfp-sim " "--help --version $commands"

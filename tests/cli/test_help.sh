@@ -12,7 +12,7 @@ with_log=" demo slave master "
 
 expect_exit 2 "unknown command" -- "$sim" fly
 expect_in "the unknown-command message lists the commands of the help" \
-  "(commands: demo, slave, master, inverter, param, convert, replay, record, line, monitor, check-cfg, gsd; see --help)" "$out"
+  "(commands: demo, slave, master, inverter, param, convert, replay, record, line, monitor, check-cfg, gsd, conformance; see --help)" "$out"
 
 expect_exit 0 "--help" -- "$sim" --help
 full=$out

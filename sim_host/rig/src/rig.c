@@ -544,6 +544,18 @@ int rig_attach_listener(rig_t *r, const sim_station_t *st)
     return 0;
 }
 
+int rig_attach_tester(rig_t *r, const sim_station_t *st, hal_uart_t *uart)
+{
+    if (!wall_clock(r)) {
+        return membus_attach(&r->bus, st, uart) != NULL ? 0 : -1;
+    }
+    if (rig_attach_listener(r, st) != 0) {
+        return -1;
+    }
+    *uart = medium_uart(r);
+    return 0;
+}
+
 dp_master_t *rig_add_master(rig_t *r, const dp_master_cfg_t *cfg, hal_time_us_t now)
 {
     if (r->has_master || (wall_clock(r) && (r->num_cards > 0u || r->has_listener))) {

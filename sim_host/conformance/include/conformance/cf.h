@@ -29,6 +29,8 @@
 #define CF_MAX_EVIDENCE 16u
 #define CF_TEXT_MAX 256u
 #define CF_MAX_CASES 160u
+/* How long the run asks for the slave before the first case (it may be searching the rate). */
+#define CF_FIND_SLAVE_MS 10000u
 /* TSDR of a reply the medium cannot time (a PTY, an LCM segment, a tty without --timing). */
 #define CF_TSDR_UNKNOWN (-1)
 
@@ -55,6 +57,7 @@ typedef struct cf_reply {
     bool garbled;      /* characters came that make no valid telegram (octets holds them) */
     uint64_t t_ns;     /* its first start bit */
     int32_t tsdr_bits; /* CF_TSDR_UNKNOWN where the medium cannot time it */
+    uint64_t tx_t_ns;  /* when the request's first start bit went out */
 } cf_reply_t;
 
 /* The device under test as the suite reaches it. A link carries whole telegrams: exchange sends
@@ -141,6 +144,8 @@ struct cf {
     bool fcb[128];
     /* The case running and the results so far. */
     cf_result_t *cur;
+    bool found;                    /* the slave answered before the cases began */
+    uint64_t found_after_ns;       /* how long that took (a baud search) */
     bool link_failed;
     char link_error[CF_TEXT_MAX];
     cf_result_t results[CF_MAX_CASES];
@@ -155,8 +160,9 @@ int cf_init(cf_t *cf, const cf_link_t *link, const gsd_t *gsd, const cf_options_
             char *err, size_t errlen);
 /* Runs every case of cases (n of them) whose id matches opt.only; results in cf->results. */
 void cf_run(cf_t *cf, const cf_case_t *cases, size_t n);
-/* All cases of the suite, in report order (the groups' tables joined). */
-const cf_case_t *cf_all_cases(size_t *n);
+/* All cases of the suite in report order (the groups' tables joined) into out; returns how
+ * many (at most cap). */
+size_t cf_all_cases(cf_case_t *out, size_t cap);
 /* The groups in report order: "GSD", "FDL", "DP state machine", "Timing", "DP-V1". */
 const char *const *cf_group_names(size_t *n);
 /* Counts by verdict. */

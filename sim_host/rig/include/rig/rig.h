@@ -174,6 +174,11 @@ membus_port_t *rig_attach_station(rig_t *r, const sim_station_t *st, hal_uart_t 
  * is the way there), before rig_open, or when the medium has its station. */
 int rig_attach_listener(rig_t *r, const sim_station_t *st);
 
+/* A station that transmits as it likes (the conformance suite's test master): on the in-memory
+ * bus another station (rig_attach_station), on a wall-clock medium its one station, as the
+ * listener is. Returns 0 with the uart it transmits on, or -1 (as those two). */
+int rig_attach_tester(rig_t *r, const sim_station_t *st, hal_uart_t *uart);
+
 /* The card by bus address (the DIP address at its last power-up), NULL if none. */
 rig_card_t *rig_card_by_address(rig_t *r, uint8_t address);
 
