@@ -17,7 +17,11 @@ uint32_t dp_baud_search_dwell_us(uint32_t baud)
 
 void fdl_station_timing_changed(dp_slave_t *s)
 {
-    s->min_tsdr_us = hal_uart_bits_us(s->baud, s->min_tsdr_bits);
+    /* min TSDR counts from the request's last stop bit, but the request's end is known only as
+     * a microsecond timestamp, up to a microsecond before the true end: at 1.5 Mbit/s and above
+     * that is more than a bit time, and an answer timed from the timestamp alone came before
+     * min TSDR (IEC 61158-4-3: a responder waits at least min TSDR). */
+    s->min_tsdr_us = hal_uart_bits_us(s->baud, s->min_tsdr_bits) + FDL_TIMESTAMP_RESOLUTION_US;
 }
 
 /* Returns false when the UART cannot make the rate; the station then keeps its old one. */

@@ -109,11 +109,11 @@ dfp_conformance_mutant(set_prm_repeated_hangs dfp_dp_slave src/dp_slave.c
 }]]
   dp.set_prm.repeated)
 
-# Prm_Req (Station_Status_2 bit 0) is never set, also not in Wait_Prm.
-dfp_conformance_mutant(diag_no_prm_req dfp_dp_slave src/dp_slave.c
-  [[        st2 |= DP_DIAG2_PRM_REQ;]]
+# WD_On (Station_status_2 bit 3) is never shown, though the watchdog runs.
+dfp_conformance_mutant(diag_no_wd_on dfp_dp_slave src/dp_slave.c
+  [[        st2 |= DP_DIAG2_WD_ON;]]
   [[        st2 |= 0u;]]
-  dp.diag.wait_prm)
+  dp.diag.data_exch)
 
 # Answers go out at the end of the request, whatever min TSDR Set_Prm asked for.
 dfp_conformance_mutant(tsdr_below_min dfp_dp_slave src/fdl_station.c

@@ -22,9 +22,9 @@ bad() { echo "FAIL: $*"; fail=$((fail + 1)); }
 check() {
     local out=$1 runs=$2 na=$3 id want got
     for id in $IDS; do
-        want="PASS $id"
-        [ "$id" = "$na" ] && want="N/A  $id:"
-        got=$(grep -cF -- "$want" <<<"$out")
+        want="PASS"
+        [ "$id" = "$na" ] && want="NA"
+        got=$(grep -cE -- "^$want +${id//./\\.}( |\$)" <<<"$out")
         if [ "$got" -eq "$runs" ]; then ok; else bad "$id: '$want' $got of $runs runs"; fi
     done
 }

@@ -148,6 +148,30 @@ if start_image dfp21b-stm32f405-qemu-sbus; then
   echo "     $summary"
 fi
 
+# ---- 4. the conformance suite against the image -------------------------------------------------
+# docs/conformance.md: every case PASS or NOT APPLICABLE (timing and the baud search: a PTY has
+# neither), the JUnit report well-formed with the same counts.
+gsd="$(cd "$(dirname "$0")/../.." && pwd)/firmware/gsd/SEWA6003.GSD"
+if start_image dfp21b-stm32f405-qemu; then
+  out=$(timeout 300 "$dfp_sim" conformance --port "$pts" --address 4 --gsd "$gsd" \
+          --report junit "$tmp/conformance.xml" 2>&1)
+  rc=$?
+  expect_eq "conformance suite against the image: exit 0 (no case fails)" "$rc" "0"
+  summary=$(printf '%s\n' "$out" | grep '^summary:')
+  expect_has "conformance: no case fails" "$summary" " 0 FAIL,"
+  expect_has "conformance: timing not measurable on a PTY" "$out" \
+    "NA    timing.tsdr.min"
+  expect_has "conformance: DP-V1 data set 47 passes" "$out" "PASS  dpv1.ds47.profidrive"
+  junit=$(python3 -c 'import sys, xml.etree.ElementTree as E
+r = E.parse(sys.argv[1]).getroot()
+print(sum(int(s.get("failures")) for s in r.iter("testsuite")))' "$tmp/conformance.xml" 2>&1)
+  expect_eq "conformance: JUnit report, 0 failures" "$junit" "0"
+  echo "     $summary"
+  printf '%s\n' "$out" | grep -A4 '^FAIL' | sed 's/^/     /'
+  kill "$qpid" 2>/dev/null; wait "$qpid" 2>/dev/null; qpid=""
+  exec 9>&-
+fi
+
 t1=$(date +%s%N)
 echo "qemu_card.sh: $(( (t1 - t0) / 1000000 )) ms"
 echo "$pass passed, $fail failed"

@@ -562,6 +562,9 @@ static void test_dx_outside_data_exch(void)
     CHECK_EQ(dp_slave_state(&R.s), DP_STATE_WAIT_CFG);
 }
 
+/* The request's end is a microsecond timestamp: the card waits that microsecond on top. */
+#define TS_US FDL_TIMESTAMP_RESOLUTION_US
+
 static void test_dx_data_exch(void)
 {
     rig_init(BAUD, 0);
@@ -576,7 +579,7 @@ static void test_dx_data_exch(void)
     CHECK_EQ(R.a.outputs_calls, 1u);
     CHECK_EQ(R.a.out_reason, DP_OUTPUTS_DATA);
     CHECK(R.a.out_len == sizeof DX14 && memcmp(R.a.out, DX14, sizeof DX14) == 0);
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 8u);
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 8u + TS_US);
     /* Rd_Inp / Rd_Outp read the images. */
     R.m2 = (tmaster_t){.addr = 2, .started = true, .fcb = 0};
     CHECK(sap(&R.m2, DP_SAP_RD_OUTP, NULL, 0));
@@ -1171,40 +1174,40 @@ static void test_min_tsdr(void)
     rig_init(BAUD, 0);
     /* Default 11 bit times at 1.5 Mbit/s = 7.3 µs, rounded up to 8. */
     CHECK(REQ(F_FDL_REQ));
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 8u);
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 8u + TS_US);
     size_t n;
     (void)diag(&R.m2, &n);
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 8u);
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 8u + TS_US);
     /* Set_Prm min TSDR 100: 66.7 µs -> 67. */
     CHECK(set_prm(&R.m2, 0x80, 0, 0, 100, IDENT, 0, PRM_TAIL, sizeof PRM_TAIL));
     (void)diag(&R.m2, &n);
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 67u);
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 67u + TS_US);
     CHECK(REQ(F_FDL_REQ));
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 67u);
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 67u + TS_US);
     /* 0 = unchanged. */
     CHECK(set_prm(&R.m2, 0x80, 0, 0, 0, IDENT, 0, PRM_TAIL, sizeof PRM_TAIL));
     (void)diag(&R.m2, &n);
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 67u);
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 67u + TS_US);
     /* 255 bit times: 170 µs. */
     CHECK(set_prm(&R.m2, 0x80, 0, 0, 255, IDENT, 0, PRM_TAIL, sizeof PRM_TAIL));
     CHECK(chk_cfg(&R.m2, CFG_P3PD, sizeof CFG_P3PD));
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 170u);
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 170u + TS_US);
     CHECK(dx(&R.m2, DX14, sizeof DX14));
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 170u);
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 170u + TS_US);
     /* Lock_Req = Unlock_Req = 0: only min TSDR is taken over (200 -> 133.3 -> 134 µs). */
     CHECK(set_prm(&R.m2, 0x00, 0, 0, 200, 0x1234, 0, NULL, 0));
     LAST_IS(0xE5);
     CHECK_EQ(dp_slave_state(&R.s), DP_STATE_DATA_EXCH);
     CHECK_EQ(dp_slave_master(&R.s), 2);
     CHECK(dx(&R.m2, DX14, sizeof DX14));
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 134u);
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 134u + TS_US);
 }
 
 static void test_min_tsdr_12m(void)
 {
     rig_init(12000000u, 0);
     CHECK(REQ(F_FDL_REQ));
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 1u); /* 11 bits = 0.92 µs */
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 1u + TS_US); /* 11 bits = 0.92 µs */
     LAST_IS(0x10, 0x02, 0x04, 0x00, 0x06, 0x16);
     CHECK_EQ(R.u.baud_count, 1u);
     CHECK_EQ(R.u.bauds[0], 12000000u);
@@ -1284,7 +1287,7 @@ static void test_baud_search_skips_refused_rate(void)
     LAST_IS(0x10, 0x02, 0x04, 0x00, 0x06, 0x16);
     CHECK_EQ(dp_slave_baud_state(&R.s), DP_BAUD_CONTROL);
     CHECK_EQ(dp_slave_baud(&R.s), 6000000u);
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + hal_uart_bits_us(6000000u, 11u));
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + hal_uart_bits_us(6000000u, 11u) + TS_US);
 }
 
 static void test_baud_found(void)
@@ -1448,7 +1451,7 @@ static void test_time_wrap(void)
     CHECK(line_now_us(&R.l) < 100000u);
     CHECK(dx(&R.m2, DX14, sizeof DX14));
     CHECK_EQ(R.u.last[6], FDL_RSP_DL);
-    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 8u);
+    CHECK_EQ(R.u.last_not_before, R.l.req_end_us + 8u + TS_US);
     check_expiry(100u, R.a.outputs_calls);
 }
 

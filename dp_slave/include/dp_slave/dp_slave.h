@@ -318,6 +318,8 @@ const char *dp_baud_state_name(dp_baud_state_t st);
 /* Dwell time on one rate during the baud search: long enough for two longest telegrams, and
  * never below DP_BAUD_SEARCH_DWELL_MIN_US. */
 #define DP_BAUD_SEARCH_DWELL_MIN_US 20000u
+/* The resolution of the receive timestamps the HAL gives (hal_time_us_t). */
+#define FDL_TIMESTAMP_RESOLUTION_US 1u
 uint32_t dp_baud_search_dwell_us(uint32_t baud);
 
 #endif

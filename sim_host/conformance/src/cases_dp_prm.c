@@ -83,13 +83,12 @@ static bool min_tsdr_round(cf_t *cf, bool wrong_ident, uint8_t tsdr)
     prm[DP_PRM_GROUP_IDENT] = 0xFF;
     if (wrong_ident) prm[DP_PRM_IDENT_LOW] ^= 0xFFu;
     if (!dpx_set_prm(cf, prm, len, what)) return false;
-    uint8_t wd = dpx_watchdog_ms(cf, cf->prm, cf->prm_len) ? DP_DIAG2_WD_ON : 0u;
+    /* The diagnosis bits of Data_Exch as such (WD_On) are dp.diag.data_exch's. */
     return cf_diag(cf, d, &n) &&
            dpx_bits(cf, d, n, DP_DIAG_STATUS_1,
                     DP_DIAG1_PRM_FAULT | DP_DIAG1_STATION_NOT_READY | DP_DIAG1_CFG_FAULT, 0,
                     "Prm_Fault, Station_Not_Ready, Cfg_Fault", what) &&
-           dpx_bits(cf, d, n, DP_DIAG_STATUS_2, DP_DIAG2_PRM_REQ | DP_DIAG2_WD_ON, wd,
-                    "Prm_Req 0 and WD_On unchanged", what) &&
+           dpx_bits(cf, d, n, DP_DIAG_STATUS_2, DP_DIAG2_PRM_REQ, 0, "Prm_Req 0", what) &&
            dpx_bits(cf, d, n, DP_DIAG_MASTER_ADD, 0xFFu, cf->opt.master, DIAG_OWNER, what);
 }
 

@@ -139,9 +139,9 @@ void dpc_wait_cfg_services(cf_t *cf)
         return;
     }
     if (!get_cfg_answered(cf, "Wait_Cfg") || !note_reads(cf)) return;
+    /* Data_Exchange and a second Set_Prm in Wait_Cfg have cases of their own
+     * (dp.wait_cfg.data_exchange, dp.set_prm.repeated). */
     if (!dpx_gc(cf, cf->opt.master, DP_GC_CLEAR_DATA, 0)) return;
-    if (!dpx_dx_refused(cf, "Data_Exchange in Wait_Cfg after Global_Control")) return;
-    if (!dpx_set_prm(cf, cf->prm, cf->prm_len, "a second Set_Prm in Wait_Cfg")) return;
     (void)to_data_exch(cf, "Chk_Cfg in Wait_Cfg");
 }
 

@@ -118,7 +118,8 @@ static void case_tsdr_max(cf_t *cf)
         return (void)cf_fail(cf, "the start-up Set_Prm sets min TSDR %u, not 11",
                              cf->prm[DP_PRM_MIN_TSDR]);
     }
-    tsdr_span_t s = { FDL_MIN_TSDR_DEFAULT_BITS, max, 0, 0, 0 };
+    /* The lower bound is timing.tsdr.min's: here only the latest answer counts. */
+    tsdr_span_t s = { 0, max, 0, 0, 0 };
     if (cf_start_up(cf) && answers_within(cf, &s)) {
         cf_info(cf, "MaxTsdr %u at %u bit/s: %u answers with TSDR %d..%d bit times", max, baud,
                 s.answers, (int)s.seen_lo, (int)s.seen_hi);
@@ -222,7 +223,7 @@ const cf_case_t cf_cases_timing[] = {
       "with min TSDR raised to 100 bit times by Set_Prm, every answer waits at least that",
       case_tsdr_min },
     { "timing.tsdr.max", "Timing", STD_TIMING " and GSD MaxTsdr_<rate> (protocol.md §A2.2)",
-      "with min TSDR 11, every answer within 11 .. the GSD's MaxTsdr at the rate",
+      "with min TSDR 11, no answer later than the GSD's MaxTsdr at the rate",
       case_tsdr_max },
     { "timing.baud_search", "Timing",
       "IEC 61158-4-3 / PI 2.032 every baud rate; automatic rate detection (protocol.md §A2.3)",

@@ -273,7 +273,8 @@ int cf_rig_open(cf_rig_t *cr, const cf_rig_cfg_t *cfg, char *err, size_t errlen)
     rig_cfg_t rc = {.medium = cfg->medium, .device = cfg->device, .use_fd = cfg->use_fd,
                     .fd = cfg->fd, .lcm_channel = cfg->lcm_channel, .lcm_url = cfg->lcm_url,
                     .lcm_station_address = -1, .lcm_key = cfg->lcm_key, .baud = cfg->baud,
-                    .echo_suppress = cfg->echo_suppress, .start_ns = cfg->start_ns};
+                    .echo_suppress = cfg->echo_suppress, .start_ns = cfg->start_ns,
+                    .every_telegram_to_cards = true};
     rig_init(&cr->rig, &rc);
     rig_tap_t tap = {.ctx = cr, .frame = tester_tap};
     (void)rig_add_tap(&cr->rig, &tap);

@@ -219,7 +219,7 @@ static bool card_rx_whole(void *ctx, const membus_telegram_t *tg)
     if (!card_hears(c)) {
         return true;
     }
-    bool quiet = card_quiet(c, tg);
+    bool quiet = !c->rig->cfg.every_telegram_to_cards && card_quiet(c, tg);
     dp_master_whole_t w = whole_of(tg);
     fdl_rx_telegram_t t = dp_master_whole_take(&c->cs.card.dp.rx, &w);
     if (quiet) {

@@ -125,6 +125,10 @@ typedef struct rig_cfg {
     /* Wall-clock media: a runner shared with another rig, so both ends of a PTY pair run in one
      * loop (NULL: the rig's own). The rig does not tap a shared runner's frames. */
     tty_runner_t *shared_runner;
+    /* RIG_MEDIUM_MEMBUS: a card is spared the telegrams that cannot concern it (to another
+     * address) by default; with this set every telegram goes through the card's own receive
+     * path, so its own checks are what decides (the conformance suite). */
+    bool every_telegram_to_cards;
     /* RIG_MEDIUM_MEMBUS: where simulated time starts (a clock past 2^31 us finds wrap bugs). */
     uint64_t start_ns;
 } rig_cfg_t;
