@@ -50,7 +50,7 @@ void dp_slave_emit(dp_slave_t *s, dp_event_type_t type, hal_time_us_t t, uint32_
     s->cfg.hooks.event(s->cfg.hooks.ctx, &ev);
 }
 
-/* Where the requester's address (DA) sits in a framed reply: behind SD1/SD3 or SD2 LE LEr SD2. */
+/* Where the requester's address (DA) sits in a framed reply: behind SD1 or SD2 LE LEr SD2. */
 static size_t reply_da_at(const uint8_t *frame)
 {
     return frame[0] == FDL_SD2 ? FDL_SD2_HEADER_LEN : FDL_SD1_SD3_HEADER_LEN;
@@ -153,6 +153,11 @@ void dp_slave_init(dp_slave_t *s, const dp_slave_cfg_t *cfg, hal_time_us_t now)
     if (cfg->default_cfg != NULL && cfg->default_cfg_len <= DP_MAX_CFG_LEN) {
         memcpy(s->cfg_data, cfg->default_cfg, cfg->default_cfg_len);
         s->cfg_len = cfg->default_cfg_len;
+    }
+    /* The diagnosis frames' two delimiters never change: written here, not on every framing. */
+    for (size_t i = 0; i < DP_DIAG_BUFFERS; i++) {
+        s->diag[i].buf[0] = FDL_SD2;
+        s->diag[i].buf[FDL_SD2_HEADER_LEN - 1u] = FDL_SD2;
     }
     fdl_rx_init(&s->rx, cfg->fixed_baud != 0u ? cfg->fixed_baud : hal_uart_bauds[0],
                 cfg->strict_timing);
@@ -397,10 +402,11 @@ static void frame_diag(dp_slave_t *s, uint32_t status)
     }
     (void)fdl_station_references(s, s->diag[i].buf, true);
     /* Written directly rather than by fdl_frame_in_place(): a watchdog expiry frames it in the
-     * main-loop section that changes the state, which must stay within its budget. Its length
-     * alone decides the delimiter: the six standard octets and the two SAPs make an SD3
-     * telegram, anything more an SD2 one (protocol.md §A1.2). */
-    _Static_assert(DP_DIAG_STD_LEN + FDL_SAPS_LEN == FDL_SD3_DU_LEN, "a bare diagnosis is an SD3 telegram");
+     * main-loop section that changes the state, which must stay within its budget. SD2 at
+     * every length, the bare six octets too (architecture.md, "Data replies are SD2"); its
+     * delimiters are in place since dp_slave_init, only LE and LEr change. */
+    _Static_assert(FDL_TX_HEADROOM == FDL_SD2_HEADER_LEN + FDL_ADDR_FC_LEN + FDL_SAPS_LEN,
+                   "the diagnosis frame starts at buf[0]");
     dp_diag_buffer_t *d = &s->diag[i];
     uint8_t ext = s->ext_diag_len;
     uint8_t *du = &d->buf[FDL_TX_HEADROOM];
@@ -414,17 +420,9 @@ static void frame_diag(dp_slave_t *s, uint32_t status)
     da[FDL_FC_FROM_DA] = FDL_RSP_DL;
     da[FDL_ADDR_FC_LEN] = 0u;
     da[FDL_ADDR_FC_LEN + 1u] = DP_SAP_SLAVE_DIAG;
-    uint8_t *start;
-    if (ext == 0u) {
-        start = da - FDL_SD1_SD3_HEADER_LEN;
-        start[0] = FDL_SD3;
-    } else {
-        start = da - FDL_SD2_HEADER_LEN;
-        start[0] = FDL_SD2;
-        start[1] = (uint8_t)(FDL_ADDR_FC_LEN + FDL_SAPS_LEN + DP_DIAG_STD_LEN + ext);
-        start[2] = start[1];
-        start[3] = FDL_SD2;
-    }
+    uint8_t le = (uint8_t)(FDL_ADDR_FC_LEN + FDL_SAPS_LEN + DP_DIAG_STD_LEN + ext);
+    d->buf[1] = le;
+    d->buf[2] = le;
     /* The status word's four octets summed by one multiply (into its top octet). */
     uint32_t sum = ((status * OCTET_SUM_MULTIPLIER) >> OCTET_SUM_SHIFT) + (s->cfg.ident >> 8) +
                    (s->cfg.ident & 0xFFu) + s->ext_diag_sum + da[1] + FDL_RSP_DL +
@@ -432,9 +430,7 @@ static void frame_diag(dp_slave_t *s, uint32_t status)
     uint8_t *end = &du[DP_DIAG_STD_LEN + ext];
     end[0] = (uint8_t)(sum + FDL_ADDR_EXT);
     end[1] = FDL_ED;
-    d->start = (uint8_t)(start - d->buf);
-    d->da_at = (uint8_t)(da - d->buf);
-    d->len = (uint8_t)(end + FDL_TRAILER_LEN - start);
+    d->len = (uint8_t)(le + FDL_SD2_OVERHEAD);
     d->sum_base = (uint8_t)sum;
     s->diag_current = i;
     s->diag_framed = true;
@@ -462,8 +458,8 @@ static void svc_slave_diag(dp_slave_t *s, const fdl_msg_t *m, hal_time_us_t t)
         frame_diag(s, diag_status_word(s));
     }
     dp_diag_buffer_t *d = &s->diag[s->diag_current];
-    uint8_t *frame = &d->buf[d->start];
-    uint8_t *da = &d->buf[d->da_at];
+    uint8_t *frame = d->buf;
+    uint8_t *da = &d->buf[FDL_SD2_HEADER_LEN];
     uint8_t dsap = (uint8_t)(m->ssap & FDL_AE_SAP_MASK);
     da[0] = (uint8_t)(m->sa | FDL_ADDR_EXT);
     da[FDL_ADDR_FC_LEN] = dsap;

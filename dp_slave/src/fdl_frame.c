@@ -255,8 +255,10 @@ bool fdl_parse_damaged(const uint8_t *octets, size_t len, fdl_msg_t *msg)
     return true;
 }
 
-size_t fdl_encode(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps, uint8_t dsap,
-                  uint8_t ssap, const uint8_t *data, size_t data_len)
+/* The one encoder behind fdl_encode() and fdl_encode_reply(): sd3 says whether a DU of exactly
+ * 8 octets takes the fixed-length form. */
+static size_t encode(uint8_t *out, bool sd3, uint8_t da, uint8_t sa, uint8_t fc, bool saps,
+                     uint8_t dsap, uint8_t ssap, const uint8_t *data, size_t data_len)
 {
     size_t du_len = data_len + (saps ? FDL_SAPS_LEN : 0u);
     if (du_len > FDL_DU_MAX) {
@@ -267,7 +269,7 @@ size_t fdl_encode(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps, u
     if (du_len == 0u) {
         out[0] = FDL_SD1;
         p = 1;
-    } else if (du_len == FDL_SD3_DU_LEN) {
+    } else if (sd3 && du_len == FDL_SD3_DU_LEN) {
         out[0] = FDL_SD3;
         p = 1;
     } else {
@@ -295,6 +297,18 @@ size_t fdl_encode(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps, u
     return p;
 }
 
+size_t fdl_encode(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps, uint8_t dsap,
+                  uint8_t ssap, const uint8_t *data, size_t data_len)
+{
+    return encode(out, true, da, sa, fc, saps, dsap, ssap, data, data_len);
+}
+
+size_t fdl_encode_reply(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps,
+                        uint8_t dsap, uint8_t ssap, const uint8_t *data, size_t data_len)
+{
+    return encode(out, false, da, sa, fc, saps, dsap, ssap, data, data_len);
+}
+
 const uint8_t *fdl_frame_in_place(uint8_t *buf, size_t du_len, uint8_t du_sum, uint8_t da,
                                   uint8_t sa, uint8_t fc, bool saps, uint8_t dsap, uint8_t ssap,
                                   size_t *len)
@@ -315,8 +329,6 @@ const uint8_t *fdl_frame_in_place(uint8_t *buf, size_t du_len, uint8_t du_sum, u
     size_t total_du = du_len + (saps ? FDL_SAPS_LEN : 0u);
     if (total_du == 0u) {
         *--p = FDL_SD1;
-    } else if (total_du == FDL_SD3_DU_LEN) {
-        *--p = FDL_SD3;
     } else {
         uint8_t le = (uint8_t)(total_du + FDL_ADDR_FC_LEN);
         p -= FDL_SD2_HEADER_LEN;

@@ -135,7 +135,7 @@ static const case_spec_t cases[] = {
     {"Chk_Cfg F3F2 -> SC", cfg_3pd, 2, DP_STATE_DATA_EXCH, 0xD, true, DP_SAP_CHK_CFG, cfg_3pd, 2, false},
     {"Data_Exch 14 B -> 14 B", cfg_3pd, 2, DP_STATE_DATA_EXCH, 0xD, false, 0, out14, 14, false},
     {"Data_Exch 28 B -> 28 B", cfg_10pd, 2, DP_STATE_DATA_EXCH, 0xD, false, 0, out28, 28, false},
-    {"Data_Exch SD3 8 B -> SD3", cfg_4pd, 1, DP_STATE_DATA_EXCH, 0xD, false, 0, out8, 8, false},
+    {"Data_Exch SD3 8 B -> SD2", cfg_4pd, 1, DP_STATE_DATA_EXCH, 0xD, false, 0, out8, 8, false},
     {"Data_Exch FCB retry", cfg_3pd, 2, DP_STATE_DATA_EXCH, 0xD, false, 0, out14, 14, true},
     {"Global_Control (no reply)", cfg_3pd, 2, DP_STATE_DATA_EXCH, 0x6, true, DP_SAP_GLOBAL_CONTROL, gc_sync, 2, false},
 };

@@ -34,7 +34,7 @@ dx=$(dx_cycles "$tmp/n.txt")
 [ "$dx" = 53 ] && ok || bad "Data_Exchange requests for --cycles 50: $dx, expected 53 (50 + 3 leaving)"
 kill -INT "$slave"; wait "$slave"
 
-# 8 output bytes: SD3 requests and replies.
+# 8 octets each way: the master sends SD3 requests, the card answers SD2.
 pty_pair || exit 1
 "$sim" slave --inverter none --port "$tmp/a" --baud 19200 >"$tmp/slave2.out" 2>&1 &
 slave=$!; pids+=($slave)
@@ -42,8 +42,11 @@ sleep 0.3
 expect_exit 0 "4 PD (8 bytes, SD3)" -- timeout 30 "$sim" master --port "$tmp/b" --address 4 \
   --config F3 --baud 19200 --cycles 20 --outputs 1122334455667788 --capture "$tmp/m2.pcap"
 expect_in "SD3 inputs" "last inputs 1122334455667788" "$out"
-# The capture holds SD3 telegrams (start delimiter A2).
-if od -An -tx1 -v "$tmp/m2.pcap" | tr -s ' \n' ' ' | grep -q " a2 04 02 "; then ok; else bad "no SD3 request in capture"; fi
+# The capture holds SD3 requests (start delimiter A2) and SD2 replies with 8 input octets.
+m2=$(od -An -tx1 -v "$tmp/m2.pcap" | tr -s ' \n' ' ')
+if grep -q " a2 04 02 " <<<"$m2"; then ok; else bad "no SD3 request in capture"; fi
+if grep -q " 68 0b 0b 68 02 04 08 " <<<"$m2"; then ok; else bad "no SD2 reply of 8 octets in capture"; fi
+if ! grep -q " a2 02 04 " <<<"$m2"; then ok; else bad "an SD3 reply in capture"; fi
 kill -INT "$slave"; wait "$slave"
 
 # Address 126: the card stays off the bus, RUN blinks, the master gets no answer.

@@ -202,13 +202,13 @@ static void expect_frame(int line, const uint8_t *e, size_t n)
 static void expect_du(int line, uint8_t ma, uint8_t req_dsap, uint8_t req_ssap, const uint8_t *du,
                       size_t n)
 {
-    size_t len = fdl_encode(R.e, ma, SLAVE, FDL_RSP_DL, true, req_ssap, req_dsap, du, n);
+    size_t len = fdl_encode_reply(R.e, ma, SLAVE, FDL_RSP_DL, true, req_ssap, req_dsap, du, n);
     expect_frame(line, R.e, len);
 }
 
 static void expect_rs(int line, uint8_t ma)
 {
-    size_t len = fdl_encode(R.e, ma, SLAVE, FDL_RSP_RS, false, 0, 0, NULL, 0);
+    size_t len = fdl_encode_reply(R.e, ma, SLAVE, FDL_RSP_RS, false, 0, 0, NULL, 0);
     expect_frame(line, R.e, len);
 }
 
@@ -350,7 +350,7 @@ static void startup(const uint8_t user[9])
 static void expect_inputs(int line)
 {
     const uint8_t in[14] = {0, 0, 0, 0, 0, 0, 0, 0, 0x02, 0x02, 0x00, 0x00, 0x00, 0x00};
-    size_t len = fdl_encode(R.e, M1, SLAVE, FDL_RSP_DL, false, 0, 0, in, sizeof in);
+    size_t len = fdl_encode_reply(R.e, M1, SLAVE, FDL_RSP_DL, false, 0, 0, in, sizeof in);
     expect_frame(line, R.e, len);
 }
 

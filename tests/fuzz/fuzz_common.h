@@ -1,8 +1,8 @@
 /* Shared pieces of the libFuzzer targets (tests/fuzz/README.md): a reader that turns the fuzzer's
  * bytes into structured operations, the PROPERTY() check that aborts on a violation (libFuzzer
  * then stores the input as crash-*), and the reply checks every target that sees card frames
- * uses: a reply must re-assemble with fdl_rx, parse with fdl_parse and re-encode with fdl_encode
- * to the same bytes. */
+ * uses: a reply must re-assemble with fdl_rx, parse with fdl_parse and re-encode with
+ * fdl_encode_reply to the same bytes (so it is never SD3). */
 #ifndef TESTS_FUZZ_FUZZ_COMMON_H
 #define TESTS_FUZZ_FUZZ_COMMON_H
 
@@ -203,7 +203,7 @@ static inline fdl_parse_result_t fz_parse_checked(const uint8_t *frame, size_t l
 
 /* A frame the card transmitted: it must be a complete telegram for fdl_rx (fed with exact
  * character timing after an idle line, it completes at its last octet and not before), parse,
- * and be exactly what fdl_encode makes of its own fields. Returns the parsed message (data
+ * and be exactly what fdl_encode_reply makes of its own fields: SD1 or SD2, never SD3. Returns the parsed message (data
  * points into frame); SC returns false with *is_sc set. */
 static inline bool fz_check_reply(const uint8_t *frame, size_t len, uint32_t baud, bool *is_sc,
                                   fdl_msg_t *msg)
@@ -234,12 +234,13 @@ static inline bool fz_check_reply(const uint8_t *frame, size_t len, uint32_t bau
         return false;
     }
     PROPERTY(frame[0] != FDL_SD4, "the card sent a token");
+    PROPERTY(frame[0] != FDL_SD3, "the card sent SD3 (its data replies are SD2)");
     fdl_msg_t m;
     fdl_parse_result_t pr = fz_parse_checked(frame, len, &m);
     PROPERTY(pr == FDL_PARSE_OK, "the reply does not parse (%d)", (int)pr);
     uint8_t enc[FDL_FRAME_MAX];
-    size_t n = fdl_encode(enc, m.da, m.sa, m.fc, m.has_dsap && m.has_ssap, m.dsap, m.ssap,
-                          m.data, m.data_len);
+    size_t n = fdl_encode_reply(enc, m.da, m.sa, m.fc, m.has_dsap && m.has_ssap, m.dsap,
+                                m.ssap, m.data, m.data_len);
     if (n != len || memcmp(enc, frame, len) != 0) {
         fz_hex("reply    ", frame, len);
         fz_hex("re-encode", enc, n);

@@ -65,7 +65,7 @@ if [ "$dx_req" -gt 100 ] && [ "$dx_rsp" -gt 100 ]; then ok; else
   bad "Data_Exchange lines: $dx_req requests 4 <- 2, $dx_rsp replies 4 -> 2"; fi
 expect_in "Set_Prm with its SAPs" "RX SD2 DA   4 SA   2 FC 5D  Set_Prm              68 15 15 68 84 82 5D 3D 3E " "$all_out"
 expect_in "an SC named after its request" "TX SC  DA   - SA   - FC --  Chk_Cfg reply        E5" "$all_out"
-expect_in "Slave_Diag answer (SD3)" "TX SD3 DA   2 SA   4 FC 08  Slave_Diag reply     A2 82 84 08 3E 3C " "$all_out"
+expect_in "Slave_Diag answer (SD2, 8 DU octets)" "TX SD2 DA   2 SA   4 FC 08  Slave_Diag reply     68 0B 0B 68 82 84 08 3E 3C " "$all_out"
 expect_in "FDL_Status during the baud search" "RX SD1 DA   4 SA   2 FC 49  FDL_Status           10 04 02 49 4F 16" "$all_out"
 expect_in "a parameter service" "param channel write index 8461.0 value 3 ok" "$all_out"
 expect_in "a state line in Data_Exch" \

@@ -81,7 +81,9 @@ static void check_slave_settled(unsigned i)
     CHECK_EQ(s->garbled, 0);
     CHECK_EQ(s->rs + s->rr + s->ue, 0);
     CHECK_EQ(s->requests_received, r.requests_to[a]);
-    CHECK_EQ(s->answers, r.requests_to[a]);
+    /* the run may stop between a request and its answer */
+    bool in_flight = r.mon.pending && r.mon.pend_da == a;
+    CHECK_EQ(s->answers + in_flight, r.requests_to[a]);
     CHECK_EQ(s->diag_changes, 1); /* Wait_Prm's diagnosis, then the one of a ready slave */
 }
 
@@ -224,6 +226,11 @@ static void test_power_cycle(void)
     int failed0 = check_failed_;
     one_master();
     const mon_station_t *s = st(12);
+    /* right after its answer: a request to it on the line would rightly go unanswered */
+    uint64_t answers0 = s->answers;
+    for (unsigned k = 0; k < 100000u && s->answers == answers0; k++) {
+        ring_rig_run_us(&r.rr, 1);
+    }
     size_t ev0 = r.num_ev;
     rig_card_power_cycle(card(2), rig_now_us(&r.rr.rig));
     ring_mon_run_ms(&r, 200);

@@ -643,10 +643,13 @@ static void test_encode_spec_frames(void)
     n = fdl_encode(out, 4, 2, 0x6D, true, 60, 62, NULL, 0);
     CHECK(n == sizeof F_DIAG_REQ && memcmp(out, F_DIAG_REQ, n) == 0);
 
-    /* 6 diag octets + 2 SAP octets = 8: the encoder picks SD3, the §A1.6 alternative form. */
+    /* 6 diag octets + 2 SAP octets = 8: the request encoder picks SD3, the reply encoder SD2,
+     * the two forms of §A1.6. */
     const uint8_t diag[] = {0x02, 0x05, 0x00, 0xFF, 0x60, 0x03};
     n = fdl_encode(out, 2, 4, 0x08, true, 62, 60, diag, sizeof diag);
     CHECK(n == sizeof F_DIAG_REP_SD3 && memcmp(out, F_DIAG_REP_SD3, n) == 0);
+    n = fdl_encode_reply(out, 2, 4, 0x08, true, 62, 60, diag, sizeof diag);
+    CHECK(n == sizeof F_DIAG_REP_SD2 && memcmp(out, F_DIAG_REP_SD2, n) == 0);
 
     const uint8_t prm[] = {0x88, 0x01, 0x64, 0x0B, 0x60, 0x03, 0x00, 0x00,
                            0x00, 0x00, 0x06, 0x81, 0x00, 0x00, 0x01, 0x01};
@@ -707,6 +710,56 @@ static void test_encode_choice(void)
     /* Address and SAP values are masked to 7 and 6 bits. */
     n = fdl_encode(out, 0x84, 0x82, 0x6D, true, 0x7C, 0x7E, NULL, 0);
     CHECK(n == sizeof F_DIAG_REQ && memcmp(out, F_DIAG_REQ, n) == 0);
+}
+
+/* The card's replies: SD1 without a DU, SD2 for every DU, 8 octets included. */
+static void test_encode_reply(void)
+{
+    uint8_t out[FDL_FRAME_MAX];
+    size_t n = fdl_encode_reply(out, 2, 4, 0x00, false, 0, 0, NULL, 0);
+    CHECK(n == sizeof F_FDL_REP && memcmp(out, F_FDL_REP, n) == 0);
+    n = fdl_encode_reply(out, 2, 4, 0x08, false, 0, 0, DX8, sizeof DX8);
+    CHECK_BYTES(out, n, 0x68, 0x0B, 0x0B, 0x68, 0x02, 0x04, 0x08, 0x11, 0x22, 0x33, 0x44, 0x55,
+                0x66, 0x77, 0x88, 0x72, 0x16);
+    n = fdl_encode_reply(out, 2, 4, 0x08, false, 0, 0, DX14, sizeof DX14);
+    CHECK(n == sizeof F_DX14_REP && memcmp(out, F_DX14_REP, n) == 0);
+    const uint8_t c1n[] = {0xDE, 0x80, 0xB5, 0x00};
+    n = fdl_encode_reply(out, 2, 4, 0x08, true, 51, 51, c1n, sizeof c1n);
+    CHECK(n == sizeof F_C1_NEG && memcmp(out, F_C1_NEG, n) == 0);
+}
+
+/* fdl_frame_in_place() makes exactly what fdl_encode_reply() makes, at every DU length, with
+ * and without SAPs: the prebuilt replies and the copied ones cannot differ in form. */
+static void test_frame_in_place(void)
+{
+    static uint8_t data[FDL_DU_MAX];
+    static uint8_t buf[FDL_TX_BUF_LEN(FDL_DU_MAX)];
+    static uint8_t want[FDL_FRAME_MAX];
+    for (size_t i = 0; i < sizeof data; i++) {
+        data[i] = (uint8_t)(i * 13u + 5u);
+    }
+    unsigned differ = 0;
+    for (unsigned saps = 0; saps < 2u; saps++) {
+        size_t max = FDL_DU_MAX - (saps != 0u ? FDL_SAPS_LEN : 0u);
+        for (size_t len = 0; len <= max; len++) {
+            memcpy(&buf[FDL_TX_HEADROOM], data, len);
+            size_t n = 0;
+            const uint8_t *f = fdl_frame_in_place(buf, len, fdl_fcs(data, len), 2, 4, 0x08,
+                                                  saps != 0u, 62, 60, &n);
+            size_t w = fdl_encode_reply(want, 2, 4, 0x08, saps != 0u, 62, 60, data, len);
+            if (n != w || memcmp(f, want, w) != 0 || f[0] == FDL_SD3) {
+                differ++;
+            }
+        }
+    }
+    CHECK_EQ(differ, 0u);
+    /* The 8-octet case written out: Slave_Diag's six octets and two SAPs. */
+    const uint8_t diag[] = {0x02, 0x05, 0x00, 0xFF, 0x60, 0x03};
+    memcpy(&buf[FDL_TX_HEADROOM], diag, sizeof diag);
+    size_t n = 0;
+    const uint8_t *f = fdl_frame_in_place(buf, sizeof diag, fdl_fcs(diag, sizeof diag), 2, 4,
+                                          0x08, true, 62, 60, &n);
+    CHECK(n == sizeof F_DIAG_REP_SD2 && memcmp(f, F_DIAG_REP_SD2, n) == 0);
 }
 
 static void test_encode_limits(void)
@@ -770,6 +823,8 @@ int main(void)
     RUN_TEST(test_parse_segment);
     RUN_TEST(test_encode_spec_frames);
     RUN_TEST(test_encode_choice);
+    RUN_TEST(test_encode_reply);
+    RUN_TEST(test_frame_in_place);
     RUN_TEST(test_encode_limits);
     RUN_TEST(test_fcs);
     return check_report();

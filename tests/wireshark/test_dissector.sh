@@ -80,8 +80,8 @@ eq "first Set_Prm: ident, station status, Lock_Req, WD_On, watchdog ms, min TSDR
 q "$demo" 'profibus.service=="Slave_Diag" && profibus.fc.request==0' \
   profibus.sd profibus.dp.diag.status_1 profibus.dp.diag.station_not_ready \
   profibus.dp.diag.prm_req profibus.dp.diag.always_1 profibus.dp.diag.master_add profibus.dp.ident
-eq "first Slave_Diag reply (SD3): not ready, Prm_Req, no master" "$(first)" \
-  "0xa2${tab}0x02${tab}1${tab}1${tab}1${tab}255${tab}0x6003"
+eq "first Slave_Diag reply (SD2, 8 DU octets): not ready, Prm_Req, no master" "$(first)" \
+  "0x68${tab}0x02${tab}1${tab}1${tab}1${tab}255${tab}0x6003"
 q "$demo" 'profibus.dp.diag.cfg_fault==1' frame.number
 if [ "$(count)" -ge 1 ]; then ok; else bad "demo scene 5: no Slave_Diag with Cfg_Fault decoded"; fi
 

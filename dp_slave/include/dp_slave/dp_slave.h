@@ -180,10 +180,10 @@ typedef struct dp_dx_buffer {
  * them to the check octet, as an ASIC inserts the header. Two buffers: the one a cached reply
  * (a retry, or the transmitter) may be reading and the one to write. */
 #define DP_DIAG_BUFFERS 2u
+/* The diagnosis is always SD2 and fills the headroom exactly: the frame starts at buf[0], the
+ * requester's address goes at buf[FDL_SD2_HEADER_LEN]. */
 typedef struct dp_diag_buffer {
-    uint8_t start;    /* the frame's first octet in buf */
-    uint8_t da_at;    /* where in buf the requester's address goes */
-    uint8_t len;      /* its length */
+    uint8_t len;      /* the frame's length */
     uint8_t sum_base; /* its check octet without the requester's address and SAP */
     uint8_t buf[FDL_TX_BUF_LEN(DP_DIAG_STD_LEN + DP_MAX_EXT_DIAG_LEN)];
 } dp_diag_buffer_t;

@@ -68,11 +68,17 @@ fdl_check_result_t fdl_check(const uint8_t *octets, size_t len, fdl_check_info_t
  * when len > 0. */
 bool fdl_parse_damaged(const uint8_t *octets, size_t len, fdl_msg_t *msg);
 
-/* Encodes SD1 (no DU), SD3 (DU of exactly 8 octets including SAP octets) or SD2. With saps the
- * address bits 0x80 are set and DSAP, SSAP lead the DU. Returns the length, 0 if data does not
- * fit. out must hold FDL_FRAME_MAX octets. */
+/* Encodes a request as the open-source masters frame it: SD1 (no DU), SD3 (DU of exactly 8
+ * octets including SAP octets) or SD2. With saps the address bits 0x80 are set and DSAP, SSAP
+ * lead the DU. Returns the length, 0 if data does not fit. out must hold FDL_FRAME_MAX octets. */
 size_t fdl_encode(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps, uint8_t dsap,
                   uint8_t ssap, const uint8_t *data, size_t data_len);
+
+/* Encodes a reply as the card frames it: SD1 without a DU, SD2 for any DU, never SD3 (real
+ * slaves answer 8 DU octets with SD2: architecture.md, "Data replies are SD2"). Otherwise as
+ * fdl_encode(). */
+size_t fdl_encode_reply(uint8_t *out, uint8_t da, uint8_t sa, uint8_t fc, bool saps,
+                        uint8_t dsap, uint8_t ssap, const uint8_t *data, size_t data_len);
 
 uint8_t fdl_fcs(const uint8_t *p, size_t n);
 
@@ -83,9 +89,9 @@ uint8_t fdl_fcs(const uint8_t *p, size_t n);
 #define FDL_TX_BUF_LEN(du_max) (FDL_TX_HEADROOM + (du_max) + FDL_TRAILER_LEN)
 
 /* Frames in place the du_len octets at buf + FDL_TX_HEADROOM, whose octet sum mod 256 is
- * du_sum: the header goes in front, FCS and ED after. The octets are those fdl_encode() gives
- * (SD1, SD3 or SD2 by length). Returns the frame's first octet inside buf; *len its length.
- * du_len + SAP octets must not exceed FDL_DU_MAX. */
+ * du_sum: the header goes in front, FCS and ED after. The octets are those fdl_encode_reply()
+ * gives (SD1 without a DU, else SD2). Returns the frame's first octet inside buf; *len its
+ * length. du_len + SAP octets must not exceed FDL_DU_MAX. */
 const uint8_t *fdl_frame_in_place(uint8_t *buf, size_t du_len, uint8_t du_sum, uint8_t da,
                                   uint8_t sa, uint8_t fc, bool saps, uint8_t dsap, uint8_t ssap,
                                   size_t *len);
