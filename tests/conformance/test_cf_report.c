@@ -33,7 +33,9 @@ static void frame(cf_result_t *r, bool from_tester, uint64_t t_ns, int32_t tsdr,
                   const uint8_t *o, uint16_t len)
 {
     cf_frame_t *f = &r->ev[r->n_ev++];
-    memcpy(f->octets, o, len);
+    if (len > 0u) { /* a silent slot has no octets (o may be NULL) */
+        memcpy(f->octets, o, len);
+    }
     f->len = len;
     f->from_tester = from_tester;
     f->t_ns = t_ns;
