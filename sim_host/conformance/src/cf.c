@@ -370,6 +370,12 @@ bool cf_request(cf_t *cf, uint8_t sa, uint8_t fc_code, int dsap, int ssap, const
         rp = out;
     }
     bool sent = cf_exchange(cf, frame, n, rp);
+    /* A wall-clock medium on a loaded host may deliver an answer after the slot time: the
+     * request goes again, unchanged (FCB too), as a master's retry does, so a late answer is
+     * taken as the answer to that retry and never as the answer to the next request. */
+    for (uint8_t k = 0; sent && rp->len == 0u && k < cf->link.retries; k++) {
+        sent = cf_exchange(cf, frame, n, rp);
+    }
     if (sent && rp->len == 0u && fc_has_fcb(fc_code)) {
         /* No answer: the cycle is not complete, the FCB stays as it was, and the next request
          * is the repetition the responder expects (IEC 61158-4-3, FCB rules). */

@@ -17,6 +17,7 @@
 #define GARBLE_QUIET_CHARS 4u
 /* The same on a wall-clock medium, which hands characters over in batches. */
 #define WALL_QUIET_US 20000u
+#define CF_RIG_WALL_RETRIES 2u
 
 /* ---- the tester as a station -------------------------------------------------------------- */
 
@@ -247,6 +248,9 @@ cf_link_t cf_rig_link(cf_rig_t *cr, const char *name)
     l.timing = !wall(cr);
     l.has_baud = !wall(cr) || (cr->cfg.medium == RIG_MEDIUM_TTY && !is_pty(&cr->cfg));
     l.slot_us = cr->cfg.slot_us;
+    /* Simulated time is exact: an unanswered request stays unanswered. A wall-clock medium
+     * (a loaded host, QEMU) may answer late. */
+    l.retries = wall(cr) ? CF_RIG_WALL_RETRIES : 0u;
     l.idle_us = cr->cfg.idle_us;
     if (cr->card == NULL) {
         l.ops = &rig_link_ops_no_card;

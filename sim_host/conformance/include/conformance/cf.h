@@ -87,6 +87,7 @@ typedef struct cf_link {
     bool has_baud;      /* set_baud changes the rate on the wire */
     uint32_t slot_us;   /* how long to wait for an answer (the slot time) */
     uint32_t idle_us;   /* idle the tester keeps before each request (at least TSYN) */
+    uint8_t retries;    /* cf_request: repetitions of an unanswered request (a late answer) */
 } cf_link_t;
 
 typedef struct cf cf_t;
