@@ -46,18 +46,7 @@ uint32_t v1_c2_timeout_ms(const cf_t *cf)
 
 const char *v1_fdl_code_name(int code)
 {
-    switch (code) {
-    case FDL_RSP_OK: return "OK";
-    case FDL_RSP_UE: return "UE";
-    case FDL_RSP_RR: return "RR";
-    case FDL_RSP_RS: return "RS";
-    case FDL_RSP_DL: return "DL";
-    case FDL_RSP_NR: return "NR";
-    case FDL_RSP_DH: return "DH";
-    case FDL_RSP_RDL: return "RDL";
-    case FDL_RSP_RDH: return "RDH";
-    default: return "a reserved response code";
-    }
+    return cf_rsp_name(code);
 }
 
 const char *v1_hex(const uint8_t *p, size_t n, char *buf, size_t cap)

@@ -458,7 +458,7 @@ int cf_rsp_code(const cf_reply_t *r)
     return (int)(a.fc & FDL_FC_CODE_MASK);
 }
 
-static const char *rsp_name(int code)
+const char *cf_rsp_name(int code)
 {
     switch (code) {
     case FDL_RSP_OK: return "OK";
@@ -488,7 +488,7 @@ const char *cf_reply_text(const cf_reply_t *r, char *buf, size_t n)
         snprintf(buf, n, "a request (FC 0x%02X) instead of an answer", a.fc);
     } else {
         snprintf(buf, n, "%s (FC 0x%02X), %u data octets",
-                 rsp_name((int)(a.fc & FDL_FC_CODE_MASK)), a.fc, (unsigned)a.du_len);
+                 cf_rsp_name((int)(a.fc & FDL_FC_CODE_MASK)), a.fc, (unsigned)a.du_len);
     }
     return buf;
 }

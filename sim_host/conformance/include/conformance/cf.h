@@ -232,6 +232,8 @@ bool cf_is_sc(const cf_reply_t *r);
 bool cf_is_ack(const cf_reply_t *r);
 /* The response code of the answer (FDL_RSP_*), -1 for SC, silence or garbage. */
 int cf_rsp_code(const cf_reply_t *r);
+/* The name of a response code (FDL_RSP_*): "RS", "DL" ... */
+const char *cf_rsp_name(int code);
 /* A text of a reply for a reason: "silence", "SC", "RS (FC 0x03)", "DL 6 octets" ... */
 const char *cf_reply_text(const cf_reply_t *r, char *buf, size_t n);
 
