@@ -60,7 +60,7 @@ rc=$?
 # timing: TSDR and the baud search not measurable on a PTY, 12M not claimed
 expect_in "dfp-sim slave on a PTY" "summary: 63 cases, 58 PASS, 0 FAIL, 5 NOT APPLICABLE" "$out"
 
-# ---- a port of the virtual line (its card with the emulated drive), an LCM segment -----------
+# ---- a port of the virtual line (its card with the emulated drive) ----------------------------
 mkdir -p "$tmp/line"
 "$sim" line --dir "$tmp/line" --ports 1 --baud 19200 --card 6 --quiet >"$tmp/line.out" 2>&1 &
 pids+=($!)
@@ -70,14 +70,6 @@ rc=$?
 [ $rc = 0 ] && ok || bad "a port of the line: exit $rc"$'\n'"$(grep -A4 '^FAIL' <<<"$out" | head -20)"$'\n'"line: $(tail -5 "$tmp/line.out")"
 expect_in "a port of the line" "summary: 63 cases, 58 PASS, 0 FAIL, 5 NOT APPLICABLE" "$out"
 
-channel="cf_suite_$$"
-"$sim" slave --bus "lcm:$channel" --address 4 --inverter none >"$tmp/lcm.out" 2>&1 &
-pids+=($!)
-sleep 0.5
-out=$(timeout 300 "$sim" conformance --bus "lcm:$channel" --address 4 --gsd "$v1" 2>&1)
-rc=$?
-[ $rc = 0 ] && ok || bad "an LCM segment: exit $rc"$'\n'"$(grep -A4 '^FAIL' <<<"$out" | head -20)"$'\n'"slave: $(tail -5 "$tmp/lcm.out")"
-expect_in "an LCM segment" "summary: 63 cases, 58 PASS, 0 FAIL, 5 NOT APPLICABLE" "$out"
 
 # ---- bad command lines ---------------------------------------------------------------------
 expect_exit 2 "no medium" -- "$sim" conformance --address 4 --gsd "$v1"
