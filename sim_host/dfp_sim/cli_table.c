@@ -1,6 +1,7 @@
 /* The generic command-line reader of cli_table.h. */
 #include "cli_table.h"
 
+#include <stdio.h>
 #include <string.h>
 
 #include "cli.h"
@@ -61,8 +62,58 @@ static bool set_list(char *base, const cli_opt_t *o, const char *v)
     return true;
 }
 
+/* "--report KIND FILE": the kind v, then the file from the next word. */
+static bool set_kind_file(const char *cmd, char *base, const cli_opt_t *o, const char *v,
+                          cli_args_t *args)
+{
+    if (!value_given(o, v)) {
+        return false;
+    }
+    const cli_choice_t *kind = o->choices;
+    while (kind->word != NULL && strcmp(kind->word, v) != 0) {
+        kind++;
+    }
+    if (kind->word == NULL) {
+        char use[200] = "";
+        size_t n = 0;
+        for (const cli_choice_t *c = o->choices; c->word != NULL; c++) {
+            if (!c->alias) {
+                n++;
+            }
+        }
+        size_t k = 0;
+        for (const cli_choice_t *c = o->choices; c->word != NULL; c++) {
+            if (c->alias) {
+                continue;
+            }
+            k++;
+            const char *sep = k == 1u ? "" : k == n ? " or " : ", ";
+            size_t used = strlen(use);
+            (void)snprintf(use + used, sizeof use - used, "%s%s FILE", sep, c->word);
+        }
+        cli_error("%s: %s '%s': use %s", cmd, o->name, v, use);
+        return false;
+    }
+    if (args->i + 1 >= args->argc) {
+        cli_error("%s: %s %s: which file? %s %s FILE", cmd, o->name, v, o->name, v);
+        return false;
+    }
+    size_t *count = (size_t *)(void *)(base + o->aux);
+    if (*count == o->max) {
+        /* "--report" gives "report files" */
+        cli_error("%s: %s: at most %u %s files", cmd, o->name, o->max, o->name + 2);
+        return false;
+    }
+    args->i++;
+    cli_kind_file_t *files = (cli_kind_file_t *)(void *)(base + o->at);
+    files[*count] = (cli_kind_file_t){kind->value, args->argv[args->i]};
+    (*count)++;
+    return true;
+}
+
 /* The value v (NULL for a flag) into the group's struct at base. False after reporting. */
-static bool set_value(char *base, const cli_opt_t *o, const char *v, cli_args_t *args)
+static bool set_value(const char *cmd, char *base, const cli_opt_t *o, const char *v,
+                      cli_args_t *args)
 {
     char *field = base + o->at;
     if (o->seen != 0u) {
@@ -86,6 +137,8 @@ static bool set_value(char *base, const cli_opt_t *o, const char *v, cli_args_t 
         return set_choice(field, o, v);
     case CLI_LIST:
         return set_list(base, o, v);
+    case CLI_KIND_FILE:
+        return set_kind_file(cmd, base, o, v, args);
     case CLI_CALL:
         return o->set(base, o, v, args);
     }
@@ -126,7 +179,7 @@ int cli_parse(const cli_command_t *cmd, int argc, char **argv, void *opts)
             return EXIT_USAGE;
         }
         cli_args_t args = {argc, argv, i};
-        if (!set_value((char *)opts + cmd->groups[g].at, o, v, &args)) {
+        if (!set_value(cmd->name, (char *)opts + cmd->groups[g].at, o, v, &args)) {
             return EXIT_USAGE;
         }
         i = args.i;

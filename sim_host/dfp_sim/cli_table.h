@@ -20,6 +20,8 @@ typedef enum cli_kind {
     CLI_CHOICE, /* an int-sized field (an enum, uint32_t) at .at: the value of a word of
                  * .choices; another word is refused with .bad (printf, the word as %s) */
     CLI_LIST,   /* repeatable: const char *[.max] at .at, their count (size_t) at .aux */
+    CLI_KIND_FILE, /* repeatable "--opt KIND FILE" (--report json FILE): cli_kind_file_t[.max]
+                    * at .at, their count (size_t) at .aux; KIND a word of .choices */
     CLI_CALL,   /* .set does it */
 } cli_kind_t;
 
@@ -28,6 +30,12 @@ typedef struct cli_choice {
     int value;
     bool alias; /* accepted, but neither completed nor listed (257 for profibus) */
 } cli_choice_t;
+
+/* One "--opt KIND FILE" of a CLI_KIND_FILE option. */
+typedef struct cli_kind_file {
+    int kind; /* the value of KIND's word in .choices */
+    const char *path;
+} cli_kind_file_t;
 
 /* The command line being read: argv[i] is the value just taken; a setter that takes further
  * words (--report json FILE) advances i. */
@@ -48,7 +56,8 @@ struct cli_opt {
     size_t at;  /* offsetof the field in the group's struct */
     size_t aux; /* CLI_HEX, CLI_LIST: offsetof the length or count */
     uint32_t min, max;           /* CLI_U32 range; CLI_HEX, CLI_LIST: at most max */
-    const cli_choice_t *choices; /* CLI_CHOICE, or for the completion of a CLI_CALL */
+    const cli_choice_t *choices; /* CLI_CHOICE, CLI_KIND_FILE, or for the completion of a
+                                  * CLI_CALL */
     const char *bad;             /* CLI_CHOICE */
     cli_set_fn *set;             /* CLI_CALL */
     size_t seen; /* CLI_SEEN(type, field): a bool set whenever the option is given; 0: none */
@@ -85,7 +94,9 @@ typedef struct cli_command {
 
 /* argv[2..] into opts (already holding the defaults). 0, or EXIT_USAGE after one line on
  * stderr: "CMD: unknown option 'X' (see dfp-sim --help)", "option X needs a value (see
- * dfp-sim --help)", or the bad value's own message. */
+ * dfp-sim --help)", or the bad value's own message (a CLI_KIND_FILE's: "CMD: --report 'xml':
+ * use json FILE or junit FILE", "CMD: --report json: which file? --report json FILE", "CMD:
+ * --report: at most 4 report files"). */
 int cli_parse(const cli_command_t *cmd, int argc, char **argv, void *opts);
 /* The option of cmd named name, NULL if none. */
 const cli_opt_t *cli_find(const cli_command_t *cmd, const char *name, size_t *group);

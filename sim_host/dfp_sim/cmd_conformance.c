@@ -19,10 +19,8 @@
 #define CF_CMD_MAX_REPORTS 2u
 #define CF_WALL_CLOCK_WATCHDOG_MS 1000u
 
-typedef struct cf_cmd_report {
-    bool html;
-    const char *path;
-} cf_cmd_report_t;
+/* --report KIND FILE: KIND as cli_kind_file_t.kind. */
+enum { CF_REPORT_JUNIT, CF_REPORT_HTML };
 
 typedef struct cf_cmd_opts {
     medium_opts_t med;
@@ -38,7 +36,7 @@ typedef struct cf_cmd_opts {
     uint32_t master;
     bool echo;
     bool list;
-    cf_cmd_report_t reports[CF_CMD_MAX_REPORTS];
+    cli_kind_file_t reports[CF_CMD_MAX_REPORTS];
     size_t n_reports;
     FILE *report_files[CF_CMD_MAX_REPORTS]; /* opened before the run: a bad path costs no run */
 } cf_cmd_opts_t;
@@ -46,34 +44,10 @@ typedef struct cf_cmd_opts {
 #define CF_OPT(field) offsetof(cf_cmd_opts_t, field)
 
 static const cli_choice_t report_kinds[] = {
-    {"junit", 0, false},
-    {"html", 1, false},
+    {"junit", CF_REPORT_JUNIT, false},
+    {"html", CF_REPORT_HTML, false},
     {NULL, 0, false},
 };
-
-/* --report junit|html FILE: two values. */
-static bool set_report(void *base, const cli_opt_t *opt, const char *kind, cli_args_t *args)
-{
-    (void)opt;
-    cf_cmd_opts_t *o = base;
-    if (strcmp(kind, "junit") != 0 && strcmp(kind, "html") != 0) {
-        cli_error("conformance: --report '%s': use junit FILE or html FILE", kind);
-        return false;
-    }
-    if (args->i + 1 >= args->argc) {
-        cli_error("conformance: --report %s: which file? --report %s FILE", kind, kind);
-        return false;
-    }
-    if (o->n_reports == CF_CMD_MAX_REPORTS) {
-        cli_error("conformance: --report: at most %u report files", CF_CMD_MAX_REPORTS);
-        return false;
-    }
-    args->i++;
-    o->reports[o->n_reports].html = strcmp(kind, "html") == 0;
-    o->reports[o->n_reports].path = args->argv[args->i];
-    o->n_reports++;
-    return true;
-}
 
 /* --baud RATE|all. */
 static bool set_baud(void *base, const cli_opt_t *opt, const char *value, cli_args_t *args)
@@ -103,8 +77,8 @@ static const cli_opt_t conformance_options[] = {
     {CLI_OPT("--baud", "RATE|all", CLI_CALL, 0), .choices = baud_words, .set = set_baud},
     {CLI_OPT("--only", "PREFIX", CLI_TEXT, CF_OPT(only))},
     {CLI_OPT("--master-address", "N", CLI_U32, CF_OPT(master)), .min = 0, .max = 125},
-    {CLI_OPT("--report", "junit|html FILE", CLI_CALL, 0), .choices = report_kinds,
-     .set = set_report},
+    {CLI_OPT("--report", "junit|html FILE", CLI_KIND_FILE, CF_OPT(reports)),
+     .aux = CF_OPT(n_reports), .max = CF_CMD_MAX_REPORTS, .choices = report_kinds},
     {CLI_OPT("--echo-suppress", NULL, CLI_FLAG, CF_OPT(echo))},
     {CLI_OPT("--list", NULL, CLI_FLAG, CF_OPT(list))},
 };
@@ -177,8 +151,9 @@ static bool conformance_check(cf_cmd_opts_t *o)
     size_t n = 0;
     files[n++] = (cli_file_t){"--gsd", o->gsd_path, true};
     for (size_t k = 0; k < o->n_reports; k++) {
-        files[n++] = (cli_file_t){o->reports[k].html ? "--report html" : "--report junit",
-                                  o->reports[k].path, false};
+        bool html = o->reports[k].kind == CF_REPORT_HTML;
+        files[n++] = (cli_file_t){html ? "--report html" : "--report junit", o->reports[k].path,
+                                  false};
     }
     return cli_files_distinct("conformance", files, n);
 }
@@ -284,7 +259,7 @@ static int write_reports(cf_cmd_opts_t *o, const cf_report_run_t *runs, size_t n
     for (size_t k = 0; k < o->n_reports; k++) {
         FILE *f = o->report_files[k];
         o->report_files[k] = NULL;
-        int w = o->reports[k].html ? cf_report_html(f, runs, n_runs, info)
+        int w = o->reports[k].kind == CF_REPORT_HTML ? cf_report_html(f, runs, n_runs, info)
                                    : cf_report_junit(f, runs, n_runs, info);
         errno = 0;
         if (w != 0 || ferror(f) != 0) {

@@ -25,34 +25,10 @@ static const cli_choice_t view_words[] = {
 };
 
 static const cli_choice_t report_kinds[] = {
-    {"json", 0, false},
-    {"junit", 1, false},
+    {"json", MON_REPORT_JSON, false},
+    {"junit", MON_REPORT_JUNIT, false},
     {NULL, 0, false},
 };
-
-/* --report json|junit FILE: two values. */
-static bool set_report(void *base, const cli_opt_t *opt, const char *kind, cli_args_t *args)
-{
-    (void)opt;
-    mon_cmd_opts_t *o = base;
-    if (strcmp(kind, "json") != 0 && strcmp(kind, "junit") != 0) {
-        cli_error("monitor: --report '%s': use json FILE or junit FILE", kind);
-        return false;
-    }
-    if (args->i + 1 >= args->argc) {
-        cli_error("monitor: --report %s: which file? --report %s FILE", kind, kind);
-        return false;
-    }
-    if (o->n_reports == MON_CMD_MAX_REPORTS) {
-        cli_error("monitor: --report: at most %u report files", MON_CMD_MAX_REPORTS);
-        return false;
-    }
-    args->i++;
-    o->reports[o->n_reports].junit = strcmp(kind, "junit") == 0;
-    o->reports[o->n_reports].path = args->argv[args->i];
-    o->n_reports++;
-    return true;
-}
 
 static const cli_opt_t monitor_options[] = {
     {CLI_OPT("--baud", "RATE", CLI_BAUD, MONITOR_OPT(baud))},
@@ -63,8 +39,8 @@ static const cli_opt_t monitor_options[] = {
     {CLI_OPT("--view", "top|log|none", CLI_CHOICE, MONITOR_OPT(view)), .choices = view_words,
      .bad = "monitor: --view '%s': use top, log or none",
      .seen = CLI_SEEN(mon_cmd_opts_t, view_given)},
-    {CLI_OPT("--report", "json|junit FILE", CLI_CALL, 0), .choices = report_kinds,
-     .set = set_report},
+    {CLI_OPT("--report", "json|junit FILE", CLI_KIND_FILE, MONITOR_OPT(reports)),
+     .aux = MONITOR_OPT(n_reports), .max = MON_CMD_MAX_REPORTS, .choices = report_kinds},
     {CLI_OPT("--expect", "N|N-M,...", CLI_TEXT, MONITOR_OPT(expect_text))},
     {CLI_OPT("--max-repeats", "N", CLI_U32, MONITOR_OPT(max_repeats)), .min = 0,
      .max = UINT32_MAX},
@@ -133,8 +109,9 @@ static bool monitor_check(mon_cmd_opts_t *o)
         files[n++] = (cli_file_t){"--pcapng", o->pcapng, false};
     }
     for (size_t k = 0; k < o->n_reports; k++) {
-        files[n++] = (cli_file_t){o->reports[k].junit ? "--report junit" : "--report json",
-                                  o->reports[k].path, false};
+        bool junit = o->reports[k].kind == MON_REPORT_JUNIT;
+        files[n++] = (cli_file_t){junit ? "--report junit" : "--report json", o->reports[k].path,
+                                  false};
     }
     return cli_files_distinct("monitor", files, n);
 }

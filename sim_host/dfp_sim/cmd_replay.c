@@ -228,21 +228,22 @@ static int start_replay(const replay_args_t *a)
 static int write_report_files(const replay_args_t *a, const replay_report_info_t *info)
 {
     int status = 0;
-    for (unsigned i = 0; i < a->n_reports; i++) {
-        const replay_report_file_t *rf = &a->reports[i];
+    for (size_t i = 0; i < a->n_reports; i++) {
+        const cli_kind_file_t *rf = &a->reports[i];
+        bool junit = rf->kind == REPLAY_REPORT_JUNIT;
         char why[160];
         FILE *f = sim_fopen_write(rf->path, why, sizeof why);
         if (f == NULL) {
-            cli_error("replay: --report %s: cannot write %s: %s", rf->junit ? "junit" : "json",
+            cli_error("replay: --report %s: cannot write %s: %s", junit ? "junit" : "json",
                       rf->path, why);
             status = 1;
             continue;
         }
-        int rc = rf->junit ? replay_report_junit(&rc_state.replay, info, f)
+        int rc = junit ? replay_report_junit(&rc_state.replay, info, f)
                            : replay_report_json(&rc_state.replay, info, f);
         if (fclose(f) != 0 || rc != 0) {
             cli_error("replay: --report %s: could not write all of %s",
-                      rf->junit ? "junit" : "json", rf->path);
+                      junit ? "junit" : "json", rf->path);
             status = 1;
         }
     }

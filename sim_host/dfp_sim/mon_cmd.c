@@ -114,7 +114,7 @@ static bool write_reports(const mon_cmd_t *c, const mon_report_opts_t *ropt)
     mon_report_info_t info = report_info(c);
     bool ok = true;
     for (size_t k = 0; k < c->o->n_reports; k++) {
-        const mon_cmd_report_t *r = &c->o->reports[k];
+        const cli_kind_file_t *r = &c->o->reports[k];
         char why[300];
         FILE *f = sim_fopen_write(r->path, why, sizeof why);
         if (f == NULL) {
@@ -123,7 +123,7 @@ static bool write_reports(const mon_cmd_t *c, const mon_report_opts_t *ropt)
             continue;
         }
         mon_sink_t out = {file_put, f};
-        if (r->junit) {
+        if (r->kind == MON_REPORT_JUNIT) {
             mon_report_junit(c->mon, &info, ropt, &out);
         } else {
             mon_report_json(c->mon, &info, &out);
@@ -170,7 +170,7 @@ static bool reports_writable(const mon_cmd_opts_t *o)
         }
         if (why != NULL) {
             fprintf(stderr, "monitor: --report %s %s: cannot write it: %s\n",
-                    o->reports[k].junit ? "junit" : "json", path, why);
+                    o->reports[k].kind == MON_REPORT_JUNIT ? "junit" : "json", path, why);
             return false;
         }
     }

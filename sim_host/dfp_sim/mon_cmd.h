@@ -7,6 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "cli_table.h"
 #include "instrument.h"
 #include "medium.h"
 #include "monitor/mon_live.h"
@@ -25,10 +26,8 @@ typedef enum mon_view_kind {
     MON_VIEW_NONE,
 } mon_view_kind_t;
 
-typedef struct mon_cmd_report {
-    const char *path;
-    bool junit;
-} mon_cmd_report_t;
+/* --report KIND FILE: KIND as cli_kind_file_t.kind. */
+enum { MON_REPORT_JSON, MON_REPORT_JUNIT };
 
 typedef struct mon_cmd_opts {
     medium_opts_t med;
@@ -40,7 +39,7 @@ typedef struct mon_cmd_opts {
     uint32_t seconds;
     int view; /* mon_view_kind_t */
     bool view_given;
-    mon_cmd_report_t reports[MON_CMD_MAX_REPORTS];
+    cli_kind_file_t reports[MON_CMD_MAX_REPORTS];
     size_t n_reports;
     const char *expect_text;
     uint8_t expect[MON_STATIONS];

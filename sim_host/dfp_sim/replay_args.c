@@ -38,30 +38,6 @@ static bool set_address(void *base, const cli_opt_t *opt, const char *v, cli_arg
     return ok;
 }
 
-/* --report json|junit FILE: two values. */
-static bool set_report(void *base, const cli_opt_t *opt, const char *kind, cli_args_t *args)
-{
-    (void)opt;
-    replay_args_t *a = base;
-    if (strcmp(kind, "json") != 0 && strcmp(kind, "junit") != 0) {
-        cli_error("replay: --report '%s': use json FILE or junit FILE", kind);
-        return false;
-    }
-    if (args->i + 1 >= args->argc) {
-        cli_error("replay: --report %s: which file? --report %s FILE", kind, kind);
-        return false;
-    }
-    const char *path = args->argv[++args->i];
-    if (a->n_reports == REPLAY_MAX_REPORTS) {
-        cli_error("replay: --report: at most %u report files", REPLAY_MAX_REPORTS);
-        return false;
-    }
-    a->reports[a->n_reports].junit = strcmp(kind, "junit") == 0;
-    a->reports[a->n_reports].path = path;
-    a->n_reports++;
-    return true;
-}
-
 static bool set_ignore(void *base, const cli_opt_t *opt, const char *v, cli_args_t *args)
 {
     (void)opt;
@@ -107,7 +83,7 @@ static const cli_choice_t inverters[] = {
 static const cli_choice_t timings[] = {
     {"auto", 0, false}, {"line", 0, false}, {"relaxed", 0, false}, {NULL, 0, false}};
 static const cli_choice_t report_kinds[] = {
-    {"json", 0, false}, {"junit", 0, false}, {NULL, 0, false}};
+    {"json", REPLAY_REPORT_JSON, false}, {"junit", REPLAY_REPORT_JUNIT, false}, {NULL, 0, false}};
 
 #define ARGS(field) offsetof(replay_args_t, field)
 #define CHECK_OPTION CLI_SEEN(replay_args_t, check_options)
@@ -134,8 +110,9 @@ static const cli_opt_t replay_options[] = {
     {CLI_OPT("--max-mismatches", "N", CLI_CALL, 0), .set = set_max_listed,
      .seen = CHECK_OPTION},
     {CLI_OPT("--ignore", "MASK", CLI_CALL, 0), .set = set_ignore, .seen = CHECK_OPTION},
-    {CLI_OPT("--report", "json|junit FILE", CLI_CALL, 0), .choices = report_kinds,
-     .set = set_report, .seen = CHECK_OPTION},
+    {CLI_OPT("--report", "json|junit FILE", CLI_KIND_FILE, ARGS(reports)),
+     .aux = ARGS(n_reports), .max = REPLAY_MAX_REPORTS, .choices = report_kinds,
+     .seen = CHECK_OPTION},
 };
 
 static const cli_group_t replay_groups[] = {
@@ -157,9 +134,10 @@ static bool files_distinct(const replay_args_t *a)
     files[n++] = (cli_file_t){"FILE", a->file, .input = true};
     files[n++] = (cli_file_t){"--lcm", cli_lcm_log_written(a->lcm_url, lcm_log, sizeof lcm_log),
                               false};
-    for (unsigned k = 0; k < a->n_reports; k++) {
-        files[n++] = (cli_file_t){a->reports[k].junit ? "--report junit" : "--report json",
-                                  a->reports[k].path, false};
+    for (size_t k = 0; k < a->n_reports; k++) {
+        bool junit = a->reports[k].kind == REPLAY_REPORT_JUNIT;
+        files[n++] = (cli_file_t){junit ? "--report junit" : "--report json", a->reports[k].path,
+                                  false};
     }
     return cli_files_distinct("replay", files, n);
 }

@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "capture/capture.h"
+#include "cli_table.h"
 #include "instrument.h"
 #include "replay/infer.h"
 #include "replay/mask.h"
@@ -15,10 +16,8 @@
 /* --report json|junit FILE, at most this many. */
 #define REPLAY_MAX_REPORTS 4u
 
-typedef struct replay_report_file {
-    bool junit; /* else JSON */
-    const char *path;
-} replay_report_file_t;
+/* KIND of --report KIND FILE, as cli_kind_file_t.kind. */
+enum { REPLAY_REPORT_JSON, REPLAY_REPORT_JUNIT };
 
 typedef struct replay_args {
     const char *file;
@@ -35,8 +34,8 @@ typedef struct replay_args {
     instrument_http_opts_t web; /* --http-token-file ... */
     uint64_t max_listed;  /* --max-mismatches (0 given: REPLAY_LIST_ALL) */
     replay_mask_t mask;   /* --ignore */
-    unsigned n_reports;
-    replay_report_file_t reports[REPLAY_MAX_REPORTS];
+    size_t n_reports;
+    cli_kind_file_t reports[REPLAY_MAX_REPORTS];
 } replay_args_t;
 
 /* Parses and checks argv[2..]: 0, or EXIT_USAGE after one line on stderr. */

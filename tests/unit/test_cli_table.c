@@ -1,5 +1,5 @@
 /* dfp-sim's option tables (sim_host/dfp_sim/cli_table.h): cli_parse with a table of every kind
- * (values stored, ranges, repeatable options, the exact error lines), the three ways a command
+ * (values stored, ranges, repeatable options and KIND FILE pairs, the exact error lines), the three ways a command
  * tells operands from options, and the check completion.c makes before writing the scripts:
  * a table that lacks an option its help names, or has one its help does not name, is refused. */
 #include <fcntl.h>
@@ -26,6 +26,8 @@ typedef struct opts {
     const char *list[2];
     size_t n_list;
     const char *pair[2];
+    cli_kind_file_t reports[2];
+    size_t n_reports;
     const char *operands[3];
     size_t n_operands;
 } opts_t;
@@ -56,6 +58,9 @@ static bool take_operand(void *base, const char *word)
 
 static const cli_choice_t words[] = {
     {"red", 1, false}, {"green", 2, false}, {"rouge", 1, true}, {NULL, 0, false}};
+static const cli_choice_t kinds[] = {
+    {"json", 5, false}, {"junit", 6, false}, {"xunit", 6, true}, {"html", 7, false},
+    {NULL, 0, false}};
 
 #define AT(field) offsetof(opts_t, field)
 
@@ -70,6 +75,8 @@ static const cli_opt_t table[] = {
      .bad = "t: --word '%s': use red or green"},
     {CLI_OPT("--list", "NAME", CLI_LIST, AT(list)), .aux = AT(n_list), .max = 2},
     {CLI_OPT("--pair", "A B", CLI_CALL, 0), .set = set_pair},
+    {CLI_OPT("--report", "json|junit|html FILE", CLI_KIND_FILE, AT(reports)),
+     .aux = AT(n_reports), .max = 2, .choices = kinds},
 };
 
 static const cli_group_t groups[] = {{table, CLI_COUNT(table), 0}};
@@ -131,6 +138,16 @@ static void test_values(void)
     CHECK_STR(o.list[1], "b");
     CHECK_STR(o.pair[0], "p");
     CHECK_STR(o.pair[1], "q");
+    /* KIND FILE: the file may look like an option or a kind */
+    CHECK_EQ(parse(&no_operands, &o, ARGS("--report", "html", "--flag", "--report", "xunit",
+                                          "json")),
+             0);
+    CHECK_EQ(o.n_reports, 2);
+    CHECK_EQ(o.reports[0].kind, 7);
+    CHECK_STR(o.reports[0].path, "--flag");
+    CHECK(!o.flag);
+    CHECK_EQ(o.reports[1].kind, 6); /* an alias */
+    CHECK_STR(o.reports[1].path, "json");
     CHECK_EQ(parse(&no_operands, &o, ARGS("--word", "rouge", "--n", "3", "--n", "125")), 0);
     CHECK_EQ(o.word, 1); /* an alias */
     CHECK_EQ(o.n, 125);  /* the last one given */
@@ -175,6 +192,16 @@ static void test_errors(void)
     expect_error(&no_operands, ARGS("--list", ""),
                  "--list: at most 2 of them, each 1..255 characters ('')");
     expect_error(&no_operands, ARGS("--pair", "p"), "--pair p: and the second?");
+    /* the kinds named from the table, its alias not */
+    expect_error(&no_operands, ARGS("--report", "xml", "f"),
+                 "t: --report 'xml': use json FILE, junit FILE or html FILE");
+    expect_error(&no_operands, ARGS("--report", "json"),
+                 "t: --report json: which file? --report json FILE");
+    expect_error(&no_operands, ARGS("--report"),
+                 "option --report needs a value (see dfp-sim --help)");
+    expect_error(&no_operands,
+                 ARGS("--report", "json", "a", "--report", "json", "b", "--report", "html", "c"),
+                 "t: --report: at most 2 report files");
 }
 
 static void test_operands(void)
