@@ -110,6 +110,7 @@ static void find_slave(cf_t *cf)
 {
     uint64_t t0 = cf->link.ops->now_ns(cf->link.ctx);
     uint64_t limit = (uint64_t)CF_FIND_SLAVE_MS * 1000000u;
+    uint32_t asked = 1;
     for (;;) {
         cf_reply_t r;
         if (!cf_dp(cf, DP_SAP_SLAVE_DIAG, NULL, 0, &r)) {
@@ -119,8 +120,14 @@ static void find_slave(cf_t *cf)
         if (cf_answer(&r, &a) && a.sa == cf->opt.address && (a.fc & FDL_FC_REQUEST) == 0u) {
             cf->found = true;
             cf->found_after_ns = cf->link.ops->now_ns(cf->link.ctx) - t0;
+            /* A slave that started late may find the requests it missed queued in its
+             * receiver (a PTY keeps what was written to it) and answer each of them. */
+            if (cf->link.retries > 0u && asked > 1u) {
+                (void)cf_settle(cf);
+            }
             return;
         }
+        asked++;
         if (cf->link.ops->now_ns(cf->link.ctx) - t0 > limit || !cf_pause_ms(cf, 1u)) {
             return;
         }
@@ -324,6 +331,25 @@ bool cf_pause_ms(cf_t *cf, uint32_t ms)
     return true;
 }
 
+bool cf_settle(cf_t *cf)
+{
+    if (cf->link_failed) {
+        return false;
+    }
+    if (cf->link.ops->settle == NULL) {
+        return true;
+    }
+    /* Late answers come as far apart as their requests went: a slot time and the idle. */
+    if (cf->link.ops->settle(cf->link.ctx, CF_SETTLE_QUIET_SLOTS * cf->link.slot_us,
+                             CF_SETTLE_MAX_SLOTS * cf->link.slot_us) != 0) {
+        cf->link_failed = true;
+        snprintf(cf->link_error, sizeof cf->link_error, "the medium failed");
+        (void)cf_fail(cf, "link: the medium failed during the case");
+        return false;
+    }
+    return true;
+}
+
 static bool fc_has_fcb(uint8_t code)
 {
     return code == FDL_REQ_SDA_LOW || code == FDL_REQ_SDA_HIGH || code == FDL_REQ_SRD_LOW ||
@@ -372,9 +398,18 @@ bool cf_request(cf_t *cf, uint8_t sa, uint8_t fc_code, int dsap, int ssap, const
     bool sent = cf_exchange(cf, frame, n, rp);
     /* A wall-clock medium on a loaded host may deliver an answer after the slot time: the
      * request goes again, unchanged (FCB too), as a master's retry does, so a late answer is
-     * taken as the answer to that retry and never as the answer to the next request. */
-    for (uint8_t k = 0; sent && rp->len == 0u && k < cf->link.retries; k++) {
+     * taken as the answer to that retry and never as the answer to the next request. An SDN
+     * has no answer to wait for. */
+    bool expects_answer = fc_code != FDL_REQ_SDN_LOW && fc_code != FDL_REQ_SDN_HIGH;
+    uint8_t repeated = 0;
+    while (sent && expects_answer && rp->len == 0u && repeated < cf->link.retries) {
+        repeated++;
         sent = cf_exchange(cf, frame, n, rp);
+    }
+    /* The answer taken may be a late one to an earlier send, the answers to the other sends
+     * still to come: they would pass for the answers to the next requests. */
+    if (sent && repeated > 0u) {
+        sent = cf_settle(cf);
     }
     if (sent && rp->len == 0u && fc_has_fcb(fc_code)) {
         /* No answer: the cycle is not complete, the FCB stays as it was, and the next request

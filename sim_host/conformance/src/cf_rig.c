@@ -41,6 +41,7 @@ static void tester_rx(void *ctx, uint8_t byte, uint8_t flags, hal_time_us_t t)
     (void)flags;
     cr->last_rx_t = t;
     cr->heard_any = true;
+    cr->rx_chars++;
     if (!cr->listening) {
         return;
     }
@@ -190,6 +191,21 @@ static int link_pause(void *ctx, uint32_t us)
     return run_for_us(cr, us, NULL);
 }
 
+static int link_settle(void *ctx, uint32_t quiet_us, uint32_t max_us)
+{
+    cf_rig_t *cr = ctx;
+    uint64_t until = rig_elapsed_ns(&cr->rig) + (uint64_t)max_us * 1000u;
+    for (;;) {
+        uint32_t heard = cr->rx_chars;
+        if (run_for_us(cr, quiet_us, NULL) != 0) {
+            return -1;
+        }
+        if (cr->rx_chars == heard || rig_elapsed_ns(&cr->rig) >= until) {
+            return 0;
+        }
+    }
+}
+
 static int link_set_baud(void *ctx, uint32_t baud)
 {
     cf_rig_t *cr = ctx;
@@ -217,14 +233,16 @@ static const cf_link_ops_t rig_link_ops = {.exchange = link_exchange,
                                            .pause = link_pause,
                                            .set_baud = link_set_baud,
                                            .now_ns = link_now_ns,
-                                           .power_cycle = link_power_cycle};
+                                           .power_cycle = link_power_cycle,
+                                           .settle = link_settle};
 
 /* Only the card in process can be switched off and on. */
 static const cf_link_ops_t rig_link_ops_no_card = {.exchange = link_exchange,
                                                    .pause = link_pause,
                                                    .set_baud = link_set_baud,
                                                    .now_ns = link_now_ns,
-                                                   .power_cycle = NULL};
+                                                   .power_cycle = NULL,
+                                                   .settle = link_settle};
 
 static bool is_pty(const cf_rig_cfg_t *cfg)
 {

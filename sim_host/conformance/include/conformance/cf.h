@@ -32,6 +32,9 @@
 #define CF_MAX_MODULES 32u /* modules in one configuration */
 /* How long the run asks for the slave before the first case (it may be searching the rate). */
 #define CF_FIND_SLAVE_MS 10000u
+/* cf_settle listens until this many slot times pass in silence, at most the second many. */
+#define CF_SETTLE_QUIET_SLOTS 2u
+#define CF_SETTLE_MAX_SLOTS 20u
 /* TSDR of a reply the medium cannot time (a PTY, an LCM segment, a tty without --timing). */
 #define CF_TSDR_UNKNOWN (-1)
 
@@ -76,6 +79,10 @@ typedef struct cf_link_ops {
     uint64_t (*now_ns)(void *ctx);
     /* Optional (NULL): switch the DUT off and on (in process only). */
     int (*power_cycle)(void *ctx);
+    /* Listens without answering until no character has come for quiet_us, at most about
+     * max_us: answers still under way to earlier sends (a slave that answered late, or that
+     * found a backlog of requests in its receiver when it started) go unheard. 0 or -1. */
+    int (*settle)(void *ctx, uint32_t quiet_us, uint32_t max_us);
 } cf_link_ops_t;
 
 typedef struct cf_link {
@@ -87,7 +94,8 @@ typedef struct cf_link {
     bool has_baud;      /* set_baud changes the rate on the wire */
     uint32_t slot_us;   /* how long to wait for an answer (the slot time) */
     uint32_t idle_us;   /* idle the tester keeps before each request (at least TSYN) */
-    uint8_t retries;    /* cf_request: repetitions of an unanswered request (a late answer) */
+    uint8_t retries;    /* cf_request: repetitions of an unanswered request (a late answer);
+                         * where non-zero, the answers to repeated sends are settled */
 } cf_link_t;
 
 typedef struct cf cf_t;
@@ -198,6 +206,9 @@ bool cf_exchange(cf_t *cf, const uint8_t *octets, size_t len, cf_reply_t *out);
 bool cf_exchange_wait(cf_t *cf, const uint8_t *octets, size_t len, uint32_t wait_us,
                       cf_reply_t *out);
 bool cf_pause_ms(cf_t *cf, uint32_t ms);
+/* Where the link can (cf_link_ops_t.settle): lets answers still under way to earlier sends come
+ * and go unheard, until two slot times pass in silence. False when the medium failed. */
+bool cf_settle(cf_t *cf);
 
 /* A request from master sa to the DUT: fc's function code (FDL_REQ_*) with FCV/FCB set by the
  * FDL rules for that master (first request FCV=0 FCB=1, then FCV=1 and FCB toggling; only for

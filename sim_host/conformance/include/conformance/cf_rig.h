@@ -52,6 +52,7 @@ typedef struct cf_rig {
     bool listening;
     hal_time_us_t last_rx_t; /* the last character's time (wall clock) */
     bool heard_any;
+    uint32_t rx_chars; /* every character heard, listening or not (settle) */
     /* Frame times from the rig's tap (the in-memory bus: to the nanosecond). */
     size_t tx_len;
     uint64_t tx_start_ns;  /* the tester's request */
