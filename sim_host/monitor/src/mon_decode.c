@@ -1,6 +1,5 @@
 #include "monitor/mon_decode.h"
 
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -9,6 +8,7 @@
 #include "movidrive/movidrive_names.h"
 #include "replay/param_text.h"
 #include "rig/rig_log.h"
+#include "sim_hal/text_buf.h"
 
 /* Extended diagnosis block header (protocol.md §A3.4): type in bits 7..6, the block's length
  * including the header in bits 5..0. */
@@ -27,34 +27,10 @@
 /* "0006 = ..." from movidrive_*_word_text: the monitor shows the word on its own. */
 #define WORD_PREFIX_LEN 7u
 
-typedef struct sbuf {
-    char *p;
-    size_t max;
-    size_t n;
-} sbuf_t;
-
-static void put(sbuf_t *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put(sbuf_t *b, const char *fmt, ...)
-{
-    if (b->max == 0u || b->n >= b->max - 1u) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    int k = vsnprintf(b->p + b->n, b->max - b->n, fmt, ap);
-    va_end(ap);
-    if (k > 0) {
-        b->n += (size_t)k;
-        if (b->n >= b->max) {
-            b->n = b->max - 1u;
-        }
-    }
-}
-
-static void put_hex(sbuf_t *b, const uint8_t *p, size_t len)
+static void put_hex(text_buf_t *b, const uint8_t *p, size_t len)
 {
     for (size_t i = 0; i < len; i++) {
-        put(b, i > 0u ? " %02X" : "%02X", p[i]);
+        text_buf_put(b, i > 0u ? " %02X" : "%02X", p[i]);
     }
 }
 
@@ -65,7 +41,7 @@ bool mon_prm_dpv1(const uint8_t *prm, size_t len)
 
 /* ---- extended diagnosis ------------------------------------------------------------------- */
 
-static void channel_block(sbuf_t *b, const uint8_t *p)
+static void channel_block(text_buf_t *b, const uint8_t *p)
 {
     static const char *const dirs[4] = {"", " input", " output", " input/output"};
     static const char *const types[8] = {"",      " bit",  " 2 bits",      " 4 bits",
@@ -75,31 +51,31 @@ static void channel_block(sbuf_t *b, const uint8_t *p)
                                            "line break", "upper limit",   "lower limit",
                                            "error"};
     unsigned err = p[2] & 0x1Fu;
-    put(b, "channel: module %u channel %u%s%s, ", p[0] & EXT_LEN_MASK, p[1] & 0x3Fu,
+    text_buf_put(b, "channel: module %u channel %u%s%s, ", p[0] & EXT_LEN_MASK, p[1] & 0x3Fu,
         dirs[p[1] >> 6], types[p[2] >> 5]);
     if (err < 10u && errors[err] != NULL) {
-        put(b, "%s (%u)", errors[err], err);
+        text_buf_put(b, "%s (%u)", errors[err], err);
     } else if (err >= 16u) {
-        put(b, "manufacturer error %u", err);
+        text_buf_put(b, "manufacturer error %u", err);
     } else {
-        put(b, "error %u", err);
+        text_buf_put(b, "error %u", err);
     }
 }
 
-static void identifier_block(sbuf_t *b, const uint8_t *p, size_t len)
+static void identifier_block(text_buf_t *b, const uint8_t *p, size_t len)
 {
-    put(b, "identifier-related: modules");
+    text_buf_put(b, "identifier-related: modules");
     bool any = false;
     for (size_t i = 1; i < len; i++) {
         for (unsigned bit = 0; bit < 8u; bit++) {
             if (((p[i] >> bit) & 1u) != 0u) {
-                put(b, "%s %zu", any ? "," : "", (i - 1u) * 8u + bit);
+                text_buf_put(b, "%s %zu", any ? "," : "", (i - 1u) * 8u + bit);
                 any = true;
             }
         }
     }
     if (!any) {
-        put(b, " none");
+        text_buf_put(b, " none");
     }
 }
 
@@ -124,28 +100,28 @@ static const char *status_name(uint8_t type)
     }
 }
 
-static void dpv1_block(sbuf_t *b, const uint8_t *p, size_t len)
+static void dpv1_block(text_buf_t *b, const uint8_t *p, size_t len)
 {
     static const char *const kinds[4] = {"", ", appears", ", disappears",
                                          ", disappears, slot still disturbed"};
     uint8_t spec = p[3];
     if ((p[1] & DPV1_TYPE_STATUS) != 0u) {
-        put(b, "%s (0x%02X), slot %u%s", status_name(p[1]), p[1], p[2],
+        text_buf_put(b, "%s (0x%02X), slot %u%s", status_name(p[1]), p[1], p[2],
             kinds[spec & SPEC_KIND_MASK]);
     } else {
-        put(b, "%s alarm (%u), slot %u, seq %u%s%s", alarm_name(p[1]), p[1], p[2],
+        text_buf_put(b, "%s alarm (%u), slot %u, seq %u%s%s", alarm_name(p[1]), p[1], p[2],
             spec >> SPEC_SEQ_SHIFT, kinds[spec & SPEC_KIND_MASK],
             (spec & SPEC_ADD_ACK) != 0u ? ", Add_Ack" : "");
     }
     if (len > DPV1_BLOCK_MIN) {
-        put(b, ": ");
+        text_buf_put(b, ": ");
         put_hex(b, p + DPV1_BLOCK_MIN, len - DPV1_BLOCK_MIN);
     }
 }
 
 /* One block; returns its length, 0 when the header cannot be a block here (the rest is then
  * shown in hex). */
-static size_t ext_block(sbuf_t *b, const uint8_t *p, size_t left, bool dpv1)
+static size_t ext_block(text_buf_t *b, const uint8_t *p, size_t left, bool dpv1)
 {
     unsigned type = p[0] >> EXT_TYPE_SHIFT;
     size_t len = p[0] & EXT_LEN_MASK;
@@ -164,12 +140,12 @@ static size_t ext_block(sbuf_t *b, const uint8_t *p, size_t left, bool dpv1)
     } else if (dpv1 && len >= DPV1_BLOCK_MIN) {
         dpv1_block(b, p, len);
     } else {
-        put(b, "device-related:");
+        text_buf_put(b, "device-related:");
         if (len == 1u) {
-            put(b, " empty");
+            text_buf_put(b, " empty");
         }
         for (size_t i = 1; i < len; i++) {
-            put(b, " %02X", p[i]);
+            text_buf_put(b, " %02X", p[i]);
         }
     }
     return len;
@@ -181,19 +157,19 @@ size_t mon_decode_diag(const uint8_t *d, size_t len, bool dpv1, char *out, size_
         return 0;
     }
     rig_diag_text(d, len < DP_DIAG_STD_LEN ? len : DP_DIAG_STD_LEN, out, max);
-    sbuf_t b = {out, max, strlen(out)};
+    text_buf_t b = {out, max, strlen(out)};
     if (len <= DP_DIAG_STD_LEN) {
         return b.n;
     }
-    put(&b, ", ext: ");
+    text_buf_put(&b, ", ext: ");
     size_t i = DP_DIAG_STD_LEN;
     while (i < len) {
         if (i > DP_DIAG_STD_LEN) {
-            put(&b, "; ");
+            text_buf_put(&b, "; ");
         }
         size_t n = ext_block(&b, d + i, len - i, dpv1);
         if (n == 0u) {
-            put(&b, "bad block: ");
+            text_buf_put(&b, "bad block: ");
             put_hex(&b, d + i, len - i);
             break;
         }

@@ -1,6 +1,5 @@
 #include "replay/decode.h"
 
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -10,6 +9,7 @@
 #include "dp_slave/dp_wire.h"
 #include "dp_slave/fdl_frame.h"
 #include "dp_slave/fdl_wire.h"
+#include "sim_hal/text_buf.h"
 
 /* ---- parsing ------------------------------------------------------------------------------ */
 
@@ -154,30 +154,6 @@ replay_service_t replay_service_of(const replay_frame_t *q)
 
 /* ---- text --------------------------------------------------------------------------------- */
 
-typedef struct sbuf {
-    char *p;
-    size_t max;
-    size_t n;
-} sbuf_t;
-
-static void put(sbuf_t *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put(sbuf_t *b, const char *fmt, ...)
-{
-    if (b->max == 0u || b->n >= b->max - 1u) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    int k = vsnprintf(b->p + b->n, b->max - b->n, fmt, ap);
-    va_end(ap);
-    if (k > 0) {
-        b->n += (size_t)k;
-        if (b->n >= b->max) {
-            b->n = b->max - 1u;
-        }
-    }
-}
-
 size_t replay_hex(const uint8_t *p, size_t len, char *out, size_t max)
 {
     if (max == 0u) {
@@ -198,7 +174,7 @@ size_t replay_hex(const uint8_t *p, size_t len, char *out, size_t max)
     return n;
 }
 
-static void put_hex(sbuf_t *b, const uint8_t *p, size_t len)
+static void put_hex(text_buf_t *b, const uint8_t *p, size_t len)
 {
     if (b->max > b->n) {
         b->n += replay_hex(p, len, b->p + b->n, b->max - b->n);
@@ -218,25 +194,25 @@ static const char *const rsp_names[16] = {
 
 size_t replay_fc_text(uint8_t fc, char *out, size_t max)
 {
-    sbuf_t b = {out, max, 0};
+    text_buf_t b = {out, max, 0};
     if (max > 0u) out[0] = '\0';
     if ((fc & FDL_FC_REQUEST) != 0u) {
-        put(&b, "%s", req_names[fc & FDL_FC_CODE_MASK]);
+        text_buf_put(&b, "%s", req_names[fc & FDL_FC_CODE_MASK]);
         if ((fc & FDL_FC_FCV) != 0u) {
-            put(&b, " FCV=1 FCB=%u", (fc & FDL_FC_FCB) != 0u ? 1u : 0u);
+            text_buf_put(&b, " FCV=1 FCB=%u", (fc & FDL_FC_FCB) != 0u ? 1u : 0u);
         } else if ((fc & FDL_FC_FCB) != 0u) {
-            put(&b, " FCV=0 FCB=1 (first)");
+            text_buf_put(&b, " FCV=0 FCB=1 (first)");
         }
     } else {
-        put(&b, "%s", rsp_names[fc & FDL_FC_CODE_MASK]);
+        text_buf_put(&b, "%s", rsp_names[fc & FDL_FC_CODE_MASK]);
         static const char *const types[4] = {"", " (master not ready)", " (master ready)",
                                              " (master in ring)"};
-        put(&b, "%s", types[(fc & FDL_FC_STATION_MASK) >> 4]);
+        text_buf_put(&b, "%s", types[(fc & FDL_FC_STATION_MASK) >> 4]);
     }
     return b.n;
 }
 
-static void diag_text(sbuf_t *b, const uint8_t *d, size_t len)
+static void diag_text(text_buf_t *b, const uint8_t *d, size_t len)
 {
     static const char *const st1[8] = {"Station_Non_Existent", "Station_Not_Ready", "Cfg_Fault",
                                        "Ext_Diag", "Not_Supported", "Invalid_Slave_Response",
@@ -244,52 +220,52 @@ static void diag_text(sbuf_t *b, const uint8_t *d, size_t len)
     static const char *const st2[8] = {"Prm_Req", "Stat_Diag", NULL, "WD_On", "Freeze_Mode",
                                        "Sync_Mode", NULL, "Deactivated"};
     if (len < DP_DIAG_STD_LEN) {
-        put(b, "short diagnosis (%zu octets)", len);
+        text_buf_put(b, "short diagnosis (%zu octets)", len);
         return;
     }
     for (unsigned i = 0; i < 8u; i++) {
-        if (((d[0] >> i) & 1u) != 0u) put(b, "%s ", st1[i]);
+        if (((d[0] >> i) & 1u) != 0u) text_buf_put(b, "%s ", st1[i]);
     }
     for (unsigned i = 0; i < 8u; i++) {
-        if (((d[1] >> i) & 1u) != 0u && st2[i] != NULL) put(b, "%s ", st2[i]);
+        if (((d[1] >> i) & 1u) != 0u && st2[i] != NULL) text_buf_put(b, "%s ", st2[i]);
     }
     if (d[DP_DIAG_MASTER_ADD] == DP_MASTER_ADD_NONE) {
-        put(b, "| no master");
+        text_buf_put(b, "| no master");
     } else {
-        put(b, "| Master_Add %u", d[DP_DIAG_MASTER_ADD]);
+        text_buf_put(b, "| Master_Add %u", d[DP_DIAG_MASTER_ADD]);
     }
-    put(b, ", ident 0x%02X%02X", d[4], d[5]);
+    text_buf_put(b, ", ident 0x%02X%02X", d[4], d[5]);
     if (len > DP_DIAG_STD_LEN) {
-        put(b, ", ext ");
+        text_buf_put(b, ", ext ");
         put_hex(b, d + DP_DIAG_STD_LEN, len - DP_DIAG_STD_LEN);
     }
 }
 
-static void movilink_text(sbuf_t *b, const uint8_t *m, bool reply)
+static void movilink_text(text_buf_t *b, const uint8_t *m, bool reply)
 {
     uint8_t mg = m[ML_OFF_MANAGEMENT];
-    put(b, "param channel [");
+    text_buf_put(b, "param channel [");
     put_hex(b, m, ML_TELEGRAM_LEN);
-    put(b, "] handshake %u, %s", (mg & ML_MGMT_HANDSHAKE) != 0u ? 1u : 0u,
+    text_buf_put(b, "] handshake %u, %s", (mg & ML_MGMT_HANDSHAKE) != 0u ? 1u : 0u,
         ml_service_name(mg & ML_MGMT_SERVICE_MASK));
     if ((mg & ML_MGMT_SERVICE_MASK) != ML_SVC_NONE) {
-        put(b, " index %u", (unsigned)m[ML_OFF_INDEX_HIGH] << 8 | m[ML_OFF_INDEX_LOW]);
+        text_buf_put(b, " index %u", (unsigned)m[ML_OFF_INDEX_HIGH] << 8 | m[ML_OFF_INDEX_LOW]);
     }
     if (reply && (mg & ML_MGMT_ERROR) != 0u) {
         char t[96];
         ml_error_text(m, t, sizeof t);
-        put(b, ", error: %s", t);
+        text_buf_put(b, ", error: %s", t);
     } else if ((mg & ML_MGMT_SERVICE_MASK) != ML_SVC_NONE) {
         uint32_t v = (uint32_t)m[4] << 24 | (uint32_t)m[5] << 16 | (uint32_t)m[6] << 8 | m[7];
-        put(b, " data 0x%08X", v);
+        text_buf_put(b, " data 0x%08X", v);
     }
 }
 
-static void io_text(sbuf_t *b, const uint8_t *d, size_t len, const replay_dx_layout_t *lay,
+static void io_text(text_buf_t *b, const uint8_t *d, size_t len, const replay_dx_layout_t *lay,
                     bool reply, const char *what)
 {
     if (len == 0u) {
-        put(b, "no %s", what);
+        text_buf_put(b, "no %s", what);
         return;
     }
     if (lay != NULL && lay->known && lay->param_channel && len >= ML_TELEGRAM_LEN) {
@@ -297,53 +273,53 @@ static void io_text(sbuf_t *b, const uint8_t *d, size_t len, const replay_dx_lay
         d += ML_TELEGRAM_LEN;
         len -= ML_TELEGRAM_LEN;
         if (len == 0u) return;
-        put(b, "; ");
+        text_buf_put(b, "; ");
     }
-    put(b, "%s", reply ? "PI" : "PO");
+    text_buf_put(b, "%s", reply ? "PI" : "PO");
     for (size_t i = 0; i + 1u < len; i += 2u) {
-        put(b, " %02X%02X", d[i], d[i + 1u]);
+        text_buf_put(b, " %02X%02X", d[i], d[i + 1u]);
     }
     if ((len & 1u) != 0u) {
-        put(b, " %02X", d[len - 1u]);
+        text_buf_put(b, " %02X", d[len - 1u]);
     }
 }
 
-static void prm_text(sbuf_t *b, const uint8_t *d, size_t len)
+static void prm_text(text_buf_t *b, const uint8_t *d, size_t len)
 {
     if (len < DP_PRM_LEN_STANDARD) {
-        put(b, "%zu octets (too short): ", len);
+        text_buf_put(b, "%zu octets (too short): ", len);
         put_hex(b, d, len);
         return;
     }
     uint8_t st = d[DP_PRM_STATION_STATUS];
-    put(b, "%s%s%s%s%s", (st & DP_PRM_LOCK_REQ) ? "Lock " : "",
+    text_buf_put(b, "%s%s%s%s%s", (st & DP_PRM_LOCK_REQ) ? "Lock " : "",
         (st & DP_PRM_UNLOCK_REQ) ? "Unlock " : "", (st & DP_PRM_SYNC_REQ) ? "Sync " : "",
         (st & DP_PRM_FREEZE_REQ) ? "Freeze " : "", (st & DP_PRM_WD_ON) ? "WD_On " : "");
     bool base_1ms = len > DP_PRM_DPV1_STATUS_1 &&
                     (d[DP_PRM_DPV1_STATUS_1] & DP_DPV1_1_WD_BASE_1MS) != 0u;
-    put(b, "WD %u x %u x %s, min TSDR %u, ident 0x%02X%02X, group 0x%02X", d[1], d[2],
+    text_buf_put(b, "WD %u x %u x %s, min TSDR %u, ident 0x%02X%02X, group 0x%02X", d[1], d[2],
         base_1ms ? "1 ms" : "10 ms", d[3], d[4], d[5], d[6]);
     if (len > DP_PRM_LEN_STANDARD) {
-        put(b, ", then ");
+        text_buf_put(b, ", then ");
         put_hex(b, d + DP_PRM_LEN_STANDARD, len - DP_PRM_LEN_STANDARD);
     }
 }
 
-static void gc_text(sbuf_t *b, const uint8_t *d, size_t len)
+static void gc_text(text_buf_t *b, const uint8_t *d, size_t len)
 {
     if (len < DP_GC_LEN) {
-        put(b, "%zu octets (too short)", len);
+        text_buf_put(b, "%zu octets (too short)", len);
         return;
     }
     uint8_t c = d[0];
-    if ((c & ~(unsigned)DP_GC_RESERVED) == 0u) put(b, "Operate ");
-    if (c & DP_GC_CLEAR_DATA) put(b, "Clear_Data ");
-    if (c & DP_GC_UNFREEZE) put(b, "Unfreeze ");
-    if (c & DP_GC_FREEZE) put(b, "Freeze ");
-    if (c & DP_GC_UNSYNC) put(b, "Unsync ");
-    if (c & DP_GC_SYNC) put(b, "Sync ");
-    if (c & DP_GC_RESERVED) put(b, "reserved bits 0x%02X ", c & DP_GC_RESERVED);
-    put(b, "(0x%02X), group 0x%02X", c, d[1]);
+    if ((c & ~(unsigned)DP_GC_RESERVED) == 0u) text_buf_put(b, "Operate ");
+    if (c & DP_GC_CLEAR_DATA) text_buf_put(b, "Clear_Data ");
+    if (c & DP_GC_UNFREEZE) text_buf_put(b, "Unfreeze ");
+    if (c & DP_GC_FREEZE) text_buf_put(b, "Freeze ");
+    if (c & DP_GC_UNSYNC) text_buf_put(b, "Unsync ");
+    if (c & DP_GC_SYNC) text_buf_put(b, "Sync ");
+    if (c & DP_GC_RESERVED) text_buf_put(b, "reserved bits 0x%02X ", c & DP_GC_RESERVED);
+    text_buf_put(b, "(0x%02X), group 0x%02X", c, d[1]);
 }
 
 static const char *fn_name(uint8_t fn)
@@ -362,23 +338,23 @@ static const char *fn_name(uint8_t fn)
 }
 
 /* A DP-V1 PDU (request or response). */
-static void dpv1_text(sbuf_t *b, const uint8_t *d, size_t len, bool reply)
+static void dpv1_text(text_buf_t *b, const uint8_t *d, size_t len, bool reply)
 {
     if (len == 0u) {
-        put(b, reply ? "empty" : "poll (no data)");
+        text_buf_put(b, reply ? "empty" : "poll (no data)");
         return;
     }
     const char *name = fn_name(d[0]);
     if (name == NULL) {
-        put(b, "function 0x%02X: ", d[0]);
+        text_buf_put(b, "function 0x%02X: ", d[0]);
         put_hex(b, d, len);
         return;
     }
     const char *dir = reply ? ".res" : ".req";
     if ((d[0] & DPV1_FN_ERROR) != 0u && d[0] != DPV1_FN_ERROR) {
-        put(b, "%s negative", name);
+        text_buf_put(b, "%s negative", name);
         if (len >= 4u) {
-            put(b, ": decode 0x%02X, code 0x%02X (%s), 0x%02X", d[1], d[2],
+            text_buf_put(b, ": decode 0x%02X, code 0x%02X (%s), 0x%02X", d[1], d[2],
                 dp_master_v1_error_text(d[2]), d[3]);
         }
         return;
@@ -386,50 +362,50 @@ static void dpv1_text(sbuf_t *b, const uint8_t *d, size_t len, bool reply)
     switch (d[0]) {
     case DPV1_FN_READ:
     case DPV1_FN_WRITE:
-        put(b, "%s%s", name, dir);
+        text_buf_put(b, "%s%s", name, dir);
         if (len >= 4u) {
-            put(b, " slot %u index %u length %u", d[1], d[2], d[3]);
+            text_buf_put(b, " slot %u index %u length %u", d[1], d[2], d[3]);
             if (len > 4u) {
-                put(b, ": ");
+                text_buf_put(b, ": ");
                 put_hex(b, d + 4, len - 4u);
             }
         }
         return;
     case DPV1_FN_RM:
-        put(b, "resource manager: connection SAP %u", len > 1u ? d[1] : 0u);
+        text_buf_put(b, "resource manager: connection SAP %u", len > 1u ? d[1] : 0u);
         return;
     case DPV1_FN_INITIATE:
-        put(b, "Initiate%s", dir);
+        text_buf_put(b, "Initiate%s", dir);
         if (!reply && len >= 6u) {
-            put(b, " Send_Timeout %u", (unsigned)d[4] << 8 | d[5]);
+            text_buf_put(b, " Send_Timeout %u", (unsigned)d[4] << 8 | d[5]);
         } else if (reply && len >= 2u) {
-            put(b, " Max_Len_Data_Unit %u", d[1]);
+            text_buf_put(b, " Max_Len_Data_Unit %u", d[1]);
         }
         return;
     case DPV1_FN_ABORT:
-        put(b, "Abort");
+        text_buf_put(b, "Abort");
         if (len >= 3u) {
-            put(b, " subnet %u, instance 0x%02X, reason %u", d[1], d[2] & 0xF0u, d[2] & 0x0Fu);
+            text_buf_put(b, " subnet %u, instance 0x%02X, reason %u", d[1], d[2] & 0xF0u, d[2] & 0x0Fu);
         }
         return;
     default:
-        put(b, "%s%s: ", name, dir);
+        text_buf_put(b, "%s%s: ", name, dir);
         put_hex(b, d + 1, len - 1u);
         return;
     }
 }
 
 /* What follows the header of a request, by its service. */
-static void request_data_text(sbuf_t *b, replay_service_t s, const replay_frame_t *m,
+static void request_data_text(text_buf_t *b, replay_service_t s, const replay_frame_t *m,
                               const replay_dx_layout_t *lay)
 {
     switch (s) {
     case REPLAY_SVC_DATA_EXCHANGE:
-        put(b, ": ");
+        text_buf_put(b, ": ");
         io_text(b, m->du, m->du_len, lay, false, "outputs");
         break;
     case REPLAY_SVC_SET_PRM:
-        put(b, ": ");
+        text_buf_put(b, ": ");
         prm_text(b, m->du, m->du_len);
         break;
     case REPLAY_SVC_CHK_CFG:
@@ -438,12 +414,12 @@ static void request_data_text(sbuf_t *b, replay_service_t s, const replay_frame_
     case REPLAY_SVC_OTHER_SAP:
     case REPLAY_SVC_OTHER_FUNCTION:
         if (m->du_len > 0u) {
-            put(b, ": ");
+            text_buf_put(b, ": ");
             put_hex(b, m->du, m->du_len);
         }
         break;
     case REPLAY_SVC_GLOBAL_CONTROL:
-        put(b, ": ");
+        text_buf_put(b, ": ");
         gc_text(b, m->du, m->du_len);
         break;
     case REPLAY_SVC_FDL_STATUS:
@@ -453,72 +429,72 @@ static void request_data_text(sbuf_t *b, replay_service_t s, const replay_frame_
     case REPLAY_SVC_RD_OUTP:
         break;
     default: /* DP-V1 */
-        put(b, ": ");
+        text_buf_put(b, ": ");
         dpv1_text(b, m->du, m->du_len, false);
         break;
     }
 }
 
-static void request_text(sbuf_t *b, const replay_frame_t *m, const replay_dx_layout_t *lay)
+static void request_text(text_buf_t *b, const replay_frame_t *m, const replay_dx_layout_t *lay)
 {
     char fc[64];
     replay_service_t s = replay_service_of(m);
     replay_fc_text(m->fc, fc, sizeof fc);
-    put(b, "%s %u -> %u (%s", replay_service_name(s), m->sa, m->da, fc);
+    text_buf_put(b, "%s %u -> %u (%s", replay_service_name(s), m->sa, m->da, fc);
     if (m->has_dsap || m->has_ssap) {
-        put(b, ", SAPs %u/%u", m->has_dsap ? m->dsap : 0u, m->has_ssap ? m->ssap : 0u);
+        text_buf_put(b, ", SAPs %u/%u", m->has_dsap ? m->dsap : 0u, m->has_ssap ? m->ssap : 0u);
     }
-    put(b, ")");
+    text_buf_put(b, ")");
     request_data_text(b, s, m, lay);
 }
 
 /* An answer without SAPs: FDL status, Data_Exchange data or a bare response code. */
-static void plain_response_text(sbuf_t *b, const replay_frame_t *m, const char *fc,
+static void plain_response_text(text_buf_t *b, const replay_frame_t *m, const char *fc,
                                 const replay_dx_layout_t *lay)
 {
     uint8_t code = m->fc & FDL_FC_CODE_MASK;
     if (m->sd == FDL_SD1 && code == FDL_RSP_OK) {
-        put(b, "FDL status reply %u -> %u: %s", m->sa, m->da, fc);
+        text_buf_put(b, "FDL status reply %u -> %u: %s", m->sa, m->da, fc);
     } else if (code == FDL_RSP_DL || code == FDL_RSP_DH) {
-        put(b, "reply %u -> %u %s: ", m->sa, m->da, fc);
+        text_buf_put(b, "reply %u -> %u %s: ", m->sa, m->da, fc);
         io_text(b, m->du, m->du_len, lay, true, "inputs");
     } else {
-        put(b, "reply %u -> %u: %s", m->sa, m->da, fc);
+        text_buf_put(b, "reply %u -> %u: %s", m->sa, m->da, fc);
         if (m->du_len > 0u) {
-            put(b, ": ");
+            text_buf_put(b, ": ");
             put_hex(b, m->du, m->du_len);
         }
     }
 }
 
 /* An answer from a service SAP (DP-V0 services, DP-V1 connections, anything else). */
-static void sap_response_text(sbuf_t *b, const replay_frame_t *m, const char *fc)
+static void sap_response_text(text_buf_t *b, const replay_frame_t *m, const char *fc)
 {
     unsigned dsap = m->has_dsap ? m->dsap : 0u;
     switch (m->ssap) {
     case DP_SAP_SLAVE_DIAG:
-        put(b, "Slave_Diag reply %u -> %u (%s): ", m->sa, m->da, fc);
+        text_buf_put(b, "Slave_Diag reply %u -> %u (%s): ", m->sa, m->da, fc);
         diag_text(b, m->du, m->du_len);
         break;
     case DP_SAP_GET_CFG:
-        put(b, "Get_Cfg reply %u -> %u (%s): ", m->sa, m->da, fc);
+        text_buf_put(b, "Get_Cfg reply %u -> %u (%s): ", m->sa, m->da, fc);
         put_hex(b, m->du, m->du_len);
         break;
     case DP_SAP_RD_INP:
     case DP_SAP_RD_OUTP:
-        put(b, "%s reply %u -> %u (%s): ", m->ssap == DP_SAP_RD_INP ? "Rd_Inp" : "Rd_Outp",
+        text_buf_put(b, "%s reply %u -> %u (%s): ", m->ssap == DP_SAP_RD_INP ? "Rd_Inp" : "Rd_Outp",
             m->sa, m->da, fc);
         put_hex(b, m->du, m->du_len);
         break;
     default:
         if (m->ssap == DPV1_SAP_C1 || m->ssap <= DPV1_SAP_RM) {
-            put(b, "%s reply %u -> %u (%s, SAPs %u/%u): ",
+            text_buf_put(b, "%s reply %u -> %u (%s, SAPs %u/%u): ",
                 m->ssap == DPV1_SAP_C1 ? "MSAC1" : "MSAC2", m->sa, m->da, fc, dsap, m->ssap);
             dpv1_text(b, m->du, m->du_len, true);
         } else {
-            put(b, "reply %u -> %u (%s, SAPs %u/%u)", m->sa, m->da, fc, dsap, m->ssap);
+            text_buf_put(b, "reply %u -> %u (%s, SAPs %u/%u)", m->sa, m->da, fc, dsap, m->ssap);
             if (m->du_len > 0u) {
-                put(b, ": ");
+                text_buf_put(b, ": ");
                 put_hex(b, m->du, m->du_len);
             }
         }
@@ -526,7 +502,7 @@ static void sap_response_text(sbuf_t *b, const replay_frame_t *m, const char *fc
     }
 }
 
-static void response_text(sbuf_t *b, const replay_frame_t *m, const replay_dx_layout_t *lay)
+static void response_text(text_buf_t *b, const replay_frame_t *m, const replay_dx_layout_t *lay)
 {
     char fc[64];
     replay_fc_text(m->fc, fc, sizeof fc);
@@ -540,23 +516,23 @@ static void response_text(sbuf_t *b, const replay_frame_t *m, const replay_dx_la
 size_t replay_describe(const uint8_t *f, size_t len, const replay_dx_layout_t *lay, char *out,
                        size_t max)
 {
-    sbuf_t b = {out, max, 0};
+    text_buf_t b = {out, max, 0};
     if (max > 0u) out[0] = '\0';
     replay_frame_t m;
     replay_frame_parse(f, len, &m);
     switch (m.kind) {
     case REPLAY_KIND_SC:
-        put(&b, len == 1u ? "SC (short acknowledgement)" : "SC followed by %zu octets",
+        text_buf_put(&b, len == 1u ? "SC (short acknowledgement)" : "SC followed by %zu octets",
             len - 1u);
         break;
     case REPLAY_KIND_TOKEN:
         if (m.has_header) {
-            put(&b, "token %u -> %u", m.sa, m.da);
+            text_buf_put(&b, "token %u -> %u", m.sa, m.da);
         } else {
-            put(&b, "token (cut: %zu octets)", len);
+            text_buf_put(&b, "token (cut: %zu octets)", len);
         }
         break;
-    case REPLAY_KIND_GARBAGE: put(&b, "not a telegram (%zu octets)", len); break;
+    case REPLAY_KIND_GARBAGE: text_buf_put(&b, "not a telegram (%zu octets)", len); break;
     case REPLAY_KIND_REQUEST: request_text(&b, &m, lay); break;
     case REPLAY_KIND_RESPONSE: response_text(&b, &m, lay); break;
     }
