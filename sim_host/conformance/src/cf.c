@@ -104,16 +104,28 @@ static bool id_selected(const cf_t *cf, const char *id)
     return cf->opt.only == NULL || strncmp(id, cf->opt.only, strlen(cf->opt.only)) == 0;
 }
 
+static bool request(cf_t *cf, uint8_t sa, uint8_t fc_code, int dsap, int ssap, const uint8_t *du,
+                    size_t du_len, uint32_t wait_us, uint8_t retries, cf_reply_t *out);
+
 /* A slave searching for the rate answers only once it has found the tester's: ask until it
  * does, as a master's start-up does, before any case is judged. */
 static void find_slave(cf_t *cf)
 {
     uint64_t t0 = cf->link.ops->now_ns(cf->link.ctx);
     uint64_t limit = (uint64_t)CF_FIND_SLAVE_MS * 1000000u;
+    /* A slave searching the rate stays only some ms on each (20 ms at the fast rates,
+     * DP_BAUD_SEARCH_DWELL_MIN_US): on a wall-clock medium, where the slot time is long, the
+     * tester asks every few ms, unrepeated, so that a request falls within the dwell on its
+     * rate. Answers that come later than that are settled once the slave is found. */
+    uint32_t wait_us = cf->link.slot_us;
+    if (!cf->link.timing && wait_us > CF_FIND_SLAVE_WAIT_US) {
+        wait_us = CF_FIND_SLAVE_WAIT_US;
+    }
     uint32_t asked = 1;
     for (;;) {
         cf_reply_t r;
-        if (!cf_dp(cf, DP_SAP_SLAVE_DIAG, NULL, 0, &r)) {
+        if (!request(cf, cf->opt.master, FDL_REQ_SRD_HIGH, DP_SAP_SLAVE_DIAG, DP_SAP_MASTER, NULL,
+                     0, wait_us, 0, &r)) {
             return;
         }
         cf_answer_t a;
@@ -378,8 +390,9 @@ void cf_fcb_restart(cf_t *cf, uint8_t sa)
     cf->fcb_started[sa & FDL_ADDR_MASK] = false;
 }
 
-bool cf_request(cf_t *cf, uint8_t sa, uint8_t fc_code, int dsap, int ssap, const uint8_t *du,
-                size_t du_len, cf_reply_t *out)
+/* cf_request with the wait for each answer and the number of repetitions given. */
+static bool request(cf_t *cf, uint8_t sa, uint8_t fc_code, int dsap, int ssap, const uint8_t *du,
+                    size_t du_len, uint32_t wait_us, uint8_t retries, cf_reply_t *out)
 {
     uint8_t frame[CF_FRAME_MAX + 8u];
     bool saps = dsap >= 0;
@@ -395,16 +408,16 @@ bool cf_request(cf_t *cf, uint8_t sa, uint8_t fc_code, int dsap, int ssap, const
     if (out != NULL) {
         rp = out;
     }
-    bool sent = cf_exchange(cf, frame, n, rp);
+    bool sent = cf_exchange_wait(cf, frame, n, wait_us, rp);
     /* A wall-clock medium on a loaded host may deliver an answer after the slot time: the
      * request goes again, unchanged (FCB too), as a master's retry does, so a late answer is
      * taken as the answer to that retry and never as the answer to the next request. An SDN
      * has no answer to wait for. */
     bool expects_answer = fc_code != FDL_REQ_SDN_LOW && fc_code != FDL_REQ_SDN_HIGH;
     uint8_t repeated = 0;
-    while (sent && expects_answer && rp->len == 0u && repeated < cf->link.retries) {
+    while (sent && expects_answer && rp->len == 0u && repeated < retries) {
         repeated++;
-        sent = cf_exchange(cf, frame, n, rp);
+        sent = cf_exchange_wait(cf, frame, n, wait_us, rp);
     }
     /* The answer taken may be a late one to an earlier send, the answers to the other sends
      * still to come: they would pass for the answers to the next requests. */
@@ -422,6 +435,13 @@ bool cf_request(cf_t *cf, uint8_t sa, uint8_t fc_code, int dsap, int ssap, const
         }
     }
     return sent;
+}
+
+bool cf_request(cf_t *cf, uint8_t sa, uint8_t fc_code, int dsap, int ssap, const uint8_t *du,
+                size_t du_len, cf_reply_t *out)
+{
+    return request(cf, sa, fc_code, dsap, ssap, du, du_len, cf->link.slot_us, cf->link.retries,
+                   out);
 }
 
 bool cf_dp_from(cf_t *cf, uint8_t sa, uint8_t ssap, uint8_t dsap, const uint8_t *du,

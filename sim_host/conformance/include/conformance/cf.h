@@ -32,6 +32,8 @@
 #define CF_MAX_MODULES 32u /* modules in one configuration */
 /* How long the run asks for the slave before the first case (it may be searching the rate). */
 #define CF_FIND_SLAVE_MS 10000u
+/* How long it waits for each of those answers on a wall-clock medium (at most the slot time). */
+#define CF_FIND_SLAVE_WAIT_US 10000u
 /* cf_settle listens until this many slot times pass in silence, at most the second many. */
 #define CF_SETTLE_QUIET_SLOTS 2u
 #define CF_SETTLE_MAX_SLOTS 20u
