@@ -134,7 +134,7 @@ static void find_slave(cf_t *cf)
             cf->found_after_ns = cf->link.ops->now_ns(cf->link.ctx) - t0;
             /* A slave that started late may find the requests it missed queued in its
              * receiver (a PTY keeps what was written to it) and answer each of them. */
-            if (cf->link.retries > 0u && asked > 1u) {
+            if (!cf->link.timing && asked > 1u) {
                 (void)cf_settle(cf);
             }
             return;
@@ -289,6 +289,15 @@ static uint32_t link_baud(const cf_t *cf)
     return cf->link.baud;
 }
 
+/* The medium failed during the case: the case fails and the run stops. Returns false. */
+static bool medium_failed(cf_t *cf)
+{
+    cf->link_failed = true;
+    snprintf(cf->link_error, sizeof cf->link_error, "the medium failed");
+    (void)cf_fail(cf, "link: the medium failed during the case");
+    return false;
+}
+
 bool cf_exchange_wait(cf_t *cf, const uint8_t *octets, size_t len, uint32_t wait_us,
                       cf_reply_t *out)
 {
@@ -309,10 +318,7 @@ bool cf_exchange_wait(cf_t *cf, const uint8_t *octets, size_t len, uint32_t wait
     f.t_ns = rp->tx_t_ns;
     keep(cf, &f);
     if (rc != 0) {
-        cf->link_failed = true;
-        snprintf(cf->link_error, sizeof cf->link_error, "the medium failed");
-        (void)cf_fail(cf, "link: the medium failed during the case");
-        return false;
+        return medium_failed(cf);
     }
     cf_frame_t a = {.from_tester = false, .len = rp->len, .t_ns = rp->t_ns,
                     .tsdr_bits = rp->tsdr_bits, .baud = link_baud(cf)};
@@ -335,10 +341,7 @@ bool cf_pause_ms(cf_t *cf, uint32_t ms)
         return false;
     }
     if (cf->link.ops->pause(cf->link.ctx, ms * 1000u) != 0) {
-        cf->link_failed = true;
-        snprintf(cf->link_error, sizeof cf->link_error, "the medium failed");
-        (void)cf_fail(cf, "link: the medium failed during the case");
-        return false;
+        return medium_failed(cf);
     }
     return true;
 }
@@ -354,10 +357,7 @@ bool cf_settle(cf_t *cf)
     /* Late answers come as far apart as their requests went: a slot time and the idle. */
     if (cf->link.ops->settle(cf->link.ctx, CF_SETTLE_QUIET_SLOTS * cf->link.slot_us,
                              CF_SETTLE_MAX_SLOTS * cf->link.slot_us) != 0) {
-        cf->link_failed = true;
-        snprintf(cf->link_error, sizeof cf->link_error, "the medium failed");
-        (void)cf_fail(cf, "link: the medium failed during the case");
-        return false;
+        return medium_failed(cf);
     }
     return true;
 }
